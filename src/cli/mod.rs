@@ -1,0 +1,39 @@
+//! The command line: one file per subcommand; `main.rs` only calls [`main`].
+
+mod render;
+
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+/// bareray — a data-oriented SIMD packet ray tracer with a scalar reference path.
+///
+/// Renders Whitted-shaded scenes (spheres, planes, transformed shapes; shadows, mirrors, glass) from
+/// bareray's TOML scene format to PNG, EXR or PPM.
+#[derive(Parser, Debug)]
+#[command(name = "bareray", version, about, long_about, propagate_version = true)]
+pub struct Cli {
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Render a scene to an image file.
+    Render(render::RenderArgs),
+}
+
+/// Parses the command line, runs the subcommand, and turns errors into a message and exit code 1.
+pub fn main() -> ExitCode {
+    let cli = Cli::parse();
+    let result = match cli.command {
+        Command::Render(args) => render::run(args),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}

@@ -1,0 +1,12 @@
+//! Primitives and their intersection kernels. Each kernel is generic over [`crate::math::Real`]: the f32
+//! instance is the scalar reference path, the f64 instance the accuracy oracle.
+
+mod plane;
+mod ray;
+mod shape;
+mod sphere;
+
+pub use plane::intersect_plane;
+pub use ray::{Departure, Hit, Ray, NO_PRIM};
+pub use shape::{Shape, ShapeKind};
+pub use sphere::{far_root, first_root, intersect_sphere, sphere_roots, Roots};

@@ -1,0 +1,114 @@
+//! Transformed generic shapes: the unit sphere (ellipsoids) and the plane z = 0 (any plane), placed by an
+//! affine map. The ray is carried into object space, where the generic test runs; t is unchanged by the map
+//! because the direction is mapped without renormalising. Normals go back by the inverse transpose.
+
+use crate::math::{Affine, Real, Vec3f, V3};
+
+use super::{intersect_plane, sphere_roots, Ray, Roots};
+
+/// Which generic shape an instance places.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum ShapeKind {
+    /// The unit sphere at the origin.
+    Sphere,
+    /// The plane z = 0, normal +z.
+    Plane,
+}
+
+impl ShapeKind {
+    /// Planar shapes cannot be hit twice by one ray; convex solids can (entry and exit).
+    pub fn is_solid(self) -> bool {
+        self == ShapeKind::Sphere
+    }
+}
+
+/// A generic shape under an affine map, ready to intersect.
+#[derive(Clone, Copy, Debug)]
+pub struct Shape<F> {
+    /// The generic shape.
+    pub kind: ShapeKind,
+    /// Carries world rays into object space.
+    pub object_from_world: Affine<F>,
+    /// Carries object-space normals to world space (inverse transpose of `world_from_object`).
+    pub normal_to_world: Affine<F>,
+    /// Index into the scene's materials.
+    pub material: u32,
+}
+
+impl<F: Real> Shape<F> {
+    /// The ray in object space.
+    #[inline(always)]
+    pub fn to_object(&self, ray: &Ray<F>) -> Ray<F> {
+        Ray::new(self.object_from_world.point(ray.origin), self.object_from_world.vector(ray.dir))
+    }
+
+    /// Closest hit in `[0, t_max)`.
+    #[inline(always)]
+    pub fn intersect(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+        let local = self.to_object(ray);
+        match self.kind {
+            ShapeKind::Sphere => super::first_root(&self.unit_sphere_roots(&local), t_max),
+            ShapeKind::Plane => intersect_plane(&local, t_max),
+        }
+    }
+
+    /// Both roots with the unit sphere, for an object-space ray.
+    #[inline(always)]
+    pub fn unit_sphere_roots(&self, local: &Ray<F>) -> Roots<F> {
+        sphere_roots(V3::all(F::splat(0.0)), F::splat(1.0), local)
+    }
+}
+
+impl Shape<f32> {
+    /// The unit world-space normal at an object-space point on the shape.
+    pub fn world_normal(&self, object_point: Vec3f) -> Vec3f {
+        let n = match self.kind {
+            ShapeKind::Sphere => object_point,
+            ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
+        };
+        self.normal_to_world.vector(n).normalize()
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::affine::normal_to_world;
+    use glam::{DAffine3, DVec3};
+
+    fn shape(kind: ShapeKind, world_from_object: DAffine3) -> Shape<f64> {
+        Shape {
+            kind,
+            object_from_world: Affine::from_glam(&world_from_object.inverse()),
+            normal_to_world: normal_to_world(&world_from_object),
+            material: 0,
+        }
+    }
+
+    #[test]
+    fn ellipsoid_hit_distance_is_in_world_units() {
+        // Unit sphere stretched to semi-axis 3 along x, moved to x = 10: a ray along +x from the origin
+        // enters at x = 7.
+        let m = DAffine3::from_translation(DVec3::new(10.0, 0.0, 0.0))
+            * DAffine3::from_scale(DVec3::new(3.0, 1.0, 1.0));
+        let s = shape(ShapeKind::Sphere, m);
+        let ray = Ray::new(V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0));
+        let (hit, t) = s.intersect(&ray, f64::INFINITY);
+        assert!(hit);
+        assert!((t - 7.0).abs() < 1e-12);
+    }
+
+    #[test]
+    fn tilted_plane_hit_and_normal() {
+        // z = 0 rotated 90° about x becomes y = 0 with normal −y... rotate by −90° to get +y, then lift to y = −1.
+        let m = DAffine3::from_translation(DVec3::new(0.0, -1.0, 0.0))
+            * DAffine3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
+        let s = shape(ShapeKind::Plane, m);
+        let ray = Ray::new(V3::new(0.0, 2.0, 0.0), V3::new(0.0, -1.0, 0.0));
+        let (hit, t) = s.intersect(&ray, f64::INFINITY);
+        assert!(hit);
+        assert!((t - 3.0).abs() < 1e-12);
+        let n = s.normal_to_world.vector(V3::new(0.0, 0.0, 1.0)).normalize();
+        assert!((n.y - 1.0).abs() < 1e-12, "{n:?}");
+    }
+}

@@ -1,0 +1,5 @@
+//! The `bareray` command: see `bareray --help`.
+
+fn main() -> std::process::ExitCode {
+    bareray::cli::main()
+}

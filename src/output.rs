@@ -1,0 +1,152 @@
+//! Images out: the format follows the file extension (PNG 8-bit sRGB, EXR linear float, PPM 8-bit sRGB).
+//! The file is written under a temporary name in the same directory and renamed into place, so a failed
+//! run never leaves half a file and never destroys an existing one.
+
+use std::fs;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use image::{ImageFormat, Rgb32FImage, RgbImage};
+use thiserror::Error;
+
+use crate::film::Image;
+
+/// An image file format bareray writes.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Format {
+    /// 8-bit sRGB PNG.
+    Png,
+    /// Linear 32-bit float OpenEXR.
+    Exr,
+    /// 8-bit sRGB binary PPM (P6).
+    Ppm,
+}
+
+/// Why an image could not be written.
+#[derive(Debug, Error)]
+pub enum OutputError {
+    /// Extension not recognised.
+    #[error("{path}: unknown image format (use .png, .exr or .ppm)")]
+    UnknownFormat {
+        /// The output path.
+        path: PathBuf,
+    },
+    /// Parent directory missing.
+    #[error("{path}: directory {dir} does not exist")]
+    NoDirectory {
+        /// The output path.
+        path: PathBuf,
+        /// Its parent.
+        dir: PathBuf,
+    },
+    /// Encoding or I/O failure.
+    #[error("{path}: {source}")]
+    Write {
+        /// The output path.
+        path: PathBuf,
+        /// What went wrong.
+        source: Box<dyn std::error::Error + Send + Sync>,
+    },
+}
+
+impl Format {
+    /// The format named by `path`'s extension (case-insensitive), checked before rendering so that a bad
+    /// name fails at once rather than after the render.
+    pub fn from_path(path: &Path) -> Result<Format, OutputError> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        let format = match ext.as_deref() {
+            Some("png") => Format::Png,
+            Some("exr") => Format::Exr,
+            Some("ppm") | Some("pnm") => Format::Ppm,
+            _ => return Err(OutputError::UnknownFormat { path: path.to_owned() }),
+        };
+        let dir = parent_dir(path);
+        if !dir.is_dir() {
+            return Err(OutputError::NoDirectory { path: path.to_owned(), dir });
+        }
+        Ok(format)
+    }
+}
+
+fn parent_dir(path: &Path) -> PathBuf {
+    match path.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+        _ => PathBuf::from("."),
+    }
+}
+
+/// Linear to sRGB-encoded 8-bit, clamped.
+pub fn srgb8(linear: f32) -> u8 {
+    let c = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
+    let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
+    (s * 255.0 + 0.5) as u8
+}
+
+/// 8-bit sRGB copy of the image.
+pub fn to_srgb8(img: &Image) -> RgbImage {
+    let raw = img.pixels.iter().flat_map(|p| [srgb8(p.x), srgb8(p.y), srgb8(p.z)]).collect();
+    RgbImage::from_raw(img.width, img.height, raw).expect("buffer size matches the image")
+}
+
+/// Writes `img` to `path` in the format its extension names, atomically.
+pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
+    let format = Format::from_path(path)?;
+    let err =
+        |e: Box<dyn std::error::Error + Send + Sync>| OutputError::Write { path: path.to_owned(), source: e };
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = encode(img, format, &tmp).and_then(|()| fs::rename(&tmp, path).map_err(Into::into));
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result.map_err(err)
+}
+
+fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+    let mut file = BufWriter::new(fs::File::create(tmp)?);
+    match format {
+        Format::Png => to_srgb8(img).write_to(&mut file, ImageFormat::Png)?,
+        Format::Ppm => to_srgb8(img).write_to(&mut file, ImageFormat::Pnm)?,
+        Format::Exr => {
+            let raw = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+            let buf =
+                Rgb32FImage::from_raw(img.width, img.height, raw).expect("buffer size matches the image");
+            // EXR needs Seek; BufWriter<File> has it.
+            buf.write_to(&mut file, ImageFormat::OpenExr)?;
+        }
+    }
+    file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    Ok(())
+}
+
+/// Writes raw bytes atomically (for text outputs such as generated scenes).
+pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
+    let result = (|| {
+        let mut f = fs::File::create(&tmp)?;
+        f.write_all(bytes)?;
+        f.sync_all()?;
+        fs::rename(&tmp, path)
+    })();
+    if result.is_err() {
+        let _ = fs::remove_file(&tmp);
+    }
+    result
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn srgb_curve_endpoints_and_midpoint() {
+        assert_eq!(srgb8(0.0), 0);
+        assert_eq!(srgb8(1.0), 255);
+        assert_eq!(srgb8(2.0), 255);
+        assert_eq!(srgb8(-1.0), 0);
+        assert_eq!(srgb8(f32::NAN), 0);
+        // sRGB 0.5 is linear 0.21404.
+        assert_eq!(srgb8(0.2141), 128);
+    }
+}

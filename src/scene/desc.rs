@@ -1,0 +1,229 @@
+//! `SceneDesc`: a scene as plain, validated data in f64, whatever file format it came from.
+//! Compile (`scene::compile`) turns it into the immutable [`crate::scene::Scene`] the renderer reads.
+
+use glam::{DAffine3, DVec3};
+
+use crate::math::Rgb;
+
+/// Where the camera looks.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Aim {
+    /// A point the view direction passes through.
+    LookAt(DVec3),
+    /// The view direction itself (any length).
+    Direction(DVec3),
+}
+
+/// How wide the camera sees.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub enum Field {
+    /// Horizontal view angle θ in degrees: the window is `s_j = 2·d·tan(θ/2)` wide.
+    HorizontalAngle(f64),
+    /// Pixel size s on the image plane at distance d: the window is `s·h_res` wide, so the field of view grows
+    /// with s and with the resolution.
+    PixelSize(f64),
+}
+
+/// Where pixel (j, k) samples the image plane.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Sweep {
+    /// Pixel centres at `(j + ½)/h_res` across the window (pbrt, Embree, POV-Ray).
+    #[default]
+    PixelCentre,
+    /// The lecture's `j/(h_res − 1)`: the first and last pixel centres lie on the window's edges.
+    WindowEdges,
+}
+
+/// The lecture's camera.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CameraDesc {
+    /// Eye point O.
+    pub eye: DVec3,
+    /// View direction Z_v, or a point it passes through.
+    pub aim: Aim,
+    /// Up vector Y_v: need be neither unit nor perpendicular to the view direction.
+    pub up: DVec3,
+    /// Image-plane distance d.
+    pub distance: f64,
+    /// View angle or pixel size.
+    pub field: Field,
+    /// Horizontal resolution h_res.
+    pub width: u32,
+    /// Vertical resolution v_res.
+    pub height: u32,
+    /// Pixel-centre or window-edge sampling.
+    pub sweep: Sweep,
+}
+
+impl Default for CameraDesc {
+    fn default() -> Self {
+        Self {
+            eye: DVec3::new(0.0, 0.0, -5.0),
+            aim: Aim::LookAt(DVec3::ZERO),
+            up: DVec3::Y,
+            distance: 1.0,
+            field: Field::HorizontalAngle(45.0),
+            width: 640,
+            height: 480,
+            sweep: Sweep::PixelCentre,
+        }
+    }
+}
+
+/// Where the samples of one pixel go.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pattern {
+    /// An n×n regular grid of stratum centres (n² samples, box filter).
+    Grid(u32),
+    /// The lecture's 9 samples at half-pixel spacing (corners, edge midpoints, centre), shared with the
+    /// neighbouring pixels (about 4 rays per pixel), weighted by the trapezoid rule.
+    HalfPixel,
+}
+
+/// A filter over the finished image.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum PostFilter {
+    /// None.
+    #[default]
+    None,
+    /// The lecture's 3×3 kernel: ½ at the centre, 1/16 at each of the 8 neighbours.
+    Lecture3x3,
+}
+
+/// Everything about a render that is not geometry.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderDesc {
+    /// Sampling pattern within each pixel.
+    pub pattern: Pattern,
+    /// Filter applied after sampling.
+    pub postfilter: PostFilter,
+    /// Longest chain of reflection/refraction bounces (0: ray casting only).
+    pub max_depth: u32,
+    /// Colour of rays that hit nothing.
+    pub background: Rgb,
+    /// Ambient light, scaled by each material's `ambient`.
+    pub ambient: Rgb,
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        Self {
+            pattern: Pattern::Grid(1),
+            postfilter: PostFilter::None,
+            max_depth: 5,
+            background: Rgb::new(0.0, 0.0, 0.0),
+            ambient: Rgb::all(1.0),
+        }
+    }
+}
+
+/// A solid-texture checkerboard in object space.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Checker {
+    /// The colour of the odd cells (the material's colour fills the even ones).
+    pub color: Rgb,
+    /// Edge length of a cell.
+    pub size: f32,
+}
+
+/// Whitted surface description.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Material {
+    /// Base colour (diffuse and ambient).
+    pub color: Rgb,
+    /// Optional checkerboard.
+    pub checker: Option<Checker>,
+    /// Ambient coefficient.
+    pub ambient: f32,
+    /// Lambert coefficient.
+    pub diffuse: f32,
+    /// Phong highlight coefficient.
+    pub specular: f32,
+    /// Phong exponent.
+    pub shininess: f32,
+    /// Mirror reflection weight.
+    pub reflect: f32,
+    /// Transmission weight.
+    pub transmit: f32,
+    /// Index of refraction (inside over outside).
+    pub ior: f32,
+    /// Split the transmitted weight by the dielectric Fresnel reflectance instead of fixed weights.
+    pub fresnel: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            color: Rgb::all(0.8),
+            checker: None,
+            ambient: 0.1,
+            diffuse: 0.9,
+            specular: 0.0,
+            shininess: 32.0,
+            reflect: 0.0,
+            transmit: 0.0,
+            ior: 1.5,
+            fresnel: false,
+        }
+    }
+}
+
+/// How a light's intensity falls with distance.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Falloff {
+    /// Constant (the classic Whitted light).
+    #[default]
+    None,
+    /// 1/r² (a physical point light).
+    InverseSquare,
+}
+
+/// A coloured point light.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct LightDesc {
+    /// Where it is.
+    pub position: DVec3,
+    /// Colour times intensity.
+    pub color: Rgb,
+    /// Distance falloff.
+    pub falloff: Falloff,
+}
+
+/// A sphere kept in the fast SoA layout.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SphereDesc {
+    /// Centre.
+    pub center: DVec3,
+    /// Radius (> 0).
+    pub radius: f64,
+    /// Index into `SceneDesc::materials`.
+    pub material: u32,
+}
+
+/// A transformed generic shape.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct ShapeDesc {
+    /// Unit sphere or plane z = 0.
+    pub kind: crate::geometry::ShapeKind,
+    /// Places the generic shape in the world (invertible).
+    pub world_from_object: DAffine3,
+    /// Index into `SceneDesc::materials`.
+    pub material: u32,
+}
+
+/// A whole scene as data.
+#[derive(Clone, Debug, PartialEq, Default)]
+pub struct SceneDesc {
+    /// The camera.
+    pub camera: CameraDesc,
+    /// Sampling, depth, background.
+    pub render: RenderDesc,
+    /// Materials; shapes refer to them by index.
+    pub materials: Vec<Material>,
+    /// Point lights.
+    pub lights: Vec<LightDesc>,
+    /// Plain spheres: ids 0.. in this order.
+    pub spheres: Vec<SphereDesc>,
+    /// Transformed shapes: ids after the spheres.
+    pub shapes: Vec<ShapeDesc>,
+}

@@ -1,0 +1,439 @@
+//! bareray's own scene format, in TOML. Every key is optional but the shapes; unknown keys are errors; every
+//! error names the file, the line and what was expected. The format is documented in README.md.
+
+use std::collections::BTreeMap;
+use std::ops::Range;
+use std::path::Path;
+
+use ::toml::Spanned;
+use glam::{DAffine3, DQuat, DVec3};
+use serde::Deserialize;
+
+use crate::camera::Camera;
+use crate::geometry::ShapeKind;
+use crate::math::Rgb;
+
+use super::desc::*;
+use super::error::SceneError;
+
+type Vec3 = [f64; 3];
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct File {
+    camera: Option<Spanned<CameraToml>>,
+    render: Option<RenderToml>,
+    #[serde(default)]
+    materials: BTreeMap<String, MaterialToml>,
+    #[serde(default)]
+    lights: Vec<LightToml>,
+    #[serde(default)]
+    spheres: Vec<SphereToml>,
+    #[serde(default)]
+    planes: Vec<PlaneToml>,
+}
+
+#[derive(Deserialize, Default)]
+#[serde(deny_unknown_fields)]
+struct CameraToml {
+    eye: Option<Vec3>,
+    look_at: Option<Vec3>,
+    direction: Option<Vec3>,
+    up: Option<Vec3>,
+    distance: Option<f64>,
+    hfov: Option<f64>,
+    pixel_size: Option<f64>,
+    width: Option<u32>,
+    height: Option<u32>,
+    sweep: Option<SweepToml>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum SweepToml {
+    PixelCentre,
+    WindowEdges,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct RenderToml {
+    samples: Option<Spanned<u32>>,
+    pattern: Option<PatternToml>,
+    postfilter: Option<PostFilterToml>,
+    max_depth: Option<u32>,
+    background: Option<Spanned<Vec3>>,
+    ambient: Option<Spanned<Vec3>>,
+}
+
+#[derive(Deserialize, Clone, Copy, PartialEq)]
+#[serde(rename_all = "kebab-case")]
+enum PatternToml {
+    Grid,
+    HalfPixel,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum PostFilterToml {
+    None,
+    Lecture3x3,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialToml {
+    color: Option<Spanned<Vec3>>,
+    checker: Option<CheckerToml>,
+    ambient: Option<Spanned<f64>>,
+    diffuse: Option<Spanned<f64>>,
+    specular: Option<Spanned<f64>>,
+    shininess: Option<Spanned<f64>>,
+    reflect: Option<Spanned<f64>>,
+    transmit: Option<Spanned<f64>>,
+    ior: Option<Spanned<f64>>,
+    fresnel: Option<bool>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CheckerToml {
+    color: Spanned<Vec3>,
+    size: Spanned<f64>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct LightToml {
+    position: Vec3,
+    color: Option<Spanned<Vec3>>,
+    intensity: Option<Spanned<f64>>,
+    falloff: Option<FalloffToml>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum FalloffToml {
+    None,
+    InverseSquare,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SphereToml {
+    center: Vec3,
+    radius: Spanned<f64>,
+    material: Option<Spanned<String>>,
+    transform: Option<Vec<Spanned<TransformOp>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct PlaneToml {
+    point: Option<Vec3>,
+    normal: Option<Spanned<Vec3>>,
+    material: Option<Spanned<String>>,
+    transform: Option<Vec<Spanned<TransformOp>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields, rename_all = "lowercase")]
+enum TransformOp {
+    Translate(Vec3),
+    Scale(Scale),
+    Rotate(Rotation),
+}
+
+#[derive(Deserialize)]
+#[serde(untagged, expecting = "a number or an array of three numbers")]
+enum Scale {
+    Uniform(f64),
+    Axes(Vec3),
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct Rotation {
+    axis: Vec3,
+    degrees: f64,
+}
+
+/// Reads a TOML scene from a file.
+pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+    let source = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::whole_file(path, format!("cannot read scene: {e}")))?;
+    parse(path, &source)
+}
+
+/// Parses TOML scene text; `path` names it in errors.
+pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
+    let file: File = ::toml::from_str(source).map_err(|e| {
+        let offset = e.span().map_or(0, |s| s.start);
+        SceneError::at_offset(path, source, offset, e.message().trim())
+    })?;
+    Reader { path, source }.build(file)
+}
+
+struct Reader<'a> {
+    path: &'a Path,
+    source: &'a str,
+}
+
+impl Reader<'_> {
+    fn err(&self, span: Range<usize>, message: impl Into<String>) -> SceneError {
+        SceneError::at_offset(self.path, self.source, span.start, message)
+    }
+
+    /// A value that must lie in a range, with the key's name for the message.
+    fn ranged(
+        &self,
+        v: &Spanned<f64>,
+        key: &str,
+        ok: impl Fn(f64) -> bool,
+        want: &str,
+    ) -> Result<f32, SceneError> {
+        let x = *v.get_ref();
+        if ok(x) && x.is_finite() {
+            Ok(x as f32)
+        } else {
+            Err(self.err(v.span(), format!("{key} must be {want}, got {x}")))
+        }
+    }
+
+    fn color(&self, v: &Spanned<Vec3>, key: &str) -> Result<Rgb, SceneError> {
+        let c = v.get_ref();
+        if c.iter().all(|x| x.is_finite() && *x >= 0.0) {
+            Ok(Rgb::new(c[0] as f32, c[1] as f32, c[2] as f32))
+        } else {
+            Err(self.err(v.span(), format!("{key} must be three finite non-negative numbers, got {c:?}")))
+        }
+    }
+
+    fn build(&self, file: File) -> Result<SceneDesc, SceneError> {
+        let (names, materials) = self.materials(&file.materials)?;
+        let material = |m: &Option<Spanned<String>>| -> Result<u32, SceneError> {
+            match m {
+                None => Ok(0),
+                Some(name) => names.get(name.get_ref().as_str()).copied().ok_or_else(|| {
+                    let known: Vec<&str> = names.keys().copied().collect();
+                    self.err(
+                        name.span(),
+                        format!(
+                            "unknown material `{}`, expected one of {}",
+                            name.get_ref(),
+                            known.join(", ")
+                        ),
+                    )
+                }),
+            }
+        };
+        let mut desc = SceneDesc {
+            camera: self.camera(file.camera)?,
+            render: self.render(file.render)?,
+            materials,
+            ..SceneDesc::default()
+        };
+        for l in &file.lights {
+            desc.lights.push(self.light(l)?);
+        }
+        for s in &file.spheres {
+            let radius = self.ranged(&s.radius, "radius", |r| r > 0.0, "positive")?;
+            let center = DVec3::from(s.center);
+            let mat = material(&s.material)?;
+            match &s.transform {
+                None => desc.spheres.push(SphereDesc { center, radius: *s.radius.get_ref(), material: mat }),
+                Some(ops) => {
+                    let user = self.transform(ops)?;
+                    let world_from_object = DAffine3::from_translation(center)
+                        * user
+                        * DAffine3::from_scale(DVec3::splat(f64::from(radius)));
+                    desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: mat });
+                }
+            }
+        }
+        for p in &file.planes {
+            let normal = match &p.normal {
+                None => DVec3::Z,
+                Some(n) => {
+                    let v = DVec3::from(*n.get_ref());
+                    if !(v.length() > 0.0 && v.is_finite()) {
+                        return Err(self.err(n.span(), "normal must be a non-zero vector"));
+                    }
+                    v.normalize()
+                }
+            };
+            let user = match &p.transform {
+                None => DAffine3::IDENTITY,
+                Some(ops) => self.transform(ops)?,
+            };
+            let world_from_object = DAffine3::from_translation(DVec3::from(p.point.unwrap_or([0.0; 3])))
+                * DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Z, normal))
+                * user;
+            desc.shapes.push(ShapeDesc {
+                kind: ShapeKind::Plane,
+                world_from_object,
+                material: material(&p.material)?,
+            });
+        }
+        Ok(desc)
+    }
+
+    fn camera(&self, cam: Option<Spanned<CameraToml>>) -> Result<CameraDesc, SceneError> {
+        let Some(cam) = cam else {
+            return Ok(CameraDesc::default());
+        };
+        let span = cam.span();
+        let c = cam.into_inner();
+        let d = CameraDesc::default();
+        let aim = match (c.look_at, c.direction) {
+            (Some(_), Some(_)) => return Err(self.err(span, "camera: give look_at or direction, not both")),
+            (Some(p), None) => Aim::LookAt(p.into()),
+            (None, Some(v)) => Aim::Direction(v.into()),
+            (None, None) => d.aim,
+        };
+        let field = match (c.hfov, c.pixel_size) {
+            (Some(_), Some(_)) => return Err(self.err(span, "camera: give hfov or pixel_size, not both")),
+            (Some(a), None) => Field::HorizontalAngle(a),
+            (None, Some(s)) => Field::PixelSize(s),
+            (None, None) => d.field,
+        };
+        let desc = CameraDesc {
+            eye: c.eye.map_or(d.eye, DVec3::from),
+            aim,
+            up: c.up.map_or(d.up, DVec3::from),
+            distance: c.distance.unwrap_or(d.distance),
+            field,
+            width: c.width.unwrap_or(d.width),
+            height: c.height.unwrap_or(d.height),
+            sweep: match c.sweep {
+                None => d.sweep,
+                Some(SweepToml::PixelCentre) => Sweep::PixelCentre,
+                Some(SweepToml::WindowEdges) => Sweep::WindowEdges,
+            },
+        };
+        // Catch unusable cameras here, where the error can point at the table.
+        Camera::new(&desc).map_err(|e| self.err(span, format!("camera: {e}")))?;
+        Ok(desc)
+    }
+
+    fn render(&self, r: Option<RenderToml>) -> Result<RenderDesc, SceneError> {
+        let d = RenderDesc::default();
+        let Some(r) = r else { return Ok(d) };
+        let pattern = match (r.pattern.unwrap_or(PatternToml::Grid), &r.samples) {
+            (PatternToml::HalfPixel, Some(s)) if *s.get_ref() != 9 => {
+                return Err(self.err(s.span(), "the half-pixel pattern takes 9 samples per pixel"));
+            }
+            (PatternToml::HalfPixel, _) => Pattern::HalfPixel,
+            (PatternToml::Grid, None) => d.pattern,
+            (PatternToml::Grid, Some(s)) => {
+                Pattern::Grid(grid_side(*s.get_ref()).map_err(|m| self.err(s.span(), m))?)
+            }
+        };
+        Ok(RenderDesc {
+            pattern,
+            postfilter: match r.postfilter {
+                None => d.postfilter,
+                Some(PostFilterToml::None) => PostFilter::None,
+                Some(PostFilterToml::Lecture3x3) => PostFilter::Lecture3x3,
+            },
+            max_depth: r.max_depth.unwrap_or(d.max_depth),
+            background: r.background.as_ref().map_or(Ok(d.background), |c| self.color(c, "background"))?,
+            ambient: r.ambient.as_ref().map_or(Ok(d.ambient), |c| self.color(c, "ambient"))?,
+        })
+    }
+
+    fn materials<'t>(
+        &self,
+        table: &'t BTreeMap<String, MaterialToml>,
+    ) -> Result<(BTreeMap<&'t str, u32>, Vec<Material>), SceneError> {
+        // Index 0 is the material of shapes that name none: `default`, given or built in.
+        let mut names = BTreeMap::from([("default", 0u32)]);
+        let mut list = vec![Material::default()];
+        for (name, m) in table {
+            let mat = self.material(m)?;
+            if name == "default" {
+                list[0] = mat;
+            } else {
+                names.insert(name.as_str(), list.len() as u32);
+                list.push(mat);
+            }
+        }
+        Ok((names, list))
+    }
+
+    fn material(&self, m: &MaterialToml) -> Result<Material, SceneError> {
+        let d = Material::default();
+        let unit = |v: &Option<Spanned<f64>>, key: &str, dflt: f32| {
+            v.as_ref().map_or(Ok(dflt), |v| self.ranged(v, key, |x| x >= 0.0, "a non-negative number"))
+        };
+        Ok(Material {
+            color: m.color.as_ref().map_or(Ok(d.color), |c| self.color(c, "color"))?,
+            checker: match &m.checker {
+                None => None,
+                Some(c) => Some(Checker {
+                    color: self.color(&c.color, "checker color")?,
+                    size: self.ranged(&c.size, "checker size", |s| s > 0.0, "positive")?,
+                }),
+            },
+            ambient: unit(&m.ambient, "ambient", d.ambient)?,
+            diffuse: unit(&m.diffuse, "diffuse", d.diffuse)?,
+            specular: unit(&m.specular, "specular", d.specular)?,
+            shininess: unit(&m.shininess, "shininess", d.shininess)?,
+            reflect: unit(&m.reflect, "reflect", d.reflect)?,
+            transmit: unit(&m.transmit, "transmit", d.transmit)?,
+            ior: m.ior.as_ref().map_or(Ok(d.ior), |v| self.ranged(v, "ior", |x| x > 0.0, "positive"))?,
+            fresnel: m.fresnel.unwrap_or(d.fresnel),
+        })
+    }
+
+    fn light(&self, l: &LightToml) -> Result<LightDesc, SceneError> {
+        let color = l.color.as_ref().map_or(Ok(Rgb::all(1.0)), |c| self.color(c, "color"))?;
+        let intensity = l
+            .intensity
+            .as_ref()
+            .map_or(Ok(1.0), |v| self.ranged(v, "intensity", |x| x >= 0.0, "a non-negative number"))?;
+        Ok(LightDesc {
+            position: l.position.into(),
+            color: color * intensity,
+            falloff: match l.falloff {
+                None | Some(FalloffToml::None) => Falloff::None,
+                Some(FalloffToml::InverseSquare) => Falloff::InverseSquare,
+            },
+        })
+    }
+
+    /// The ops composed in list order: the first applies first.
+    fn transform(&self, ops: &[Spanned<TransformOp>]) -> Result<DAffine3, SceneError> {
+        let mut m = DAffine3::IDENTITY;
+        for op in ops {
+            let step = match op.get_ref() {
+                TransformOp::Translate(t) => DAffine3::from_translation((*t).into()),
+                TransformOp::Scale(Scale::Uniform(s)) => DAffine3::from_scale(DVec3::splat(*s)),
+                TransformOp::Scale(Scale::Axes(s)) => DAffine3::from_scale((*s).into()),
+                TransformOp::Rotate(r) => {
+                    let axis = DVec3::from(r.axis);
+                    if axis.length().is_nan() || axis.length() <= 0.0 {
+                        return Err(self.err(op.span(), "rotation axis must be a non-zero vector"));
+                    }
+                    DAffine3::from_axis_angle(axis.normalize(), r.degrees.to_radians())
+                }
+            };
+            let det = step.matrix3.determinant();
+            if !(det.abs() > 1e-12 && det.is_finite() && step.translation.is_finite()) {
+                return Err(self.err(op.span(), "transform step is singular or not finite (zero scale?)"));
+            }
+            m = step * m;
+        }
+        Ok(m)
+    }
+}
+
+/// The side n of an n×n grid for `samples` per pixel.
+pub fn grid_side(samples: u32) -> Result<u32, String> {
+    let n = (f64::from(samples).sqrt().round()) as u32;
+    if samples >= 1 && n * n == samples {
+        Ok(n)
+    } else {
+        Err(format!("samples must be a square number (1, 4, 9, 16, ...) for the regular grid, got {samples}"))
+    }
+}
