@@ -77,6 +77,7 @@ enum PatternToml {
 #[serde(rename_all = "kebab-case")]
 enum PostFilterToml {
     None,
+    #[serde(rename = "lecture-3x3")]
     Lecture3x3,
 }
 

@@ -1,0 +1,130 @@
+//! The `bareray` binary end to end: every scene in scenes/ renders to every format; bad input gives a clear
+//! error, exit code 1 and no panic, and never touches an existing output file.
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+fn bareray(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_bareray")).args(args).output().expect("bareray runs")
+}
+
+fn scenes() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut all: Vec<PathBuf> = std::fs::read_dir(dir)
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "toml"))
+        .collect();
+    all.sort();
+    all
+}
+
+fn stderr(out: &Output) -> String {
+    String::from_utf8_lossy(&out.stderr).into_owned()
+}
+
+#[test]
+fn every_scene_renders_to_png_exr_and_ppm() {
+    let dir = tempfile::tempdir().unwrap();
+    let scenes = scenes();
+    assert!(scenes.len() >= 4, "scenes/ holds the demo scenes: {scenes:?}");
+    for scene in &scenes {
+        for ext in ["png", "exr", "ppm"] {
+            let out = dir.path().join(format!("{}.{ext}", scene.file_stem().unwrap().to_string_lossy()));
+            let run =
+                bareray(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "40"]);
+            assert!(run.status.success(), "{scene:?} -> {ext}: {}", stderr(&run));
+            let img = image::open(&out).unwrap_or_else(|e| panic!("{out:?} does not decode: {e}"));
+            assert_eq!(img.width(), 40);
+            assert!(img.height() >= 20);
+        }
+    }
+    // Nothing but the outputs is left behind (no temporary files).
+    let files = std::fs::read_dir(dir.path()).unwrap().count();
+    assert_eq!(files, scenes.len() * 3);
+}
+
+#[test]
+fn exr_holds_linear_values_and_png_their_srgb_encoding() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("a.exr");
+    let png = dir.path().join("a.png");
+    for out in [&exr, &png] {
+        let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "32", "--spp", "1", "-q"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        assert!(run.stdout.is_empty(), "--quiet prints nothing");
+    }
+    let lin = image::open(&exr).unwrap().into_rgb32f();
+    let srgb = image::open(&png).unwrap().into_rgb8();
+    let mut compared = 0;
+    for (l, s) in lin.pixels().zip(srgb.pixels()) {
+        for c in 0..3 {
+            if l[c] <= 1.0 {
+                assert_eq!(bareray::output::srgb8(l[c]), s[c]);
+                compared += 1;
+            }
+        }
+    }
+    assert!(compared > 1000);
+}
+
+#[test]
+fn demo_scene_renders_without_arguments() {
+    let dir = tempfile::tempdir().unwrap();
+    let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+        .args(["render", "--width", "64"])
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    let summary = String::from_utf8_lossy(&run.stdout);
+    assert!(summary.contains("demo.png: 64x48") && summary.contains("Mrays/s"), "{summary}");
+    assert_eq!(image::open(dir.path().join("demo.png")).unwrap().height(), 48);
+}
+
+#[test]
+fn bad_scene_fails_cleanly_and_keeps_the_old_output() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("bad.toml");
+    std::fs::write(&scene, "[camera]\nwidth = 64\n\n[[spheres]]\ncentre = [0, 0, 0]\nradius = 1\n").unwrap();
+    let out = dir.path().join("keep.png");
+    std::fs::write(&out, b"precious").unwrap();
+    let run = bareray(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(1));
+    let err = stderr(&run);
+    assert!(err.contains("bad.toml:5:1: unknown field `centre`"), "{err}");
+    assert!(!err.contains("panicked"), "{err}");
+    assert_eq!(std::fs::read(&out).unwrap(), b"precious");
+}
+
+#[test]
+fn bad_arguments_fail_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases: [(&[&str], &str); 5] = [
+        (&["render", "nope.toml"], "nope.toml: cannot read scene"),
+        (&["render", "scene.obj"], "unknown scene format"),
+        (&["render", "-o", "out.jpg"], "unknown image format"),
+        (&["render", "-o", "no/such/dir/out.png"], "does not exist"),
+        (&["render", "--spp", "5"], "square number"),
+    ];
+    for (args, needle) in cases {
+        let run =
+            Command::new(env!("CARGO_BIN_EXE_bareray")).args(args).current_dir(dir.path()).output().unwrap();
+        assert_eq!(run.status.code(), Some(1), "{args:?}");
+        let err = stderr(&run);
+        assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+    }
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no output written");
+}
+
+#[test]
+fn help_explains_the_commands() {
+    let run = bareray(&["--help"]);
+    assert!(run.status.success());
+    assert!(String::from_utf8_lossy(&run.stdout).contains("render"));
+    let run = bareray(&["render", "--help"]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    for flag in ["--output", "--width", "--height", "--spp", "--threads", ".exr"] {
+        assert!(text.contains(flag), "render --help lacks {flag}");
+    }
+}

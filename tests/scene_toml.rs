@@ -1,0 +1,133 @@
+//! The TOML scene reader: what it builds, and errors that name the file, the line and what was expected.
+
+use std::path::Path;
+
+use bareray::geometry::ShapeKind;
+use bareray::scene::desc::{Falloff, Pattern, PostFilter};
+use bareray::scene::{toml, SceneDesc, SceneError};
+
+fn parse(src: &str) -> Result<SceneDesc, SceneError> {
+    toml::parse(Path::new("dir/s.toml"), src)
+}
+
+/// Parses, expecting an error on `line` whose message contains `needle`.
+fn error_at(src: &str, line: usize, needle: &str) {
+    let e = parse(src).expect_err("scene should be rejected");
+    let text = e.to_string();
+    assert!(text.starts_with(&format!("dir/s.toml:{line}:")), "wrong place: {text}");
+    assert!(text.contains(needle), "message lacks {needle:?}: {text}");
+}
+
+#[test]
+fn empty_file_gives_defaults() {
+    let d = parse("").unwrap();
+    assert_eq!(d.camera.width, 640);
+    assert_eq!(d.materials.len(), 1);
+    assert!(d.spheres.is_empty() && d.shapes.is_empty());
+}
+
+#[test]
+fn full_scene_is_read() {
+    let d = parse(
+        r#"
+        [render]
+        samples = 9
+        postfilter = "lecture-3x3"
+        [materials.a]
+        color = [1, 0, 0]
+        [materials.b]
+        transmit = 0.5
+        [[lights]]
+        position = [1, 2, 3]
+        color = [1, 0.5, 0]
+        intensity = 2
+        falloff = "inverse-square"
+        [[spheres]]
+        center = [0, 0, 0]
+        radius = 1
+        material = "b"
+        [[spheres]]
+        center = [0, 0, 0]
+        radius = 1
+        transform = [{ scale = [2, 1, 1] }, { rotate = { axis = [0, 0, 1], degrees = 90 } }]
+        [[planes]]
+        normal = [0, 1, 0]
+        material = "a"
+    "#,
+    )
+    .unwrap();
+    assert_eq!(d.render.pattern, Pattern::Grid(3));
+    assert_eq!(d.render.postfilter, PostFilter::Lecture3x3);
+    assert_eq!(d.lights[0].color.y, 1.0);
+    assert_eq!(d.lights[0].falloff, Falloff::InverseSquare);
+    assert_eq!(d.spheres.len(), 1);
+    assert_eq!(d.materials[d.spheres[0].material as usize].transmit, 0.5);
+    assert_eq!(d.shapes.len(), 2);
+    assert_eq!(d.shapes[0].kind, ShapeKind::Sphere);
+    // Scaled 2× along x, then turned 90° about z: the long axis now lies along y.
+    let long = d.shapes[0].world_from_object.transform_vector3(glam::DVec3::X);
+    assert!((long - glam::DVec3::new(0.0, 2.0, 0.0)).length() < 1e-12, "{long}");
+    assert_eq!(d.shapes[1].kind, ShapeKind::Plane);
+    let n = d.shapes[1].world_from_object.transform_vector3(glam::DVec3::Z);
+    assert!((n - glam::DVec3::Y).length() < 1e-12);
+}
+
+#[test]
+fn syntax_error_names_the_line() {
+    error_at("[camera]\nwidth = 10\nheight = = 3\n", 3, "");
+}
+
+#[test]
+fn unknown_key_is_an_error() {
+    error_at("[[spheres]]\ncenter = [0,0,0]\nradus = 1\n", 3, "unknown field `radus`");
+}
+
+#[test]
+fn unknown_table_is_an_error() {
+    error_at("[camera]\nwidth = 3\n\n[lamps]\nx = 1\n", 4, "unknown field `lamps`");
+}
+
+#[test]
+fn wrong_type_says_what_was_expected() {
+    error_at("[camera]\nwidth = \"wide\"\n", 2, "u32");
+    error_at("[[spheres]]\ncenter = [0, 0]\nradius = 1\n", 2, "3");
+}
+
+#[test]
+fn missing_radius_is_an_error() {
+    let e = parse("\n[[spheres]]\ncenter = [0,0,0]\n").unwrap_err();
+    assert!(e.to_string().contains("missing field `radius`"), "{e}");
+    assert!(e.line >= 2, "{e}");
+}
+
+#[test]
+fn unknown_material_lists_the_known_ones() {
+    error_at(
+        "[materials.red]\n[[spheres]]\ncenter = [0,0,0]\nradius = 1\nmaterial = \"blue\"\n",
+        5,
+        "unknown material `blue`, expected one of default, red",
+    );
+}
+
+#[test]
+fn bad_values_name_their_line() {
+    error_at("[[spheres]]\ncenter = [0,0,0]\nradius = -1\n", 3, "radius must be positive");
+    error_at("[render]\nsamples = 5\n", 2, "square number");
+    error_at("[render]\npattern = \"half-pixel\"\nsamples = 4\n", 3, "9 samples");
+    error_at("[render]\nbackground = [0, -1, 0]\n", 2, "non-negative");
+    error_at("[materials.x]\nior = 0\n", 2, "ior must be positive");
+    error_at("[render]\npattern = \"jitter\"\n", 2, "grid");
+    error_at("[[planes]]\nnormal = [0, 0, 0]\n", 2, "non-zero");
+    error_at(
+        "[[spheres]]\ncenter = [0,0,0]\nradius = 1\ntransform = [{ scale = [1, 0, 1] }]\n",
+        4,
+        "singular",
+    );
+}
+
+#[test]
+fn camera_errors_point_at_the_camera_table() {
+    error_at("# c\n[camera]\nup = [0, 0, 1]\nlook_at = [0, 0, 10]\neye = [0, 0, 0]\n", 2, "parallel");
+    error_at("[camera]\nhfov = 40\npixel_size = 0.1\n", 1, "not both");
+    error_at("[camera]\nhfov = 200\n", 1, "(0, 180)");
+}
