@@ -6,6 +6,7 @@
 //! [`output`] writes.
 
 pub mod accel;
+pub mod aov;
 pub mod camera;
 pub mod cli;
 pub mod film;

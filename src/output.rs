@@ -45,7 +45,7 @@ pub enum OutputError {
         /// The output path.
         path: PathBuf,
         /// What went wrong.
-        source: Box<dyn std::error::Error + Send + Sync>,
+        source: BoxError,
     },
 }
 
@@ -88,21 +88,29 @@ pub fn to_srgb8(img: &Image) -> RgbImage {
     RgbImage::from_raw(img.width, img.height, raw).expect("buffer size matches the image")
 }
 
+/// A boxed error from an encoder or the file system.
+pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
+
 /// Writes `img` to `path` in the format its extension names, atomically.
 pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    let err =
-        |e: Box<dyn std::error::Error + Send + Sync>| OutputError::Write { path: path.to_owned(), source: e };
+    write_atomic(path, |tmp| encode(img, format, tmp))
+        .map_err(|source| OutputError::Write { path: path.to_owned(), source })
+}
+
+/// Runs `write` on a temporary file beside `path`, then renames it to `path`; on failure the temporary
+/// file is removed and `path` is left as it was.
+pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), BoxError>) -> Result<(), BoxError> {
     let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = encode(img, format, &tmp).and_then(|()| fs::rename(&tmp, path).map_err(Into::into));
+    let result = write(&tmp).and_then(|()| fs::rename(&tmp, path).map_err(Into::into));
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
     }
-    result.map_err(err)
+    result
 }
 
-fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), Box<dyn std::error::Error + Send + Sync>> {
+fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
     let mut file = BufWriter::new(fs::File::create(tmp)?);
     match format {
         Format::Png => to_srgb8(img).write_to(&mut file, ImageFormat::Png)?,
@@ -111,7 +119,6 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), Box<dyn std::er
             let raw = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
             let buf =
                 Rgb32FImage::from_raw(img.width, img.height, raw).expect("buffer size matches the image");
-            // EXR needs Seek; BufWriter<File> has it.
             buf.write_to(&mut file, ImageFormat::OpenExr)?;
         }
     }
@@ -121,18 +128,13 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), Box<dyn std::er
 
 /// Writes raw bytes atomically (for text outputs such as generated scenes).
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
-    let result = (|| {
-        let mut f = fs::File::create(&tmp)?;
+    write_atomic(path, |tmp| {
+        let mut f = fs::File::create(tmp)?;
         f.write_all(bytes)?;
         f.sync_all()?;
-        fs::rename(&tmp, path)
-    })();
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
-    }
-    result
+        Ok(())
+    })
+    .map_err(std::io::Error::other)
 }
 
 #[cfg(test)]

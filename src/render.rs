@@ -45,6 +45,16 @@ fn tiles(width: u32, height: u32) -> Vec<Tile> {
     out
 }
 
+/// A pool of `threads` workers (rayon's default when `None`): each render gets its own pool so that
+/// `--threads` holds even when the caller already runs inside rayon.
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        builder = builder.num_threads(n);
+    }
+    builder.build()
+}
+
 /// Renders `scene` on `threads` threads (rayon's default when `None`), ticking `progress` once per tile.
 pub fn render(
     scene: &Scene,
@@ -55,12 +65,7 @@ pub fn render(
     let (width, height) = (scene.camera.width, scene.camera.height);
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
-    let mut builder = rayon::ThreadPoolBuilder::new();
-    if let Some(n) = threads {
-        builder = builder.num_threads(n);
-    }
-    // A pool of our own so `--threads` holds even when the caller already runs inside rayon.
-    let pool = builder.build()?;
+    let pool = thread_pool(threads)?;
     let traced: Vec<(Tile, Vec<Rgb>, RayCounts)> = pool.install(|| {
         tiles
             .par_iter()

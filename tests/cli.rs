@@ -128,3 +128,66 @@ fn help_explains_the_commands() {
         assert!(text.contains(flag), "render --help lacks {flag}");
     }
 }
+
+/// `--aov` writes float EXR channels Z, N.X, N.Y, N.Z and id; camera flags override the scene's camera.
+#[test]
+fn aov_channels_hold_depth_normal_and_id() {
+    use exr::prelude::*;
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("one.toml");
+    // The camera in the file looks away; the flags turn it toward the sphere.
+    std::fs::write(
+        &scene,
+        "[camera]\neye = [9, 9, 9]\nlook_at = [20, 9, 9]\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\n",
+    )
+    .unwrap();
+    let out = dir.path().join("one.png");
+    let args = ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--aov", "depth,normal,id"];
+    let flags = [
+        "--eye", "0,0,-4", "--look", "0,0,0", "--up", "0,1,0", "--hfov", "45", "--width", "31", "--height",
+        "21",
+    ];
+    let run = bareray(&[&args[..], &flags[..]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = read_all_flat_layers_from_file(dir.path().join("one.aov.exr")).unwrap();
+    let layer = &img.layer_data[0];
+    assert_eq!(layer.size, Vec2(31, 21));
+    let channel = |name: &str| -> Vec<f32> {
+        let c = layer
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == name)
+            .unwrap_or_else(|| panic!("{name}"));
+        c.sample_data.values_as_f32().collect()
+    };
+    let (z, id, nz) = (channel("Z"), channel("id"), channel("N.Z"));
+    channel("N.X");
+    channel("N.Y");
+    let centre = 10 * 31 + 15;
+    // The centre ray runs straight down +z from z = −4 and meets the unit sphere at z = −1.
+    assert_eq!(z[centre], 3.0);
+    assert_eq!(id[centre], 0.0);
+    assert_eq!(nz[centre], -1.0);
+    assert_eq!(z[0], f32::INFINITY);
+    assert_eq!(id[0], -1.0);
+}
+
+#[test]
+fn stats_report_scene_rays_and_times() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.png");
+    let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "40", "--stats"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = String::from_utf8_lossy(&run.stdout);
+    for needle in [
+        "3 primitives (2 spheres, 0 ellipsoids, 1 planes), 2 lights",
+        "primary",
+        "shadow",
+        "parse",
+        "build",
+        "Mrays/s",
+    ] {
+        assert!(text.contains(needle), "--stats lacks {needle:?}: {text}");
+    }
+}

@@ -1,5 +1,6 @@
 //! The command line: one file per subcommand; `main.rs` only calls [`main`].
 
+mod camera_args;
 mod render;
 
 use std::process::ExitCode;
@@ -35,5 +36,16 @@ pub fn main() -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use clap::CommandFactory;
+
+    #[test]
+    fn command_line_definition_is_consistent() {
+        Cli::command().debug_assert();
     }
 }

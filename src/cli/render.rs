@@ -8,8 +8,11 @@ use anyhow::{bail, Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
+use super::camera_args::CameraArgs;
+use crate::aov::{self, AovList};
+use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
-use crate::render::render;
+use crate::render::{render, thread_pool, Rendered};
 use crate::scene::desc::Pattern;
 use crate::scene::{toml, Scene, SceneDesc};
 
@@ -30,12 +33,8 @@ pub struct RenderArgs {
     /// Default: the scene's name with .png, in the current directory.
     #[arg(short, long)]
     pub output: Option<PathBuf>,
-    /// Image width in pixels. Given alone, the height follows the scene's aspect ratio.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub width: Option<u32>,
-    /// Image height in pixels. Given alone, the width follows the scene's aspect ratio.
-    #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub height: Option<u32>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
     /// Samples per pixel on a regular n×n grid (1, 4, 9, 16, ...); overrides the scene.
     #[arg(long)]
     pub spp: Option<u32>,
@@ -45,14 +44,32 @@ pub struct RenderArgs {
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
+    /// Also write raw primary-ray results (one sample per pixel at pixel centres) as float EXR channels
+    /// to OUT's name with `.aov.exr`: a comma list of depth (channel Z), normal (N.X, N.Y, N.Z), id.
+    #[arg(long, value_parser = aov::parse_list)]
+    pub aov: Option<AovList>,
+    /// Print a scene summary, rays by kind and the time split.
+    #[arg(long)]
+    pub stats: bool,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
 }
 
+/// Wall-clock seconds of each stage.
+#[derive(Default)]
+struct Timings {
+    parse: f64,
+    build: f64,
+    render: f64,
+    aov: f64,
+    write: f64,
+}
+
 /// Runs `bareray render`.
 pub fn run(args: RenderArgs) -> Result<()> {
-    let t_parse = Instant::now();
+    let mut time = Timings::default();
+    let clock = Instant::now();
     let (mut desc, name) = match &args.scene {
         Some(path) => (load_scene(path)?, stem(path)),
         None => (toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?, "demo".to_owned()),
@@ -61,45 +78,103 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // Fail on a bad output name now, not after the render.
     Format::from_path(&output)?;
     apply_overrides(&mut desc, &args)?;
-    let scene = Scene::compile(&desc).context("camera")?;
-    let parse_s = t_parse.elapsed().as_secs_f64();
+    time.parse = clock.elapsed().as_secs_f64();
 
-    let progress = if !args.quiet && std::io::stderr().is_terminal() {
-        let bar = ProgressBar::new(0);
-        bar.set_style(
-            ProgressStyle::with_template(
-                "{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} tiles, eta {eta}",
-            )
-            .expect("valid template"),
-        );
-        bar
-    } else {
-        ProgressBar::hidden()
-    };
-    let rendered = render(&scene, args.threads.map(|t| t as usize), &progress)?;
+    let clock = Instant::now();
+    let scene = Scene::compile(&desc).context("camera")?;
+    time.build = clock.elapsed().as_secs_f64();
+
+    let threads = args.threads.map(|t| t as usize);
+    let progress = progress_bar(args.quiet);
+    let rendered = render(&scene, threads, &progress)?;
     progress.finish_and_clear();
-    let t_write = Instant::now();
+    time.render = rendered.seconds;
+
+    let aovs = match &args.aov {
+        None => None,
+        Some(which) => {
+            let clock = Instant::now();
+            let img = thread_pool(threads)?.install(|| aov::render_aovs(&scene));
+            time.aov = clock.elapsed().as_secs_f64();
+            Some((img, which))
+        }
+    };
+    let clock = Instant::now();
     write_image(&rendered.image, &output)?;
-    let write_s = t_write.elapsed().as_secs_f64();
-    if !args.quiet {
-        let c = rendered.counts;
-        println!(
-            "{}: {}x{} in {:.3} s (parse {:.3} s, write {:.3} s); {} rays ({} primary, {} shadow, {} reflection, {} refraction), {:.2} Mrays/s",
-            output.display(),
-            scene.camera.width,
-            scene.camera.height,
-            rendered.seconds,
-            parse_s,
-            write_s,
-            c.total(),
-            c.primary,
-            c.shadow,
-            c.reflection,
-            c.refraction,
-            c.total() as f64 / rendered.seconds / 1e6
-        );
+    if let Some((img, which)) = aovs {
+        let path = aov::aov_path(&output);
+        aov::write_exr(&img, &which.0, scene.geometry.len(), &path)
+            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
+    }
+    time.write = clock.elapsed().as_secs_f64();
+
+    if args.stats {
+        print_stats(&scene, &rendered, &time);
+    } else if !args.quiet {
+        print_summary(&output, &scene, &rendered, &time);
     }
     Ok(())
+}
+
+fn progress_bar(quiet: bool) -> ProgressBar {
+    if quiet || !std::io::stderr().is_terminal() {
+        return ProgressBar::hidden();
+    }
+    let bar = ProgressBar::new(0);
+    let style =
+        ProgressStyle::with_template("{spinner} [{elapsed_precise}] {wide_bar} {pos}/{len} tiles, eta {eta}")
+            .expect("valid template");
+    bar.set_style(style);
+    bar
+}
+
+fn print_summary(output: &Path, scene: &Scene, r: &Rendered, time: &Timings) {
+    let c = r.counts;
+    println!(
+        "{}: {}x{} in {:.3} s (parse {:.3} s, write {:.3} s); {} rays ({} primary, {} shadow, {} reflection, \
+         {} refraction), {:.2} Mrays/s",
+        output.display(),
+        scene.camera.width,
+        scene.camera.height,
+        r.seconds,
+        time.parse,
+        time.write,
+        c.total(),
+        c.primary,
+        c.shadow,
+        c.reflection,
+        c.refraction,
+        c.total() as f64 / r.seconds / 1e6
+    );
+}
+
+fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
+    let g = &scene.geometry;
+    let count = |kind| g.shapes.iter().filter(|s| s.kind == kind).count();
+    println!(
+        "scene: {} primitives ({} spheres, {} ellipsoids, {} planes), {} lights, {} materials",
+        g.len(),
+        g.spheres.len(),
+        count(ShapeKind::Sphere),
+        count(ShapeKind::Plane),
+        scene.lights.len(),
+        scene.materials.len()
+    );
+    println!("image: {}x{}, {:?}", scene.camera.width, scene.camera.height, scene.render.pattern);
+    let c = r.counts;
+    println!(
+        "rays: {} total: {} primary, {} shadow, {} reflection, {} refraction",
+        c.total(),
+        c.primary,
+        c.shadow,
+        c.reflection,
+        c.refraction
+    );
+    println!(
+        "time: parse {:.3} s, build {:.3} s, render {:.3} s, aov {:.3} s, write {:.3} s",
+        time.parse, time.build, time.render, time.aov, time.write
+    );
+    println!("throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
 }
 
 fn stem(path: &Path) -> String {
@@ -116,14 +191,7 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc> {
 }
 
 fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {
-    let cam = &mut desc.camera;
-    let aspect = f64::from(cam.width) / f64::from(cam.height);
-    match (args.width, args.height) {
-        (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
-        (Some(w), None) => (cam.width, cam.height) = (w, ((f64::from(w) / aspect).round() as u32).max(1)),
-        (None, Some(h)) => (cam.width, cam.height) = (((f64::from(h) * aspect).round() as u32).max(1), h),
-        (None, None) => {}
-    }
+    args.camera.apply(desc)?;
     if let Some(spp) = args.spp {
         let n = toml::grid_side(spp).map_err(|m| anyhow::anyhow!("--spp: {m}"))?;
         desc.render.pattern = Pattern::Grid(n);
