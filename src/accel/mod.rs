@@ -1,6 +1,7 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit). Brute force over SoA arrays for now; the BVH comes with large sphere fields.
 
+pub mod bvh;
 mod brute;
 
 use crate::geometry::{Ray, Shape, NO_PRIM};
@@ -34,6 +35,17 @@ impl Spheres {
     #[inline(always)]
     pub fn center(&self, i: usize) -> Vec3f {
         V3::new(self.cx[i], self.cy[i], self.cz[i])
+    }
+    /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.
+    pub fn permuted(&self, order: &[u32]) -> Spheres {
+        let pick = |v: &[f32]| order.iter().map(|&i| v[i as usize]).collect();
+        Spheres {
+            cx: pick(&self.cx),
+            cy: pick(&self.cy),
+            cz: pick(&self.cz),
+            r: pick(&self.r),
+            material: order.iter().map(|&i| self.material[i as usize]).collect(),
+        }
     }
     /// Appends a sphere.
     pub fn push(&mut self, center: Vec3f, radius: f32, material: u32) {
