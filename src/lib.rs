@@ -16,3 +16,4 @@ pub mod render;
 pub mod sample;
 pub mod scene;
 pub mod shade;
+pub mod simd;
