@@ -13,6 +13,7 @@ use crate::math::{Mask, Real};
 /// The vector is private so that only comparisons, mask logic and [`Lanes::mask_from_bits`] make masks:
 /// wide's `select` reads the sign bit alone, which matches a scalar `if` only for such all-or-nothing lanes.
 /// There is no `PartialEq`: an all-ones lane is a NaN as a float; compare [`Lanes::move_mask`] instead.
+/// `Debug` prints the bitmask with lane 0 as the rightmost digit.
 #[derive(Clone, Copy)]
 #[repr(transparent)]
 pub struct LaneMask<V>(V);
