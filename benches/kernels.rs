@@ -1,1 +1,113 @@
-fn main() {}
+//! Brute-force sphere kernels at K = 1 (the scalar path), 4, 8 and 16, in rays per second:
+//!
+//! - `packet_vs_spheres/K`: packets of K camera rays against every sphere (lanes = rays).
+//! - `ray_vs_spheres/K`: one camera ray against K spheres at a time (lanes = spheres).
+//!
+//! The scene is the peer benchmark's sphere field (splitmix64, DESIGN.md) with 64 spheres in [-1, 1]³, seen
+//! by its camera at 64×64 pixels: most rays hit something.
+
+use std::hint::black_box;
+
+use bareray::accel::Spheres;
+use bareray::camera::Camera;
+use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket};
+use bareray::math::V3;
+use bareray::scene::desc::{Aim, CameraDesc};
+use bareray::simd::{IdLanes, Lanes};
+use criterion::measurement::WallTime;
+use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
+use glam::DVec3;
+use wide::{f32x16, f32x4, f32x8};
+
+const SPHERES: usize = 64;
+const SIDE: u32 = 64;
+
+/// The benchmark contract's generator: splitmix64, 24-bit uniforms.
+struct SplitMix(u64);
+
+impl SplitMix {
+    fn next(&mut self) -> u64 {
+        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
+        let mut z = self.0;
+        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
+        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
+        z ^ (z >> 31)
+    }
+    fn uniform(&mut self) -> f64 {
+        (self.next() >> 40) as f64 * 2f64.powi(-24)
+    }
+}
+
+fn sphere_field(n: usize) -> Spheres {
+    let mut rng = SplitMix(1);
+    let s = 2.0 / (n as f64).cbrt();
+    let (rmin, rmax) = (0.1 * s, 0.25 * s);
+    let mut spheres = Spheres::default();
+    for _ in 0..n {
+        let (ux, uy, uz, ur) = (rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform());
+        let at = |u: f64| (-1.0 + u * 2.0) as f32;
+        spheres.push(V3::new(at(ux), at(uy), at(uz)), (rmin + ur * (rmax - rmin)) as f32, 0);
+    }
+    spheres
+}
+
+fn camera_rays() -> Vec<Ray<f32>> {
+    let desc = CameraDesc {
+        eye: DVec3::new(0.0, 0.0, -4.0),
+        aim: Aim::LookAt(DVec3::ZERO),
+        width: SIDE,
+        height: SIDE,
+        ..CameraDesc::default()
+    };
+    let camera = Camera::new(&desc).expect("valid camera").to_f32();
+    (0..SIDE * SIDE).map(|p| camera.ray((p % SIDE) as f32 + 0.5, (p / SIDE) as f32 + 0.5)).collect()
+}
+
+/// Lanes = rays: the rays regrouped into packets once, outside the timed loop.
+fn packet_vs_spheres<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, spheres: &Spheres, rays: &[Ray<f32>]) {
+    let packets: Vec<RayPacket<F>> =
+        rays.chunks(F::K).map(|c| RayPacket::from_rays(c, f32::INFINITY)).collect();
+    group.bench_function(BenchmarkId::new("packet_vs_spheres", F::K), |b| {
+        b.iter(|| {
+            let mut hits = 0u32;
+            for packet in &packets {
+                let h = intersect_spheres_k(black_box(spheres), black_box(packet));
+                hits = hits.wrapping_add(h.prim.lane(0));
+            }
+            hits
+        })
+    });
+}
+
+/// Lanes = spheres.
+fn ray_vs_spheres<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, spheres: &Spheres, rays: &[Ray<f32>]) {
+    group.bench_function(BenchmarkId::new("ray_vs_spheres", F::K), |b| {
+        b.iter(|| {
+            let mut hits = 0u32;
+            for ray in rays {
+                let h = intersect_spheres_1::<F>(black_box(spheres), black_box(ray), f32::INFINITY);
+                hits = hits.wrapping_add(h.prim);
+            }
+            hits
+        })
+    });
+}
+
+fn kernels(c: &mut Criterion) {
+    let spheres = sphere_field(SPHERES);
+    let rays = camera_rays();
+    let mut group = c.benchmark_group(format!("{SPHERES}_spheres"));
+    group.throughput(Throughput::Elements(rays.len() as u64));
+    packet_vs_spheres::<f32>(&mut group, &spheres, &rays);
+    packet_vs_spheres::<f32x4>(&mut group, &spheres, &rays);
+    packet_vs_spheres::<f32x8>(&mut group, &spheres, &rays);
+    packet_vs_spheres::<f32x16>(&mut group, &spheres, &rays);
+    ray_vs_spheres::<f32>(&mut group, &spheres, &rays);
+    ray_vs_spheres::<f32x4>(&mut group, &spheres, &rays);
+    ray_vs_spheres::<f32x8>(&mut group, &spheres, &rays);
+    ray_vs_spheres::<f32x16>(&mut group, &spheres, &rays);
+    group.finish();
+}
+
+criterion_group!(benches, kernels);
+criterion_main!(benches);

@@ -17,3 +17,4 @@ pub mod render;
 pub mod sample;
 pub mod scene;
 pub mod shade;
+pub mod simd;

@@ -1,11 +1,13 @@
 //! Primitives and their intersection kernels. Each kernel is generic over [`crate::math::Real`]: the f32
 //! instance is the scalar reference path, the f64 instance the accuracy oracle.
 
+mod packet;
 mod plane;
 mod ray;
 mod shape;
 mod sphere;
 
+pub use packet::{intersect_spheres_1, intersect_spheres_k, HitPacket, RayPacket};
 pub use plane::intersect_plane;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};

@@ -1,0 +1,167 @@
+//! Ray packets, hit packets, and the two brute-force sphere kernels built on them.
+//!
+//! Both kernels run the scalar reference formula ([`intersect_sphere`]) at a lane type, so their results are
+//! bit-identical to [`crate::accel::Geometry::intersect`] over the same spheres (for camera rays):
+//!
+//! - [`intersect_spheres_k`]: lanes = rays. K rays against each sphere in turn, the sphere splatted.
+//! - [`intersect_spheres_1`]: lanes = spheres. One ray against K spheres at a time, loaded straight from the
+//!   SoA arrays, then a reduction over the lanes.
+//!
+//! Both keep the scalar tie rule: a sphere replaces the best hit only when its t is strictly smaller, so of
+//! equal t the lower id wins.
+
+use crate::accel::Spheres;
+use crate::math::{Mask, V3};
+use crate::simd::{IdLanes, Lanes};
+
+use super::{intersect_sphere, Hit, Ray, NO_PRIM};
+
+/// K rays in structure-of-arrays layout: lane `i` of every field belongs to ray `i`.
+///
+/// With `F = f32x8`, `origin.x` holds the eight origins' x coordinates in one register, `origin.y` the y
+/// coordinates, and so on: 6 vectors for the rays, 1 for the ranges and 1 for the mask, so a kernel reads
+/// whole registers and never shuffles. `F = f32` is a packet of one ray.
+#[derive(Clone, Copy, Debug)]
+pub struct RayPacket<F: Lanes> {
+    /// Ray origins.
+    pub origin: V3<F>,
+    /// Ray directions (not necessarily unit length).
+    pub dir: V3<F>,
+    /// Exclusive upper end of each ray's range `[0, t_max)`.
+    pub t_max: F,
+    /// Lanes that carry a ray; the others are ignored by every kernel and report misses.
+    pub active: F::Mask,
+}
+
+impl<F: Lanes> RayPacket<F> {
+    /// The rays as a [`Ray`] of lanes, the form the generic kernels take.
+    #[inline(always)]
+    pub fn ray(&self) -> Ray<F> {
+        Ray::new(self.origin, self.dir)
+    }
+
+    /// Lane `i` gets `f(i) = (ray, t_max, active)`.
+    pub fn from_fn(mut f: impl FnMut(usize) -> (Ray<f32>, f32, bool)) -> Self {
+        let lanes: Vec<_> = (0..F::K).map(&mut f).collect();
+        let get = |g: fn(&(Ray<f32>, f32, bool)) -> f32| F::from_fn(|i| g(&lanes[i]));
+        Self {
+            origin: V3::new(get(|l| l.0.origin.x), get(|l| l.0.origin.y), get(|l| l.0.origin.z)),
+            dir: V3::new(get(|l| l.0.dir.x), get(|l| l.0.dir.y), get(|l| l.0.dir.z)),
+            t_max: get(|l| l.1),
+            active: F::mask_from_fn(|i| lanes[i].2),
+        }
+    }
+
+    /// Up to K rays sharing one `t_max`; lanes past `rays.len()` are inactive (and zero).
+    pub fn from_rays(rays: &[Ray<f32>], t_max: f32) -> Self {
+        assert!(rays.len() <= F::K, "{} rays for {} lanes", rays.len(), F::K);
+        let zero = Ray::new(V3::all(0.0), V3::all(0.0));
+        Self::from_fn(|i| (rays.get(i).copied().unwrap_or(zero), t_max, i < rays.len()))
+    }
+
+    /// Lane `i` as a scalar ray, its `t_max` and whether it is active.
+    pub fn lane(&self, i: usize) -> (Ray<f32>, f32, bool) {
+        let v = |p: V3<F>| V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
+        (Ray::new(v(self.origin), v(self.dir)), self.t_max.lane(i), F::mask_lane(self.active, i))
+    }
+}
+
+/// The closest hits of a packet: lane `i` is ray `i`'s [`Hit`] (`t = inf`, `prim = NO_PRIM` on a miss or an
+/// inactive lane).
+#[derive(Clone, Copy, Debug)]
+pub struct HitPacket<F: Lanes> {
+    /// Ray parameter of each hit.
+    pub t: F,
+    /// Primitive id of each hit.
+    pub prim: F::Ids,
+}
+
+impl<F: Lanes> HitPacket<F> {
+    /// No hits in any lane.
+    pub fn miss() -> Self {
+        Self { t: F::splat_f32(f32::INFINITY), prim: F::Ids::splat(NO_PRIM) }
+    }
+
+    /// Lanes that hit something. A hit's t is below its `t_max ≤ inf`, so "finite" is "hit".
+    #[inline(always)]
+    pub fn found(&self) -> F::Mask {
+        self.t.lt(F::splat_f32(f32::INFINITY))
+    }
+
+    /// Lane `i` as a scalar hit.
+    pub fn lane(&self, i: usize) -> Hit {
+        Hit { t: self.t.lane(i), prim: self.prim.lane(i) }
+    }
+}
+
+/// Closest hits of a packet of camera rays with every sphere (lanes = rays): the packet twin of
+/// [`crate::accel::Geometry::intersect`] over spheres with [`super::Departure::CAMERA`].
+pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -> HitPacket<F> {
+    let ray = packet.ray();
+    let mut best = HitPacket { t: packet.t_max, prim: F::Ids::splat(NO_PRIM) };
+    if !packet.active.any() {
+        return HitPacket::miss();
+    }
+    let mut found = F::mask_from_bits(0);
+    for i in 0..spheres.len() {
+        let centre = F::splat_v3(spheres.center(i));
+        let (hit, t) = intersect_sphere(centre, F::splat_f32(spheres.r[i]), &ray, best.t);
+        // `t < best.t` inside the kernel is the strict comparison that lets the lower id keep a tie.
+        let hit = hit & packet.active;
+        best.t = F::select(hit, t, best.t);
+        best.prim = F::select_ids(hit, F::Ids::splat(i as u32), best.prim);
+        found = found | hit;
+    }
+    // Misses report `inf`, not `t_max`, as the scalar query does.
+    best.t = F::select(found, best.t, F::splat_f32(f32::INFINITY));
+    best
+}
+
+/// Closest hit of one camera ray with every sphere, K spheres at a time (lanes = spheres): the transposed
+/// twin of [`intersect_spheres_k`], with the same result as the scalar query.
+pub fn intersect_spheres_1<F: Lanes>(spheres: &Spheres, ray: &Ray<f32>, t_max: f32) -> Hit {
+    let n = spheres.len();
+    let ray_k = Ray::new(F::splat_v3(ray.origin), F::splat_v3(ray.dir));
+    let mut best = HitPacket { t: F::splat_f32(t_max), prim: F::Ids::splat(NO_PRIM) };
+    let mut at = 0;
+    while at + F::K <= n {
+        sphere_chunk(spheres, &ray_k, at, None, &mut best);
+        at += F::K;
+    }
+    if at < n {
+        sphere_chunk(spheres, &ray_k, at, Some(F::lanes_below(n - at)), &mut best);
+    }
+    closest_lane(&best)
+}
+
+/// Spheres `at..at + K` against a splatted ray, updating each lane's best hit; `valid` masks a tail chunk.
+#[inline(always)]
+fn sphere_chunk<F: Lanes>(
+    s: &Spheres,
+    ray: &Ray<F>,
+    at: usize,
+    valid: Option<F::Mask>,
+    best: &mut HitPacket<F>,
+) {
+    // A zero-radius sphere at the origin pads the tail; `valid` masks it out whatever it would give.
+    let centre = F::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
+    let (hit, t) = intersect_sphere(centre, F::load_partial(&s.r, at, 0.0), ray, best.t);
+    let hit = valid.map_or(hit, |v| hit & v);
+    best.t = F::select(hit, t, best.t);
+    best.prim = F::select_ids(hit, F::Ids::splat(at as u32) + F::lane_ids(), best.prim);
+}
+
+/// The smallest t over the lanes, of equal t the lowest id: lane `l` saw spheres `l, l + K, …` in order, so
+/// it holds their lowest-id closest hit, and this picks the scalar loop's answer among the lanes.
+fn closest_lane<F: Lanes>(best: &HitPacket<F>) -> Hit {
+    let mut out = Hit::MISS;
+    for i in 0..F::K {
+        let lane = best.lane(i);
+        // Float comparisons, not bits: −0 and +0 tie, as they do in the scalar loop.
+        let closer = lane.t < out.t || (lane.t == out.t && lane.prim < out.prim);
+        if lane.prim != NO_PRIM && closer {
+            out = lane;
+        }
+    }
+    out
+}
