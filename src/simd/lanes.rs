@@ -99,6 +99,14 @@ impl Lanes for f32 {
             if_false
         }
     }
+    #[inline(always)]
+    fn ids_eq(a: u32, b: u32) -> bool {
+        a == b
+    }
+    #[inline(always)]
+    fn ids_lt(a: u32, b: u32) -> bool {
+        a < b
+    }
 }
 
 /// Implements everything for one width: float type, its u32 lanes, and K.
@@ -207,6 +215,14 @@ macro_rules! impl_lanes {
                 // Reinterprets the float mask's bits as u32 lanes (wide's `Select<u32xK> for f32xK`).
                 m.0.select(if_true, if_false)
             }
+            #[inline(always)]
+            fn ids_eq(a: $u, b: $u) -> Self::Mask {
+                LaneMask($f::from_bits(a.simd_eq(b)))
+            }
+            #[inline(always)]
+            fn ids_lt(a: $u, b: $u) -> Self::Mask {
+                LaneMask($f::from_bits(a.simd_lt(b)))
+            }
         }
     };
 }
@@ -252,6 +268,12 @@ mod tests {
             assert_eq!(F::mask_lane(le, i), y <= x, "lane {i}");
         }
         let ids = F::select_ids(lt, F::lane_ids(), F::Ids::splat(99));
+        let (two, big) = (F::Ids::splat(2), F::Ids::splat(u32::MAX));
+        for i in 0..F::K {
+            assert_eq!(F::mask_lane(F::ids_eq(F::lane_ids(), two), i), i == 2);
+            assert_eq!(F::mask_lane(F::ids_lt(F::lane_ids(), two), i), i < 2);
+            assert!(F::mask_lane(F::ids_lt(F::lane_ids(), big), i), "unsigned compare");
+        }
         for i in 0..F::K {
             let want = if b.lane(i) < a.lane(i) { i as u32 } else { 99 };
             assert_eq!(ids.lane(i), want);

@@ -80,6 +80,10 @@ pub trait Lanes: Real {
     fn mask_from_bits(bits: u32) -> Self::Mask;
     /// Lane `i` of `if_true` where the mask is set, else of `if_false`.
     fn select_ids(m: Self::Mask, if_true: Self::Ids, if_false: Self::Ids) -> Self::Ids;
+    /// `a == b` per lane, as a float mask.
+    fn ids_eq(a: Self::Ids, b: Self::Ids) -> Self::Mask;
+    /// `a < b` per lane (unsigned), as a float mask.
+    fn ids_lt(a: Self::Ids, b: Self::Ids) -> Self::Mask;
 
     /// The value in lane `i` (panics when `i ≥ K`).
     #[inline(always)]
