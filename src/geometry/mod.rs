@@ -2,11 +2,13 @@
 //! instance is the scalar reference path, the f64 instance the accuracy oracle.
 
 mod plane;
+pub mod polygon;
 mod ray;
 mod shape;
 mod sphere;
 
 pub use plane::intersect_plane;
+pub use polygon::intersect_triangle;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};
 pub use sphere::{far_root, first_root, intersect_sphere, sphere_roots, Roots};
