@@ -1,9 +1,11 @@
-//! Scenes: read (TOML, later NFF and xyzr) into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
+//! Scenes: read (TOML, NFF, xyzr) into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
 
 mod compile;
 pub mod desc;
 pub mod error;
+pub mod nff;
 pub mod toml;
+pub mod xyzr;
 
 pub use compile::{Light, Scene};
 pub use desc::SceneDesc;
