@@ -1,8 +1,9 @@
-//! Scenes: read (TOML, NFF, xyzr) into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
+//! Scenes: read (TOML, NFF, xyzr) or generated into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
 
 mod compile;
 pub mod desc;
 pub mod error;
+pub mod generate;
 pub mod nff;
 pub mod toml;
 pub mod xyzr;
