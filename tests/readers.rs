@@ -265,7 +265,10 @@ fn field_box_seed_and_radii_are_honoured_and_checked() {
     );
     assert!(bad(FieldParams { rmin: Some(0.3), rmax: Some(0.2), ..Default::default() })
         .contains("must not exceed"));
-    assert!(bad(FieldParams { rmin: Some(-1.0), ..Default::default() }).contains("positive"));
+    assert!(bad(FieldParams { rmin: Some(-1.0), ..Default::default() }).contains("--rmin must be a positive"));
+    assert!(
+        bad(FieldParams { rmax: Some(f64::NAN), ..Default::default() }).contains("--rmax must be a positive")
+    );
 }
 
 // ---------------------------------------------------------------------------------------------------- flake

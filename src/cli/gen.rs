@@ -6,8 +6,8 @@ use std::time::Instant;
 use anyhow::{bail, Context, Result};
 use clap::{Args, Subcommand};
 
-use crate::output::write_bytes_atomic;
-use crate::scene::generate::{flake_count, flake_nff, FieldParams, MAX_FLAKE_LEVEL};
+use crate::output::write_atomic_with;
+use crate::scene::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
 
 /// Arguments of `bareray gen`.
 #[derive(Args, Debug)]
@@ -39,10 +39,10 @@ pub struct FieldArgs {
     #[arg(long = "box", value_name = "x0,y0,z0,x1,y1,z1", allow_hyphen_values = true)]
     pub bounds: Option<String>,
     /// Smallest radius [default: 0.1·s, s = (x1 − x0)/cbrt(count)].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rmin: Option<f64>,
     /// Largest radius [default: 0.25·s].
-    #[arg(long)]
+    #[arg(long, allow_negative_numbers = true)]
     pub rmax: Option<f64>,
     /// Output file (.xyzr), written atomically.
     #[arg(short, long)]
@@ -75,8 +75,10 @@ fn field(a: FieldArgs) -> Result<()> {
     if let Some(b) = &a.bounds {
         (params.lo, params.hi) = parse_box(b)?;
     }
-    let text = params.to_xyzr()?;
-    write(&a.output, &text)?;
+    // Check first so that bad arguments say so instead of failing a half-written file.
+    params.radii()?;
+    write_atomic_with(&a.output, |w| params.write_xyzr(w))
+        .with_context(|| format!("{}: cannot write", a.output.display()))?;
     report(a.count, &a.output, start);
     Ok(())
 }
@@ -86,13 +88,10 @@ fn flake(a: FlakeArgs) -> Result<()> {
     if a.level > MAX_FLAKE_LEVEL {
         bail!("--level must be at most {MAX_FLAKE_LEVEL}, got {}", a.level);
     }
-    write(&a.output, &flake_nff(a.level)?)?;
+    write_atomic_with(&a.output, |w| write_flake_nff(a.level, w))
+        .with_context(|| format!("{}: cannot write", a.output.display()))?;
     report(flake_count(a.level), &a.output, start);
     Ok(())
-}
-
-fn write(path: &Path, text: &str) -> Result<()> {
-    write_bytes_atomic(path, text.as_bytes()).with_context(|| format!("{}: cannot write", path.display()))
 }
 
 fn report(count: u64, path: &Path, start: Instant) {

@@ -1,7 +1,7 @@
 //! Scene generators: the benchmark contract's random sphere field (DESIGN.md, "Peer benchmark contract") and
 //! SPD's sphereflake (`balls`), written as `.xyzr` and `.nff` text.
 
-use std::fmt::Write as _;
+use std::io::{self, Write};
 
 use glam::{DMat3, DVec3};
 use thiserror::Error;
@@ -75,8 +75,10 @@ impl FieldParams {
         }
         let s = (self.hi[0] - self.lo[0]) / (self.count as f64).cbrt();
         let (rmin, rmax) = (self.rmin.unwrap_or(0.1 * s), self.rmax.unwrap_or(0.25 * s));
-        if !(rmin > 0.0 && rmin.is_finite() && rmax.is_finite()) {
-            return Err(GenError(format!("--rmin must be a positive finite number, got {rmin}")));
+        for (name, r) in [("--rmin", rmin), ("--rmax", rmax)] {
+            if !(r > 0.0 && r.is_finite()) {
+                return Err(GenError(format!("{name} must be a positive finite number, got {r}")));
+            }
         }
         if rmin > rmax {
             return Err(GenError(format!("--rmin ({rmin}) must not exceed --rmax ({rmax})")));
@@ -96,21 +98,29 @@ impl FieldParams {
         }))
     }
 
-    /// The field as `.xyzr` text: a `#` header naming the parameters, then `x y z r` per line. f32 `Display`
-    /// is the shortest text that parses back to the same f32, so the file reproduces the floats exactly.
-    pub fn to_xyzr(&self) -> Result<String, GenError> {
-        let (rmin, rmax) = self.radii()?;
-        let mut out = String::with_capacity(self.count.min(1 << 28) as usize * 44 + 256);
-        let _ = writeln!(
-            out,
+    /// Writes the field as `.xyzr`: a `#` header naming the parameters, then `x y z r` per line. f32
+    /// `Display` is the shortest text that parses back to the same f32, so the file reproduces the floats
+    /// exactly. Invalid parameters are an `InvalidInput` error before anything is written.
+    pub fn write_xyzr(&self, w: &mut impl Write) -> io::Result<()> {
+        let (rmin, rmax) = self.radii().map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
+        writeln!(
+            w,
             "# bareray gen field: {} spheres, splitmix64 seed {}, box {:?}..{:?}, radii {rmin}..{rmax}",
             self.count, self.seed, self.lo, self.hi
-        );
-        let _ = writeln!(out, "# x y z r");
-        for [x, y, z, r] in self.spheres()? {
-            let _ = writeln!(out, "{x} {y} {z} {r}");
+        )?;
+        writeln!(w, "# x y z r")?;
+        for [x, y, z, r] in self.spheres().map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))? {
+            writeln!(w, "{x} {y} {z} {r}")?;
         }
-        Ok(out)
+        Ok(())
+    }
+
+    /// The `.xyzr` text in memory (for tests and small fields).
+    pub fn to_xyzr(&self) -> Result<String, GenError> {
+        self.radii()?;
+        let mut out = Vec::new();
+        self.write_xyzr(&mut out).map_err(|e| GenError(e.to_string()))?;
+        Ok(String::from_utf8(out).expect("generated text is ASCII"))
     }
 }
 
@@ -129,12 +139,18 @@ pub fn flake_count(level: u32) -> u64 {
 /// child of radius r/3 at distance 4r/3 from its parent's centre, each child's set turned so that the set's
 /// +z maps onto the direction from parent to child.
 pub fn flake(level: u32) -> Result<Vec<[f64; 4]>, GenError> {
+    let mut out = Vec::with_capacity(flake_count(level.min(MAX_FLAKE_LEVEL)) as usize);
+    for_each_flake_sphere(level, &mut |s| out.push(s))?;
+    Ok(out)
+}
+
+/// Calls `visit` with each sphere of [`flake`] in order, without storing them.
+pub fn for_each_flake_sphere(level: u32, visit: &mut dyn FnMut([f64; 4])) -> Result<(), GenError> {
     if level > MAX_FLAKE_LEVEL {
         return Err(GenError(format!("--level must be at most {MAX_FLAKE_LEVEL}, got {level}")));
     }
-    let mut out = Vec::with_capacity(flake_count(level) as usize);
-    grow(&child_directions(), level, DVec3::ZERO, 0.5, DVec3::Z, &mut out);
-    Ok(out)
+    grow(&child_directions(), level, DVec3::ZERO, 0.5, DVec3::Z, visit);
+    Ok(())
 }
 
 /// The nine unit directions of one set of children, for a parent whose axis is +z.
@@ -155,8 +171,15 @@ fn child_directions() -> [DVec3; 9] {
 }
 
 /// Emits the sphere at `center` and, while `depth` lasts, its nine children around `axis`.
-fn grow(set: &[DVec3; 9], depth: u32, center: DVec3, radius: f64, axis: DVec3, out: &mut Vec<[f64; 4]>) {
-    out.push([center.x, center.y, center.z, radius]);
+fn grow(
+    set: &[DVec3; 9],
+    depth: u32,
+    center: DVec3,
+    radius: f64,
+    axis: DVec3,
+    out: &mut dyn FnMut([f64; 4]),
+) {
+    out([center.x, center.y, center.z, radius]);
     if depth == 0 {
         return;
     }
@@ -180,26 +203,40 @@ fn rotation_from_z(axis: DVec3) -> DMat3 {
     }
 }
 
-/// The sphereflake as NFF: SPD balls' background, view, three colourless lights, beige floor polygon and
-/// pale-yellow mirror fill (as SPD prints them), then the spheres at full f64 precision.
-pub fn flake_nff(level: u32) -> Result<String, GenError> {
-    let spheres = flake(level)?;
-    let mut out = String::with_capacity(spheres.len() * 80 + 512);
-    let _ = writeln!(
-        out,
+/// Writes the sphereflake as NFF: SPD balls' background, view, three colourless lights, beige floor polygon
+/// and pale-yellow mirror fill (as SPD prints them), then the spheres at full f64 precision.
+pub fn write_flake_nff(level: u32, w: &mut impl Write) -> io::Result<()> {
+    let invalid = |e: GenError| io::Error::new(io::ErrorKind::InvalidInput, e);
+    writeln!(
+        w,
         "# SPD balls (sphereflake), size factor {level}: {} spheres, by bareray gen flake",
-        spheres.len()
-    );
-    out.push_str(FLAKE_HEADER);
-    for s in &spheres {
-        out.push('s');
-        for v in s {
-            out.push(' ');
-            push_number(&mut out, *v);
+        flake_count(level.min(MAX_FLAKE_LEVEL))
+    )?;
+    w.write_all(FLAKE_HEADER.as_bytes())?;
+    let mut result = Ok(());
+    for_each_flake_sphere(level, &mut |s| {
+        if result.is_ok() {
+            result = write_sphere(w, s);
         }
-        out.push('\n');
+    })
+    .map_err(invalid)?;
+    result
+}
+
+/// The sphereflake NFF text in memory (for tests and small levels).
+pub fn flake_nff(level: u32) -> Result<String, GenError> {
+    let mut out = Vec::new();
+    write_flake_nff(level, &mut out).map_err(|e| GenError(e.to_string()))?;
+    Ok(String::from_utf8(out).expect("generated text is ASCII"))
+}
+
+fn write_sphere(w: &mut impl Write, s: [f64; 4]) -> io::Result<()> {
+    w.write_all(b"s")?;
+    for v in s {
+        w.write_all(b" ")?;
+        write_number(w, v)?;
     }
-    Ok(out)
+    w.write_all(b"\n")
 }
 
 /// Everything of SPD `balls` before the spheres, in SPD's own NFF text.
@@ -224,9 +261,13 @@ f 1 0.9 0.7 0.5 0.5 3.0827 0 1
 ";
 
 /// Shortest round-trip text of `v`, in scientific notation when plain digits would be long (tiny or huge).
-fn push_number(out: &mut String, v: f64) {
+fn write_number(w: &mut impl Write, v: f64) -> io::Result<()> {
     let a = v.abs();
-    let _ = if a == 0.0 || (1e-5..1e15).contains(&a) { write!(out, "{v}") } else { write!(out, "{v:e}") };
+    if a == 0.0 || (1e-5..1e15).contains(&a) {
+        write!(w, "{v}")
+    } else {
+        write!(w, "{v:e}")
+    }
 }
 
 #[cfg(test)]
@@ -251,13 +292,15 @@ mod tests {
 
     #[test]
     fn numbers_print_compactly_and_round_trip() {
-        let mut s = String::new();
-        for v in [0.5, 1.1102230246251565e-16, -0.0555556, 0.0] {
-            s.clear();
-            push_number(&mut s, v);
-            assert_eq!(s.parse::<f64>().unwrap(), v, "{s}");
+        let text = |v: f64| {
+            let mut out = Vec::new();
+            write_number(&mut out, v).unwrap();
+            String::from_utf8(out).unwrap()
+        };
+        for v in [0.5, 1.1102230246251565e-16, -0.0555556, 0.0, 3e20] {
+            assert_eq!(text(v).parse::<f64>().unwrap(), v, "{}", text(v));
         }
-        push_number(&mut s, 1e-20);
-        assert!(s.ends_with("1e-20"), "{s}");
+        assert_eq!(text(1e-20), "1e-20");
+        assert_eq!(text(0.25), "0.25");
     }
 }

@@ -13,7 +13,11 @@
 //! `2·tan(angle/2)` from the left edge of the image to the right edge, pixels sampled at their centres. To
 //! frame like those images, the angle becomes bareray's [`Field::HorizontalAngle`] with [`Sweep::PixelCentre`]
 //! (the window's edges are the image's edges). The literal NFF reading ([`Sweep::WindowEdges`]) differs by
-//! one pixel across the image; Tachyon's reader frames visibly wider than both.
+//! one pixel across the image; Tachyon's reader frames visibly wider than both. NFF assumes square images;
+//! for a non-square `resolution` the angle is taken as the horizontal one.
+//!
+//! NFF objects are one-sided unless transmitting; that only matters to renderers that cull back faces.
+//! bareray's primitives are two-sided, which shades the same for SPD's closed or floor-like geometry.
 //!
 //! # Shading
 //!
