@@ -128,10 +128,19 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
 
 /// Writes raw bytes atomically (for text outputs such as generated scenes).
 pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
+    write_atomic_with(path, |w| w.write_all(bytes))
+}
+
+/// Streams a file atomically: `fill` writes into a buffered temporary file in the same directory, which
+/// replaces `path` only once everything was written (for generated scenes too large to hold in memory).
+pub fn write_atomic_with(
+    path: &Path,
+    fill: impl FnOnce(&mut BufWriter<fs::File>) -> std::io::Result<()>,
+) -> std::io::Result<()> {
     write_atomic(path, |tmp| {
-        let mut f = fs::File::create(tmp)?;
-        f.write_all(bytes)?;
-        f.sync_all()?;
+        let mut w = BufWriter::with_capacity(1 << 20, fs::File::create(tmp)?);
+        fill(&mut w)?;
+        w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
         Ok(())
     })
     .map_err(std::io::Error::other)

@@ -1,6 +1,7 @@
 //! The command line: one file per subcommand; `main.rs` only calls [`main`].
 
 mod camera_args;
+mod gen;
 mod render;
 
 use std::process::ExitCode;
@@ -22,6 +23,8 @@ pub struct Cli {
 enum Command {
     /// Render a scene to an image file.
     Render(render::RenderArgs),
+    /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
+    Gen(gen::GenArgs),
 }
 
 /// Parses the command line, runs the subcommand, and turns errors into a message and exit code 1.
@@ -29,6 +32,7 @@ pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
+        Command::Gen(args) => gen::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

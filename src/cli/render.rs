@@ -186,7 +186,9 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => Ok(toml::load(path)?),
-        _ => bail!("{}: unknown scene format (expected a .toml file)", path.display()),
+        Some("nff") => Ok(crate::scene::nff::load(path)?),
+        Some("xyzr") => Ok(crate::scene::xyzr::load(path)?),
+        _ => bail!("{}: unknown scene format (expected a .toml, .nff or .xyzr file)", path.display()),
     }
 }
 

@@ -3,12 +3,14 @@
 
 mod packet;
 mod plane;
+pub mod polygon;
 mod ray;
 mod shape;
 mod sphere;
 
 pub use packet::{intersect_spheres_1, intersect_spheres_k, HitPacket, RayPacket};
 pub use plane::intersect_plane;
+pub use polygon::intersect_triangle;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};
 pub use sphere::{far_root, first_root, intersect_sphere, sphere_roots, Roots};

@@ -1,13 +1,14 @@
 //! Compile: a validated [`SceneDesc`] becomes the immutable [`Scene`] every render thread shares — camera frame
 //! precomputed, spheres in SoA arrays, transforms inverted once, everything rounded to f32 once.
 
-use crate::accel::Geometry;
+use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
+use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
 use crate::math::affine::normal_to_world;
 use crate::math::{Affine, Rgb, Vec3f, V3};
 
-use super::desc::{Falloff, Material, RenderDesc, SceneDesc};
+use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -56,6 +57,9 @@ impl Scene {
                 material: s.material,
             })
             .collect();
+        for p in &desc.polygons {
+            push_polygon(&mut geometry.polygons, p);
+        }
         let lights = desc
             .lights
             .iter()
@@ -74,4 +78,21 @@ impl Scene {
             lights,
         })
     }
+}
+
+/// Triangulates one polygon into `out` (in f64, then rounded). A polygon the readers would have rejected
+/// (a `SceneDesc` built by hand) still gets its id, with a fan of possibly degenerate triangles, which the
+/// kernel can only miss or hit harmlessly: ids must not shift.
+fn push_polygon(out: &mut Polygons, p: &PolygonDesc) {
+    let n = p.vertices.len() as u32;
+    let triangles =
+        triangulate(&p.vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect());
+    let vertices: Vec<Vec3f> = p.vertices.iter().map(|v| V3::from(*v).to_f32()).collect();
+    let unit = |v: glam::DVec3| V3::from(v.normalize_or_zero()).to_f32();
+    let normals = p
+        .normals
+        .as_ref()
+        .filter(|ns| ns.len() == p.vertices.len())
+        .map(|ns| ns.iter().map(|v| unit(*v)).collect::<Vec<_>>());
+    out.push(&vertices, normals.as_deref(), &triangles, unit(newell_normal(&p.vertices)), p.material);
 }

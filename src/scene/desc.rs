@@ -211,6 +211,18 @@ pub struct ShapeDesc {
     pub material: u32,
 }
 
+/// A planar polygon (NFF `p`, or `pp` with per-vertex normals).
+#[derive(Clone, Debug, PartialEq)]
+pub struct PolygonDesc {
+    /// Vertices in order around the outline; the geometric normal follows the right-hand rule.
+    pub vertices: Vec<DVec3>,
+    /// One normal per vertex, interpolated across the polygon for shading (any length; normalised by
+    /// compile), or `None` for a flat polygon.
+    pub normals: Option<Vec<DVec3>>,
+    /// Index into `SceneDesc::materials`.
+    pub material: u32,
+}
+
 /// A whole scene as data.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SceneDesc {
@@ -226,4 +238,6 @@ pub struct SceneDesc {
     pub spheres: Vec<SphereDesc>,
     /// Transformed shapes: ids after the spheres.
     pub shapes: Vec<ShapeDesc>,
+    /// Planar polygons: ids after the shapes, one per polygon however it is triangulated.
+    pub polygons: Vec<PolygonDesc>,
 }

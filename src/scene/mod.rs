@@ -1,9 +1,12 @@
-//! Scenes: read (TOML, later NFF and xyzr) into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
+//! Scenes: read (TOML, NFF, xyzr) or generated into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
 
 mod compile;
 pub mod desc;
 pub mod error;
+pub mod generate;
+pub mod nff;
 pub mod toml;
+pub mod xyzr;
 
 pub use compile::{Light, Scene};
 pub use desc::SceneDesc;

@@ -1,0 +1,111 @@
+//! `bareray gen`: write generated scenes (the benchmark field, SPD's sphereflake) to files.
+
+use std::path::{Path, PathBuf};
+use std::time::Instant;
+
+use anyhow::{bail, Context, Result};
+use clap::{Args, Subcommand};
+
+use crate::output::write_atomic_with;
+use crate::scene::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
+
+/// Arguments of `bareray gen`.
+#[derive(Args, Debug)]
+pub struct GenArgs {
+    #[command(subcommand)]
+    what: GenCommand,
+}
+
+#[derive(Subcommand, Debug)]
+enum GenCommand {
+    /// The benchmark contract's random sphere field (splitmix64), as .xyzr.
+    #[command(after_help = "Example:\n  bareray gen field --count 1000000 -o field1m.xyzr")]
+    Field(FieldArgs),
+    /// SPD's sphereflake (`balls`) at a size factor, as NFF.
+    #[command(after_help = "Example:\n  bareray gen flake --level 4 -o balls4.nff   # 7381 spheres")]
+    Flake(FlakeArgs),
+}
+
+/// Arguments of `bareray gen field`.
+#[derive(Args, Debug)]
+pub struct FieldArgs {
+    /// Number of spheres (at least 1).
+    #[arg(long)]
+    pub count: u64,
+    /// splitmix64 seed.
+    #[arg(long, default_value_t = 1)]
+    pub seed: u64,
+    /// The box the centres fill: x0,y0,z0,x1,y1,z1.
+    #[arg(long = "box", value_name = "x0,y0,z0,x1,y1,z1", allow_hyphen_values = true)]
+    pub bounds: Option<String>,
+    /// Smallest radius [default: 0.1·s, s = (x1 − x0)/cbrt(count)].
+    #[arg(long, allow_negative_numbers = true)]
+    pub rmin: Option<f64>,
+    /// Largest radius [default: 0.25·s].
+    #[arg(long, allow_negative_numbers = true)]
+    pub rmax: Option<f64>,
+    /// Output file (.xyzr), written atomically.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Arguments of `bareray gen flake`.
+#[derive(Args, Debug)]
+pub struct FlakeArgs {
+    /// Size factor: (9^(L+1) − 1)/8 spheres (2: 91, 3: 820, 4: 7381, 5: 66430, 6: 597871).
+    #[arg(long)]
+    pub level: u32,
+    /// Output file (.nff), written atomically.
+    #[arg(short, long)]
+    pub output: PathBuf,
+}
+
+/// Runs `bareray gen`.
+pub fn run(args: GenArgs) -> Result<()> {
+    match args.what {
+        GenCommand::Field(a) => field(a),
+        GenCommand::Flake(a) => flake(a),
+    }
+}
+
+fn field(a: FieldArgs) -> Result<()> {
+    let start = Instant::now();
+    let mut params =
+        FieldParams { count: a.count, seed: a.seed, rmin: a.rmin, rmax: a.rmax, ..Default::default() };
+    if let Some(b) = &a.bounds {
+        (params.lo, params.hi) = parse_box(b)?;
+    }
+    // Check first so that bad arguments say so instead of failing a half-written file.
+    params.radii()?;
+    write_atomic_with(&a.output, |w| params.write_xyzr(w))
+        .with_context(|| format!("{}: cannot write", a.output.display()))?;
+    report(a.count, &a.output, start);
+    Ok(())
+}
+
+fn flake(a: FlakeArgs) -> Result<()> {
+    let start = Instant::now();
+    if a.level > MAX_FLAKE_LEVEL {
+        bail!("--level must be at most {MAX_FLAKE_LEVEL}, got {}", a.level);
+    }
+    write_atomic_with(&a.output, |w| write_flake_nff(a.level, w))
+        .with_context(|| format!("{}: cannot write", a.output.display()))?;
+    report(flake_count(a.level), &a.output, start);
+    Ok(())
+}
+
+fn report(count: u64, path: &Path, start: Instant) {
+    println!("{}: {count} spheres in {:.3} s", path.display(), start.elapsed().as_secs_f64());
+}
+
+/// `x0,y0,z0,x1,y1,z1` as two corners.
+fn parse_box(text: &str) -> Result<([f64; 3], [f64; 3])> {
+    let v: Vec<f64> = text
+        .split(',')
+        .map(|w| w.trim().parse::<f64>().with_context(|| format!("--box: `{w}` is not a number")))
+        .collect::<Result<_>>()?;
+    if v.len() != 6 {
+        bail!("--box takes six numbers x0,y0,z0,x1,y1,z1, got {}", v.len());
+    }
+    Ok(([v[0], v[1], v[2]], [v[3], v[4], v[5]]))
+}

@@ -1,0 +1,198 @@
+//! Planar polygons: the ray/triangle kernel, and the triangulation that turns an NFF polygon into triangles.
+//!
+//! A polygon is stored as triangles that all carry the polygon's primitive id, so the self-intersection rule
+//! ("a ray leaving a planar primitive never re-tests it") covers every triangle of it at once.
+//!
+//! The kernel is Möller–Trumbore (1997): with edges `e1 = v1 − v0`, `e2 = v2 − v0`, `p = d × e2`,
+//! `det = e1·p`, `s = o − v0`, `q = s × e1`, the hit has barycentrics `u = (s·p)/det`, `v = (d·q)/det` and
+//! parameter `t = (e2·q)/det`. It needs no precomputed plane, works for unnormalised directions, and a ray
+//! parallel to the triangle gives `det = 0`, which the mask rejects. Edges are inclusive (`u, v ≥ 0`,
+//! `u + v ≤ 1`) so that a ray through the shared diagonal of a fan hits at least one of the two triangles.
+
+use glam::{DVec2, DVec3};
+
+use crate::math::{Real, V3};
+
+use super::Ray;
+
+/// Closest hit of one ray with the triangle `(v0, v0 + e1, v0 + e2)` in `[0, t_max)`, both sides.
+///
+/// Branch-free: every condition is a mask, so a lane instance evaluates the same IEEE operations as the
+/// scalar one. One reciprocal (a true division, not an approximation) is shared by u, v and t.
+#[inline(always)]
+pub fn intersect_triangle<F: Real>(v0: V3<F>, e1: V3<F>, e2: V3<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+    let zero = F::splat(0.0);
+    let p = ray.dir.cross(e2);
+    let det = e1.dot(p);
+    let inv = F::splat(1.0) / det;
+    let s = ray.origin - v0;
+    let u = s.dot(p) * inv;
+    let q = s.cross(e1);
+    let v = ray.dir.dot(q) * inv;
+    let t = e2.dot(q) * inv;
+    // det ≠ 0 written as two comparisons: NaN fails both, so NaN rays miss.
+    let facing = det.lt(zero) | det.gt(zero);
+    let inside = u.ge(zero) & v.ge(zero) & (u + v).le(F::splat(1.0));
+    (facing & inside & t.ge(zero) & t.lt(t_max), t)
+}
+
+/// Why a list of vertices is not a usable polygon.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub enum PolygonError {
+    /// Fewer than three vertices.
+    TooFew(usize),
+    /// A coordinate is NaN or infinite.
+    NotFinite,
+    /// All vertices on one line or point (zero area).
+    Degenerate,
+    /// A vertex lies off the polygon's plane by more than the tolerance.
+    NotPlanar,
+    /// Ear clipping found no ear: the outline crosses itself.
+    SelfIntersecting,
+}
+
+impl std::fmt::Display for PolygonError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            PolygonError::TooFew(n) => write!(f, "a polygon needs at least 3 vertices, got {n}"),
+            PolygonError::NotFinite => write!(f, "polygon vertex is not a finite number"),
+            PolygonError::Degenerate => write!(f, "polygon has zero area (its vertices are collinear)"),
+            PolygonError::NotPlanar => write!(f, "polygon is not planar"),
+            PolygonError::SelfIntersecting => write!(f, "polygon outline crosses itself"),
+        }
+    }
+}
+
+/// The area-weighted normal of a polygon (Newell's method): robust for any planar polygon, convex or not,
+/// and its length is twice the area. Follows the right-hand rule: counter-clockwise seen from its tip.
+pub fn newell_normal(vertices: &[DVec3]) -> DVec3 {
+    let n = vertices.len();
+    (0..n).fold(DVec3::ZERO, |acc, i| {
+        let (a, b) = (vertices[i], vertices[(i + 1) % n]);
+        acc + DVec3::new((a.y - b.y) * (a.z + b.z), (a.z - b.z) * (a.x + b.x), (a.x - b.x) * (a.y + b.y))
+    })
+}
+
+/// Splits a planar polygon into triangles (vertex index triples, each wound like the polygon).
+///
+/// Convex polygons become a fan from vertex 0. Non-convex simple polygons are ear-clipped in the plane of
+/// their Newell normal (O(n²), fine for the small polygons of NFF files). Planarity is checked with a
+/// tolerance of 1e-4 of the polygon's extent, because SPD prints coordinates to 6 significant digits.
+pub fn triangulate(vertices: &[DVec3]) -> Result<Vec<[u32; 3]>, PolygonError> {
+    let n = vertices.len();
+    if n < 3 {
+        return Err(PolygonError::TooFew(n));
+    }
+    if !vertices.iter().all(|v| v.is_finite()) {
+        return Err(PolygonError::NotFinite);
+    }
+    let normal = newell_normal(vertices);
+    let extent = vertices.iter().map(|v| (*v - vertices[0]).length()).fold(0.0, f64::max);
+    // Vertices are finite here, so the length is a number.
+    if normal.length() <= 1e-12 * extent * extent {
+        return Err(PolygonError::Degenerate);
+    }
+    let unit = normal.normalize();
+    if vertices.iter().any(|v| (*v - vertices[0]).dot(unit).abs() > 1e-4 * extent) {
+        return Err(PolygonError::NotPlanar);
+    }
+    let flat = project(vertices, unit);
+    let corner = |a: usize, b: usize, c: usize| (flat[b] - flat[a]).perp_dot(flat[c] - flat[b]);
+    if (0..n).all(|i| corner(i, (i + 1) % n, (i + 2) % n) >= 0.0) {
+        return Ok((1..n as u32 - 1).map(|i| [0, i, i + 1]).collect());
+    }
+    ear_clip(&flat)
+}
+
+/// 2D coordinates in the polygon's plane, oriented so that the polygon winds counter-clockwise.
+fn project(vertices: &[DVec3], unit_normal: DVec3) -> Vec<DVec2> {
+    let u = unit_normal.any_orthonormal_vector();
+    let v = unit_normal.cross(u);
+    vertices.iter().map(|p| DVec2::new(p.dot(u), p.dot(v))).collect()
+}
+
+/// Ear clipping of a counter-clockwise simple polygon: repeatedly cut off a convex corner whose triangle
+/// contains no other remaining vertex.
+fn ear_clip(flat: &[DVec2]) -> Result<Vec<[u32; 3]>, PolygonError> {
+    let mut left: Vec<usize> = (0..flat.len()).collect();
+    let mut out = Vec::with_capacity(flat.len() - 2);
+    while left.len() > 3 {
+        let m = left.len();
+        let ear = (0..m).find(|&i| {
+            let (a, b, c) = (left[(i + m - 1) % m], left[i], left[(i + 1) % m]);
+            is_ear(flat, &left, a, b, c)
+        });
+        let Some(i) = ear else { return Err(PolygonError::SelfIntersecting) };
+        out.push([left[(i + m - 1) % m] as u32, left[i] as u32, left[(i + 1) % m] as u32]);
+        left.remove(i);
+    }
+    out.push([left[0] as u32, left[1] as u32, left[2] as u32]);
+    Ok(out)
+}
+
+fn is_ear(flat: &[DVec2], left: &[usize], a: usize, b: usize, c: usize) -> bool {
+    let (pa, pb, pc) = (flat[a], flat[b], flat[c]);
+    if (pb - pa).perp_dot(pc - pb) <= 0.0 {
+        return false;
+    }
+    // No other remaining vertex may lie in (or on) the candidate triangle.
+    left.iter().filter(|&&k| k != a && k != b && k != c).all(|&k| {
+        let p = flat[k];
+        let inside = (pb - pa).perp_dot(p - pa) >= 0.0
+            && (pc - pb).perp_dot(p - pb) >= 0.0
+            && (pa - pc).perp_dot(p - pc) >= 0.0;
+        !inside
+    })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn square() -> Vec<DVec3> {
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from).to_vec()
+    }
+
+    #[test]
+    fn convex_polygons_become_fans() {
+        assert_eq!(triangulate(&square()).unwrap(), vec![[0, 1, 2], [0, 2, 3]]);
+    }
+
+    #[test]
+    fn concave_polygon_is_ear_clipped_into_n_minus_2_triangles() {
+        // An L shape: six vertices, reflex corner at (1, 1).
+        let l = [[0.0, 0.0], [2.0, 0.0], [2.0, 1.0], [1.0, 1.0], [1.0, 2.0], [0.0, 2.0]]
+            .map(|[x, y]| DVec3::new(x, y, 3.0))
+            .to_vec();
+        let tris = triangulate(&l).unwrap();
+        assert_eq!(tris.len(), 4);
+        let area: f64 = tris
+            .iter()
+            .map(|t| newell_normal(&[l[t[0] as usize], l[t[1] as usize], l[t[2] as usize]]).z / 2.0)
+            .sum();
+        assert!((area - 3.0).abs() < 1e-12, "triangles cover the L's area 3, got {area}");
+    }
+
+    #[test]
+    fn bad_polygons_are_rejected() {
+        let mut s = square();
+        assert_eq!(triangulate(&s[..2]), Err(PolygonError::TooFew(2)));
+        s[2].z = 0.5;
+        assert_eq!(triangulate(&s), Err(PolygonError::NotPlanar));
+        let line = [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [2.0, 0.0, 0.0]].map(DVec3::from);
+        assert_eq!(triangulate(&line), Err(PolygonError::Degenerate));
+        let bow = [[0.0, 0.0, 0.0], [1.0, 1.0, 0.0], [1.0, 0.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from);
+        assert_eq!(triangulate(&bow), Err(PolygonError::Degenerate), "a symmetric bow tie has zero net area");
+        let nan = [[0.0, 0.0, 0.0], [1.0, f64::NAN, 0.0], [1.0, 1.0, 0.0]].map(DVec3::from);
+        assert_eq!(triangulate(&nan), Err(PolygonError::NotFinite));
+    }
+
+    #[test]
+    fn kernel_hits_inside_and_misses_outside() {
+        let (v0, e1, e2) = (V3::new(0.0f64, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.0, 1.0, 0.0));
+        let down = |x: f64, y: f64| Ray::new(V3::new(x, y, 2.0), V3::new(0.0, 0.0, -1.0));
+        assert_eq!(intersect_triangle(v0, e1, e2, &down(0.25, 0.25), f64::INFINITY), (true, 2.0));
+        assert!(!intersect_triangle(v0, e1, e2, &down(0.75, 0.75), f64::INFINITY).0);
+        assert!(!intersect_triangle(v0, e1, e2, &down(0.25, 0.25), 2.0).0, "t_max is exclusive");
+    }
+}

@@ -1,0 +1,353 @@
+//! Eric Haines' Neutral File Format (NFF), the language of the Standard Procedural Databases (SPD).
+//!
+//! The file is read as a stream of whitespace-separated tokens, each with its line number: entities may be
+//! split over lines and use any whitespace, numbers may use scientific notation, and `#` starts a comment that
+//! runs to the end of its line. Every error names `file:line` and what was expected there. Supported:
+//! `v` (with `from`, `at`, `up`, `angle`, `hither`, `resolution` in any order), `b`, `l` (with or without
+//! colour), `f`, `s`, `p`, `pp`. Cones (`c`) are an error naming the line until bareray has cones.
+//!
+//! # Framing
+//!
+//! NFF defines `angle` between the centres of the extreme pixel rows and columns, with aspect ratio 1. SPD's
+//! reference images were rendered by POV-Ray 3.1 from SPD's own POV-Ray output, whose camera spans
+//! `2·tan(angle/2)` from the left edge of the image to the right edge, pixels sampled at their centres. To
+//! frame like those images, the angle becomes bareray's [`Field::HorizontalAngle`] with [`Sweep::PixelCentre`]
+//! (the window's edges are the image's edges). The literal NFF reading ([`Sweep::WindowEdges`]) differs by
+//! one pixel across the image; Tachyon's reader frames visibly wider than both. NFF assumes square images;
+//! for a non-square `resolution` the angle is taken as the horizontal one.
+//!
+//! NFF objects are one-sided unless transmitting; that only matters to renderers that cull back faces.
+//! bareray's primitives are two-sided, which shades the same for SPD's closed or floor-like geometry.
+//!
+//! # Shading
+//!
+//! `f r g b Kd Ks shine T ior` becomes a [`Material`] with `diffuse = Kd`, `specular = Ks` (Phong exponent
+//! `shine`), `reflect = Ks` (NFF's Ks is also the mirror weight in Whitted use), `transmit = T`, `ior`. NFF has
+//! no ambient term; SPD's POV-Ray conversion gives the balls floor 0.2 and the spheres 0, so NFF materials get
+//! [`NFF_AMBIENT`], between the two, which keeps fully shadowed floor from going black. Lights without colour
+//! each get intensity `1/sqrt(number of lights)`, as SPD's converters do for every renderer but NFF's own.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::camera::Camera;
+use crate::geometry::polygon::triangulate;
+use crate::math::Rgb;
+
+use super::desc::*;
+use super::error::SceneError;
+
+/// Ambient coefficient of NFF materials (see the module documentation).
+pub const NFF_AMBIENT: f32 = 0.1;
+
+/// Reads an NFF scene from a file.
+pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+    let source = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::whole_file(path, format!("cannot read scene: {e}")))?;
+    parse(path, &source)
+}
+
+/// Parses NFF text; `path` names it in errors.
+pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
+    let mut reader = Reader {
+        path,
+        tokens: Tokens::new(source),
+        desc: SceneDesc::default(),
+        material: None,
+        colourless: Vec::new(),
+        view_seen: false,
+    };
+    while let Some(tok) = reader.tokens.next() {
+        reader.entity(tok)?;
+    }
+    reader.finish()
+}
+
+/// A token and its 1-based line.
+#[derive(Clone, Copy, Debug)]
+struct Tok<'a> {
+    text: &'a str,
+    line: usize,
+}
+
+/// Whitespace-separated tokens with line numbers, `#` comments removed, one token of look-ahead.
+struct Tokens<'a> {
+    lines: std::iter::Enumerate<std::str::Lines<'a>>,
+    words: std::str::SplitWhitespace<'a>,
+    line: usize,
+    peeked: Option<Tok<'a>>,
+}
+
+impl<'a> Tokens<'a> {
+    fn new(source: &'a str) -> Self {
+        Self { lines: source.lines().enumerate(), words: "".split_whitespace(), line: 0, peeked: None }
+    }
+
+    fn next(&mut self) -> Option<Tok<'a>> {
+        if let Some(t) = self.peeked.take() {
+            return Some(t);
+        }
+        loop {
+            match self.words.next() {
+                // A comment runs to the end of the line: drop the rest of its words.
+                Some(w) if w.starts_with('#') => self.words = "".split_whitespace(),
+                Some(w) => return Some(Tok { text: w, line: self.line }),
+                None => {
+                    let (i, l) = self.lines.next()?;
+                    self.line = i + 1;
+                    self.words = l.split_whitespace();
+                }
+            }
+        }
+    }
+
+    fn peek(&mut self) -> Option<Tok<'a>> {
+        if self.peeked.is_none() {
+            self.peeked = self.next();
+        }
+        self.peeked
+    }
+}
+
+struct Reader<'a> {
+    path: &'a Path,
+    tokens: Tokens<'a>,
+    desc: SceneDesc,
+    /// The material of the last `f`, if any.
+    material: Option<u32>,
+    /// Indices of lights given without colour, scaled once the number of lights is known.
+    colourless: Vec<usize>,
+    view_seen: bool,
+}
+
+impl<'a> Reader<'a> {
+    fn err(&self, line: usize, message: impl Into<String>) -> SceneError {
+        SceneError::at_line(self.path, line, message)
+    }
+
+    /// The next token, or an error saying what was expected instead of the end of the file.
+    fn expect(&mut self, what: &str) -> Result<Tok<'a>, SceneError> {
+        let last = self.tokens.line;
+        self.tokens.next().ok_or_else(|| self.err(last, format!("unexpected end of file, expected {what}")))
+    }
+
+    fn number(&mut self, what: &str) -> Result<f64, SceneError> {
+        let tok = self.expect(what)?;
+        let (text, line) = (tok.text, tok.line);
+        match text.parse::<f64>() {
+            Ok(v) if v.is_finite() => Ok(v),
+            _ => Err(self.err(line, format!("expected {what} (a finite number), got `{text}`"))),
+        }
+    }
+
+    fn vec3(&mut self, what: &str) -> Result<DVec3, SceneError> {
+        Ok(DVec3::new(self.number(what)?, self.number(what)?, self.number(what)?))
+    }
+
+    fn color(&mut self, what: &str) -> Result<Rgb, SceneError> {
+        let line = self.tokens.peek().map_or(self.tokens.line, |t| t.line);
+        let c = self.vec3(what)?;
+        if c.min_element() < 0.0 {
+            return Err(self.err(line, format!("{what} must not be negative, got {c}")));
+        }
+        Ok(Rgb::new(c.x as f32, c.y as f32, c.z as f32))
+    }
+
+    /// A count or resolution: a whole number in `lo..=hi`.
+    fn integer(&mut self, what: &str, lo: u32, hi: u32) -> Result<u32, SceneError> {
+        let tok = self.expect(what)?;
+        let (text, line) = (tok.text, tok.line);
+        match text.parse::<u32>() {
+            Ok(v) if (lo..=hi).contains(&v) => Ok(v),
+            _ => {
+                Err(self
+                    .err(line, format!("expected {what} (a whole number from {lo} to {hi}), got `{text}`")))
+            }
+        }
+    }
+
+    fn entity(&mut self, tok: Tok<'_>) -> Result<(), SceneError> {
+        let line = tok.line;
+        match tok.text {
+            "v" => self.view(line),
+            "b" => {
+                self.desc.render.background = self.color("background colour r g b")?;
+                Ok(())
+            }
+            "l" => self.light(),
+            "f" => self.fill(line),
+            "s" => self.sphere(line),
+            "p" => self.polygon(line, false),
+            "pp" => self.polygon(line, true),
+            "c" => Err(self.err(line, "cones and cylinders (`c`) are not supported yet")),
+            other => Err(self.err(
+                line,
+                format!("unknown entity `{other}`, expected one of v, b, l, f, s, p, pp (or a # comment)"),
+            )),
+        }
+    }
+
+    /// `v` and its keyword lines, in any order; all but `hither` are required.
+    fn view(&mut self, line: usize) -> Result<(), SceneError> {
+        if self.view_seen {
+            return Err(self.err(line, "a second view (`v`): NFF files have one"));
+        }
+        self.view_seen = true;
+        let (mut from, mut at, mut up, mut angle, mut res) = (None, None, None, None, None);
+        while let Some(key) = self.tokens.peek().map(|t| t.text) {
+            match key {
+                "from" | "at" | "up" | "angle" | "hither" | "resolution" => self.tokens.next(),
+                _ => break,
+            };
+            match key {
+                "from" => from = Some(self.vec3("`from` x y z")?),
+                "at" => at = Some(self.vec3("`at` x y z")?),
+                "up" => up = Some(self.vec3("`up` x y z")?),
+                "angle" => angle = Some(self.number("`angle` in degrees")?),
+                // bareray needs no near plane: rays start at the eye. Read and checked, then ignored.
+                "hither" => {
+                    self.number("`hither` distance")?;
+                }
+                _ => res = Some((self.integer("width", 1, 65536)?, self.integer("height", 1, 65536)?)),
+            }
+        }
+        let missing = |name: &str| self.err(line, format!("view (`v`) lacks its `{name}` line"));
+        let camera = CameraDesc {
+            eye: from.ok_or_else(|| missing("from"))?,
+            aim: Aim::LookAt(at.ok_or_else(|| missing("at"))?),
+            up: up.ok_or_else(|| missing("up"))?,
+            distance: 1.0,
+            field: Field::HorizontalAngle(angle.ok_or_else(|| missing("angle"))?),
+            width: res.ok_or_else(|| missing("resolution"))?.0,
+            height: res.ok_or_else(|| missing("resolution"))?.1,
+            sweep: Sweep::PixelCentre,
+        };
+        Camera::new(&camera).map_err(|e| self.err(line, format!("view: {e}")))?;
+        self.desc.camera = camera;
+        Ok(())
+    }
+
+    /// `l x y z [r g b]`: the colour is there when a number follows the position.
+    fn light(&mut self) -> Result<(), SceneError> {
+        let position = self.vec3("light position x y z")?;
+        let has_color = self.tokens.peek().is_some_and(|t| t.text.parse::<f64>().is_ok());
+        let color = if has_color {
+            self.color("light colour r g b")?
+        } else {
+            self.colourless.push(self.desc.lights.len());
+            Rgb::all(1.0)
+        };
+        self.desc.lights.push(LightDesc { position, color, falloff: Falloff::None });
+        Ok(())
+    }
+
+    /// `f r g b Kd Ks shine T ior`.
+    fn fill(&mut self, line: usize) -> Result<(), SceneError> {
+        let color = self.color("fill colour r g b")?;
+        let mut coef = [0.0f64; 5];
+        for (v, what) in coef.iter_mut().zip(["Kd", "Ks", "shine", "T", "ior"]) {
+            *v = self.number(what)?;
+        }
+        let [kd, ks, shine, t, ior] = coef;
+        if kd < 0.0 || ks < 0.0 || shine < 0.0 || t < 0.0 {
+            return Err(self.err(line, "fill: Kd, Ks, shine and T must not be negative"));
+        }
+        if t > 0.0 && ior <= 0.0 {
+            return Err(self.err(line, format!("fill: index of refraction must be positive, got {ior}")));
+        }
+        self.desc.materials.push(Material {
+            color,
+            checker: None,
+            ambient: NFF_AMBIENT,
+            diffuse: kd as f32,
+            specular: ks as f32,
+            shininess: shine as f32,
+            reflect: ks as f32,
+            transmit: t as f32,
+            // Only transmitting fills use the index; others may carry anything, e.g. 0.
+            ior: if ior > 0.0 { ior as f32 } else { 1.0 },
+            fresnel: false,
+        });
+        self.material = Some(self.desc.materials.len() as u32 - 1);
+        Ok(())
+    }
+
+    /// The current fill; objects before any `f` get bareray's default material.
+    fn current_material(&mut self) -> u32 {
+        *self.material.get_or_insert_with(|| {
+            self.desc.materials.push(Material { ambient: NFF_AMBIENT, ..Material::default() });
+            self.desc.materials.len() as u32 - 1
+        })
+    }
+
+    fn sphere(&mut self, line: usize) -> Result<(), SceneError> {
+        let center = self.vec3("sphere centre x y z")?;
+        let radius = self.number("sphere radius")?;
+        if radius <= 0.0 {
+            return Err(self.err(line, format!("sphere radius must be positive, got {radius}")));
+        }
+        let material = self.current_material();
+        self.desc.spheres.push(SphereDesc { center, radius, material });
+        Ok(())
+    }
+
+    /// `p n` then n vertices; `pp n` then n vertices each followed by its normal.
+    fn polygon(&mut self, line: usize, patch: bool) -> Result<(), SceneError> {
+        let n = self.integer("number of vertices", 3, 1 << 20)?;
+        let mut vertices = Vec::with_capacity(n as usize);
+        let mut normals = Vec::with_capacity(if patch { n as usize } else { 0 });
+        for _ in 0..n {
+            vertices.push(self.vec3("polygon vertex x y z")?);
+            if patch {
+                normals.push(self.vec3("patch vertex normal nx ny nz")?);
+            }
+        }
+        triangulate(&vertices).map_err(|e| self.err(line, e.to_string()))?;
+        let material = self.current_material();
+        let normals = patch.then_some(normals);
+        self.desc.polygons.push(PolygonDesc { vertices, normals, material });
+        Ok(())
+    }
+
+    fn finish(mut self) -> Result<SceneDesc, SceneError> {
+        if !self.view_seen {
+            return Err(SceneError::whole_file(
+                self.path,
+                "no view (`v`): an NFF file must define its camera",
+            ));
+        }
+        let scale = 1.0 / (self.desc.lights.len() as f32).sqrt();
+        for &i in &self.colourless {
+            self.desc.lights[i].color = Rgb::all(scale);
+        }
+        Ok(self.desc)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const VIEW: &str = "v\nfrom 0 0 -5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.01\nresolution 64 48\n";
+
+    fn parse_str(s: &str) -> Result<SceneDesc, SceneError> {
+        parse(Path::new("t.nff"), s)
+    }
+
+    #[test]
+    fn tokens_may_span_lines_and_use_any_whitespace() {
+        let d = parse_str(&format!("{VIEW}s\t1e0  2\r\n 3\n\n   0.5 # trailing\n# whole line\n")).unwrap();
+        assert_eq!(d.spheres[0].center, DVec3::new(1.0, 2.0, 3.0));
+        assert_eq!(d.spheres[0].radius, 0.5);
+        assert_eq!((d.camera.width, d.camera.height), (64, 48));
+    }
+
+    #[test]
+    fn colourless_lights_share_unit_power_and_coloured_ones_keep_theirs() {
+        let d = parse_str(&format!("{VIEW}l 1 2 3\nl 4 5 6 0.5 0.25 1\nl 7 8 9\nl 0 0 0\n")).unwrap();
+        assert_eq!(d.lights[0].color, Rgb::all(0.5));
+        assert_eq!(d.lights[1].color, Rgb::new(0.5, 0.25, 1.0));
+        assert_eq!(d.lights[3].position, DVec3::ZERO);
+    }
+}

@@ -1,0 +1,117 @@
+//! `.xyzr` sphere lists (the MSMS/Chimera atom-list convention): one sphere `x y z r` per line, separated by
+//! any whitespace; blank lines and lines starting with `#` are skipped. Every error names `file:line`.
+//!
+//! The file holds geometry only, so the rest of the scene is chosen here: bareray's default material, and
+//! the benchmark contract's camera orientation (from −z looking +z, up +y, horizontal angle 45°, 1920×1080,
+//! pixel centres), centred on the field's bounding box and backed off until the box's front face fills the
+//! image in its tighter direction ([`frame_box`]); for the contract's [−1, 1]³ field that puts the eye near
+//! z = −5.6 (the contract's fixed z = −4 crops the field, on purpose). One white light sits above and to the
+//! left of the eye so that shading shows the spheres' shape. The CLI overrides the camera.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use crate::math::Rgb;
+
+use super::desc::*;
+use super::error::SceneError;
+
+/// Reads an `.xyzr` file.
+pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+    let source = std::fs::read_to_string(path)
+        .map_err(|e| SceneError::whole_file(path, format!("cannot read sphere list: {e}")))?;
+    parse(path, &source)
+}
+
+/// Parses `.xyzr` text; `path` names it in errors.
+pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
+    let mut spheres = Vec::new();
+    for (i, line) in source.lines().enumerate() {
+        let text = line.trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        let s = sphere(text).map_err(|m| SceneError::at_line(path, i + 1, m))?;
+        spheres.push(s);
+    }
+    if spheres.is_empty() {
+        return Err(SceneError::whole_file(path, "no spheres: expected lines of `x y z r`"));
+    }
+    Ok(scene_around(spheres))
+}
+
+/// One `x y z r` line.
+fn sphere(text: &str) -> Result<SphereDesc, String> {
+    let mut v = [0.0f64; 4];
+    let mut words = text.split_whitespace();
+    for (k, name) in ["x", "y", "z", "r"].iter().enumerate() {
+        let w = words.next().ok_or_else(|| format!("expected 4 numbers `x y z r`, got {k}"))?;
+        v[k] = match w.parse::<f64>() {
+            Ok(x) if x.is_finite() => x,
+            _ => return Err(format!("expected {name} (a finite number), got `{w}`")),
+        };
+    }
+    if let Some(extra) = words.next() {
+        return Err(format!("expected 4 numbers `x y z r`, got more (`{extra}`)"));
+    }
+    if v[3] <= 0.0 {
+        return Err(format!("radius must be positive, got {}", v[3]));
+    }
+    Ok(SphereDesc { center: DVec3::new(v[0], v[1], v[2]), radius: v[3], material: 0 })
+}
+
+/// A scene showing `spheres`: default material, a camera framing their bounds, one light.
+pub fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
+    let (lo, hi) = spheres.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), s| {
+        (lo.min(s.center - s.radius), hi.max(s.center + s.radius))
+    });
+    let camera = frame_box(lo, hi);
+    let reach = (camera.eye - (lo + hi) * 0.5).length();
+    SceneDesc {
+        camera,
+        materials: vec![Material::default()],
+        lights: vec![LightDesc {
+            position: camera.eye + DVec3::new(0.5, 0.5, 0.0) * reach,
+            color: Rgb::all(1.0),
+            falloff: Falloff::None,
+        }],
+        spheres,
+        ..SceneDesc::default()
+    }
+}
+
+/// The contract-oriented camera (see the module documentation) for the box `[lo, hi]`.
+pub fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
+    let (width, height) = (1920u32, 1080u32);
+    let hfov = 45.0f64;
+    let tan_w = (hfov.to_radians() / 2.0).tan();
+    let tan_h = tan_w * f64::from(height) / f64::from(width);
+    let centre = (lo + hi) * 0.5;
+    let half = ((hi - lo) * 0.5).max(DVec3::splat(1e-9));
+    let back = half.z + (half.x / tan_w).max(half.y / tan_h);
+    CameraDesc {
+        eye: centre - DVec3::new(0.0, 0.0, back),
+        aim: Aim::LookAt(centre),
+        up: DVec3::Y,
+        distance: 1.0,
+        field: Field::HorizontalAngle(hfov),
+        width,
+        height,
+        sweep: Sweep::PixelCentre,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn camera_sees_the_whole_front_face() {
+        let cam = frame_box(DVec3::splat(-1.0), DVec3::splat(1.0));
+        // The face z = −1 is (eye distance − 1) away; its half-height 1 must fit tan_h times that.
+        let d = -1.0 - cam.eye.z;
+        let tan_h = (22.5f64.to_radians()).tan() * 1080.0 / 1920.0;
+        assert!((d * tan_h - 1.0).abs() < 1e-12, "{cam:?}");
+    }
+}
