@@ -405,3 +405,50 @@ fn a_ray_leaving_a_polygon_never_hits_it_again() {
     assert!(g.occluded(&down, from, 2.0) && !g.occluded(&down, from, 0.5));
     assert_eq!(triangulate(&square(0.0).vertices).unwrap().len(), 2);
 }
+
+// ---------------------------------------------------------------------------------------------------- CLI
+
+fn bareray(args: &[&str]) -> std::process::Output {
+    std::process::Command::new(env!("CARGO_BIN_EXE_bareray")).args(args).output().expect("the binary runs")
+}
+
+#[test]
+fn cli_generates_and_renders_fields_and_flakes() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let out = bareray(&["gen", "field", "--count", "1000", "-o", &path("f.xyzr")]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    let text = std::fs::read_to_string(path("f.xyzr")).unwrap();
+    assert_eq!(text, FieldParams { count: 1000, ..Default::default() }.to_xyzr().unwrap());
+    let out = bareray(&["gen", "flake", "--level", "2", "-o", &path("b.nff")]);
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert_eq!(std::fs::read_to_string(path("b.nff")).unwrap(), flake_nff(2).unwrap());
+    for (scene, png) in [("f.xyzr", "f.png"), ("b.nff", "b.png")] {
+        let out = bareray(&["render", &path(scene), "--width", "32", "-q", "-o", &path(png)]);
+        assert!(out.status.success(), "{scene}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(std::fs::metadata(path(png)).unwrap().len() > 0);
+    }
+}
+
+#[test]
+fn cli_reports_reader_errors_with_file_and_line_and_rejects_bad_generator_arguments() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("cone.nff");
+    std::fs::write(&scene, format!("{VIEW}c\n0 0 0 1\n0 1 0 1\n")).unwrap();
+    let out =
+        bareray(&["render", &scene.to_string_lossy(), "-o", &dir.path().join("x.png").to_string_lossy()]);
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert!(!out.status.success() && err.contains("cone.nff:8: cones"), "{err}");
+    let target = dir.path().join("never.xyzr").to_string_lossy().into_owned();
+    for args in [
+        &["gen", "field", "--count", "0", "-o", &target][..],
+        &["gen", "field", "--count", "9", "--box", "0,0,0,1,1", "-o", &target],
+        &["gen", "field", "--count", "9", "--rmin", "-1", "-o", &target],
+        &["gen", "flake", "--level", "99", "-o", &target],
+    ] {
+        let out = bareray(args);
+        assert!(!out.status.success(), "{args:?} must fail");
+        assert!(String::from_utf8_lossy(&out.stderr).starts_with("error: "), "{args:?}");
+    }
+    assert!(!Path::new(&target).exists(), "failed runs leave no file");
+}
