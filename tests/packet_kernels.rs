@@ -285,7 +285,7 @@ fn check_camera<F: Lanes>(camera: &Camera<f32>, pixels: &[(f32, f32)]) -> Result
 // Packet kernels against the scalar brute-force query
 
 fn geometry(case: &Case) -> Geometry {
-    Geometry { spheres: case.spheres(), shapes: Vec::new() }
+    Geometry { spheres: case.spheres(), ..Geometry::default() }
 }
 
 fn check_packet_kernel<F: Lanes>(case: &Case) -> Result<(), TestCaseError> {

@@ -77,7 +77,8 @@ pub fn build(spheres: &mut Spheres, params: BvhBuildParams) -> (Bvh, Vec<u32>, B
     let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
     let order = bvh2.primitive_indices.clone();
     *spheres = spheres.permuted(&order);
-    let mut bvh = Bvh { nodes: vec![Node { lo: [[0.0; 2]; 3], hi: [[0.0; 2]; 3], child: [0; 2], count: [0; 2] }] };
+    let mut bvh =
+        Bvh { nodes: vec![Node { lo: [[0.0; 2]; 3], hi: [[0.0; 2]; 3], child: [0; 2], count: [0; 2] }] };
     let (root_box, root_child, root_count) = flatten(&bvh2.nodes, 0, &mut bvh.nodes);
     bvh.nodes[0].set_child(0, root_box, root_child, root_count);
     bvh.nodes[0].set_child(1, Node::EMPTY_BOX, 0, 0);
@@ -89,7 +90,11 @@ pub fn build(spheres: &mut Spheres, params: BvhBuildParams) -> (Bvh, Vec<u32>, B
 }
 
 /// Appends the subtree of obvhs node `i` and returns its box and its (child, count) reference.
-fn flatten(src: &[obvhs::bvh2::node::Bvh2Node], i: usize, out: &mut Vec<Node>) -> (([f32; 3], [f32; 3]), u32, u32) {
+fn flatten(
+    src: &[obvhs::bvh2::node::Bvh2Node],
+    i: usize,
+    out: &mut Vec<Node>,
+) -> (([f32; 3], [f32; 3]), u32, u32) {
     let n = &src[i];
     let bounds = (n.aabb.min.to_array(), n.aabb.max.to_array());
     if n.prim_count > 0 {

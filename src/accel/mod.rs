@@ -1,8 +1,8 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit). Brute force over SoA arrays for now; the BVH comes with large sphere fields.
 
-pub mod bvh;
 mod brute;
+pub mod bvh;
 
 use crate::geometry::{Ray, Shape, NO_PRIM};
 use crate::math::{Vec3f, V3};
