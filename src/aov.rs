@@ -76,7 +76,7 @@ pub fn render_aovs(scene: &Scene) -> AovImage {
                         return (f32::INFINITY, [0.0; 3], NO_PRIM);
                     }
                     let n = scene.geometry.surface(&ray, hit.t, hit.prim).normal;
-                    (hit.t, [n.x, n.y, n.z], hit.prim)
+                    (hit.t, [n.x, n.y, n.z], scene.geometry.file_id(hit.prim))
                 })
                 .collect()
         })

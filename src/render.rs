@@ -1,20 +1,29 @@
-//! The render loop: the image is cut into tiles, tiles are traced in parallel (rayon), and each pixel's
-//! samples are combined in a fixed order, so the image is the same bits at any thread count.
+//! The render loop: the image is cut into tiles, tiles are traced in parallel (rayon), and inside a tile
+//! camera rays go out in packets of K over pixel blocks (2×2 for K = 4, 4×2 for 8, 4×4 for 16, one pixel
+//! for K = 1), one sample offset at a time. Each pixel's samples are summed in the same fixed order at every
+//! width and thread count, so the image is the same bits whatever K and the number of threads.
 
 use std::time::Instant;
 
 use indicatif::ProgressBar;
 use rayon::prelude::*;
+use wide::{f32x16, f32x4, f32x8};
 
+use crate::camera::Camera;
 use crate::film::Image;
-use crate::math::Rgb;
+use crate::geometry::RayPacket;
+use crate::math::{Rgb, V3};
 use crate::sample::{grid_offsets, lecture_3x3, HALF_PIXEL_WEIGHTS};
 use crate::scene::desc::{Pattern, PostFilter};
 use crate::scene::Scene;
 use crate::shade::{RayCounts, Tracer};
+use crate::simd::Lanes;
 
 /// Tile edge in pixels: small enough to balance two threads on small images, large enough to amortise.
 const TILE: u32 = 16;
+
+/// The packet widths a render can run at.
+pub const LANE_CHOICES: [usize; 4] = [1, 4, 8, 16];
 
 /// A finished render.
 #[derive(Clone, Debug)]
@@ -27,15 +36,21 @@ pub struct Rendered {
     pub seconds: f64,
 }
 
+/// A rectangle of the image.
 #[derive(Clone, Copy, Debug)]
-struct Tile {
-    x0: u32,
-    y0: u32,
-    w: u32,
-    h: u32,
+pub struct Tile {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width.
+    pub w: u32,
+    /// Height.
+    pub h: u32,
 }
 
-fn tiles(width: u32, height: u32) -> Vec<Tile> {
+/// The image cut into tiles, row by row.
+pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     let mut out = Vec::new();
     for y0 in (0..height).step_by(TILE as usize) {
         for x0 in (0..width).step_by(TILE as usize) {
@@ -55,8 +70,25 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, rayon::T
     builder.build()
 }
 
-/// Renders `scene` on `threads` threads (rayon's default when `None`), ticking `progress` once per tile.
-pub fn render(
+/// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on `threads` threads.
+pub fn render_lanes(
+    scene: &Scene,
+    lanes: usize,
+    threads: Option<usize>,
+    progress: &ProgressBar,
+) -> Result<Rendered, rayon::ThreadPoolBuildError> {
+    match lanes {
+        1 => render::<f32>(scene, threads, progress),
+        4 => render::<f32x4>(scene, threads, progress),
+        8 => render::<f32x8>(scene, threads, progress),
+        16 => render::<f32x16>(scene, threads, progress),
+        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
+    }
+}
+
+/// Renders `scene` with packets of `F::K` rays on `threads` threads (rayon's default when `None`),
+/// ticking `progress` once per tile.
+pub fn render<F: Lanes>(
     scene: &Scene,
     threads: Option<usize>,
     progress: &ProgressBar,
@@ -65,12 +97,11 @@ pub fn render(
     let (width, height) = (scene.camera.width, scene.camera.height);
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
-    let pool = thread_pool(threads)?;
-    let traced: Vec<(Tile, Vec<Rgb>, RayCounts)> = pool.install(|| {
+    let traced: Vec<(Tile, Vec<Rgb>, RayCounts)> = thread_pool(threads)?.install(|| {
         tiles
             .par_iter()
             .map(|&tile| {
-                let mut tracer = Tracer::new(scene);
+                let mut tracer = Tracer::<F>::new(scene);
                 let pixels = trace_tile(scene, &mut tracer, tile);
                 progress.inc(1);
                 (tile, pixels, tracer.counts)
@@ -92,40 +123,89 @@ pub fn render(
     Ok(Rendered { image, counts, seconds: start.elapsed().as_secs_f64() })
 }
 
+/// Pixel-block shape of a packet: (columns, rows).
+pub fn block<F: Lanes>() -> (u32, u32) {
+    match F::K {
+        1 => (1, 1),
+        4 => (2, 2),
+        8 => (4, 2),
+        16 => (4, 4),
+        k => (k as u32, 1),
+    }
+}
+
+/// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
+/// `(dx, dy)` from its pixel's corner: the camera rays and, per lane, the index of its pixel in the tile.
+pub fn for_each_packet<F: Lanes>(
+    camera: &Camera<F>,
+    tile: Tile,
+    (dx, dy): (f32, f32),
+    mut visit: impl FnMut(&RayPacket<F>, &[Option<usize>]),
+) {
+    let (bw, bh) = block::<F>();
+    let mut pixel = [None; 16];
+    for by in (0..tile.h).step_by(bh as usize) {
+        for bx in (0..tile.w).step_by(bw as usize) {
+            for (i, slot) in pixel.iter_mut().enumerate().take(F::K) {
+                let (px, py) = (bx + i as u32 % bw, by + i as u32 / bw);
+                *slot = (px < tile.w && py < tile.h).then_some((py * tile.w + px) as usize);
+            }
+            let sx = F::from_fn(|i| (tile.x0 + bx + i as u32 % bw) as f32 + dx);
+            let sy = F::from_fn(|i| (tile.y0 + by + i as u32 / bw) as f32 + dy);
+            let ray = camera.ray(sx, sy);
+            let active = F::mask_from_fn(|i| pixel[i].is_some());
+            let rays =
+                RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
+            visit(&rays, &pixel[..F::K]);
+        }
+    }
+}
+
+/// Lane `i` of a colour packet.
+fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
+    Rgb::new(c.x.lane(i), c.y.lane(i), c.z.lane(i))
+}
+
 /// The pixels of one tile, row by row.
-fn trace_tile(scene: &Scene, tracer: &mut Tracer, tile: Tile) -> Vec<Rgb> {
-    let cam = &scene.camera;
+fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
+    let camera = scene.camera.to_lanes::<F>();
     match scene.render.pattern {
         Pattern::Grid(n) => {
             let offsets = grid_offsets(n);
             let scale = 1.0 / offsets.len() as f32;
-            let mut out = Vec::with_capacity((tile.w * tile.h) as usize);
-            for y in tile.y0..tile.y0 + tile.h {
-                for x in tile.x0..tile.x0 + tile.w {
-                    let mut sum = Rgb::default();
-                    for &(dx, dy) in &offsets {
-                        sum = sum + tracer.primary(&cam.ray(x as f32 + dx, y as f32 + dy));
+            let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
+            for &offset in &offsets {
+                for_each_packet(&camera, tile, offset, |rays, pixels| {
+                    let c = tracer.primary(rays);
+                    for (i, p) in pixels.iter().enumerate() {
+                        if let Some(p) = *p {
+                            sum[p] = sum[p] + lane_rgb(&c, i);
+                        }
                     }
-                    out.push(sum * scale);
-                }
+                });
             }
-            out
+            sum.into_iter().map(|s| s * scale).collect()
         }
-        Pattern::HalfPixel => half_pixel_tile(scene, tracer, tile),
+        Pattern::HalfPixel => half_pixel_tile(&camera, tracer, tile),
     }
 }
 
 /// The 9-sample half-pixel grid: a (2w+1)×(2h+1) lattice at half-pixel spacing over the tile, each interior
-/// sample shared by up to four pixels, combined with the trapezoid weights.
-fn half_pixel_tile(scene: &Scene, tracer: &mut Tracer, tile: Tile) -> Vec<Rgb> {
+/// sample shared by up to four pixels, combined with the trapezoid weights. Lattice points go out K at a
+/// time along its rows.
+fn half_pixel_tile<F: Lanes>(camera: &Camera<F>, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
     let (lw, lh) = (2 * tile.w + 1, 2 * tile.h + 1);
-    let mut lattice = Vec::with_capacity((lw * lh) as usize);
-    for b in 0..lh {
-        for a in 0..lw {
-            let sx = tile.x0 as f32 + a as f32 * 0.5;
-            let sy = tile.y0 as f32 + b as f32 * 0.5;
-            lattice.push(tracer.primary(&scene.camera.ray(sx, sy)));
-        }
+    let n = (lw * lh) as usize;
+    let mut lattice = Vec::with_capacity(n);
+    for first in (0..n).step_by(F::K) {
+        let point = |i: usize| ((first + i) % lw as usize, (first + i) / lw as usize);
+        let sx = F::from_fn(|i| tile.x0 as f32 + point(i).0 as f32 * 0.5);
+        let sy = F::from_fn(|i| tile.y0 as f32 + point(i).1 as f32 * 0.5);
+        let ray = camera.ray(sx, sy);
+        let active = F::lanes_below(n - first);
+        let rays = RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
+        let c = tracer.primary(&rays);
+        lattice.extend((0..F::K.min(n - first)).map(|i| lane_rgb(&c, i)));
     }
     let mut out = Vec::with_capacity((tile.w * tile.h) as usize);
     for y in 0..tile.h {

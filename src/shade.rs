@@ -1,12 +1,19 @@
-//! Whitted shading: ambient + Lambert + Phong from coloured point lights, hard shadows by occlusion rays,
-//! mirror reflection and refraction (Snell, total internal reflection, optional Fresnel), to a depth limit.
+//! Whitted shading for packets of K rays: ambient + Lambert + Phong from coloured point lights, hard shadows
+//! by packet occlusion queries, mirror reflection and refraction (Snell, total internal reflection, optional
+//! Fresnel) as masked packets, to a depth limit. Generic over the lane type; K = 1 is the scalar reference.
+//!
+//! Work that differs per lane and has no exact SIMD form (surface lookup by primitive id, material fetch,
+//! checker `floor`, Phong's `powf`) is done lane by lane with the scalar code, so every width computes the
+//! same bits; everything else is lane arithmetic in the scalar path's operation order.
 
+use std::marker::PhantomData;
 use std::ops::AddAssign;
 
-use crate::geometry::{Departure, Ray};
-use crate::math::{Rgb, Vec3f};
+use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
+use crate::math::{Mask, Real, Rgb, Vec3f, V3};
 use crate::scene::desc::{Falloff, Material};
 use crate::scene::Scene;
+use crate::simd::{IdLanes, Lanes};
 
 /// Secondary rays whose contribution to the pixel would be below this weight are not traced.
 const MIN_WEIGHT: f32 = 1.0 / 1024.0;
@@ -40,125 +47,216 @@ impl AddAssign for RayCounts {
     }
 }
 
-/// Traces rays through one scene, counting them. One per thread.
-pub struct Tracer<'a> {
+/// The number of set lanes.
+fn lanes_set<F: Lanes>(m: F::Mask) -> u64 {
+    u64::from(F::move_mask(m).count_ones())
+}
+
+/// A colour in every lane.
+fn splat_rgb<F: Lanes>(c: Rgb) -> V3<F> {
+    F::splat_v3(c)
+}
+
+/// What shading needs at the hit of each lane, gathered from the lanes' primitives and materials.
+struct Surface<F: Lanes> {
+    point: V3<F>,
+    /// Unit normal turned toward the incoming ray.
+    normal: V3<F>,
+    /// Lanes hit from inside (normal flipped: the lecture's case 4).
+    inside: F::Mask,
+    base: V3<F>,
+    ambient: F,
+    diffuse: F,
+    specular: F,
+    shininess: F,
+    reflect: F,
+    transmit: F,
+    ior: F,
+    fresnel: F::Mask,
+}
+
+/// Traces packets through one scene, counting rays. One per thread.
+pub struct Tracer<'a, F: Lanes> {
     scene: &'a Scene,
     /// Rays traced so far.
     pub counts: RayCounts,
+    lanes: PhantomData<F>,
 }
 
-impl<'a> Tracer<'a> {
+impl<'a, F: Lanes> Tracer<'a, F> {
     /// A tracer over `scene` with zero counts.
     pub fn new(scene: &'a Scene) -> Self {
-        Self { scene, counts: RayCounts::default() }
+        Self { scene, counts: RayCounts::default(), lanes: PhantomData }
     }
 
-    /// Radiance along a camera ray.
-    pub fn primary(&mut self, ray: &Ray<f32>) -> Rgb {
-        self.counts.primary += 1;
-        self.trace(ray, Departure::CAMERA, 0, 1.0)
+    /// Radiance along each active camera ray (zero in inactive lanes).
+    pub fn primary(&mut self, rays: &RayPacket<F>) -> V3<F> {
+        self.counts.primary += lanes_set::<F>(rays.active);
+        self.trace(rays, &DeparturePacket::camera(), 0, F::splat_f32(1.0))
     }
 
-    fn trace(&mut self, ray: &Ray<f32>, from: Departure, depth: u32, weight: f32) -> Rgb {
-        let hit = self.scene.geometry.intersect(ray, from, f32::INFINITY);
-        if !hit.is_hit() {
-            return self.scene.render.background;
+    fn trace(&mut self, rays: &RayPacket<F>, from: &DeparturePacket<F>, depth: u32, weight: F) -> V3<F> {
+        let hit = self.scene.geometry.intersect_k(rays, from);
+        let found = hit.found() & rays.active;
+        let zero = V3::all(F::splat_f32(0.0));
+        let background = V3::select(rays.active & !found, splat_rgb::<F>(self.scene.render.background), zero);
+        if !found.any() {
+            return background;
         }
-        let sp = self.scene.geometry.surface(ray, hit.t, hit.prim);
-        let mat = &self.scene.materials[sp.material as usize];
-        // Turn the normal toward the ray: a hit from inside (the lecture's case 4) flips it.
-        let inside = sp.normal.dot(ray.dir) > 0.0;
-        let n = if inside { -sp.normal } else { sp.normal };
-        let base = surface_color(mat, sp.object_point);
-        let view = -ray.dir;
-        let mut color = base.mul_elem(self.scene.render.ambient) * mat.ambient;
-        // Rays leaving on the normal's side head inside exactly when the hit was from inside.
-        let same_side = Departure { prim: hit.prim, inward: inside };
-        if mat.diffuse > 0.0 || mat.specular > 0.0 {
-            color = color + self.direct(mat, base, sp.point, n, view, same_side);
+        let s = self.surface(rays, &hit, found);
+        let view = -rays.dir;
+        let mut color = s.base.mul_elem(splat_rgb::<F>(self.scene.render.ambient)) * s.ambient;
+        let zero_f = F::splat_f32(0.0);
+        let lambert_or_phong = found & (s.diffuse.gt(zero_f) | s.specular.gt(zero_f));
+        if lambert_or_phong.any() {
+            let same_side = DeparturePacket { prim: hit.prim, inward: s.inside };
+            let direct = self.direct(&s, view, lambert_or_phong, &same_side);
+            color = V3::select(lambert_or_phong, color + direct, color);
         }
         if depth < self.scene.render.max_depth {
-            color = color + self.secondary(mat, ray, sp.point, n, inside, hit.prim, depth, weight);
+            color = color + self.secondary(&s, rays, found, hit.prim, depth, weight);
         }
-        color
+        V3::select(found, color, background)
     }
 
-    /// Lambert and Phong from every light that the point sees.
-    fn direct(&mut self, mat: &Material, base: Rgb, p: Vec3f, n: Vec3f, view: Vec3f, from: Departure) -> Rgb {
-        let mut sum = Rgb::default();
+    /// Gathers each found lane's surface point and material with the scalar code.
+    fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
+        let mut v = [[0.0f32; 16]; 16];
+        let mut fresnel = 0u32;
+        for i in (0..F::K).filter(|&i| F::mask_lane(found, i)) {
+            let (ray, _, _) = rays.lane(i);
+            let sp = self.scene.geometry.surface(&ray, hit.t.lane(i), hit.prim.lane(i));
+            let m = &self.scene.materials[sp.material as usize];
+            let base = surface_color(m, sp.object_point);
+            let row = [
+                sp.point.x,
+                sp.point.y,
+                sp.point.z,
+                sp.normal.x,
+                sp.normal.y,
+                sp.normal.z,
+                base.x,
+                base.y,
+                base.z,
+                m.ambient,
+                m.diffuse,
+                m.specular,
+                m.shininess,
+                m.reflect,
+                m.transmit,
+                m.ior,
+            ];
+            for (k, x) in row.into_iter().enumerate() {
+                v[k][i] = x;
+            }
+            fresnel |= u32::from(m.fresnel) << i;
+        }
+        let lane = |k: usize| F::from_lanes(&v[k][..F::K]);
+        let v3 = |k: usize| V3::new(lane(k), lane(k + 1), lane(k + 2));
+        let normal = v3(3);
+        let inside = normal.dot(rays.dir).gt(F::splat_f32(0.0));
+        Surface {
+            point: v3(0),
+            normal: V3::select(inside, -normal, normal),
+            inside,
+            base: v3(6),
+            ambient: lane(9),
+            diffuse: lane(10),
+            specular: lane(11),
+            shininess: lane(12),
+            reflect: lane(13),
+            transmit: lane(14),
+            ior: lane(15),
+            fresnel: F::mask_from_bits(fresnel),
+        }
+    }
+
+    /// Lambert and Phong from every light each lane sees, by one occlusion packet per light.
+    fn direct(&mut self, s: &Surface<F>, view: V3<F>, lanes: F::Mask, from: &DeparturePacket<F>) -> V3<F> {
+        let zero = F::splat_f32(0.0);
+        let mut sum = V3::all(zero);
         for light in &self.scene.lights {
-            let to_light = light.position - p;
+            let to_light = F::splat_v3(light.position) - s.point;
             let dist2 = to_light.dot(to_light);
             let dist = dist2.sqrt();
-            let l = to_light * (1.0 / dist);
-            let cos = n.dot(l);
+            let l = to_light * (F::splat_f32(1.0) / dist);
+            let cos = s.normal.dot(l);
             // Lights behind the surface (or a NaN normal) contribute nothing.
-            if cos.is_nan() || cos <= 0.0 {
+            let lit = lanes & cos.gt(zero);
+            if !lit.any() {
                 continue;
             }
-            self.counts.shadow += 1;
-            if self.scene.geometry.occluded(&Ray::new(p, l), from, dist) {
-                continue;
-            }
+            self.counts.shadow += lanes_set::<F>(lit);
+            let shadow = RayPacket { origin: s.point, dir: l, t_max: dist, active: lit };
+            let visible = lit & !self.scene.geometry.occluded_k(&shadow, from);
             let intensity = match light.falloff {
-                Falloff::None => light.color,
-                Falloff::InverseSquare => light.color * (1.0 / dist2),
+                Falloff::None => splat_rgb::<F>(light.color),
+                Falloff::InverseSquare => splat_rgb::<F>(light.color) * (F::splat_f32(1.0) / dist2),
             };
-            let mut reflected = base * (mat.diffuse * cos);
-            if mat.specular > 0.0 {
-                let mirror = n * (2.0 * cos) - l;
-                let highlight = mirror.dot(view).max(0.0).powf(mat.shininess);
-                reflected = reflected + Rgb::all(mat.specular * highlight);
+            let mut reflected = s.base * (s.diffuse * cos);
+            let phong = visible & s.specular.gt(zero);
+            if phong.any() {
+                let mirror = s.normal * (F::splat_f32(2.0) * cos) - l;
+                let along = mirror.dot(view);
+                let highlight = F::from_fn(|i| along.lane(i).max(0.0).powf(s.shininess.lane(i)));
+                reflected = V3::select(phong, reflected + V3::all(s.specular * highlight), reflected);
             }
-            sum = sum + reflected.mul_elem(intensity);
+            sum = V3::select(visible, sum + reflected.mul_elem(intensity), sum);
         }
         sum
     }
 
-    /// Mirror and transmitted contributions.
-    #[allow(clippy::too_many_arguments)]
+    /// Mirror and transmitted contributions, as masked packets.
     fn secondary(
         &mut self,
-        mat: &Material,
-        ray: &Ray<f32>,
-        p: Vec3f,
-        n: Vec3f,
-        inside: bool,
-        prim: u32,
+        s: &Surface<F>,
+        rays: &RayPacket<F>,
+        found: F::Mask,
+        prim: F::Ids,
         depth: u32,
-        weight: f32,
-    ) -> Rgb {
-        let mut kr = mat.reflect;
-        let mut kt = mat.transmit;
+        weight: F,
+    ) -> V3<F> {
+        let zero = F::splat_f32(0.0);
+        let one = F::splat_f32(1.0);
+        let mut kr = s.reflect;
+        let mut kt = s.transmit;
+        let transmitting = found & kt.gt(zero);
         let mut refracted = None;
-        if kt > 0.0 {
-            let eta = if inside { mat.ior } else { 1.0 / mat.ior };
-            match refract(ray.dir, n, eta) {
-                Some((dir, fresnel)) => {
-                    if mat.fresnel {
-                        kr += kt * fresnel;
-                        kt *= 1.0 - fresnel;
-                    }
-                    refracted = Some(dir);
-                }
-                None => {
-                    // Total internal reflection: all transmitted energy is reflected.
-                    kr += kt;
-                    kt = 0.0;
-                }
+        if transmitting.any() {
+            let eta = F::select(s.inside, s.ior, one / s.ior);
+            let (through, dir, fresnel) = refract(rays.dir, s.normal, eta);
+            let through = transmitting & through;
+            let split = through & s.fresnel;
+            kr = F::select(split, kr + kt * fresnel, kr);
+            kt = F::select(split, kt * (one - fresnel), kt);
+            // Total internal reflection: all transmitted energy is reflected.
+            let tir = transmitting & !through;
+            kr = F::select(tir, kr + kt, kr);
+            kt = F::select(tir, zero, kt);
+            refracted = Some((through, dir));
+        }
+        let min_weight = F::splat_f32(MIN_WEIGHT);
+        let mut color = V3::all(zero);
+        let mirror = found & (kr * weight).gt(min_weight);
+        if mirror.any() {
+            self.counts.reflection += lanes_set::<F>(mirror);
+            let d = rays.dir;
+            let dir = (d - s.normal * (F::splat_f32(2.0) * d.dot(s.normal))).normalize();
+            let next = RayPacket { origin: s.point, dir, t_max: F::splat_f32(f32::INFINITY), active: mirror };
+            let from = DeparturePacket { prim, inward: s.inside };
+            let c = self.trace(&next, &from, depth + 1, weight * kr);
+            color = V3::select(mirror, color + c * kr, color);
+        }
+        if let Some((through, dir)) = refracted {
+            let glass = through & (kt * weight).gt(min_weight);
+            if glass.any() {
+                self.counts.refraction += lanes_set::<F>(glass);
+                let next =
+                    RayPacket { origin: s.point, dir, t_max: F::splat_f32(f32::INFINITY), active: glass };
+                let from = DeparturePacket { prim, inward: !s.inside };
+                let c = self.trace(&next, &from, depth + 1, weight * kt);
+                color = V3::select(glass, color + c * kt, color);
             }
-        }
-        let mut color = Rgb::default();
-        if kr * weight > MIN_WEIGHT {
-            self.counts.reflection += 1;
-            let dir = (ray.dir - n * (2.0 * ray.dir.dot(n))).normalize();
-            let from = Departure { prim, inward: inside };
-            color = color + self.trace(&Ray::new(p, dir), from, depth + 1, weight * kr) * kr;
-        }
-        if let Some(dir) = refracted.filter(|_| kt * weight > MIN_WEIGHT) {
-            self.counts.refraction += 1;
-            let from = Departure { prim, inward: !inside };
-            color = color + self.trace(&Ray::new(p, dir), from, depth + 1, weight * kt) * kt;
         }
         color
     }
@@ -181,35 +279,34 @@ fn surface_color(mat: &Material, object_point: Vec3f) -> Rgb {
 }
 
 /// Snell refraction of unit direction `d` through unit normal `n` (facing against `d`) with
-/// `eta = n_incident / n_transmitted`. Returns the unit transmitted direction and the unpolarised dielectric
-/// Fresnel reflectance, or `None` under total internal reflection.
-pub fn refract(d: Vec3f, n: Vec3f, eta: f32) -> Option<(Vec3f, f32)> {
+/// `eta = n_incident / n_transmitted`. Returns the lanes that refract (not totally internally reflected),
+/// the unit transmitted direction and the unpolarised dielectric Fresnel reflectance.
+pub fn refract<F: Real>(d: V3<F>, n: V3<F>, eta: F) -> (F::Mask, V3<F>, F) {
+    let one = F::splat(1.0);
     let cos_i = -d.dot(n);
-    let sin2_t = eta * eta * (1.0 - cos_i * cos_i);
-    if sin2_t > 1.0 {
-        return None;
-    }
-    let cos_t = (1.0 - sin2_t).sqrt();
+    let sin2_t = eta * eta * (one - cos_i * cos_i);
+    let through = sin2_t.le(one);
+    let cos_t = (one - sin2_t).sqrt();
     let dir = (d * eta + n * (eta * cos_i - cos_t)).normalize();
     let rs = (eta * cos_i - cos_t) / (eta * cos_i + cos_t);
     let rp = (cos_i - eta * cos_t) / (cos_i + eta * cos_t);
-    Some((dir, 0.5 * (rs * rs + rp * rp)))
+    (through, dir, F::splat(0.5) * (rs * rs + rp * rp))
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::V3;
 
     #[test]
     fn refraction_obeys_snell_and_fresnel_at_normal_incidence() {
         let n = V3::new(0.0, 1.0, 0.0);
         let d = V3::new(0.6f32, -0.8, 0.0);
-        let (t, f) = refract(d, n, 1.0 / 1.5).unwrap();
+        let (ok, t, f) = refract(d, n, 1.0 / 1.5);
+        assert!(ok);
         // sin θ_t = sin θ_i / 1.5
         assert!((t.x - 0.6 / 1.5).abs() < 1e-6);
         assert!(f > 0.0 && f < 1.0);
-        let (_, f0) = refract(V3::new(0.0, -1.0, 0.0), n, 1.0 / 1.5).unwrap();
+        let (_, _, f0) = refract(V3::new(0.0, -1.0, 0.0), n, 1.0 / 1.5);
         assert!((f0 - 0.04).abs() < 1e-6, "normal-incidence reflectance of glass is 4%: {f0}");
     }
 
@@ -217,9 +314,8 @@ mod tests {
     fn total_internal_reflection_past_the_critical_angle() {
         let n = V3::new(0.0, 1.0, 0.0);
         // Leaving glass (eta = 1.5) at 60° from the normal: sin θ_t = 1.3 > 1.
-        let d = V3::new(0.866_025_4f32, -0.5, 0.0);
-        assert!(refract(d, n, 1.5).is_none());
-        assert!(refract(V3::new(0.5f32, -0.866_025_4, 0.0), n, 1.5).is_some());
+        assert!(!refract(V3::new(0.866_025_4f32, -0.5, 0.0), n, 1.5).0);
+        assert!(refract(V3::new(0.5f32, -0.866_025_4, 0.0), n, 1.5).0);
     }
 
     #[test]

@@ -3,14 +3,14 @@
 use std::path::Path;
 
 use bareray::film::Image;
-use bareray::render::render;
+use bareray::render::render_lanes;
 use bareray::scene::{toml, Scene};
 use indicatif::ProgressBar;
 
 fn render_toml(src: &str, threads: usize) -> Image {
     let desc = toml::parse(Path::new("test.toml"), src).expect("scene parses");
     let scene = Scene::compile(&desc).expect("scene compiles");
-    render(&scene, Some(threads), &ProgressBar::hidden()).expect("render").image
+    render_lanes(&scene, 8, Some(threads), &ProgressBar::hidden()).expect("render").image
 }
 
 /// pbrt's inside-out test: the camera sits inside a diffuse sphere of radius R with a point light of intensity

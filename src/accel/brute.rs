@@ -1,82 +1,126 @@
-//! Brute-force queries: every primitive, in id order. Ties go to the lower id (strict `<` on t).
+//! Brute-force queries over every primitive, generic over the lane type (lanes = rays): the K = 1 instance is
+//! the scalar reference path. Hits are combined by [`HitPacket::update`]'s (t, id) order, so the result does
+//! not depend on the order of the loops.
 
-use crate::geometry::{far_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Hit, Ray};
+use crate::geometry::{
+    far_root, intersect_sphere, intersect_triangle, sphere_roots, DeparturePacket, HitPacket, Ray, RayPacket,
+};
+use crate::math::Mask;
+use crate::simd::{IdLanes, Lanes};
 
-use super::{Geometry, PrimRef};
+use super::{Geometry, PrimRef, Spheres};
+
+/// Closest hits of every sphere, lanes = rays, the departure sphere of each lane excluded.
+pub fn spheres_intersect_k<F: Lanes>(
+    s: &Spheres,
+    range: std::ops::Range<usize>,
+    ray: &Ray<F>,
+    t_max: F,
+    live: F::Mask,
+    skip: F::Ids,
+    best: &mut HitPacket<F>,
+) {
+    for i in range {
+        let id = F::Ids::splat(i as u32);
+        let (hit, t) = intersect_sphere(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray, t_max);
+        best.update(live & hit & !F::ids_eq(id, skip), t, id);
+    }
+}
+
+/// Lanes of `live` blocked by a sphere in `range` (the departure sphere excluded).
+pub fn spheres_occluded_k<F: Lanes>(
+    s: &Spheres,
+    range: std::ops::Range<usize>,
+    ray: &Ray<F>,
+    t_max: F,
+    live: F::Mask,
+    skip: F::Ids,
+) -> F::Mask {
+    let mut blocked = F::mask_from_bits(0);
+    for i in range {
+        let id = F::Ids::splat(i as u32);
+        let (hit, _) = intersect_sphere(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray, t_max);
+        blocked = blocked | (live & hit & !F::ids_eq(id, skip));
+        if (blocked | !live).all() {
+            break;
+        }
+    }
+    blocked
+}
 
 impl Geometry {
-    /// Closest hit in `[0, t_max)`, never on the departure surface's near side.
-    pub fn intersect(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> Hit {
-        let mut best = Hit { t: t_max, prim: from.prim };
-        let s = &self.spheres;
-        for i in 0..s.len() {
-            if i as u32 == from.prim {
-                continue;
-            }
-            let (hit, t) = intersect_sphere(s.center(i), s.r[i], ray, best.t);
-            if hit {
-                best = Hit { t, prim: i as u32 };
-            }
-        }
+    /// Closest hits of the non-sphere primitives (shapes, polygons), lanes = rays.
+    pub(super) fn others_intersect_k<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        skip: F::Ids,
+        best: &mut HitPacket<F>,
+    ) {
+        let ray = rays.ray();
+        let base = self.spheres.len() as u32;
         for (k, shape) in self.shapes.iter().enumerate() {
-            let prim = (s.len() + k) as u32;
-            if prim == from.prim {
-                continue;
-            }
-            let (hit, t) = shape.intersect(ray, best.t);
-            if hit {
-                best = Hit { t, prim };
-            }
+            let id = F::Ids::splat(base + k as u32);
+            let (hit, t) = shape.to_lanes::<F>().intersect(&ray, rays.t_max);
+            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id);
         }
         let p = &self.polygons;
         let base = self.polygon_base() as u32;
         for j in 0..p.triangles() {
-            let prim = base + p.polygon[j];
-            if prim == from.prim {
-                continue;
-            }
-            let (hit, t) = intersect_triangle(p.v0[j], p.e1[j], p.e2[j], ray, best.t);
-            if hit {
-                best = Hit { t, prim };
-            }
-        }
-        // `best.prim == from.prim` here means nothing else was hit (ids are never reused).
-        let found = best.prim != from.prim;
-        if from.inward {
-            if let Some(t) = self.exit_of_departure(ray, from.prim, best.t) {
-                return Hit { t, prim: from.prim };
-            }
-        }
-        if found {
-            best
-        } else {
-            Hit::MISS
+            let id = F::Ids::splat(base + p.polygon[j]);
+            let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
+            let (hit, t) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
+            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id);
         }
     }
 
-    /// True when anything lies in `[0, t_max)`, the departure surface's near side excluded.
-    pub fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
-        let s = &self.spheres;
-        let spheres = (0..s.len())
-            .filter(|&i| i as u32 != from.prim)
-            .any(|i| intersect_sphere(s.center(i), s.r[i], ray, t_max).0);
-        spheres
-            || self
-                .shapes
-                .iter()
-                .enumerate()
-                .any(|(k, shape)| (s.len() + k) as u32 != from.prim && shape.intersect(ray, t_max).0)
-            || self.polygons_occlude(ray, from, t_max)
-            || (from.inward && self.exit_of_departure(ray, from.prim, t_max).is_some())
-    }
-
-    /// True when a polygon other than the departure one lies in `[0, t_max)`.
-    fn polygons_occlude(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
+    /// Lanes of `live` blocked by a non-sphere primitive.
+    pub(super) fn others_occluded_k<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        live: F::Mask,
+        skip: F::Ids,
+    ) -> F::Mask {
+        let ray = rays.ray();
+        let mut blocked = F::mask_from_bits(0);
+        let base = self.spheres.len() as u32;
+        for (k, shape) in self.shapes.iter().enumerate() {
+            let id = F::Ids::splat(base + k as u32);
+            let (hit, _) = shape.to_lanes::<F>().intersect(&ray, rays.t_max);
+            blocked = blocked | (live & hit & !F::ids_eq(id, skip));
+        }
         let p = &self.polygons;
         let base = self.polygon_base() as u32;
-        (0..p.triangles()).any(|j| {
-            base + p.polygon[j] != from.prim && intersect_triangle(p.v0[j], p.e1[j], p.e2[j], ray, t_max).0
-        })
+        for j in 0..p.triangles() {
+            let id = F::Ids::splat(base + p.polygon[j]);
+            let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
+            let (hit, _) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
+            blocked = blocked | (live & hit & !F::ids_eq(id, skip));
+        }
+        blocked
+    }
+
+    /// For lanes whose ray heads into the solid it leaves: its exit from that solid, as a candidate hit.
+    /// Computed lane by lane with the scalar kernel (each lane's solid differs), so every width gets the
+    /// scalar bits.
+    pub(super) fn departure_exits_k<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> (F::Mask, F) {
+        let inward = from.inward & rays.active;
+        if !inward.any() {
+            return (inward, F::splat_f32(f32::INFINITY));
+        }
+        let mut t = F::splat_f32(f32::INFINITY).to_array();
+        let mut found = 0u32;
+        for i in (0..F::K).filter(|&i| F::mask_lane(inward, i)) {
+            let (ray, t_max, _) = rays.lane(i);
+            if let Some(exit) = self.exit_of_departure(&ray, from.prim.lane(i), t_max) {
+                t.as_mut()[i] = exit;
+                found |= 1 << i;
+            }
+        }
+        (F::mask_from_bits(found), F::from_lanes(t.as_ref()))
     }
 
     /// For a ray that leaves a solid primitive toward its inside: where it leaves the primitive again.

@@ -1,11 +1,14 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
-//! `occluded` (any hit). Brute force over SoA arrays for now; the BVH comes with large sphere fields.
+//! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
+//! Spheres go through the BVH when the scene has one, else brute force; shapes and polygons (few, and
+//! planes are unbounded) are always tested brute force.
 
 mod brute;
 pub mod bvh;
 
-use crate::geometry::{Ray, Shape, NO_PRIM};
-use crate::math::{Vec3f, V3};
+use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, NO_PRIM};
+use crate::math::{Mask, Vec3f, V3};
+use crate::simd::Lanes;
 
 /// Spheres in structure-of-arrays layout: one array per coordinate, so lanes load contiguous values.
 #[derive(Clone, Debug, Default)]
@@ -154,8 +157,12 @@ fn barycentric(v0: Vec3f, e1: Vec3f, e2: Vec3f, p: Vec3f) -> [f32; 3] {
 /// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
-    /// Plain spheres.
+    /// Plain spheres, in BVH leaf order when there is a BVH.
     pub spheres: Spheres,
+    /// The BVH over the spheres, or `None` for brute force.
+    pub bvh: Option<bvh::Bvh>,
+    /// The scene-file index of each sphere (the identity without a BVH), for reporting ids.
+    pub sphere_file_ids: Vec<u32>,
     /// Transformed generic shapes.
     pub shapes: Vec<Shape<f32>>,
     /// Planar polygons.
@@ -188,6 +195,79 @@ pub struct SurfacePoint {
 }
 
 impl Geometry {
+    /// Closest hits of a packet in each lane's `[0, t_max)`, never on the near side of its departure surface.
+    /// Misses and inactive lanes report `t = inf` and [`NO_PRIM`].
+    pub fn intersect_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> HitPacket<F> {
+        let mut best = HitPacket::miss();
+        if !rays.active.any() {
+            return best;
+        }
+        let ray = rays.ray();
+        match &self.bvh {
+            Some(bvh) => bvh.intersect_k(&self.spheres, &ray, rays.t_max, rays.active, from.prim, &mut best),
+            None => brute::spheres_intersect_k(
+                &self.spheres,
+                0..self.spheres.len(),
+                &ray,
+                rays.t_max,
+                rays.active,
+                from.prim,
+                &mut best,
+            ),
+        }
+        self.others_intersect_k(rays, from.prim, &mut best);
+        let (exits, t) = self.departure_exits_k(rays, from);
+        best.update(exits, t, from.prim);
+        best
+    }
+
+    /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side
+    /// excluded); inactive lanes are false.
+    pub fn occluded_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> F::Mask {
+        let live = rays.active;
+        if !live.any() {
+            return live;
+        }
+        let ray = rays.ray();
+        let mut blocked = match &self.bvh {
+            Some(bvh) => bvh.occluded_k(&self.spheres, &ray, rays.t_max, live, from.prim),
+            None => brute::spheres_occluded_k(
+                &self.spheres,
+                0..self.spheres.len(),
+                &ray,
+                rays.t_max,
+                live,
+                from.prim,
+            ),
+        };
+        if (blocked | !live).all() {
+            return blocked;
+        }
+        blocked = blocked | self.others_occluded_k(rays, live & !blocked, from.prim);
+        blocked | self.departure_exits_k(rays, from).0
+    }
+
+    /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].
+    pub fn intersect(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> Hit {
+        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true };
+        let hit = self.intersect_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward });
+        Hit { t: hit.t, prim: hit.prim }
+    }
+
+    /// Whether one ray meets anything in `[0, t_max)`: the K = 1 instance of [`Geometry::occluded_k`].
+    pub fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
+        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true };
+        self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
+    }
+
+    /// The scene-file id of primitive `prim` (spheres are stored in BVH order; other ids are unchanged).
+    pub fn file_id(&self, prim: u32) -> u32 {
+        match self.sphere_file_ids.get(prim as usize) {
+            Some(&id) => id,
+            None => prim,
+        }
+    }
+
     /// Total number of primitives.
     pub fn len(&self) -> usize {
         self.spheres.len() + self.shapes.len() + self.polygons.len()

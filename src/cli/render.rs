@@ -12,7 +12,7 @@ use super::camera_args::CameraArgs;
 use crate::aov::{self, AovList};
 use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
-use crate::render::{render, thread_pool, Rendered};
+use crate::render::{render_lanes, thread_pool, Rendered, LANE_CHOICES};
 use crate::scene::desc::Pattern;
 use crate::scene::{toml, Scene, SceneDesc};
 
@@ -51,6 +51,9 @@ pub struct RenderArgs {
     /// Print a scene summary, rays by kind and the time split.
     #[arg(long)]
     pub stats: bool,
+    /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16. The image is identical at every width.
+    #[arg(long, default_value_t = 8, value_parser = parse_lanes)]
+    pub lanes: usize,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -86,7 +89,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
 
     let threads = args.threads.map(|t| t as usize);
     let progress = progress_bar(args.quiet);
-    let rendered = render(&scene, threads, &progress)?;
+    let rendered = render_lanes(&scene, args.lanes, threads, &progress)?;
     progress.finish_and_clear();
     time.render = rendered.seconds;
 
@@ -175,6 +178,14 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         time.parse, time.build, time.render, time.aov, time.write
     );
     println!("throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
+}
+
+/// Parses a packet width.
+pub fn parse_lanes(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(k) if LANE_CHOICES.contains(&k) => Ok(k),
+        _ => Err(format!("lanes must be one of 1, 4, 8, 16, got `{s}`")),
+    }
 }
 
 fn stem(path: &Path) -> String {

@@ -92,6 +92,36 @@ impl<F: Lanes> HitPacket<F> {
     pub fn lane(&self, i: usize) -> Hit {
         Hit { t: self.t.lane(i), prim: self.prim.lane(i) }
     }
+
+    /// Takes `(t, id)` in the lanes of `valid` where it is closer: smaller t, or equal t and a lower id. The
+    /// order is total, so the closest hit does not depend on the order primitives are visited in — what lets
+    /// a packet traversal, which visits nodes in its own order, agree bit for bit with a single ray's.
+    #[inline(always)]
+    pub fn update(&mut self, valid: F::Mask, t: F, id: F::Ids) {
+        let closer = valid & (t.lt(self.t) | (t.le(self.t) & F::ids_lt(id, self.prim)));
+        self.t = F::select(closer, t, self.t);
+        self.prim = F::select_ids(closer, id, self.prim);
+    }
+}
+
+/// Where each lane's ray starts: the packet form of [`super::Departure`].
+#[derive(Clone, Copy, Debug)]
+pub struct DeparturePacket<F: Lanes> {
+    /// The primitive each ray leaves ([`NO_PRIM`] for camera rays).
+    pub prim: F::Ids,
+    /// Lanes whose ray heads into its primitive's interior.
+    pub inward: F::Mask,
+}
+
+impl<F: Lanes> DeparturePacket<F> {
+    /// Camera rays: no departure surface.
+    pub fn camera() -> Self {
+        Self { prim: F::Ids::splat(NO_PRIM), inward: F::mask_from_bits(0) }
+    }
+    /// Lane `i` as a scalar departure.
+    pub fn lane(&self, i: usize) -> super::Departure {
+        super::Departure { prim: self.prim.lane(i), inward: F::mask_lane(self.inward, i) }
+    }
 }
 
 /// Closest hits of a packet of camera rays with every sphere (lanes = rays): the packet twin of

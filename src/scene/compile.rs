@@ -1,12 +1,14 @@
 //! Compile: a validated [`SceneDesc`] becomes the immutable [`Scene`] every render thread shares — camera frame
 //! precomputed, spheres in SoA arrays, transforms inverted once, everything rounded to f32 once.
 
+use crate::accel::bvh::{self, BuildStats};
 use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
 use crate::math::affine::normal_to_world;
 use crate::math::{Affine, Rgb, Vec3f, V3};
+use obvhs::BvhBuildParams;
 
 use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
 
@@ -36,12 +38,41 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Point lights.
     pub lights: Vec<Light>,
+    /// What building the BVH cost (zero without one).
+    pub build: BuildStats,
+}
+
+/// How spheres are searched.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum Accel {
+    /// BVH from [`BVH_MIN_SPHERES`] spheres on, brute force below.
+    #[default]
+    Auto,
+    /// Always a BVH.
+    Bvh,
+    /// Always brute force.
+    Brute,
+}
+
+/// Below this many spheres brute force is used (see PERF.md for the crossover measurement).
+pub const BVH_MIN_SPHERES: usize = 16;
+
+/// The largest coordinate magnitude a ray can start from or pass near: spheres' far sides, the eye, lights.
+fn reach(desc: &SceneDesc) -> f32 {
+    let spheres = desc.spheres.iter().map(|s| s.center.abs().max_element() + s.radius);
+    let lights = desc.lights.iter().map(|l| l.position.abs().max_element());
+    spheres.chain(lights).fold(desc.camera.eye.abs().max_element(), f64::max) as f32
 }
 
 impl Scene {
     /// Compiles a description. Fails only on a camera that cannot form an image; everything else was
     /// validated by the reader.
     pub fn compile(desc: &SceneDesc) -> Result<Scene, CameraError> {
+        Self::compile_with(desc, Accel::Auto)
+    }
+
+    /// Compiles with a chosen acceleration structure for the spheres.
+    pub fn compile_with(desc: &SceneDesc, accel: Accel) -> Result<Scene, CameraError> {
         let camera_f64 = Camera::new(&desc.camera)?;
         let mut geometry = Geometry::default();
         for s in &desc.spheres {
@@ -60,6 +91,24 @@ impl Scene {
         for p in &desc.polygons {
             push_polygon(&mut geometry.polygons, p);
         }
+        // obvhs cannot order boxes with infinite or NaN corners; readers reject such spheres, and a scene
+        // built by hand with them falls back to brute force rather than failing.
+        let sp = &geometry.spheres;
+        let finite = [&sp.cx, &sp.cy, &sp.cz, &sp.r].iter().all(|v| v.iter().all(|x| x.is_finite()));
+        let use_bvh = finite
+            && match accel {
+                Accel::Auto => geometry.spheres.len() >= BVH_MIN_SPHERES,
+                Accel::Bvh => !geometry.spheres.is_empty(),
+                Accel::Brute => false,
+            };
+        let mut build = BuildStats::default();
+        if use_bvh {
+            let pad = bvh::padding(reach(desc));
+            let (tree, order, stats) = bvh::build(&mut geometry.spheres, pad, BvhBuildParams::fast_build());
+            geometry.bvh = Some(tree);
+            geometry.sphere_file_ids = order;
+            build = stats;
+        }
         let lights = desc
             .lights
             .iter()
@@ -76,6 +125,7 @@ impl Scene {
             geometry,
             materials,
             lights,
+            build,
         })
     }
 }

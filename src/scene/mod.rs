@@ -8,6 +8,6 @@ pub mod nff;
 pub mod toml;
 pub mod xyzr;
 
-pub use compile::{Light, Scene};
+pub use compile::{Accel, Light, Scene, BVH_MIN_SPHERES};
 pub use desc::SceneDesc;
 pub use error::SceneError;

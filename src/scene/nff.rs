@@ -136,8 +136,12 @@ impl<'a> Reader<'a> {
         let tok = self.expect(what)?;
         let (text, line) = (tok.text, tok.line);
         match text.parse::<f64>() {
-            Ok(v) if v.is_finite() => Ok(v),
-            _ => Err(self.err(line, format!("expected {what} (a finite number), got `{text}`"))),
+            // Geometry is rendered in f32: a value beyond its range would become infinite there.
+            Ok(v) if v.is_finite() && (v as f32).is_finite() => Ok(v),
+            _ => {
+                Err(self
+                    .err(line, format!("expected {what} (a finite number within f32 range), got `{text}`")))
+            }
         }
     }
 

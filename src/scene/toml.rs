@@ -238,7 +238,14 @@ impl Reader<'_> {
             desc.lights.push(self.light(l)?);
         }
         for s in &file.spheres {
-            let radius = self.ranged(&s.radius, "radius", |r| r > 0.0, "positive")?;
+            let radius =
+                self.ranged(&s.radius, "radius", |r| r > 0.0 && (r as f32).is_finite(), "positive")?;
+            if !s.center.iter().all(|c| (*c as f32).is_finite()) {
+                return Err(self.err(
+                    s.radius.span(),
+                    format!("center must be finite (within f32 range), got {:?}", s.center),
+                ));
+            }
             let center = DVec3::from(s.center);
             let mat = material(&s.material)?;
             match &s.transform {

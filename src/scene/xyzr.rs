@@ -48,8 +48,8 @@ fn sphere(text: &str) -> Result<SphereDesc, String> {
     for (k, name) in ["x", "y", "z", "r"].iter().enumerate() {
         let w = words.next().ok_or_else(|| format!("expected 4 numbers `x y z r`, got {k}"))?;
         v[k] = match w.parse::<f64>() {
-            Ok(x) if x.is_finite() => x,
-            _ => return Err(format!("expected {name} (a finite number), got `{w}`")),
+            Ok(x) if x.is_finite() && (x as f32).is_finite() => x,
+            _ => return Err(format!("expected {name} (a finite number within f32 range), got `{w}`")),
         };
     }
     if let Some(extra) = words.next() {
