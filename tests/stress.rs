@@ -615,6 +615,10 @@ fn acne_whitted_is_the_same_image_at_every_scale_and_offset() {
     desc.camera.height = 120;
     desc.render.pattern = bareray::scene::desc::Pattern::Grid(1);
     let reference = render_image(&compile(&desc));
+    // The detector itself: one corrupted pixel in the flat sky is one speckle.
+    let mut fake = reference.clone();
+    fake.pixels[2 * 160 + 80] = fake.pixels[2 * 160 + 80] * 0.5;
+    assert_eq!(speckles(&reference, &pixel_diffs(&reference, &fake), 0.02), 1, "speckle detector");
     for s in [1e-3, 1.0, 1e3, 1e4] {
         let img = render_image(&compile(&scaled(&desc, s, DVec3::new(1e4 * s, 0.0, 0.0))));
         let d = pixel_diffs(&reference, &img);
