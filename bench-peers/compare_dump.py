@@ -43,6 +43,14 @@ def write_dump(path, t, ids):
         ids.tofile(f)
 
 
+def checksum(ids):
+    """embree_bench's checksum: FNV-1a 64 over the int32 ids' little-endian bytes, row-major."""
+    h = 0xCBF29CE484222325
+    for byte in np.ascontiguousarray(ids, dtype="<i4").tobytes():
+        h = ((h ^ byte) * 0x100000001B3) & 0xFFFFFFFFFFFFFFFF
+    return f"{h:016x}"
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("a")
@@ -50,6 +58,7 @@ def main():
     ap.add_argument("--max-id-ppm", type=float, default=None, help="fail above this many id mismatches per million")
     ap.add_argument("--max-rel", type=float, default=None, help="fail above this max relative t difference")
     ap.add_argument("--show", type=int, default=5, help="print this many mismatching pixels")
+    ap.add_argument("--checksum", action="store_true", help="also print both id checksums (slow: pure Python)")
     args = ap.parse_args()
 
     wa, ha, ta, ia = read_dump(args.a)
@@ -67,6 +76,8 @@ def main():
     relmax = float(rel.max()) if rel.size else 0.0
     rel999 = float(np.quantile(rel, 0.999)) if rel.size else 0.0
     ulps = np.abs(ta[same].view(np.int32).astype(np.int64) - tb[same].view(np.int32).astype(np.int64))
+    if args.checksum:
+        print(f"checksum a {checksum(ia)}  b {checksum(ib)}")
     print(f"pixels {n}  hits a {int(hit_a.sum())} b {int(hit_b.sum())}")
     print(f"id mismatches {nm} ({nm / n * 1e6:.2f} per million), of which hit/miss disagreements {hitmiss}")
     print(f"t on same-id hits: max rel {relmax:.3e}, 99.9% rel {rel999:.3e}, "
