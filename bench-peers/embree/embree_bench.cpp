@@ -25,6 +25,8 @@
 #include <thread>
 #include <vector>
 
+#include <sys/resource.h>
+
 namespace {
 
 // ---------------------------------------------------------------------------------------------- utilities
@@ -37,6 +39,13 @@ namespace {
 double now_s() {
   using clock = std::chrono::steady_clock;
   return std::chrono::duration<double>(clock::now().time_since_epoch()).count();
+}
+
+// Process CPU time (user + system, all threads).
+double cpu_s() {
+  rusage ru;
+  getrusage(RUSAGE_SELF, &ru);
+  return ru.ru_utime.tv_sec + ru.ru_stime.tv_sec + 1e-6 * (ru.ru_utime.tv_usec + ru.ru_stime.tv_usec);
 }
 
 double median(std::vector<double> v) {
@@ -582,16 +591,17 @@ int main(int argc, char** argv) {
     for (const std::string& geom : geoms) {
       bool user = geom == "user";
       // Build: median over build_reps fresh scenes; the last one is kept for rendering.
-      std::vector<double> builds;
+      std::vector<double> builds, build_cpus;
       RTCScene scene = nullptr;
       int64_t bytes = 0;
       for (int b = 0; b < build_reps; ++b) {
         if (scene) rtcReleaseScene(scene);
         int64_t before = g_bytes.load();
         scene = make_scene(dev, sp, user, &ud, quality, points);
-        double t0 = now_s();
+        double c0 = cpu_s(), t0 = now_s();
         rtcCommitScene(scene);
         builds.push_back(now_s() - t0);
+        build_cpus.push_back(cpu_s() - c0);
         if (rtcGetDeviceError(dev) != RTC_ERROR_NONE) die("Embree error during commit");
         bytes = g_bytes.load() - before;
       }
@@ -601,11 +611,12 @@ int main(int argc, char** argv) {
         fr.t.assign(size_t(cam.W) * cam.H, NAN);
         fr.id.assign(size_t(cam.W) * cam.H, -2);
         render(scene, cam, fr, api, threads);  // warm-up (not timed)
-        std::vector<double> times;
+        std::vector<double> times, cpus;
         for (int r = 0; r < reps; ++r) {
-          double t0 = now_s();
+          double c0 = cpu_s(), t0 = now_s();
           render(scene, cam, fr, api, threads);
           times.push_back(now_s() - t0);
+          cpus.push_back(cpu_s() - c0);
         }
         double sec = median(times);
         uint64_t hits = 0;
@@ -615,11 +626,11 @@ int main(int argc, char** argv) {
         uint64_t ck = checksum_ids(fr.id);
         std::printf(
             "{\"tracer\":\"embree\",\"geometry\":\"%s\",\"api\":\"%d\",\"threads\":%d,\"spheres\":%zu,"
-            "\"build_s\":%.6f,\"seconds\":%.6f,\"mrays_per_s\":%.3f,\"checksum\":\"%016" PRIx64 "\","
+            "\"build_s\":%.6f,\"build_cpu_s\":%.6f,\"seconds\":%.6f,\"mrays_per_s\":%.3f,\"checksum\":\"%016" PRIx64 "\","
             "\"hits\":%" PRIu64 ",\"t_sum\":%.9g,\"width\":%d,\"height\":%d,\"reps\":%d,\"seconds_min\":%.6f,"
-            "\"seconds_max\":%.6f,\"build_s_all\":[",
-            geom.c_str(), api, threads, sp.size(), build_s, sec, nrays / sec / 1e6, ck, hits, tsum, cam.W, cam.H,
-            reps, *std::min_element(times.begin(), times.end()), *std::max_element(times.begin(), times.end()));
+            "\"seconds_max\":%.6f,\"cpu_s\":%.6f,\"build_s_all\":[",
+            geom.c_str(), api, threads, sp.size(), build_s, median(build_cpus), sec, nrays / sec / 1e6, ck, hits, tsum, cam.W, cam.H,
+            reps, *std::min_element(times.begin(), times.end()), *std::max_element(times.begin(), times.end()), median(cpus));
         for (size_t b = 0; b < builds.size(); ++b) std::printf("%s%.6f", b ? "," : "", builds[b]);
         std::printf("],\"embree_bytes\":%" PRId64 ",\"quality\":\"%s\"%s,\"embree\":\"%s\"}\n", bytes,
                     quality_name.c_str(), user ? (user_f64 ? ",\"user_precision\":\"f64\"" : ",\"user_precision\":\"f32\"") : "",
