@@ -632,8 +632,8 @@ int main(int argc, char** argv) {
             geom.c_str(), api, threads, sp.size(), build_s, median(build_cpus), sec, nrays / sec / 1e6, ck, hits, tsum, cam.W, cam.H,
             reps, *std::min_element(times.begin(), times.end()), *std::max_element(times.begin(), times.end()), median(cpus));
         for (size_t b = 0; b < builds.size(); ++b) std::printf("%s%.6f", b ? "," : "", builds[b]);
-        std::printf("],\"embree_bytes\":%" PRId64 ",\"quality\":\"%s\"%s,\"embree\":\"%s\"}\n", bytes,
-                    quality_name.c_str(), user ? (user_f64 ? ",\"user_precision\":\"f64\"" : ",\"user_precision\":\"f32\"") : "",
+        std::printf("],\"embree_bytes\":%" PRId64 ",\"quality\":\"%s\",\"raygen\":\"%s\"%s,\"embree\":\"%s\"}\n", bytes,
+                    quality_name.c_str(), pregen ? "pregen" : "inline", user ? (user_f64 ? ",\"user_precision\":\"f64\"" : ",\"user_precision\":\"f32\"") : "",
                     RTC_VERSION_STRING);
         std::fflush(stdout);
         if (!dump.empty() && !dumped) {
