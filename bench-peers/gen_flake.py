@@ -14,6 +14,7 @@ child's subtree). Written from an inspection of balls2.nff: levels 1 and 2 repro
 """
 import argparse
 import math
+import os
 import sys
 
 HEADER = """b 0.078 0.361 0.753
@@ -96,6 +97,7 @@ def main():
         sys.exit("gen_flake: level must be in 0..7")
     sys.setrecursionlimit(100)
     if a.output:
+        os.makedirs(os.path.dirname(a.output) or ".", exist_ok=True)
         with open(a.output, "w") as f:
             n = flake(a.level, f)
     else:
