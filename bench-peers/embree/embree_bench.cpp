@@ -558,6 +558,7 @@ void usage() {
       "        --quality low|medium|high (medium)  --user-precision f32|f64 (f32)\n"
       "        --user-kernel packet|scalar (packet: branch-free SIMD callback for packets, f32 only)\n"
       "output: --dump FILE   per-pixel t and id of the FIRST configuration run (see README)\n"
+      "        --write-xyzr FILE  write the spheres ('%.9g', round-trips f32) and continue\n"
       "        --verbose     Embree device verbose=1 (prints the ISA chosen)\n"
       "timing: --pregen      compute all ray directions once before timing (default: generated per ray,\n"
       "                      inside the timed loop, as a renderer does)");
@@ -568,7 +569,7 @@ void usage() {
 int main(int argc, char** argv) {
   FieldParams fp;
   CameraParams cp;
-  std::string xyzr, dump;
+  std::string xyzr, dump, write_xyzr;
   std::vector<std::string> geoms = {"points", "user"};
   std::vector<int> apis = {1, 4, 8, 16}, thread_counts = {1, 2};
   int reps = 5, build_reps = 3;
@@ -618,6 +619,7 @@ int main(int argc, char** argv) {
       if (v == "f64") user_f64 = true; else if (v == "f32") user_f64 = false; else die("--user-precision f32|f64");
     }
     else if (k == "--dump") dump = val();
+    else if (k == "--write-xyzr") write_xyzr = val();
     else if (k == "--user-kernel") {
       user_kernel = val();
       if (user_kernel != "packet" && user_kernel != "scalar") die("--user-kernel packet|scalar");
@@ -637,6 +639,15 @@ int main(int argc, char** argv) {
   Spheres sp = xyzr.empty() ? generate_field(fp) : read_xyzr(xyzr);
   double t_gen = now_s() - t_gen0;
   std::fprintf(stderr, "spheres: %zu (%s, %.3f s)\n", sp.size(), xyzr.empty() ? "generated" : xyzr.c_str(), t_gen);
+
+  if (!write_xyzr.empty()) {
+    FILE* f = std::fopen(write_xyzr.c_str(), "w");
+    if (!f) die("cannot write " + write_xyzr);
+    std::fprintf(f, "# x y z r (f32, %%.9g); %zu spheres\n", sp.size());
+    for (size_t i = 0; i < sp.size(); ++i)
+      std::fprintf(f, "%.9g %.9g %.9g %.9g\n", sp.x[i], sp.y[i], sp.z[i], sp.r[i]);
+    std::fclose(f);
+  }
 
   std::vector<float> points(sp.size() * 4);
   for (size_t i = 0; i < sp.size(); ++i) {
