@@ -145,3 +145,29 @@ fn half_pixel_pattern_agrees_with_a_fine_grid() {
     };
     assert!(err(&half) < 0.5 * err(&one), "half-pixel {} vs one sample {}", err(&half), err(&one));
 }
+
+/// Every scene in scenes/ renders to the same pixels, bit for bit, at 1, 4, 8 and 16 lanes and on 1 and 2
+/// threads: the packet path and the scalar reference path are one computation.
+#[test]
+fn every_scene_is_identical_at_every_width_and_thread_count() {
+    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    scenes.sort();
+    let mut checked = 0;
+    for path in scenes.iter().filter(|p| p.extension().is_some_and(|e| e == "toml")) {
+        let mut desc = toml::load(path).unwrap();
+        desc.camera.width = 96;
+        desc.camera.height = 64;
+        let scene = Scene::compile(&desc).unwrap();
+        let reference = render_lanes(&scene, 1, Some(1), &ProgressBar::hidden()).unwrap().image;
+        for (lanes, threads) in [(1, 2), (4, 1), (4, 2), (8, 1), (8, 2), (16, 1), (16, 2)] {
+            let img = render_lanes(&scene, lanes, Some(threads), &ProgressBar::hidden()).unwrap().image;
+            let same = img.pixels.iter().zip(&reference.pixels).all(|(a, b)| {
+                a.x.to_bits() == b.x.to_bits() && a.y.to_bits() == b.y.to_bits() && a.z.to_bits() == b.z.to_bits()
+            });
+            assert!(same, "{path:?} differs at lanes {lanes}, threads {threads}");
+        }
+        checked += 1;
+    }
+    assert!(checked >= 4);
+}
