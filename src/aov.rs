@@ -11,7 +11,8 @@ use exr::prelude::{
 };
 use rayon::prelude::*;
 
-use crate::geometry::{Departure, NO_PRIM};
+use crate::geometry::NO_PRIM;
+use crate::render::{primary_hits_lanes, thread_pool};
 use crate::output::{write_atomic, BoxError};
 use crate::scene::Scene;
 
@@ -62,32 +63,29 @@ pub struct AovImage {
     pub id: Vec<u32>,
 }
 
-/// Traces one ray through every pixel centre (in the calling rayon pool).
-pub fn render_aovs(scene: &Scene) -> AovImage {
-    let (w, h) = (scene.camera.width, scene.camera.height);
-    let rows: Vec<Vec<(f32, [f32; 3], u32)>> = (0..h)
-        .into_par_iter()
-        .map(|y| {
-            (0..w)
-                .map(|x| {
-                    let ray = scene.camera.ray(x as f32 + 0.5, y as f32 + 0.5);
-                    let hit = scene.geometry.intersect(&ray, Departure::CAMERA, f32::INFINITY);
-                    if !hit.is_hit() {
-                        return (f32::INFINITY, [0.0; 3], NO_PRIM);
-                    }
-                    let n = scene.geometry.surface(&ray, hit.t, hit.prim).normal;
-                    (hit.t, [n.x, n.y, n.z], scene.geometry.file_id(hit.prim))
-                })
-                .collect()
-        })
-        .collect();
-    let mut img = AovImage { width: w, height: h, ..AovImage::default() };
-    for (t, n, id) in rows.into_iter().flatten() {
-        img.depth.push(t);
-        img.normal.push(n);
-        img.id.push(id);
-    }
-    img
+/// Traces one ray through every pixel centre in packets of `lanes`, and looks up the normals.
+pub fn render_aovs(
+    scene: &Scene,
+    lanes: usize,
+    threads: Option<usize>,
+) -> Result<AovImage, rayon::ThreadPoolBuildError> {
+    let hits = primary_hits_lanes(scene, lanes, threads)?;
+    let w = hits.width as usize;
+    let normal = thread_pool(threads)?.install(|| {
+        (0..hits.t.len())
+            .into_par_iter()
+            .map(|i| {
+                if hits.prim[i] == NO_PRIM {
+                    return [0.0; 3];
+                }
+                let ray = scene.camera.ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                let n = scene.geometry.surface(&ray, hits.t[i], hits.prim[i]).normal;
+                [n.x, n.y, n.z]
+            })
+            .collect()
+    });
+    let id = hits.prim.iter().map(|&p| if p == NO_PRIM { NO_PRIM } else { scene.geometry.file_id(p) }).collect();
+    Ok(AovImage { width: hits.width, height: hits.height, depth: hits.t, normal, id })
 }
 
 /// The AOV file for an image output: `out.png` → `out.aov.exr`.

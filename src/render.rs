@@ -221,3 +221,90 @@ fn half_pixel_tile<F: Lanes>(camera: &Camera<F>, tracer: &mut Tracer<F>, tile: T
     }
     out
 }
+
+/// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
+#[derive(Clone, Debug)]
+pub struct PrimaryHits {
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Hit distance per pixel, row-major, `inf` on a miss.
+    pub t: Vec<f32>,
+    /// Primitive id per pixel in storage order ([`crate::accel::Geometry::file_id`] maps it to the scene
+    /// file's numbering), [`crate::geometry::NO_PRIM`] on a miss.
+    pub prim: Vec<u32>,
+    /// Wall-clock seconds of the tracing.
+    pub seconds: f64,
+}
+
+impl PrimaryHits {
+    /// FNV-1a 64 over the per-pixel scene-file ids as little-endian i32 (−1 on a miss), row-major: the
+    /// checksum bench-peers/ computes for Embree, so equal results give equal checksums across tracers.
+    pub fn checksum(&self, scene: &Scene) -> u64 {
+        let mut h = 0xcbf2_9ce4_8422_2325u64;
+        for &p in &self.prim {
+            let id = if p == crate::geometry::NO_PRIM { -1i32 } else { scene.geometry.file_id(p) as i32 };
+            for b in id.to_le_bytes() {
+                h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+            }
+        }
+        h
+    }
+}
+
+/// [`primary_hits`] at a packet width chosen at run time.
+pub fn primary_hits_lanes(
+    scene: &Scene,
+    lanes: usize,
+    threads: Option<usize>,
+) -> Result<PrimaryHits, rayon::ThreadPoolBuildError> {
+    match lanes {
+        1 => primary_hits::<f32>(scene, threads),
+        4 => primary_hits::<f32x4>(scene, threads),
+        8 => primary_hits::<f32x8>(scene, threads),
+        16 => primary_hits::<f32x16>(scene, threads),
+        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
+    }
+}
+
+/// Traces one camera ray per pixel centre in packets of `F::K` and keeps the closest hits.
+pub fn primary_hits<F: Lanes>(
+    scene: &Scene,
+    threads: Option<usize>,
+) -> Result<PrimaryHits, rayon::ThreadPoolBuildError> {
+    use crate::geometry::DeparturePacket;
+    let start = Instant::now();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let tiles = tiles(width, height);
+    let traced: Vec<(Tile, Vec<(f32, u32)>)> = thread_pool(threads)?.install(|| {
+        tiles
+            .par_iter()
+            .map(|&tile| {
+                let camera = scene.camera.to_lanes::<F>();
+                let mut out = vec![(f32::INFINITY, crate::geometry::NO_PRIM); (tile.w * tile.h) as usize];
+                for_each_packet(&camera, tile, (0.5, 0.5), |rays, pixels| {
+                    let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+                    for (i, p) in pixels.iter().enumerate() {
+                        if let Some(p) = *p {
+                            out[p] = (hit.t.lane(i), crate::simd::IdLanes::lane(hit.prim, i));
+                        }
+                    }
+                });
+                (tile, out)
+            })
+            .collect()
+    });
+    let n = width as usize * height as usize;
+    let mut hits = PrimaryHits { width, height, t: vec![0.0; n], prim: vec![0; n], seconds: 0.0 };
+    for (tile, out) in traced {
+        for (i, (t, prim)) in out.into_iter().enumerate() {
+            let (x, y) = (tile.x0 + i as u32 % tile.w, tile.y0 + i as u32 / tile.w);
+            let at = y as usize * width as usize + x as usize;
+            hits.t[at] = t;
+            hits.prim[at] = prim;
+        }
+    }
+    hits.seconds = start.elapsed().as_secs_f64();
+    Ok(hits)
+}

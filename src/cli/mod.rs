@@ -1,5 +1,6 @@
 //! The command line: one file per subcommand; `main.rs` only calls [`main`].
 
+mod bench;
 mod camera_args;
 mod gen;
 mod render;
@@ -23,6 +24,8 @@ pub struct Cli {
 enum Command {
     /// Render a scene to an image file.
     Render(render::RenderArgs),
+    /// Measure: trace a scene repeatedly at each packet width and thread count and print a table (or JSON).
+    Bench(bench::BenchArgs),
     /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
     Gen(gen::GenArgs),
 }
@@ -33,6 +36,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Gen(args) => gen::run(args),
+        Command::Bench(args) => bench::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -12,7 +12,7 @@ use super::camera_args::CameraArgs;
 use crate::aov::{self, AovList};
 use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
-use crate::render::{render_lanes, thread_pool, Rendered, LANE_CHOICES};
+use crate::render::{render_lanes, Rendered, LANE_CHOICES};
 use crate::scene::desc::Pattern;
 use crate::scene::{toml, Scene, SceneDesc};
 
@@ -97,7 +97,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         None => None,
         Some(which) => {
             let clock = Instant::now();
-            let img = thread_pool(threads)?.install(|| aov::render_aovs(&scene));
+            let img = aov::render_aovs(&scene, args.lanes, threads)?;
             time.aov = clock.elapsed().as_secs_f64();
             Some((img, which))
         }

@@ -1,0 +1,154 @@
+//! `bareray bench`: the same scene traced repeatedly at each packet width and thread count.
+
+use std::path::PathBuf;
+use std::time::Instant;
+
+use anyhow::{bail, Result};
+use clap::Args;
+use indicatif::ProgressBar;
+
+use super::camera_args::CameraArgs;
+use super::render::{load_scene, parse_lanes};
+use crate::render::{primary_hits_lanes, render_lanes};
+use crate::scene::Scene;
+
+/// Arguments of `bareray bench`.
+#[derive(Args, Debug)]
+#[command(after_help = "Examples:\n  bareray gen field --count 1000000 -o f.xyzr\n  \
+bareray bench f.xyzr --primary-only --eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080\n  \
+bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --json")]
+pub struct BenchArgs {
+    /// Scene file (.toml, .nff or .xyzr).
+    pub scene: PathBuf,
+    /// Packet widths to measure, a comma list of 1, 4, 8, 16 (1 is the scalar reference path).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1, 4, 8, 16], value_parser = parse_lanes)]
+    pub lanes: Vec<usize>,
+    /// Thread counts to measure, a comma list.
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1, 2])]
+    pub threads: Vec<usize>,
+    /// Trace camera rays to the closest hit only (one per pixel centre): no shading, no secondary rays.
+    #[arg(long)]
+    pub primary_only: bool,
+    /// Timed repetitions per setting (the median is reported), after one untimed warm-up.
+    #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
+    pub reps: u32,
+    /// One JSON object per line instead of a table.
+    #[arg(long)]
+    pub json: bool,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+/// One measured setting.
+struct Row {
+    lanes: usize,
+    threads: usize,
+    rays: u64,
+    seconds: f64,
+    checksum: u64,
+}
+
+/// Runs `bareray bench`.
+pub fn run(args: BenchArgs) -> Result<()> {
+    if args.threads.iter().any(|&t| t == 0 || t > 1024) {
+        bail!("--threads takes counts from 1 to 1024, got {:?}", args.threads);
+    }
+    let clock = Instant::now();
+    let mut desc = load_scene(&args.scene)?;
+    args.camera.apply(&mut desc)?;
+    let parse_s = clock.elapsed().as_secs_f64();
+    let clock = Instant::now();
+    let scene = Scene::compile(&desc)?;
+    let compile_s = clock.elapsed().as_secs_f64();
+    let g = &scene.geometry;
+    let bytes = g.spheres.len() * 20 + scene.build.node_bytes;
+    if !args.json {
+        println!(
+            "{}: {} primitives ({} spheres), {}x{}; parse {parse_s:.3} s, compile {compile_s:.3} s (BVH build {:.3} s, \
+             {:.1} bytes/sphere); {}",
+            args.scene.display(),
+            g.len(),
+            g.spheres.len(),
+            scene.camera.width,
+            scene.camera.height,
+            scene.build.seconds,
+            bytes as f64 / g.spheres.len().max(1) as f64,
+            if args.primary_only { "primary rays only" } else { "full Whitted render" }
+        );
+        println!("lanes threads        rays   median s    Mrays/s  vs 1 lane  checksum");
+    }
+    let mut scalar: Option<f64> = None;
+    for &threads in &args.threads {
+        for &lanes in &args.lanes {
+            let row = measure(&scene, &args, lanes, threads)?;
+            let mrays = row.rays as f64 / row.seconds / 1e6;
+            if lanes == 1 && threads == args.threads[0] {
+                scalar = Some(mrays);
+            }
+            if args.json {
+                println!(
+                    "{{\"tracer\":\"bareray\",\"scene\":{:?},\"primary_only\":{},\"lanes\":{},\"threads\":{},\"rays\":{},\
+                     \"seconds\":{:.6},\"mrays_per_s\":{:.3},\"checksum\":\"{:016x}\",\"reps\":{},\"spheres\":{},\
+                     \"build_s\":{:.6},\"width\":{},\"height\":{}}}",
+                    args.scene.display().to_string(),
+                    args.primary_only,
+                    row.lanes,
+                    row.threads,
+                    row.rays,
+                    row.seconds,
+                    mrays,
+                    row.checksum,
+                    args.reps,
+                    g.spheres.len(),
+                    scene.build.seconds,
+                    scene.camera.width,
+                    scene.camera.height
+                );
+            } else {
+                let ratio = scalar.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
+                println!(
+                    "{:5} {:7} {:11} {:10.4} {:10.2} {:>10}  {:016x}",
+                    row.lanes, row.threads, row.rays, row.seconds, mrays, ratio, row.checksum
+                );
+            }
+        }
+    }
+    Ok(())
+}
+
+/// The median of `reps` timed runs after one warm-up.
+fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
+    let mut times = Vec::with_capacity(args.reps as usize);
+    let (mut rays, mut checksum) = (0, 0);
+    for rep in 0..=args.reps {
+        let seconds = if args.primary_only {
+            let hits = primary_hits_lanes(scene, lanes, Some(threads))?;
+            rays = hits.t.len() as u64;
+            checksum = hits.checksum(scene);
+            hits.seconds
+        } else {
+            let r = render_lanes(scene, lanes, Some(threads), &ProgressBar::hidden())?;
+            rays = r.counts.total();
+            checksum = image_checksum(&r.image);
+            r.seconds
+        };
+        if rep > 0 {
+            times.push(seconds);
+        }
+    }
+    times.sort_by(f64::total_cmp);
+    Ok(Row { lanes, threads, rays, seconds: times[times.len() / 2], checksum })
+}
+
+/// FNV-1a 64 over the image's f32 bits, row-major.
+fn image_checksum(img: &crate::film::Image) -> u64 {
+    let mut h = 0xcbf2_9ce4_8422_2325u64;
+    for p in &img.pixels {
+        for v in [p.x, p.y, p.z] {
+            for b in v.to_bits().to_le_bytes() {
+                h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+            }
+        }
+    }
+    h
+}
