@@ -12,8 +12,8 @@ use exr::prelude::{
 use rayon::prelude::*;
 
 use crate::geometry::NO_PRIM;
-use crate::render::{primary_hits_lanes, thread_pool};
 use crate::output::{write_atomic, BoxError};
+use crate::render::{primary_hits_lanes, thread_pool};
 use crate::scene::Scene;
 
 /// One kind of AOV.
@@ -84,7 +84,8 @@ pub fn render_aovs(
             })
             .collect()
     });
-    let id = hits.prim.iter().map(|&p| if p == NO_PRIM { NO_PRIM } else { scene.geometry.file_id(p) }).collect();
+    let id =
+        hits.prim.iter().map(|&p| if p == NO_PRIM { NO_PRIM } else { scene.geometry.file_id(p) }).collect();
     Ok(AovImage { width: hits.width, height: hits.height, depth: hits.t, normal, id })
 }
 

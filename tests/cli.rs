@@ -181,7 +181,9 @@ fn stats_report_scene_rays_and_times() {
     assert!(run.status.success(), "{}", stderr(&run));
     let text = String::from_utf8_lossy(&run.stdout);
     for needle in [
-        "3 primitives (2 spheres, 0 ellipsoids, 1 planes), 2 lights",
+        "3 primitives (2 spheres, 0 ellipsoids, 1 planes, 0 polygons), 2 lights",
+        "skips: bvh, ellipsoids, polygons",
+        "brute force",
         "primary",
         "shadow",
         "parse",

@@ -163,7 +163,9 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
         for (lanes, threads) in [(1, 2), (4, 1), (4, 2), (8, 1), (8, 2), (16, 1), (16, 2)] {
             let img = render_lanes(&scene, lanes, Some(threads), &ProgressBar::hidden()).unwrap().image;
             let same = img.pixels.iter().zip(&reference.pixels).all(|(a, b)| {
-                a.x.to_bits() == b.x.to_bits() && a.y.to_bits() == b.y.to_bits() && a.z.to_bits() == b.z.to_bits()
+                a.x.to_bits() == b.x.to_bits()
+                    && a.y.to_bits() == b.y.to_bits()
+                    && a.z.to_bits() == b.z.to_bits()
             });
             assert!(same, "{path:?} differs at lanes {lanes}, threads {threads}");
         }

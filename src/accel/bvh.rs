@@ -152,10 +152,12 @@ struct SlabRays<F: Lanes> {
 
 impl<F: Lanes> SlabRays<F> {
     fn new(ray: &Ray<F>, live: F::Mask) -> Self {
-        // A zero component becomes ±1e-30 so no slab product is 0·inf = NaN; the reciprocal is a true
-        // division, computed lane by lane as the scalar path does.
-        let safe = |d: f32| if d.abs() < 1e-30 { 1.0 / 1e-30f32.copysign(d) } else { 1.0 / d };
-        let inv = |c: F| F::from_fn(|i| safe(c.lane(i)));
+        // A zero component becomes ±1e-30 so no slab product is 0·inf = NaN.
+        let tiny = F::splat_f32(1e-30);
+        let inv = |d: F| {
+            let away = F::select(d.lt(F::splat_f32(0.0)), -tiny, tiny);
+            F::splat_f32(1.0) / F::select(d.abs().lt(tiny), away, d)
+        };
         let first = F::move_mask(live).trailing_zeros() as usize;
         let lane = first.min(F::K - 1);
         Self {
@@ -172,13 +174,13 @@ impl<F: Lanes> SlabRays<F> {
         let slab = |lo: f32, hi: f32, o: F, inv: F| {
             let t0 = (F::splat_f32(lo) - o) * inv;
             let t1 = (F::splat_f32(hi) - o) * inv;
-            (t0.min_of(t1), t1.max_of(t0))
+            (t0.fast_min(t1), t0.fast_max(t1))
         };
         let (nx, fx) = slab(n.lo[0][c], n.hi[0][c], self.origin.x, self.inv_dir.x);
         let (ny, fy) = slab(n.lo[1][c], n.hi[1][c], self.origin.y, self.inv_dir.y);
         let (nz, fz) = slab(n.lo[2][c], n.hi[2][c], self.origin.z, self.inv_dir.z);
-        let near = nx.max_of(F::splat_f32(0.0)).max_of(ny).max_of(nz);
-        let far = fx.min_of(fy).min_of(fz) * F::splat_f32(1.0 + 4.0 * f32::EPSILON);
+        let near = nx.fast_max(F::splat_f32(0.0)).fast_max(ny).fast_max(nz);
+        let far = fx.fast_min(fy).fast_min(fz) * F::splat_f32(1.0 + 4.0 * f32::EPSILON);
         let inside = near.le(far) & near.le(limit);
         F::select(inside, near, F::splat_f32(f32::INFINITY))
     }
@@ -192,15 +194,43 @@ struct Entry<F: Lanes> {
     near: F,
 }
 
+/// A fixed-capacity traversal stack on the call stack (a heap vector per packet costs more than a small
+/// BVH's whole traversal).
+struct Stack<F: Lanes> {
+    items: [std::mem::MaybeUninit<Entry<F>>; STACK],
+    len: usize,
+}
+
+impl<F: Lanes> Stack<F> {
+    #[inline(always)]
+    fn new() -> Self {
+        Self { items: [const { std::mem::MaybeUninit::uninit() }; STACK], len: 0 }
+    }
+    #[inline(always)]
+    fn push(&mut self, e: Entry<F>) {
+        assert!(self.len < STACK, "BVH deeper than the traversal stack");
+        self.items[self.len].write(e);
+        self.len += 1;
+    }
+    #[inline(always)]
+    fn pop(&mut self) -> Option<Entry<F>> {
+        if self.len == 0 {
+            return None;
+        }
+        self.len -= 1;
+        // SAFETY: entries below `len` were written by `push` and are plain `Copy` data.
+        Some(unsafe { self.items[self.len].assume_init() })
+    }
+}
+
 impl Bvh {
     /// Pushes the two children of `n` that some lane enters, the nearer last so it is popped first.
     #[inline(always)]
-    fn push_children<F: Lanes>(&self, n: &Node, rays: &SlabRays<F>, limit: F, stack: &mut Vec<Entry<F>>) {
+    fn push_children<F: Lanes>(&self, n: &Node, rays: &SlabRays<F>, limit: F, stack: &mut Stack<F>) {
         let first = usize::from(rays.flip[n.axis as usize]);
         for c in [1 - first, first] {
             let near = rays.enter(n, c, limit);
             if near.lt(F::splat_f32(f32::INFINITY)).any() {
-                assert!(stack.len() < STACK, "BVH deeper than the traversal stack");
                 stack.push(Entry { child: n.child[c], count: n.count[c], near });
             }
         }
@@ -217,7 +247,7 @@ impl Bvh {
         best: &mut HitPacket<F>,
     ) {
         let rays = SlabRays::new(ray, live);
-        let mut stack: Vec<Entry<F>> = Vec::with_capacity(STACK);
+        let mut stack = Stack::<F>::new();
         let limit =
             |best: &HitPacket<F>| F::select(live, best.t.min_of(t_max), F::splat_f32(f32::NEG_INFINITY));
         self.push_children(&self.nodes[0], &rays, limit(best), &mut stack);
@@ -247,7 +277,7 @@ impl Bvh {
         skip: F::Ids,
     ) -> F::Mask {
         let rays = SlabRays::new(ray, live);
-        let mut stack: Vec<Entry<F>> = Vec::with_capacity(STACK);
+        let mut stack = Stack::<F>::new();
         let mut blocked = F::mask_from_bits(0);
         let limit = F::select(live, t_max, F::splat_f32(f32::NEG_INFINITY));
         self.push_children(&self.nodes[0], &rays, limit, &mut stack);

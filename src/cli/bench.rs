@@ -1,5 +1,6 @@
 //! `bareray bench`: the same scene traced repeatedly at each packet width and thread count.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
@@ -10,7 +11,7 @@ use indicatif::ProgressBar;
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes};
 use crate::render::{primary_hits_lanes, render_lanes};
-use crate::scene::Scene;
+use crate::scene::{Accel, Scene};
 
 /// Arguments of `bareray bench`.
 #[derive(Args, Debug)]
@@ -29,6 +30,10 @@ pub struct BenchArgs {
     /// Trace camera rays to the closest hit only (one per pixel centre): no shading, no secondary rays.
     #[arg(long)]
     pub primary_only: bool,
+    /// How spheres are searched: `auto` (a BVH from 16 spheres on), `bvh`, or `brute` (every ray tests every
+    /// sphere: the setting for comparing kernels).
+    #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
+    pub accel: AccelArg,
     /// Timed repetitions per setting (the median is reported), after one untimed warm-up.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub reps: u32,
@@ -37,6 +42,17 @@ pub struct BenchArgs {
     pub json: bool,
     #[command(flatten)]
     pub camera: CameraArgs,
+}
+
+/// `--accel`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AccelArg {
+    /// BVH from 16 spheres on.
+    Auto,
+    /// Always a BVH.
+    Bvh,
+    /// Always brute force.
+    Brute,
 }
 
 /// One measured setting.
@@ -58,12 +74,19 @@ pub fn run(args: BenchArgs) -> Result<()> {
     args.camera.apply(&mut desc)?;
     let parse_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let scene = Scene::compile(&desc)?;
+    let accel = match args.accel {
+        AccelArg::Auto => Accel::Auto,
+        AccelArg::Bvh => Accel::Bvh,
+        AccelArg::Brute => Accel::Brute,
+    };
+    let scene = Scene::compile_with(&desc, accel)?;
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;
+    let mut out = std::io::stdout().lock();
     let bytes = g.spheres.len() * 20 + scene.build.node_bytes;
     if !args.json {
-        println!(
+        writeln!(
+            out,
             "{}: {} primitives ({} spheres), {}x{}; parse {parse_s:.3} s, compile {compile_s:.3} s (BVH build {:.3} s, \
              {:.1} bytes/sphere); {}",
             args.scene.display(),
@@ -74,8 +97,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
             scene.build.seconds,
             bytes as f64 / g.spheres.len().max(1) as f64,
             if args.primary_only { "primary rays only" } else { "full Whitted render" }
-        );
-        println!("lanes threads        rays   median s    Mrays/s  vs 1 lane  checksum");
+        )?;
+        writeln!(out, "lanes threads        rays   median s    Mrays/s  vs 1 lane  checksum")?;
     }
     let mut scalar: Option<f64> = None;
     for &threads in &args.threads {
@@ -86,7 +109,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 scalar = Some(mrays);
             }
             if args.json {
-                println!(
+                writeln!(
+                    out,
                     "{{\"tracer\":\"bareray\",\"scene\":{:?},\"primary_only\":{},\"lanes\":{},\"threads\":{},\"rays\":{},\
                      \"seconds\":{:.6},\"mrays_per_s\":{:.3},\"checksum\":\"{:016x}\",\"reps\":{},\"spheres\":{},\
                      \"build_s\":{:.6},\"width\":{},\"height\":{}}}",
@@ -103,13 +127,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     scene.build.seconds,
                     scene.camera.width,
                     scene.camera.height
-                );
+                )?;
             } else {
                 let ratio = scalar.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
-                println!(
+                writeln!(
+                    out,
                     "{:5} {:7} {:11} {:10.4} {:10.2} {:>10}  {:016x}",
                     row.lanes, row.threads, row.rays, row.seconds, mrays, ratio, row.checksum
-                );
+                )?;
             }
         }
     }

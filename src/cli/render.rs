@@ -155,15 +155,24 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
     let g = &scene.geometry;
     let count = |kind| g.shapes.iter().filter(|s| s.kind == kind).count();
     println!(
-        "scene: {} primitives ({} spheres, {} ellipsoids, {} planes), {} lights, {} materials",
+        "scene: {} primitives ({} spheres, {} ellipsoids, {} planes, {} polygons), {} lights, {} materials",
         g.len(),
         g.spheres.len(),
         count(ShapeKind::Sphere),
         count(ShapeKind::Plane),
+        g.polygons.len(),
         scene.lights.len(),
         scene.materials.len()
     );
     println!("image: {}x{}, {:?}", scene.camera.width, scene.camera.height, scene.render.pattern);
+    println!("features: {}", crate::scene::features::Features::of(scene));
+    let bytes = g.spheres.len() * 20 + scene.build.node_bytes;
+    println!(
+        "accel: {}, build {:.3} s, {:.1} bytes/sphere (spheres + BVH nodes)",
+        if g.bvh.is_some() { "BVH" } else { "brute force" },
+        scene.build.seconds,
+        bytes as f64 / g.spheres.len().max(1) as f64
+    );
     let c = r.counts;
     println!(
         "rays: {} total: {} primary, {} shadow, {} reflection, {} refraction",

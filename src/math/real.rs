@@ -52,6 +52,14 @@ pub trait Real:
     fn le(self, other: Self) -> Self::Mask;
     /// `a` where `mask` is set, else `b`.
     fn select(mask: Self::Mask, a: Self, b: Self) -> Self;
+    /// The smaller of the two by the hardware instruction (`minps`): which operand a NaN gives is not
+    /// specified, so use it only where a NaN operand cannot change a result (BVH slab tests, whose NaN rays
+    /// miss every primitive anyway).
+    fn fast_min(self, other: Self) -> Self;
+    /// The larger of the two by the hardware instruction; NaN behaviour as [`Real::fast_min`].
+    fn fast_max(self, other: Self) -> Self;
+    /// `|self|`, exactly (sign bit cleared).
+    fn abs(self) -> Self;
 
     /// `self > other`.
     #[inline(always)]
@@ -102,6 +110,18 @@ macro_rules! impl_real_scalar {
                 } else {
                     b
                 }
+            }
+            #[inline(always)]
+            fn fast_min(self, other: Self) -> Self {
+                <$t>::min(self, other)
+            }
+            #[inline(always)]
+            fn fast_max(self, other: Self) -> Self {
+                <$t>::max(self, other)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                <$t>::abs(self)
             }
         }
     };

@@ -3,6 +3,7 @@
 mod compile;
 pub mod desc;
 pub mod error;
+pub mod features;
 pub mod generate;
 pub mod nff;
 pub mod toml;

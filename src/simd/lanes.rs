@@ -152,6 +152,18 @@ macro_rules! impl_lanes {
             fn select(mask: Self::Mask, a: Self, b: Self) -> Self {
                 mask.0.select(a, b)
             }
+            #[inline(always)]
+            fn fast_min(self, other: Self) -> Self {
+                $f::fast_min(self, other)
+            }
+            #[inline(always)]
+            fn fast_max(self, other: Self) -> Self {
+                $f::fast_max(self, other)
+            }
+            #[inline(always)]
+            fn abs(self) -> Self {
+                $f::abs(self)
+            }
         }
 
         impl IdLanes for $u {

@@ -1,0 +1,75 @@
+//! What a compiled scene uses, so that `--stats` can say what the render path runs and what it skips.
+
+use std::fmt;
+
+use super::desc::{Pattern, PostFilter};
+use super::Scene;
+use crate::geometry::ShapeKind;
+
+/// The parts of the tracer a scene needs.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Features {
+    /// Plain spheres (SoA kernel).
+    pub spheres: bool,
+    /// A BVH over the spheres (else brute force).
+    pub bvh: bool,
+    /// Transformed spheres (ellipsoids).
+    pub ellipsoids: bool,
+    /// Planes.
+    pub planes: bool,
+    /// Polygons.
+    pub polygons: bool,
+    /// Lights that shade something: Lambert or Phong terms and shadow rays.
+    pub direct: bool,
+    /// Mirror materials and a depth limit above 0.
+    pub reflection: bool,
+    /// Transmissive materials and a depth limit above 0.
+    pub refraction: bool,
+    /// More than one sample per pixel or a postfilter.
+    pub antialiasing: bool,
+}
+
+impl Features {
+    /// Detects the features of a compiled scene.
+    pub fn of(scene: &Scene) -> Features {
+        let g = &scene.geometry;
+        let kind = |k: ShapeKind| g.shapes.iter().any(|s| s.kind == k);
+        let m = &scene.materials;
+        let deep = scene.render.max_depth > 0;
+        Features {
+            spheres: !g.spheres.is_empty(),
+            bvh: g.bvh.is_some(),
+            ellipsoids: kind(ShapeKind::Sphere),
+            planes: kind(ShapeKind::Plane),
+            polygons: !g.polygons.is_empty(),
+            direct: !scene.lights.is_empty() && m.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0),
+            reflection: deep && m.iter().any(|m| m.reflect > 0.0 || m.transmit > 0.0),
+            refraction: deep && m.iter().any(|m| m.transmit > 0.0),
+            antialiasing: scene.render.pattern != Pattern::Grid(1)
+                || scene.render.postfilter != PostFilter::None,
+        }
+    }
+
+    fn list(&self) -> [(&'static str, bool); 9] {
+        [
+            ("spheres", self.spheres),
+            ("bvh", self.bvh),
+            ("ellipsoids", self.ellipsoids),
+            ("planes", self.planes),
+            ("polygons", self.polygons),
+            ("direct light + shadow rays", self.direct),
+            ("reflection", self.reflection),
+            ("refraction", self.refraction),
+            ("antialiasing", self.antialiasing),
+        ]
+    }
+}
+
+impl fmt::Display for Features {
+    /// `uses: a, b; skips: c, d`.
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        let names =
+            |on: bool| self.list().iter().filter(|(_, v)| *v == on).map(|(n, _)| *n).collect::<Vec<_>>();
+        write!(f, "uses: {}; skips: {}", names(true).join(", "), names(false).join(", "))
+    }
+}
