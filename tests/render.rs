@@ -154,8 +154,8 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
     let mut scenes: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
     scenes.sort();
     let mut checked = 0;
-    for path in scenes.iter().filter(|p| p.extension().is_some_and(|e| e == "toml")) {
-        let mut desc = toml::load(path).unwrap();
+    for path in &scenes {
+        let mut desc = bareray::scene::load(path).unwrap();
         desc.camera.width = 96;
         desc.camera.height = 64;
         let scene = Scene::compile(&desc).unwrap();
@@ -171,5 +171,5 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
         }
         checked += 1;
     }
-    assert!(checked >= 4);
+    assert!(checked >= 7, "toml, nff and xyzr scenes: {checked}");
 }

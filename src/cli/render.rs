@@ -4,7 +4,7 @@ use std::io::IsTerminal;
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
@@ -203,13 +203,7 @@ fn stem(path: &Path) -> String {
 
 /// Reads a scene file, choosing the reader by extension.
 pub fn load_scene(path: &Path) -> Result<SceneDesc> {
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("toml") => Ok(toml::load(path)?),
-        Some("nff") => Ok(crate::scene::nff::load(path)?),
-        Some("xyzr") => Ok(crate::scene::xyzr::load(path)?),
-        _ => bail!("{}: unknown scene format (expected a .toml, .nff or .xyzr file)", path.display()),
-    }
+    Ok(crate::scene::load(path)?)
 }
 
 fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {

@@ -12,3 +12,14 @@ pub mod xyzr;
 pub use compile::{Accel, Light, Scene, BVH_MIN_SPHERES};
 pub use desc::SceneDesc;
 pub use error::SceneError;
+
+/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr`.
+pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("toml") => toml::load(path),
+        Some("nff") => nff::load(path),
+        Some("xyzr") => xyzr::load(path),
+        _ => Err(SceneError::whole_file(path, "unknown scene format (expected a .toml, .nff or .xyzr file)")),
+    }
+}
