@@ -333,6 +333,7 @@ fn shape() -> impl Strategy<Value = Shape<f32>> {
             );
             Shape {
                 kind: if sphere { ShapeKind::Sphere } else { ShapeKind::Plane },
+                center: V3::new(m.translation.x as f32, m.translation.y as f32, m.translation.z as f32),
                 object_from_world: Affine::from_glam(&m.inverse()).to_f32(),
                 normal_to_world: normal_to_world(&m).to_f32(),
                 material: 0,

@@ -97,6 +97,7 @@ fn wide_affine(a: &Affine<f32>) -> Affine<f64> {
 fn wide_shape(s: &Shape<f32>) -> Shape<f64> {
     Shape {
         kind: s.kind,
+        center: wide(s.center),
         object_from_world: wide_affine(&s.object_from_world),
         normal_to_world: wide_affine(&s.normal_to_world),
         material: s.material,

@@ -83,6 +83,7 @@ impl Scene {
             .iter()
             .map(|s| Shape {
                 kind: s.kind,
+                center: V3::from(s.world_from_object.translation).to_f32(),
                 object_from_world: Affine::from_glam(&s.world_from_object.inverse()).to_f32(),
                 normal_to_world: normal_to_world(&s.world_from_object).to_f32(),
                 material: s.material,

@@ -21,6 +21,7 @@ impl Shape<f32> {
     pub fn to_lanes<F: Lanes>(&self) -> Shape<F> {
         Shape {
             kind: self.kind,
+            center: F::splat_v3(self.center),
             object_from_world: self.object_from_world.to_lanes(),
             normal_to_world: self.normal_to_world.to_lanes(),
             material: self.material,
