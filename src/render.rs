@@ -9,6 +9,7 @@ use indicatif::ProgressBar;
 use rayon::prelude::*;
 use wide::{f32x16, f32x4, f32x8};
 
+use crate::accel::{take_work, Work};
 use crate::camera::Camera;
 use crate::film::Image;
 use crate::geometry::RayPacket;
@@ -32,6 +33,10 @@ pub struct Rendered {
     pub image: Image,
     /// Rays traced by kind.
     pub counts: RayCounts,
+    /// Intersection tests done.
+    pub work: Work,
+    /// Rays per packet.
+    pub lanes: usize,
     /// Wall-clock seconds spent tracing and filtering.
     pub seconds: f64,
 }
@@ -97,21 +102,24 @@ pub fn render<F: Lanes>(
     let (width, height) = (scene.camera.width, scene.camera.height);
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
-    let traced: Vec<(Tile, Vec<Rgb>, RayCounts)> = thread_pool(threads)?.install(|| {
+    let traced: Vec<(Tile, Vec<Rgb>, RayCounts, Work)> = thread_pool(threads)?.install(|| {
         tiles
             .par_iter()
             .map(|&tile| {
+                take_work();
                 let mut tracer = Tracer::<F>::new(scene);
                 let pixels = trace_tile(scene, &mut tracer, tile);
                 progress.inc(1);
-                (tile, pixels, tracer.counts)
+                (tile, pixels, tracer.counts, take_work())
             })
             .collect()
     });
     let mut image = Image::new(width, height);
     let mut counts = RayCounts::default();
-    for (tile, pixels, c) in traced {
+    let mut work = Work::default();
+    for (tile, pixels, c, w) in traced {
         counts += c;
+        work += w;
         for (i, p) in pixels.into_iter().enumerate() {
             let i = i as u32;
             image.set(tile.x0 + i % tile.w, tile.y0 + i / tile.w, p);
@@ -120,7 +128,7 @@ pub fn render<F: Lanes>(
     if scene.render.postfilter == PostFilter::Lecture3x3 {
         image = lecture_3x3(&image);
     }
-    Ok(Rendered { image, counts, seconds: start.elapsed().as_secs_f64() })
+    Ok(Rendered { image, counts, work, lanes: F::K, seconds: start.elapsed().as_secs_f64() })
 }
 
 /// Pixel-block shape of a packet: (columns, rows).

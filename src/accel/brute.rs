@@ -56,6 +56,7 @@ impl Geometry {
         skip: F::Ids,
         best: &mut HitPacket<F>,
     ) {
+        super::count_work(self.shapes.len() + self.polygons.triangles(), 0);
         let ray = rays.ray();
         let base = self.spheres.len() as u32;
         for (k, shape) in self.shapes.iter().enumerate() {
@@ -80,6 +81,7 @@ impl Geometry {
         live: F::Mask,
         skip: F::Ids,
     ) -> F::Mask {
+        super::count_work(self.shapes.len() + self.polygons.triangles(), 0);
         let ray = rays.ray();
         let mut blocked = F::mask_from_bits(0);
         let base = self.spheres.len() as u32;

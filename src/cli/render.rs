@@ -88,6 +88,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     time.build = clock.elapsed().as_secs_f64();
 
     let threads = args.threads.map(|t| t as usize);
+    crate::accel::set_counting(args.stats);
     let progress = progress_bar(args.quiet);
     let rendered = render_lanes(&scene, args.lanes, threads, &progress)?;
     progress.finish_and_clear();
@@ -181,6 +182,10 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         c.shadow,
         c.reflection,
         c.refraction
+    );
+    println!(
+        "intersection tests: {} packet-primitive, {} packet-box, at {} rays per packet",
+        r.work.prim_tests, r.work.box_tests, r.lanes
     );
     println!(
         "time: parse {:.3} s, build {:.3} s, render {:.3} s, aov {:.3} s, write {:.3} s",
