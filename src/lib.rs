@@ -1,9 +1,11 @@
 //! bareray: a data-oriented SIMD packet ray tracer.
 //!
-//! Data flow (see ARCHITECTURE.md): a scene file is read into a plain [`scene::SceneDesc`], compiled into an
-//! immutable [`scene::Scene`], rendered tile by tile ([`render`]) by Whitted shading ([`shade`]) over the
-//! intersection queries of [`accel`], whose kernels live in [`geometry`], into a [`film::Image`] that
-//! [`output`] writes.
+//! Data flow (see ARCHITECTURE.md): a scene file (TOML, NFF or xyzr) is read into a plain
+//! [`scene::SceneDesc`], compiled into an immutable [`scene::Scene`] (SoA spheres, BVH), rendered tile by tile
+//! ([`render`]) in packets of K rays by Whitted shading ([`shade`]) over the packet queries of [`accel`], whose
+//! kernels live in [`geometry`], into a [`film::Image`] that [`output`] writes. Everything on the ray path is
+//! generic over the lane type ([`simd::Lanes`]); K = 1 is the scalar reference path, and every width gives the
+//! same bits.
 
 pub mod accel;
 pub mod aov;
