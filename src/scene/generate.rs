@@ -204,14 +204,10 @@ fn rotation_from_z(axis: DVec3) -> DMat3 {
 }
 
 /// Writes the sphereflake as NFF: SPD balls' background, view, three colourless lights, beige floor polygon
-/// and pale-yellow mirror fill (as SPD prints them), then the spheres at full f64 precision.
+/// and pale-yellow mirror fill (as SPD prints them), then the spheres at full f64 precision. No comment line:
+/// Tachyon's NFF reader silently reads nothing from a file that starts with one, and peers must read it.
 pub fn write_flake_nff(level: u32, w: &mut impl Write) -> io::Result<()> {
     let invalid = |e: GenError| io::Error::new(io::ErrorKind::InvalidInput, e);
-    writeln!(
-        w,
-        "# SPD balls (sphereflake), size factor {level}: {} spheres, by bareray gen flake",
-        flake_count(level.min(MAX_FLAKE_LEVEL))
-    )?;
     w.write_all(FLAKE_HEADER.as_bytes())?;
     let mut result = Ok(());
     for_each_flake_sphere(level, &mut |s| {
@@ -273,6 +269,16 @@ fn write_number(w: &mut impl Write, v: f64) -> io::Result<()> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn flake_nff_starts_with_an_entity_not_a_comment() {
+        // Tachyon reads nothing from an NFF whose first line is a comment.
+        let mut out = Vec::new();
+        write_flake_nff(1, &mut out).unwrap();
+        let text = String::from_utf8(out).unwrap();
+        assert!(text.starts_with("b "), "{}", &text[..20]);
+        assert!(!text.lines().any(|l| l.starts_with('#')));
+    }
 
     #[test]
     fn splitmix_matches_the_reference_sequence() {
