@@ -13,6 +13,7 @@ use bareray::camera::Camera;
 use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket};
 use bareray::math::V3;
 use bareray::scene::desc::{Aim, CameraDesc};
+use bareray::scene::generate::FieldParams;
 use bareray::simd::{IdLanes, Lanes};
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
@@ -22,31 +23,12 @@ use wide::{f32x16, f32x4, f32x8};
 const SPHERES: usize = 64;
 const SIDE: u32 = 64;
 
-/// The benchmark contract's generator: splitmix64, 24-bit uniforms.
-struct SplitMix(u64);
-
-impl SplitMix {
-    fn next(&mut self) -> u64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        z ^ (z >> 31)
-    }
-    fn uniform(&mut self) -> f64 {
-        (self.next() >> 40) as f64 * 2f64.powi(-24)
-    }
-}
-
+/// The contract field of `n` spheres, from bareray's own generator.
 fn sphere_field(n: usize) -> Spheres {
-    let mut rng = SplitMix(1);
-    let s = 2.0 / (n as f64).cbrt();
-    let (rmin, rmax) = (0.1 * s, 0.25 * s);
+    let params = FieldParams { count: n as u64, ..FieldParams::default() };
     let mut spheres = Spheres::default();
-    for _ in 0..n {
-        let (ux, uy, uz, ur) = (rng.uniform(), rng.uniform(), rng.uniform(), rng.uniform());
-        let at = |u: f64| (-1.0 + u * 2.0) as f32;
-        spheres.push(V3::new(at(ux), at(uy), at(uz)), (rmin + ur * (rmax - rmin)) as f32, 0);
+    for [x, y, z, r] in params.spheres().expect("valid field") {
+        spheres.push(V3::new(x, y, z), r, 0);
     }
     spheres
 }

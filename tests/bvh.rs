@@ -5,28 +5,22 @@
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
 use bareray::math::V3;
 use bareray::scene::desc::{SceneDesc, SphereDesc};
+use bareray::scene::generate::SplitMix64;
 use bareray::scene::{Accel, Scene};
 use bareray::simd::Lanes;
 use glam::DVec3;
 use wide::{f32x16, f32x4, f32x8};
 
-/// A small deterministic generator (splitmix64), so failures reproduce.
-struct Rng(u64);
+/// Uniform numbers from the contract's generator, so failures reproduce.
+struct Rng(SplitMix64);
 impl Rng {
-    fn next(&mut self) -> f64 {
-        self.0 = self.0.wrapping_add(0x9E37_79B9_7F4A_7C15);
-        let mut z = self.0;
-        z = (z ^ (z >> 30)).wrapping_mul(0xBF58_476D_1CE4_E5B9);
-        z = (z ^ (z >> 27)).wrapping_mul(0x94D0_49BB_1331_11EB);
-        ((z ^ (z >> 31)) >> 11) as f64 / (1u64 << 53) as f64
-    }
     fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.next()
+        lo + (hi - lo) * self.0.unit()
     }
 }
 
 fn field(n: usize, seed: u64) -> SceneDesc {
-    let mut rng = Rng(seed);
+    let mut rng = Rng(SplitMix64::new(seed));
     let mut desc = SceneDesc::default();
     for _ in 0..n {
         let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
@@ -40,7 +34,7 @@ fn field(n: usize, seed: u64) -> SceneDesc {
 
 /// Random rays: from outside the field, from inside spheres, axis-parallel ones.
 fn rays(desc: &SceneDesc, count: usize, seed: u64) -> Vec<Ray<f32>> {
-    let mut rng = Rng(seed);
+    let mut rng = Rng(SplitMix64::new(seed));
     (0..count)
         .map(|i| {
             let o = match i % 3 {
