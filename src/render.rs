@@ -250,15 +250,20 @@ impl PrimaryHits {
     /// FNV-1a 64 over the per-pixel scene-file ids as little-endian i32 (−1 on a miss), row-major: the
     /// checksum bench-peers/ computes for Embree, so equal results give equal checksums across tracers.
     pub fn checksum(&self, scene: &Scene) -> u64 {
-        let mut h = 0xcbf2_9ce4_8422_2325u64;
-        for &p in &self.prim {
-            let id = if p == crate::geometry::NO_PRIM { -1i32 } else { scene.geometry.file_id(p) as i32 };
-            for b in id.to_le_bytes() {
-                h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
+        let ids = self.prim.iter().map(|&p| {
+            if p == crate::geometry::NO_PRIM {
+                -1i32
+            } else {
+                scene.geometry.file_id(p) as i32
             }
-        }
-        h
+        });
+        fnv1a(ids.flat_map(i32::to_le_bytes))
     }
+}
+
+/// FNV-1a 64 of a byte stream (offset basis 0xcbf29ce484222325, prime 0x100000001b3).
+pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
 }
 
 /// [`primary_hits`] at a packet width chosen at run time.

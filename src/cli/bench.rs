@@ -10,7 +10,7 @@ use indicatif::ProgressBar;
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes};
-use crate::render::{primary_hits_lanes, render_lanes};
+use crate::render::{fnv1a, primary_hits_lanes, render_lanes};
 use crate::scene::{Accel, Scene};
 
 /// Arguments of `bareray bench`.
@@ -167,13 +167,5 @@ fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Res
 
 /// FNV-1a 64 over the image's f32 bits, row-major.
 fn image_checksum(img: &crate::film::Image) -> u64 {
-    let mut h = 0xcbf2_9ce4_8422_2325u64;
-    for p in &img.pixels {
-        for v in [p.x, p.y, p.z] {
-            for b in v.to_bits().to_le_bytes() {
-                h = (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3);
-            }
-        }
-    }
-    h
+    fnv1a(img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(|v| v.to_bits().to_le_bytes()))
 }

@@ -15,11 +15,6 @@ pub struct Affine<F> {
 }
 
 impl<F: Real> Affine<F> {
-    /// Maps a point (linear part, then translation).
-    #[inline(always)]
-    pub fn point(&self, p: V3<F>) -> V3<F> {
-        self.vector(p) + self.translation
-    }
     /// Maps a direction (linear part only); lengths change, so ray parameters t are preserved.
     #[inline(always)]
     pub fn vector(&self, v: V3<F>) -> V3<F> {
