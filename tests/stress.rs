@@ -994,6 +994,8 @@ fn departure_from_touching_spheres() {
     let scene = compile(&SceneDesc { spheres: spheres.clone(), ..SceneDesc::default() });
     let g = &scene.geometry;
     let oracle = Oracle::new(g);
+    // Queries and the oracle speak storage ids (BVH leaf order); the loops below speak file indices.
+    let stored = |file: usize| (0..g.spheres.len() as u32).find(|&i| g.file_id(i) == file as u32).unwrap();
     let mut rng = Rng::new(14);
     let (mut checked, mut max_err, mut disagree, mut near_contact_hits) = (0usize, 0.0f64, 0usize, 0usize);
     let (mut at_contact, mut largest_contact_theta) = (0usize, 0.0f64);
@@ -1009,11 +1011,11 @@ fn departure_from_touching_spheres() {
                     let n = (a * theta.cos() + tangent(a, &mut rng) * theta.sin()).normalize();
                     let p = f32v(c_from + n * r_from);
                     let ray = Ray::new(p, f32v(n));
-                    let h = g.intersect(&ray, Departure { prim: from as u32, inward: false }, f32::INFINITY);
+                    let h = g.intersect(&ray, Departure { prim: stored(from), inward: false }, f32::INFINITY);
                     let r64 = wide_ray(&ray);
-                    let (p64, t64) = oracle.closest(&r64, from as u32);
+                    let (p64, t64) = oracle.closest(&r64, stored(from));
                     checked += 1;
-                    near_contact_hits += usize::from(p64 == toward as u32);
+                    near_contact_hits += usize::from(p64 == stored(toward));
                     if h.prim == p64 {
                         let err = if p64 == NO_PRIM { 0.0 } else { (f64::from(h.t) - t64).abs() / EPS32 };
                         if err > 64.0 && oracle.starts_on(p64, &r64, 16.0) {

@@ -30,7 +30,7 @@ pub struct BenchArgs {
     /// Trace camera rays to the closest hit only (one per pixel centre): no shading, no secondary rays.
     #[arg(long)]
     pub primary_only: bool,
-    /// How spheres are searched: `auto` (a BVH from 16 spheres on), `bvh`, or `brute` (every ray tests every
+    /// How spheres are searched: `auto` (a BVH from 4 spheres on), `bvh`, or `brute` (every ray tests every
     /// sphere: the setting for comparing kernels).
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
     pub accel: AccelArg,
@@ -47,7 +47,7 @@ pub struct BenchArgs {
 /// `--accel`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum AccelArg {
-    /// BVH from 16 spheres on.
+    /// BVH from 4 spheres on.
     Auto,
     /// Always a BVH.
     Bvh,
