@@ -143,25 +143,32 @@ pub fn block<F: Lanes>() -> (u32, u32) {
 }
 
 /// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
-/// `(dx, dy)` from its pixel's corner: the camera rays and, per lane, the index of its pixel in the tile.
+/// `(dx, dy)` from its pixel's corner: the camera rays and, per lane, its pixel's column and row in the tile.
 pub fn for_each_packet<F: Lanes>(
     camera: &Camera<F>,
     tile: Tile,
     (dx, dy): (f32, f32),
-    mut visit: impl FnMut(&RayPacket<F>, &[Option<usize>]),
+    mut visit: impl FnMut(&RayPacket<F>, &[Option<(u32, u32)>]),
 ) {
     let (bw, bh) = block::<F>();
+    // Lane offsets inside a block, computed once: x = (column + lane column) + dx, the same sums as per lane.
+    let lane_x = F::from_fn(|i| (i as u32 % bw) as f32);
+    let lane_y = F::from_fn(|i| (i as u32 / bw) as f32);
     let mut pixel = [None; 16];
     for by in (0..tile.h).step_by(bh as usize) {
         for bx in (0..tile.w).step_by(bw as usize) {
             for (i, slot) in pixel.iter_mut().enumerate().take(F::K) {
                 let (px, py) = (bx + i as u32 % bw, by + i as u32 / bw);
-                *slot = (px < tile.w && py < tile.h).then_some((py * tile.w + px) as usize);
+                *slot = (px < tile.w && py < tile.h).then_some((px, py));
             }
-            let sx = F::from_fn(|i| (tile.x0 + bx + i as u32 % bw) as f32 + dx);
-            let sy = F::from_fn(|i| (tile.y0 + by + i as u32 / bw) as f32 + dy);
+            let sx = (F::splat_f32((tile.x0 + bx) as f32) + lane_x) + F::splat_f32(dx);
+            let sy = (F::splat_f32((tile.y0 + by) as f32) + lane_y) + F::splat_f32(dy);
             let ray = camera.ray(sx, sy);
-            let active = F::mask_from_fn(|i| pixel[i].is_some());
+            let active = if bx + bw <= tile.w && by + bh <= tile.h {
+                F::mask_from_bits(u32::MAX)
+            } else {
+                F::mask_from_fn(|i| pixel[i].is_some())
+            };
             let rays =
                 RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
             visit(&rays, &pixel[..F::K]);
@@ -186,7 +193,8 @@ fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Ve
                 for_each_packet(&camera, tile, offset, |rays, pixels| {
                     let c = tracer.primary(rays);
                     for (i, p) in pixels.iter().enumerate() {
-                        if let Some(p) = *p {
+                        if let Some((x, y)) = *p {
+                            let p = (y * tile.w + x) as usize;
                             sum[p] = sum[p] + lane_rgb(&c, i);
                         }
                     }
@@ -289,35 +297,29 @@ pub fn primary_hits<F: Lanes>(
     use crate::geometry::DeparturePacket;
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
-    let tiles = tiles(width, height);
-    let traced: Vec<(Tile, Vec<(f32, u32)>)> = thread_pool(threads)?.install(|| {
-        tiles
-            .par_iter()
-            .map(|&tile| {
-                let camera = scene.camera.to_lanes::<F>();
-                let mut out = vec![(f32::INFINITY, crate::geometry::NO_PRIM); (tile.w * tile.h) as usize];
+    let n = width as usize * height as usize;
+    let mut hits = PrimaryHits { width, height, t: vec![0.0; n], prim: vec![0; n], seconds: 0.0 };
+    // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
+    let band = width as usize * TILE as usize;
+    thread_pool(threads)?.install(|| {
+        let bands = hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate();
+        bands.for_each(|(b, (t, prim))| {
+            let camera = scene.camera.to_lanes::<F>();
+            let y0 = b as u32 * TILE;
+            for tile in tiles(width, TILE.min(height - y0)) {
+                let tile = Tile { y0, ..tile };
                 for_each_packet(&camera, tile, (0.5, 0.5), |rays, pixels| {
                     let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
                     for (i, p) in pixels.iter().enumerate() {
-                        if let Some(p) = *p {
-                            out[p] = (hit.t.lane(i), crate::simd::IdLanes::lane(hit.prim, i));
+                        if let Some((x, y)) = *p {
+                            let at = y as usize * width as usize + (tile.x0 + x) as usize;
+                            (t[at], prim[at]) = (hit.t.lane(i), crate::simd::IdLanes::lane(hit.prim, i));
                         }
                     }
                 });
-                (tile, out)
-            })
-            .collect()
+            }
+        });
     });
-    let n = width as usize * height as usize;
-    let mut hits = PrimaryHits { width, height, t: vec![0.0; n], prim: vec![0; n], seconds: 0.0 };
-    for (tile, out) in traced {
-        for (i, (t, prim)) in out.into_iter().enumerate() {
-            let (x, y) = (tile.x0 + i as u32 % tile.w, tile.y0 + i as u32 / tile.w);
-            let at = y as usize * width as usize + x as usize;
-            hits.t[at] = t;
-            hits.prim[at] = prim;
-        }
-    }
     hits.seconds = start.elapsed().as_secs_f64();
     Ok(hits)
 }
