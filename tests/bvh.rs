@@ -52,8 +52,33 @@ fn rays(desc: &SceneDesc, count: usize, seed: u64) -> Vec<Ray<f32>> {
         .collect()
 }
 
+/// Camera-like packets: per packet one origin and directions within a narrow cone (K consecutive rays).
+fn coherent_rays(count: usize, k: usize, seed: u64) -> Vec<Ray<f32>> {
+    let mut rng = Rng(SplitMix64::new(seed));
+    let mut out = Vec::with_capacity(count);
+    while out.len() < count {
+        let o = V3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), -4.0);
+        let aim = V3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) - o;
+        for _ in 0..k {
+            let d = aim + V3::new(rng.range(-0.05, 0.05), rng.range(-0.05, 0.05), 0.0);
+            out.push(Ray::new(o.to_f32(), d.to_f32()));
+        }
+    }
+    out
+}
+
+/// Checks packets of `F::K` rays, and packets of 1 and 2 live lanes (the single-ray path at K > 1).
 fn check_width<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
-    for chunk in rays.chunks(F::K) {
+    check_packets::<F>(bvh, brute, rays, F::K);
+    check_packets::<F>(bvh, brute, &rays[..rays.len() / 4], 1);
+    check_packets::<F>(bvh, brute, &rays[..rays.len() / 4], 2);
+}
+
+fn check_packets<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>], live: usize) {
+    if live > F::K {
+        return;
+    }
+    for chunk in rays.chunks(live) {
         let packet = RayPacket::<F>::from_rays(chunk, f32::INFINITY);
         let hits = bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
         let shadow = RayPacket::<F>::from_rays(chunk, 2.0);
@@ -90,5 +115,35 @@ fn bvh_equals_brute_force_at_every_width() {
         check_width::<f32x4>(&bvh, &brute, &rays);
         check_width::<f32x8>(&bvh, &brute, &rays);
         check_width::<f32x16>(&bvh, &brute, &rays);
+    }
+}
+
+#[test]
+fn interval_culling_keeps_the_brute_force_answer() {
+    for (n, seed) in [(17, 6), (300, 7), (2000, 8)] {
+        let desc = field(n, seed);
+        let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        bvh.geometry.bvh.as_mut().unwrap().interval_culling = true;
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        // The interval test must rule children out, or this test would not be testing it.
+        let packets = coherent_rays(2000, 16, seed + 100);
+        let box_tests = |bvh: &Scene| {
+            bareray::accel::set_counting(true);
+            bareray::accel::take_work();
+            for chunk in packets.chunks(16) {
+                let packet = RayPacket::<f32x16>::from_rays(chunk, f32::INFINITY);
+                bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
+            }
+            bareray::accel::take_work().box_tests
+        };
+        let culled = box_tests(&bvh);
+        bvh.geometry.bvh.as_mut().unwrap().interval_culling = false;
+        let all = box_tests(&bvh);
+        bvh.geometry.bvh.as_mut().unwrap().interval_culling = true;
+        bareray::accel::set_counting(false);
+        assert!(culled < all, "{n} spheres: {culled} box tests with interval culling, {all} without");
+        check_width::<f32x4>(&bvh, &brute, &coherent_rays(2000, 4, seed + 100));
+        check_width::<f32x8>(&bvh, &brute, &coherent_rays(2000, 8, seed + 100));
+        check_width::<f32x16>(&bvh, &brute, &coherent_rays(2000, 16, seed + 100));
     }
 }

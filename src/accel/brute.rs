@@ -3,7 +3,8 @@
 //! not depend on the order of the loops.
 
 use crate::geometry::{
-    far_root, intersect_sphere, intersect_triangle, sphere_roots, DeparturePacket, HitPacket, Ray, RayPacket,
+    far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, DeparturePacket, HitPacket, Ray,
+    RayPacket,
 };
 use crate::math::Mask;
 use crate::simd::{IdLanes, Lanes};
@@ -21,8 +22,13 @@ pub fn spheres_intersect_k<F: Lanes>(
     best: &mut HitPacket<F>,
 ) {
     for i in range {
+        // Most spheres of a leaf miss every lane: skip the roots' division and square root for them.
+        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray);
+        if !(line.meets() & live).any() {
+            continue;
+        }
         let id = F::Ids::splat(i as u32);
-        let (hit, t) = intersect_sphere(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray, t_max);
+        let (hit, t) = first_root(&line.roots(), t_max);
         best.update(live & hit & !F::ids_eq(id, skip), t, id);
     }
 }
@@ -38,8 +44,12 @@ pub fn spheres_occluded_k<F: Lanes>(
 ) -> F::Mask {
     let mut blocked = F::mask_from_bits(0);
     for i in range {
+        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray);
+        if !(line.meets() & live).any() {
+            continue;
+        }
         let id = F::Ids::splat(i as u32);
-        let (hit, _) = intersect_sphere(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray, t_max);
+        let (hit, _) = first_root(&line.roots(), t_max);
         blocked = blocked | (live & hit & !F::ids_eq(id, skip));
         if (blocked | !live).all() {
             break;

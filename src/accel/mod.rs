@@ -22,7 +22,8 @@ pub struct Work {
     /// Packet–primitive tests: spheres in visited BVH leaves (or all spheres without a BVH), shapes and
     /// triangles.
     pub prim_tests: u64,
-    /// Packet–box tests in BVH traversal (two per visited node).
+    /// Packet–box slab tests in BVH traversal (one per visited node and occupied child, fewer where interval
+    /// culling rules children out; for single rays each node's 4-wide test counts as N).
     pub box_tests: u64,
 }
 

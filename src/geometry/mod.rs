@@ -13,4 +13,4 @@ pub use plane::intersect_plane;
 pub use polygon::intersect_triangle;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};
-pub use sphere::{far_root, first_root, intersect_sphere, sphere_roots, Roots};
+pub use sphere::{far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, Approach, Roots};

@@ -23,19 +23,45 @@ pub struct Roots<F: Real> {
     pub far: F,
 }
 
-/// The roots of `|origin + t·dir − centre|² = radius²`.
+/// Where a ray's line passes a sphere: enough to know whether it meets it, before any square root.
+#[derive(Clone, Copy, Debug)]
+pub struct Approach<F: Real> {
+    dd: F,
+    proj: F,
+    l2: F,
+    r2: F,
+}
+
+impl<F: Real> Approach<F> {
+    /// The line meets the sphere (`l² ≤ r²`); NaN inputs give false.
+    #[inline(always)]
+    pub fn meets(&self) -> F::Mask {
+        self.l2.le(self.r2)
+    }
+
+    /// The two roots.
+    #[inline(always)]
+    pub fn roots(&self) -> Roots<F> {
+        let td = ((self.r2 - self.l2) / self.dd).sqrt();
+        Roots { hit: self.meets(), near: self.proj - td, far: self.proj + td }
+    }
+}
+
+/// The closest approach of the ray's line to the sphere's centre.
 #[inline(always)]
-pub fn sphere_roots<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Roots<F> {
+pub fn sphere_approach<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Approach<F> {
     let d = ray.dir;
     let c = centre - ray.origin;
     let dd = d.dot(d);
     let proj = c.dot(d) / dd;
     let perp = c - d * proj;
-    let l2 = perp.dot(perp);
-    let r2 = radius * radius;
-    let hit = l2.le(r2);
-    let td = ((r2 - l2) / dd).sqrt();
-    Roots { hit, near: proj - td, far: proj + td }
+    Approach { dd, proj, l2: perp.dot(perp), r2: radius * radius }
+}
+
+/// The roots of `|origin + t·dir − centre|² = radius²`.
+#[inline(always)]
+pub fn sphere_roots<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Roots<F> {
+    sphere_approach(centre, radius, ray).roots()
 }
 
 /// The smallest root in `[0, t_max)`, or `None` (the mask is false): cases 3 and 4 hit, 1 and 5 miss.

@@ -1,0 +1,223 @@
+//! Packet traversal: K rays walk the tree together. A child is entered when any live lane's slab test passes;
+//! each stack entry keeps its lanes' entry distances (`inf` for lanes that missed it), so a popped subtree
+//! is skipped for every lane that has already hit something nearer. Children are pushed in the node's
+//! precomputed order for the octant of the packet's first live lane, so the nearest is popped first.
+//!
+//! With [`Bvh::interval_culling`], packets whose live lanes share one origin (camera rays) first test each
+//! node's children against the whole packet at once by interval arithmetic ([`Interval`]), and run the K-lane
+//! slab test only on the children it cannot rule out. It is off by default: on the contract fields the
+//! bounds on `1/d` are too loose near the view axis to rule out enough children to pay for themselves.
+
+use wide::f32x4;
+
+use super::super::brute::{spheres_intersect_k, spheres_occluded_k};
+use super::super::{count_work, Spheres};
+use super::{Bvh, Node, Stack};
+use crate::geometry::{HitPacket, Ray};
+use crate::math::{Mask, Real, V3};
+use crate::simd::Lanes;
+
+/// Exit distances are widened by this factor (2γ₃ rounded up) so rounding never culls a box a ray enters.
+pub(super) const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// `1/d` with a zero component replaced by ±1e-30 first, so no slab product is 0·inf = NaN.
+#[inline(always)]
+pub(super) fn inverse<F: Lanes>(d: F) -> F {
+    let tiny = F::splat_f32(1e-30);
+    let away = F::select(d.lt(F::splat_f32(0.0)), -tiny, tiny);
+    F::splat_f32(1.0) / F::select(d.abs().lt(tiny), away, d)
+}
+
+/// A ray packet prepared for slab tests.
+struct SlabRays<F: Lanes> {
+    origin: V3<F>,
+    inv_dir: V3<F>,
+    /// The octant of the first live lane's direction, which orders the children.
+    octant: usize,
+    /// The whole-packet bounds, when asked for and the live lanes share an origin.
+    interval: Option<Interval>,
+}
+
+impl<F: Lanes> SlabRays<F> {
+    fn new(ray: &Ray<F>, live: F::Mask, interval: bool) -> Self {
+        let inv_dir = V3::new(inverse(ray.dir.x), inverse(ray.dir.y), inverse(ray.dir.z));
+        let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
+        let negative = |d: F| usize::from(d.lane(first) < 0.0);
+        let octant = negative(ray.dir.x) | negative(ray.dir.y) << 1 | negative(ray.dir.z) << 2;
+        let interval = if interval { Interval::new(&ray.origin, &inv_dir, live) } else { None };
+        Self { origin: ray.origin, inv_dir, octant, interval }
+    }
+
+    /// Entry distance of each lane into child `c` of `n`, `inf` where the lane misses it or enters beyond
+    /// `limit`.
+    #[inline(always)]
+    fn enter(&self, n: &Node, c: usize, limit: F) -> F {
+        let slab = |lo: f32, hi: f32, o: F, inv: F| {
+            let t0 = (F::splat_f32(lo) - o) * inv;
+            let t1 = (F::splat_f32(hi) - o) * inv;
+            (t0.fast_min(t1), t0.fast_max(t1))
+        };
+        let (nx, fx) = slab(n.lo[0][c], n.hi[0][c], self.origin.x, self.inv_dir.x);
+        let (ny, fy) = slab(n.lo[1][c], n.hi[1][c], self.origin.y, self.inv_dir.y);
+        let (nz, fz) = slab(n.lo[2][c], n.hi[2][c], self.origin.z, self.inv_dir.z);
+        let near = nx.fast_max(F::splat_f32(0.0)).fast_max(ny).fast_max(nz);
+        let far = fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN);
+        let inside = near.le(far) & near.le(limit);
+        F::select(inside, near, F::splat_f32(f32::INFINITY))
+    }
+}
+
+/// The packet as one interval ray: a shared origin and, per axis, the range of the live lanes' inverse
+/// directions. For a fixed difference `a = lo − o`, the rounded product `a·inv` is monotone in `inv`, so
+/// every lane's slab distances lie between the products at the range's ends: a box whose lower bound on
+/// entry exceeds its upper bound on exit is missed by every lane, exactly as the
+/// lanes' own tests would find. Nothing is culled when a bound is NaN (comparisons are false).
+#[derive(Clone, Copy)]
+struct Interval {
+    origin: [f32; 3],
+    inv_lo: [f32; 3],
+    inv_hi: [f32; 3],
+}
+
+impl Interval {
+    fn new<F: Lanes>(origin: &V3<F>, inv: &V3<F>, live: F::Mask) -> Option<Self> {
+        let bits = F::move_mask(live);
+        if F::K == 1 || bits == 0 {
+            return None;
+        }
+        let first = bits.trailing_zeros() as usize;
+        let o = [origin.x.lane(first), origin.y.lane(first), origin.z.lane(first)];
+        let same = |v: F, o: f32| v.le(F::splat_f32(o)) & v.ge(F::splat_f32(o));
+        if !(same(origin.x, o[0]) & same(origin.y, o[1]) & same(origin.z, o[2]) | !live).all() {
+            return None;
+        }
+        let lo = |v: F| F::select(live, v, F::splat_f32(f32::INFINITY)).reduce_min();
+        let hi = |v: F| F::select(live, v, F::splat_f32(f32::NEG_INFINITY)).reduce_max();
+        Some(Self {
+            origin: o,
+            inv_lo: [lo(inv.x), lo(inv.y), lo(inv.z)],
+            inv_hi: [hi(inv.x), hi(inv.y), hi(inv.z)],
+        })
+    }
+
+    /// Bit `c` set for each child of `n` that some lane may enter.
+    #[inline(always)]
+    fn maybe_entered(&self, n: &Node) -> u32 {
+        let mut near = f32x4::splat(0.0);
+        let mut far = f32x4::splat(f32::INFINITY);
+        for a in 0..3 {
+            let o = f32x4::splat(self.origin[a]);
+            let (lo, hi) = (f32x4::from(n.lo[a]) - o, f32x4::from(n.hi[a]) - o);
+            let (i0, i1) = (f32x4::splat(self.inv_lo[a]), f32x4::splat(self.inv_hi[a]));
+            let (p0, p1, p2, p3) = (lo * i0, lo * i1, hi * i0, hi * i1);
+            near = near.max(p0.min(p1).min(p2.min(p3)));
+            far = far.min(p0.max(p1).max(p2.max(p3)));
+        }
+        !f32x4::move_mask(near.gt(far * f32x4::splat(WIDEN)))
+    }
+}
+
+/// A pending subtree: its reference and each lane's entry distance.
+#[derive(Clone, Copy)]
+struct Entry<F: Lanes> {
+    child: u32,
+    count: u8,
+    near: F,
+}
+
+impl Bvh {
+    /// Pushes the children of `n` that some lane enters within its `limit`, the nearest last so it is popped
+    /// first. Returns the number of box tests.
+    #[inline(always)]
+    fn push_children<F: Lanes>(
+        &self,
+        n: &Node,
+        rays: &SlabRays<F>,
+        limit: F,
+        stack: &mut Stack<Entry<F>>,
+    ) -> usize {
+        let maybe = rays.interval.as_ref().map_or(u32::MAX, |interval| interval.maybe_entered(n));
+        let mut tests = 0;
+        for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
+            tests += 1;
+            let near = rays.enter(n, c, limit);
+            if near.lt(F::splat_f32(f32::INFINITY)).any() {
+                stack.push(Entry { child: n.child[c], count: n.count[c], near });
+            }
+        }
+        tests
+    }
+
+    /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal.
+    pub(super) fn intersect_packet<F: Lanes>(
+        &self,
+        s: &Spheres,
+        ray: &Ray<F>,
+        t_max: F,
+        live: F::Mask,
+        skip: F::Ids,
+        best: &mut HitPacket<F>,
+    ) {
+        let rays = SlabRays::new(ray, live, self.interval_culling);
+        let mut stack = Stack::<Entry<F>>::new();
+        let limit = |lanes: F::Mask, best: &HitPacket<F>| {
+            F::select(lanes, best.t.min_of(t_max), F::splat_f32(f32::NEG_INFINITY))
+        };
+        // Counted locally and reported once per packet: a shared counter per node costs measurably.
+        let mut boxes = self.push_children(&self.nodes[0], &rays, limit(live, best), &mut stack);
+        let mut prims = 0;
+        while let Some(e) = stack.pop() {
+            // Lanes that entered this subtree no farther than their best hit so far.
+            let lanes = e.near.le(best.t) & live;
+            if !lanes.any() {
+                continue;
+            }
+            if e.count > 0 {
+                let first = e.child as usize;
+                prims += usize::from(e.count);
+                spheres_intersect_k(s, first..first + usize::from(e.count), ray, t_max, lanes, skip, best);
+            } else {
+                let n = &self.nodes[e.child as usize];
+                boxes += self.push_children(n, &rays, limit(lanes, best), &mut stack);
+            }
+        }
+        count_work(prims, boxes);
+    }
+
+    /// Lanes of `live` blocked by a sphere within their `t_max`, by packet traversal; stops as soon as every
+    /// live lane is.
+    pub(super) fn occluded_packet<F: Lanes>(
+        &self,
+        s: &Spheres,
+        ray: &Ray<F>,
+        t_max: F,
+        live: F::Mask,
+        skip: F::Ids,
+    ) -> F::Mask {
+        let rays = SlabRays::new(ray, live, self.interval_culling);
+        let mut stack = Stack::<Entry<F>>::new();
+        let mut blocked = F::mask_from_bits(0);
+        let limit = |lanes: F::Mask| F::select(lanes, t_max, F::splat_f32(f32::NEG_INFINITY));
+        let mut boxes = self.push_children(&self.nodes[0], &rays, limit(live), &mut stack);
+        let mut prims = 0;
+        while let Some(e) = stack.pop() {
+            let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
+            if !lanes.any() {
+                continue;
+            }
+            if e.count > 0 {
+                let first = e.child as usize;
+                prims += usize::from(e.count);
+                blocked = blocked
+                    | spheres_occluded_k(s, first..first + usize::from(e.count), ray, t_max, lanes, skip);
+                if (blocked | !live).all() {
+                    break;
+                }
+            } else {
+                boxes += self.push_children(&self.nodes[e.child as usize], &rays, limit(lanes), &mut stack);
+            }
+        }
+        count_work(prims, boxes);
+        blocked
+    }
+}
