@@ -29,8 +29,8 @@ enum GenCommand {
 /// Arguments of `bareray gen field`.
 #[derive(Args, Debug)]
 pub struct FieldArgs {
-    /// Number of spheres (at least 1).
-    #[arg(long)]
+    /// Number of spheres (at least 1): an integer, or a power-of-ten form such as `1e6`.
+    #[arg(long, value_parser = parse_count)]
     pub count: u64,
     /// splitmix64 seed.
     #[arg(long, default_value_t = 1)]
@@ -94,6 +94,21 @@ fn flake(a: FlakeArgs) -> Result<()> {
     Ok(())
 }
 
+/// A whole count written as digits or as `<mantissa>e<exponent>` (`1e6`, `2.5e5`).
+fn parse_count(s: &str) -> Result<u64, String> {
+    if let Ok(n) = s.parse::<u64>() {
+        return Ok(n);
+    }
+    let bad = || format!("'{s}' is not a whole number of spheres (e.g. 1000000 or 1e6)");
+    let (m, e) = s.split_once(['e', 'E']).ok_or_else(bad)?;
+    let (m, e): (f64, u32) = (m.parse().map_err(|_| bad())?, e.parse().map_err(|_| bad())?);
+    let n = m * 10f64.powi(e as i32);
+    if !(0.0..=u64::MAX as f64).contains(&n) || n.fract() != 0.0 || !m.is_finite() {
+        return Err(bad());
+    }
+    Ok(n as u64)
+}
+
 fn report(count: u64, path: &Path, start: Instant) {
     println!("{}: {count} spheres in {:.3} s", path.display(), start.elapsed().as_secs_f64());
 }
@@ -108,4 +123,19 @@ fn parse_box(text: &str) -> Result<([f64; 3], [f64; 3])> {
         bail!("--box takes six numbers x0,y0,z0,x1,y1,z1, got {}", v.len());
     }
     Ok(([v[0], v[1], v[2]], [v[3], v[4], v[5]]))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::parse_count;
+
+    #[test]
+    fn counts_in_digits_and_powers_of_ten() {
+        assert_eq!(parse_count("1000"), Ok(1000));
+        assert_eq!(parse_count("1e6"), Ok(1_000_000));
+        assert_eq!(parse_count("2.5E5"), Ok(250_000));
+        for bad in ["1.5", "1e-3", "2.5e0", "e6", "1e", "1e99", "-1e3", "ten"] {
+            assert!(parse_count(bad).is_err(), "{bad}");
+        }
+    }
 }
