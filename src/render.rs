@@ -142,36 +142,56 @@ pub fn block<F: Lanes>() -> (u32, u32) {
     }
 }
 
+/// The pixels of one packet: a block of `w × h` pixels at column `x`, row `y` of its tile; lane `i` is the
+/// pixel `(i mod bw, i div bw)` of the block, `bw × bh` = [`block`] (`w`, `h` are smaller at a tile's edge).
+#[derive(Clone, Copy, Debug)]
+pub struct Block {
+    /// Left column in the tile.
+    pub x: u32,
+    /// Top row in the tile.
+    pub y: u32,
+    /// Columns covered.
+    pub w: u32,
+    /// Rows covered.
+    pub h: u32,
+    /// Columns of a whole block (lanes per row).
+    pub bw: u32,
+}
+
+impl Block {
+    /// `(lane, column, row)` in the tile for each pixel of the block.
+    pub fn pixels(self) -> impl Iterator<Item = (usize, u32, u32)> {
+        (0..self.h)
+            .flat_map(move |r| (0..self.w).map(move |c| ((r * self.bw + c) as usize, self.x + c, self.y + r)))
+    }
+}
+
 /// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
-/// `(dx, dy)` from its pixel's corner: the camera rays and, per lane, its pixel's column and row in the tile.
+/// `(dx, dy)` from its pixel's corner: the camera rays and the block of pixels they sample.
 pub fn for_each_packet<F: Lanes>(
     camera: &Camera<F>,
     tile: Tile,
     (dx, dy): (f32, f32),
-    mut visit: impl FnMut(&RayPacket<F>, &[Option<(u32, u32)>]),
+    mut visit: impl FnMut(&RayPacket<F>, Block),
 ) {
     let (bw, bh) = block::<F>();
     // Lane offsets inside a block, computed once: x = (column + lane column) + dx, the same sums as per lane.
     let lane_x = F::from_fn(|i| (i as u32 % bw) as f32);
     let lane_y = F::from_fn(|i| (i as u32 / bw) as f32);
-    let mut pixel = [None; 16];
     for by in (0..tile.h).step_by(bh as usize) {
         for bx in (0..tile.w).step_by(bw as usize) {
-            for (i, slot) in pixel.iter_mut().enumerate().take(F::K) {
-                let (px, py) = (bx + i as u32 % bw, by + i as u32 / bw);
-                *slot = (px < tile.w && py < tile.h).then_some((px, py));
-            }
+            let b = Block { x: bx, y: by, w: bw.min(tile.w - bx), h: bh.min(tile.h - by), bw };
             let sx = (F::splat_f32((tile.x0 + bx) as f32) + lane_x) + F::splat_f32(dx);
             let sy = (F::splat_f32((tile.y0 + by) as f32) + lane_y) + F::splat_f32(dy);
             let ray = camera.ray(sx, sy);
-            let active = if bx + bw <= tile.w && by + bh <= tile.h {
+            let active = if b.w == bw && b.h == bh {
                 F::mask_from_bits(u32::MAX)
             } else {
-                F::mask_from_fn(|i| pixel[i].is_some())
+                F::mask_from_fn(|i| (i as u32 % bw) < b.w && (i as u32 / bw) < b.h)
             };
             let rays =
                 RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
-            visit(&rays, &pixel[..F::K]);
+            visit(&rays, b);
         }
     }
 }
@@ -190,13 +210,11 @@ fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Ve
             let scale = 1.0 / offsets.len() as f32;
             let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
             for &offset in &offsets {
-                for_each_packet(&camera, tile, offset, |rays, pixels| {
+                for_each_packet(&camera, tile, offset, |rays, block| {
                     let c = tracer.primary(rays);
-                    for (i, p) in pixels.iter().enumerate() {
-                        if let Some((x, y)) = *p {
-                            let p = (y * tile.w + x) as usize;
-                            sum[p] = sum[p] + lane_rgb(&c, i);
-                        }
+                    for (i, x, y) in block.pixels() {
+                        let p = (y * tile.w + x) as usize;
+                        sum[p] = sum[p] + lane_rgb(&c, i);
                     }
                 });
             }
@@ -308,13 +326,16 @@ pub fn primary_hits<F: Lanes>(
             let y0 = b as u32 * TILE;
             for tile in tiles(width, TILE.min(height - y0)) {
                 let tile = Tile { y0, ..tile };
-                for_each_packet(&camera, tile, (0.5, 0.5), |rays, pixels| {
+                for_each_packet(&camera, tile, (0.5, 0.5), |rays, b| {
                     let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
-                    for (i, p) in pixels.iter().enumerate() {
-                        if let Some((x, y)) = *p {
-                            let at = y as usize * width as usize + (tile.x0 + x) as usize;
-                            (t[at], prim[at]) = (hit.t.lane(i), crate::simd::IdLanes::lane(hit.prim, i));
-                        }
+                    let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
+                    // Row by row: each row of the block is a run of pixels in the image row.
+                    for r in 0..b.h as usize {
+                        let lane = r * b.bw as usize;
+                        let at = (b.y as usize + r) * width as usize + (tile.x0 + b.x) as usize;
+                        let n = b.w as usize;
+                        t[at..at + n].copy_from_slice(&ts.as_ref()[lane..lane + n]);
+                        prim[at..at + n].copy_from_slice(&ids.as_ref()[lane..lane + n]);
                     }
                 });
             }

@@ -43,6 +43,11 @@ impl<V: Not<Output = V>> Not for LaneMask<V> {
 }
 
 impl IdLanes for u32 {
+    type Array = [u32; 1];
+    #[inline(always)]
+    fn to_array(self) -> [u32; 1] {
+        [self]
+    }
     #[inline(always)]
     fn splat(v: u32) -> Self {
         v
@@ -167,6 +172,11 @@ macro_rules! impl_lanes {
         }
 
         impl IdLanes for $u {
+            type Array = [u32; $k];
+            #[inline(always)]
+            fn to_array(self) -> [u32; $k] {
+                $u::to_array(self)
+            }
             #[inline(always)]
             fn splat(v: u32) -> Self {
                 $u::splat(v)

@@ -44,6 +44,10 @@ use crate::math::{Real, V3};
 
 /// u32 values, one per lane: primitive ids travelling with a packet's `t` values.
 pub trait IdLanes: Copy + Debug + PartialEq + Send + Sync + 'static + Add<Output = Self> {
+    /// `[u32; K]`.
+    type Array: AsRef<[u32]>;
+    /// The lanes as an array.
+    fn to_array(self) -> Self::Array;
     /// `v` in every lane.
     fn splat(v: u32) -> Self;
     /// Lane `i` is `f(i)`.
