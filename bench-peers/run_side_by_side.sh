@@ -5,7 +5,10 @@
 # field`, so both read the same file. Output: results/side-<UTC stamp>.txt (header: date, machine, load,
 # commands) with one line per measurement; summarize with `python3 summarize_side.py FILE`.
 #
-# usage: run_side_by_side.sh [path/to/bareray]      env: COUNTS="1e3 1e5 1e6" THREADS="1 2" ROUNDS=3 REPS=7
+# bareray runs once per BVH preset in PRESETS (default: fast, its default, and very-fast).
+#
+# usage: run_side_by_side.sh [path/to/bareray]
+# env:   COUNTS="1e3 1e5 1e6" THREADS="1 2" ROUNDS=3 REPS=7 PRESETS="fast very-fast" EMBREE_ARGS=""
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 bareray="${1:-$here/../target/release/bareray}"
@@ -20,7 +23,7 @@ reps="${REPS:-7}"
   echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
   echo "# embree: $(dpkg-query -W -f='${Version}' libembree3-3 2>/dev/null || echo unknown)  bareray: $("$bareray" --version)"
   echo "# embree: embree_bench --xyzr F --geometry user --api 16 --threads T --reps $reps ${EMBREE_ARGS:-}"
-  echo "# bareray: bareray bench F --primary-only ${cam[*]} --lanes 16 --threads T --reps $reps --json"
+  echo "# bareray: bareray bench F --primary-only ${cam[*]} --lanes 16 --threads T --reps $reps --json --bvh-preset P (P in ${PRESETS:-fast very-fast})"
 } > "$out"
 for n in ${COUNTS:-1e3 1e5 1e6}; do
   [ -f "$here/out/field-$n.xyzr" ] || "$bareray" gen field --count "$n" -o "$here/out/field-$n.xyzr" >&2
@@ -32,8 +35,10 @@ for round in $(seq 1 "${ROUNDS:-3}"); do
       load="$(cut -d' ' -f1 /proc/loadavg)"
       "$here/embree/embree_bench" --xyzr "$f" --geometry user --api 16 --threads "$t" --reps "$reps" \
         ${EMBREE_ARGS:-} 2>/dev/null | sed "s/^/embree round=$round n=$n load=$load /" | tee -a "$out"
-      "$bareray" bench "$f" --primary-only "${cam[@]}" --lanes 16 --threads "$t" --reps "$reps" --json \
-        | sed "s/^/bareray round=$round n=$n load=$load /" | tee -a "$out"
+      for preset in ${PRESETS:-fast very-fast}; do
+        "$bareray" bench "$f" --primary-only "${cam[@]}" --lanes 16 --threads "$t" --reps "$reps" --json \
+          --bvh-preset "$preset" | sed "s/^/bareray round=$round n=$n load=$load /" | tee -a "$out"
+      done
     done
   done
 done

@@ -11,7 +11,7 @@ use indicatif::ProgressBar;
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes};
 use crate::render::{fnv1a, primary_hits_lanes, render_lanes};
-use crate::scene::{Accel, Scene};
+use crate::scene::{Accel, BvhPreset, Scene};
 
 /// Arguments of `bareray bench`.
 #[derive(Args, Debug)]
@@ -34,6 +34,13 @@ pub struct BenchArgs {
     /// sphere: the setting for comparing kernels).
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
     pub accel: AccelArg,
+    /// obvhs build preset for the BVH (`very-fast` builds quickest and traces uniform fields fastest).
+    #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
+    pub bvh_preset: BvhPreset,
+    /// Test each BVH node against a shared-origin packet as a whole before its lanes (interval arithmetic on
+    /// the packet's direction range). Off by default: measured slower (PERF.md); here to measure it again.
+    #[arg(long)]
+    pub interval_culling: bool,
     /// Timed repetitions per setting (the median is reported), after one untimed warm-up.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub reps: u32,
@@ -79,7 +86,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
         AccelArg::Bvh => Accel::Bvh,
         AccelArg::Brute => Accel::Brute,
     };
-    let scene = Scene::compile_with(&desc, accel)?;
+    let mut scene = Scene::compile_with_preset(&desc, accel, args.bvh_preset)?;
+    if let Some(bvh) = &mut scene.geometry.bvh {
+        bvh.interval_culling = args.interval_culling;
+    }
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;
     let mut out = std::io::stdout().lock();
@@ -113,7 +123,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     out,
                     "{{\"tracer\":\"bareray\",\"scene\":{:?},\"primary_only\":{},\"lanes\":{},\"threads\":{},\"rays\":{},\
                      \"seconds\":{:.6},\"mrays_per_s\":{:.3},\"checksum\":\"{:016x}\",\"reps\":{},\"spheres\":{},\
-                     \"build_s\":{:.6},\"width\":{},\"height\":{}}}",
+                     \"build_s\":{:.6},\"width\":{},\"height\":{},\"interval_culling\":{},\"bvh_preset\":\"{:?}\"}}",
                     args.scene.display().to_string(),
                     args.primary_only,
                     row.lanes,
@@ -126,7 +136,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     g.spheres.len(),
                     scene.build.seconds,
                     scene.camera.width,
-                    scene.camera.height
+                    scene.camera.height,
+                    args.interval_culling,
+                    args.bvh_preset
                 )?;
             } else {
                 let ratio = scalar.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));

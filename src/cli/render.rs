@@ -14,7 +14,7 @@ use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
 use crate::scene::desc::Pattern;
-use crate::scene::{toml, Scene, SceneDesc};
+use crate::scene::{toml, Accel, BvhPreset, Scene, SceneDesc};
 
 /// The demo scene rendered when no scene file is given.
 pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
@@ -54,6 +54,9 @@ pub struct RenderArgs {
     /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16. The image is identical at every width.
     #[arg(long, default_value_t = 8, value_parser = parse_lanes)]
     pub lanes: usize,
+    /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; PERF.md compares them).
+    #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
+    pub bvh_preset: BvhPreset,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -84,7 +87,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     time.parse = clock.elapsed().as_secs_f64();
 
     let clock = Instant::now();
-    let scene = Scene::compile(&desc).context("camera")?;
+    let scene = Scene::compile_with_preset(&desc, Accel::Auto, args.bvh_preset).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     let threads = args.threads.map(|t| t as usize);

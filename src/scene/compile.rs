@@ -54,6 +54,36 @@ pub enum Accel {
     Brute,
 }
 
+/// The obvhs build preset for the BVH over the spheres (its `BvhBuildParams` presets).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum BvhPreset {
+    /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
+    Fastest,
+    /// obvhs `very_fast_build`: the quickest build; on uniform random fields it also traces faster than
+    /// `fast`, on sphereflakes 8–10% slower (PERF.md).
+    VeryFast,
+    /// obvhs `fast_build`, the default: the best traced speed on structured scenes.
+    #[default]
+    Fast,
+    /// obvhs `medium_build`.
+    Medium,
+    /// obvhs `slow_build`.
+    Slow,
+}
+
+impl BvhPreset {
+    /// The obvhs parameters.
+    pub fn params(self) -> BvhBuildParams {
+        match self {
+            BvhPreset::Fastest => BvhBuildParams::fastest_build(),
+            BvhPreset::VeryFast => BvhBuildParams::very_fast_build(),
+            BvhPreset::Fast => BvhBuildParams::fast_build(),
+            BvhPreset::Medium => BvhBuildParams::medium_build(),
+            BvhPreset::Slow => BvhBuildParams::slow_build(),
+        }
+    }
+}
+
 /// Below this many spheres brute force is used: with 2–3 spheres brute force measured 8–13% faster, from 4
 /// spheres on the BVH was already faster (PERF.md, "BVH crossover").
 pub const BVH_MIN_SPHERES: usize = 4;
@@ -74,6 +104,15 @@ impl Scene {
 
     /// Compiles with a chosen acceleration structure for the spheres.
     pub fn compile_with(desc: &SceneDesc, accel: Accel) -> Result<Scene, CameraError> {
+        Self::compile_with_preset(desc, accel, BvhPreset::default())
+    }
+
+    /// Compiles with a chosen acceleration structure and BVH build preset.
+    pub fn compile_with_preset(
+        desc: &SceneDesc,
+        accel: Accel,
+        preset: BvhPreset,
+    ) -> Result<Scene, CameraError> {
         let camera_f64 = Camera::new(&desc.camera)?;
         let mut geometry = Geometry::default();
         for s in &desc.spheres {
@@ -106,9 +145,7 @@ impl Scene {
         let mut build = BuildStats::default();
         if use_bvh {
             let pad = bvh::padding(reach(desc));
-            // Presets from fastest to slow and leaf sizes 1 to 16 traced within ±5% (PERF.md): fast builds quickest
-            // among the equals.
-            let params = BvhBuildParams::fast_build();
+            let params = preset.params();
             let (tree, order, stats) = bvh::build(&mut geometry.spheres, pad, params);
             geometry.bvh = Some(tree);
             geometry.sphere_file_ids = order;

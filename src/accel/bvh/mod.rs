@@ -88,9 +88,17 @@ impl Node {
 /// order a ray in that octant meets well-separated boxes. Packed 2 bits per slot, nearest first.
 fn front_to_back(children: &[ChildRef], octant: usize) -> u8 {
     let sign = |a: usize| if octant >> a & 1 == 1 { -1.0 } else { 1.0 };
-    let key = |c: &ChildRef| (0..3).map(|a| sign(a) * (c.lo[a] + c.hi[a])).sum::<f32>();
-    let mut slots: Vec<usize> = (0..children.len()).collect();
-    slots.sort_by(|&i, &j| key(&children[i]).total_cmp(&key(&children[j])));
+    let key = |c: usize| (0..3).map(|a| sign(a) * (children[c].lo[a] + children[c].hi[a])).sum::<f32>();
+    let mut slots = [0, 1, 2, 3];
+    let slots = &mut slots[..children.len()];
+    // Insertion sort: at most four slots, and no allocation per node (the collapse makes one per node).
+    for i in 1..slots.len() {
+        let mut j = i;
+        while j > 0 && key(slots[j - 1]) > key(slots[j]) {
+            slots.swap(j - 1, j);
+            j -= 1;
+        }
+    }
     slots.iter().enumerate().fold(0, |bits, (k, &slot)| bits | (slot as u8) << (2 * k))
 }
 
@@ -163,21 +171,22 @@ fn child_ref(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> ChildRef {
 /// into its two children until it has N.
 fn flatten(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> u32 {
     let first = src[i].first_index as usize;
-    let mut open = vec![first, first + 1];
-    while open.len() < N {
-        let widest = open
-            .iter()
-            .enumerate()
-            .filter(|(_, &j)| src[j].prim_count == 0)
-            .max_by(|(_, &a), (_, &b)| src[a].aabb.half_area().total_cmp(&src[b].aabb.half_area()));
-        let Some((at, &j)) = widest else { break };
-        let grand = src[j].first_index as usize;
-        open.splice(at..=at, [grand, grand + 1]);
+    let (mut open, mut len) = ([first, first + 1, 0, 0], 2);
+    while len < N {
+        let area = |j: usize| src[j].aabb.half_area();
+        let inner = (0..len).filter(|&k| src[open[k]].prim_count == 0);
+        let Some(at) = inner.max_by(|&a, &b| area(open[a]).total_cmp(&area(open[b]))) else { break };
+        let grand = src[open[at]].first_index as usize;
+        (open[at], open[len]) = (grand, grand + 1);
+        len += 1;
     }
     let me = out.len();
     out.push(Node::new(&[]));
-    let children: Vec<ChildRef> = open.iter().map(|&j| child_ref(src, j, out)).collect();
-    out[me] = Node::new(&children);
+    let mut children = [EMPTY; N];
+    for k in 0..len {
+        children[k] = child_ref(src, open[k], out);
+    }
+    out[me] = Node::new(&children[..len]);
     me as u32
 }
 
