@@ -29,7 +29,7 @@ pub fn spheres_intersect_k<F: Lanes>(
         }
         let id = F::Ids::splat(i as u32);
         let (hit, t) = first_root(&line.roots(), t_max);
-        best.update(live & hit & !F::ids_eq(id, skip), t, id);
+        best.update(live & hit & !F::ids_eq(id, skip), t, id, F::Ids::splat(s.key[i]));
     }
 }
 
@@ -72,7 +72,7 @@ impl Geometry {
         for (k, shape) in self.shapes.iter().enumerate() {
             let id = F::Ids::splat(base + k as u32);
             let (hit, t) = shape.to_lanes::<F>().intersect(&ray, rays.t_max);
-            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id);
+            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id, id);
         }
         let p = &self.polygons;
         let base = self.polygon_base() as u32;
@@ -80,7 +80,7 @@ impl Geometry {
             let id = F::Ids::splat(base + p.polygon[j]);
             let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
             let (hit, t) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
-            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id);
+            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id, id);
         }
     }
 

@@ -8,7 +8,7 @@ pub mod bvh;
 
 use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, NO_PRIM};
 use crate::math::{Mask, Vec3f, V3};
-use crate::simd::Lanes;
+use crate::simd::{IdLanes, Lanes};
 
 thread_local! {
     /// Intersection work done on this thread since the last [`take_work`]: (packet–primitive tests,
@@ -75,6 +75,9 @@ pub struct Spheres {
     pub r: Vec<f32>,
     /// Material index.
     pub material: Vec<u32>,
+    /// Scene-file index (the identity until [`Spheres::permuted`]): breaks ties in t and names the sphere
+    /// in reports.
+    pub key: Vec<u32>,
 }
 
 impl Spheres {
@@ -100,6 +103,7 @@ impl Spheres {
             cz: pick(&self.cz),
             r: pick(&self.r),
             material: order.iter().map(|&i| self.material[i as usize]).collect(),
+            key: order.iter().map(|&i| self.key[i as usize]).collect(),
         }
     }
     /// Appends a sphere.
@@ -107,6 +111,7 @@ impl Spheres {
         self.cx.push(center.x);
         self.cy.push(center.y);
         self.cz.push(center.z);
+        self.key.push(self.r.len() as u32);
         self.r.push(radius);
         self.material.push(material);
     }
@@ -213,8 +218,6 @@ pub struct Geometry {
     pub spheres: Spheres,
     /// The BVH over the spheres, or `None` for brute force.
     pub bvh: Option<bvh::Bvh>,
-    /// The scene-file index of each sphere (the identity without a BVH), for reporting ids.
-    pub sphere_file_ids: Vec<u32>,
     /// Transformed generic shapes.
     pub shapes: Vec<Shape<f32>>,
     /// Planar polygons.
@@ -272,7 +275,7 @@ impl Geometry {
         }
         self.others_intersect_k(rays, from.prim, &mut best);
         let (exits, t) = self.departure_exits_k(rays, from);
-        best.update(exits, t, from.prim);
+        best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
         best
     }
 
@@ -315,9 +318,23 @@ impl Geometry {
         self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
     }
 
+    /// The scene-file ids of the lanes' primitives in `lanes` (the others: [`crate::geometry::NO_PRIM`]).
+    fn keys_k<F: Lanes>(&self, prims: F::Ids, lanes: F::Mask) -> F::Ids {
+        if !lanes.any() {
+            return F::Ids::splat(crate::geometry::NO_PRIM);
+        }
+        F::Ids::from_fn(|i| {
+            if F::mask_lane(lanes, i) {
+                self.file_id(prims.lane(i))
+            } else {
+                crate::geometry::NO_PRIM
+            }
+        })
+    }
+
     /// The scene-file id of primitive `prim` (spheres are stored in BVH order; other ids are unchanged).
     pub fn file_id(&self, prim: u32) -> u32 {
-        match self.sphere_file_ids.get(prim as usize) {
+        match self.spheres.key.get(prim as usize) {
             Some(&id) => id,
             None => prim,
         }

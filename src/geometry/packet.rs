@@ -8,7 +8,7 @@
 //!   SoA arrays, then a reduction over the lanes.
 //!
 //! Both keep the scalar tie rule: a sphere replaces the best hit only when its t is strictly smaller, so of
-//! equal t the lower id wins.
+//! equal t the lower id wins (these two assume storage order is file order: no BVH).
 
 use crate::accel::Spheres;
 use crate::math::{Mask, V3};
@@ -74,12 +74,15 @@ pub struct HitPacket<F: Lanes> {
     pub t: F,
     /// Primitive id of each hit.
     pub prim: F::Ids,
+    /// The hit primitive's scene-file id, which breaks ties in t: the same order whatever order the
+    /// primitives are stored and visited in (a BVH stores spheres in leaf order).
+    pub key: F::Ids,
 }
 
 impl<F: Lanes> HitPacket<F> {
     /// No hits in any lane.
     pub fn miss() -> Self {
-        Self { t: F::splat_f32(f32::INFINITY), prim: F::Ids::splat(NO_PRIM) }
+        Self { t: F::splat_f32(f32::INFINITY), prim: F::Ids::splat(NO_PRIM), key: F::Ids::splat(NO_PRIM) }
     }
 
     /// Lanes that hit something. A hit's t is below its `t_max ≤ inf`, so "finite" is "hit".
@@ -93,14 +96,17 @@ impl<F: Lanes> HitPacket<F> {
         Hit { t: self.t.lane(i), prim: self.prim.lane(i) }
     }
 
-    /// Takes `(t, id)` in the lanes of `valid` where it is closer: smaller t, or equal t and a lower id. The
-    /// order is total, so the closest hit does not depend on the order primitives are visited in — what lets
-    /// a packet traversal, which visits nodes in its own order, agree bit for bit with a single ray's.
+    /// Takes the hit `(t, id)` of the primitive with scene-file id `key` in the lanes of `valid` where it is
+    /// closer: smaller t, or equal t and a lower file id. The order is total and independent of storage
+    /// order, so the closest hit does not depend on the order primitives are stored or visited in — what lets
+    /// a packet traversal, which visits nodes in its own order, agree bit for bit with a single ray's, and a
+    /// BVH with brute force, ids included.
     #[inline(always)]
-    pub fn update(&mut self, valid: F::Mask, t: F, id: F::Ids) {
-        let closer = valid & (t.lt(self.t) | (t.le(self.t) & F::ids_lt(id, self.prim)));
+    pub fn update(&mut self, valid: F::Mask, t: F, id: F::Ids, key: F::Ids) {
+        let closer = valid & (t.lt(self.t) | (t.le(self.t) & F::ids_lt(key, self.key)));
         self.t = F::select(closer, t, self.t);
         self.prim = F::select_ids(closer, id, self.prim);
+        self.key = F::select_ids(closer, key, self.key);
     }
 }
 
@@ -128,7 +134,7 @@ impl<F: Lanes> DeparturePacket<F> {
 /// [`crate::accel::Geometry::intersect`] over spheres with [`super::Departure::CAMERA`].
 pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -> HitPacket<F> {
     let ray = packet.ray();
-    let mut best = HitPacket { t: packet.t_max, prim: F::Ids::splat(NO_PRIM) };
+    let mut best = HitPacket { t: packet.t_max, prim: F::Ids::splat(NO_PRIM), key: F::Ids::splat(NO_PRIM) };
     if !packet.active.any() {
         return HitPacket::miss();
     }
@@ -140,6 +146,7 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
         let hit = hit & packet.active;
         best.t = F::select(hit, t, best.t);
         best.prim = F::select_ids(hit, F::Ids::splat(i as u32), best.prim);
+        best.key = F::select_ids(hit, F::Ids::splat(spheres.key[i]), best.key);
         found = found | hit;
     }
     // Misses report `inf`, not `t_max`, as the scalar query does.
@@ -152,7 +159,8 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
 pub fn intersect_spheres_1<F: Lanes>(spheres: &Spheres, ray: &Ray<f32>, t_max: f32) -> Hit {
     let n = spheres.len();
     let ray_k = Ray::new(F::splat_v3(ray.origin), F::splat_v3(ray.dir));
-    let mut best = HitPacket { t: F::splat_f32(t_max), prim: F::Ids::splat(NO_PRIM) };
+    let mut best =
+        HitPacket { t: F::splat_f32(t_max), prim: F::Ids::splat(NO_PRIM), key: F::Ids::splat(NO_PRIM) };
     let mut at = 0;
     while at + F::K <= n {
         sphere_chunk(spheres, &ray_k, at, None, &mut best);
@@ -179,6 +187,8 @@ fn sphere_chunk<F: Lanes>(
     let hit = valid.map_or(hit, |v| hit & v);
     best.t = F::select(hit, t, best.t);
     best.prim = F::select_ids(hit, F::Ids::splat(at as u32) + F::lane_ids(), best.prim);
+    best.key =
+        F::select_ids(hit, F::Ids::from_fn(|i| s.key.get(at + i).copied().unwrap_or(NO_PRIM)), best.key);
 }
 
 /// The smallest t over the lanes, of equal t the lowest id: lane `l` saw spheres `l, l + K, …` in order, so

@@ -146,9 +146,8 @@ impl Scene {
         if use_bvh {
             let pad = bvh::padding(reach(desc));
             let params = preset.params();
-            let (tree, order, stats) = bvh::build(&mut geometry.spheres, pad, params);
+            let (tree, stats) = bvh::build(&mut geometry.spheres, pad, params);
             geometry.bvh = Some(tree);
-            geometry.sphere_file_ids = order;
             build = stats;
         }
         let lights = desc

@@ -129,9 +129,9 @@ pub fn padding(reach: f32) -> f32 {
     reach * (64.0 * f32::EPSILON)
 }
 
-/// Builds the BVH and reorders `spheres` into its leaf order. Returns the BVH, the file index of each
-/// reordered sphere, and build statistics.
-pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, Vec<u32>, BuildStats) {
+/// Builds the BVH and reorders `spheres` into its leaf order (their `key` keeps each one's file index).
+/// Returns the BVH and build statistics.
+pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, BuildStats) {
     let start = Instant::now();
     let boxes: Vec<Aabb> = (0..spheres.len())
         .map(|i| {
@@ -141,8 +141,7 @@ pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, V
         })
         .collect();
     let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
-    let order = bvh2.primitive_indices.clone();
-    *spheres = spheres.permuted(&order);
+    *spheres = spheres.permuted(&bvh2.primitive_indices);
     let mut nodes = Vec::with_capacity(bvh2.nodes.len() / 2 + 1);
     if bvh2.nodes[0].prim_count > 0 {
         let leaf = child_ref(&bvh2.nodes, 0, &mut nodes);
@@ -152,7 +151,7 @@ pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, V
     }
     let stats =
         BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: nodes.len() * size_of::<Node>() };
-    (Bvh { nodes, interval_culling: false }, order, stats)
+    (Bvh { nodes, interval_culling: false }, stats)
 }
 
 /// The reference to obvhs node `i` from its parent: a leaf as it is, an inner node flattened first.

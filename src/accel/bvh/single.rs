@@ -137,11 +137,12 @@ impl Bvh {
             return self.intersect_packet(s, ray, t_max, live, skip, best);
         }
         for i in (0..F::K).filter(|i| bits >> i & 1 == 1) {
-            let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i) };
+            let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
             self.intersect_1(s, &lane_ray(ray, i), t_max.lane(i), skip.lane(i), &mut hit);
             let at = F::mask_from_bits(1 << i);
             best.t = F::select(at, F::splat_f32(hit.t), best.t);
             best.prim = F::select_ids(at, F::Ids::splat(hit.prim), best.prim);
+            best.key = F::select_ids(at, F::Ids::splat(hit.key), best.key);
         }
     }
 
