@@ -80,13 +80,17 @@ pub struct Tracer<'a, F: Lanes> {
     scene: &'a Scene,
     /// Rays traced so far.
     pub counts: RayCounts,
+    /// Per light, a sphere that blocked the last shadow packet toward it: tested first for the next one
+    /// (the shadow cache of Haines & Greenberg; it changes what is tested first, never the answer).
+    shadow_hints: Vec<u32>,
     lanes: PhantomData<F>,
 }
 
 impl<'a, F: Lanes> Tracer<'a, F> {
     /// A tracer over `scene` with zero counts.
     pub fn new(scene: &'a Scene) -> Self {
-        Self { scene, counts: RayCounts::default(), lanes: PhantomData }
+        let shadow_hints = vec![crate::geometry::NO_PRIM; scene.lights.len()];
+        Self { scene, counts: RayCounts::default(), shadow_hints, lanes: PhantomData }
     }
 
     /// Radiance along each active camera ray (zero in inactive lanes).
@@ -175,7 +179,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     fn direct(&mut self, s: &Surface<F>, view: V3<F>, lanes: F::Mask, from: &DeparturePacket<F>) -> V3<F> {
         let zero = F::splat_f32(0.0);
         let mut sum = V3::all(zero);
-        for light in &self.scene.lights {
+        for (k, light) in self.scene.lights.iter().enumerate() {
             let to_light = F::splat_v3(light.position) - s.point;
             let dist2 = to_light.dot(to_light);
             let dist = dist2.sqrt();
@@ -188,7 +192,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             }
             self.counts.shadow += lanes_set::<F>(lit);
             let shadow = RayPacket { origin: s.point, dir: l, t_max: dist, active: lit };
-            let visible = lit & !self.scene.geometry.occluded_k(&shadow, from);
+            let visible =
+                lit & !self.scene.geometry.occluded_hinted_k(&shadow, from, &mut self.shadow_hints[k]);
             let intensity = match light.falloff {
                 Falloff::None => splat_rgb::<F>(light.color),
                 Falloff::InverseSquare => splat_rgb::<F>(light.color) * (F::splat_f32(1.0) / dist2),

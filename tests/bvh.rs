@@ -83,6 +83,16 @@ fn check_packets<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>], live: 
         let hits = bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
         let shadow = RayPacket::<F>::from_rays(chunk, 2.0);
         let blocked = bvh.geometry.occluded_k(&shadow, &DeparturePacket::camera());
+        // A shadow-cache hint changes only what is tested first: any sphere, none, or an out-of-range id.
+        let n = bvh.geometry.spheres.len() as u32;
+        for mut hint in [0, n / 2, n - 1, n, u32::MAX] {
+            let hinted = bvh.geometry.occluded_hinted_k(&shadow, &DeparturePacket::camera(), &mut hint);
+            assert_eq!(F::move_mask(hinted), F::move_mask(blocked), "K={} hint {hint}", F::K);
+            // Spheres only here: a blocked lane leaves a blocking sphere as the next hint.
+            if F::move_mask(blocked) != 0 {
+                assert!(hint < n, "K={} no blocker recorded: {hint}", F::K);
+            }
+        }
         for (i, ray) in chunk.iter().enumerate() {
             let want = brute.geometry.intersect(ray, Departure::CAMERA, f32::INFINITY);
             let got = hits.lane(i);

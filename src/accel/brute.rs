@@ -33,7 +33,8 @@ pub fn spheres_intersect_k<F: Lanes>(
     }
 }
 
-/// Lanes of `live` blocked by a sphere in `range` (the departure sphere excluded).
+/// Lanes of `live` blocked by a sphere in `range` (the departure sphere excluded); `blocker` is set to a
+/// sphere that blocked some lane, if any did.
 pub fn spheres_occluded_k<F: Lanes>(
     s: &Spheres,
     range: std::ops::Range<usize>,
@@ -41,6 +42,7 @@ pub fn spheres_occluded_k<F: Lanes>(
     t_max: F,
     live: F::Mask,
     skip: F::Ids,
+    blocker: &mut u32,
 ) -> F::Mask {
     let mut blocked = F::mask_from_bits(0);
     for i in range {
@@ -50,7 +52,11 @@ pub fn spheres_occluded_k<F: Lanes>(
         }
         let id = F::Ids::splat(i as u32);
         let (hit, _) = first_root(&line.roots(), t_max);
-        blocked = blocked | (live & hit & !F::ids_eq(id, skip));
+        let now = live & hit & !F::ids_eq(id, skip);
+        if now.any() {
+            *blocker = i as u32;
+        }
+        blocked = blocked | now;
         if (blocked | !live).all() {
             break;
         }

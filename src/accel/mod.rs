@@ -282,22 +282,41 @@ impl Geometry {
     /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side
     /// excluded); inactive lanes are false.
     pub fn occluded_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> F::Mask {
+        let mut hint = crate::geometry::NO_PRIM;
+        self.occluded_hinted_k(rays, from, &mut hint)
+    }
+
+    /// [`Geometry::occluded_k`] that first tests the sphere `hint` (a blocker of an earlier, nearby packet:
+    /// neighbouring shadow rays tend to be blocked by the same sphere), and leaves in `hint` a sphere that
+    /// blocked some lane this time. The answer is the same whatever the hint: it only decides what is
+    /// tested first.
+    pub fn occluded_hinted_k<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+        hint: &mut u32,
+    ) -> F::Mask {
         let live = rays.active;
         if !live.any() {
             return live;
         }
         let ray = rays.ray();
-        let mut blocked = match &self.bvh {
-            Some(bvh) => bvh.occluded_k(&self.spheres, &ray, rays.t_max, live, from.prim),
-            None => brute::spheres_occluded_k(
-                &self.spheres,
-                0..self.spheres.len(),
-                &ray,
-                rays.t_max,
-                live,
-                from.prim,
-            ),
-        };
+        let s = &self.spheres;
+        let mut blocked = F::mask_from_bits(0);
+        if (*hint as usize) < s.len() {
+            let h = *hint as usize;
+            count_work(1, 0);
+            blocked = brute::spheres_occluded_k(s, h..h + 1, &ray, rays.t_max, live, from.prim, hint);
+            if (blocked | !live).all() {
+                return blocked;
+            }
+        }
+        let rest = live & !blocked;
+        blocked = blocked
+            | match &self.bvh {
+                Some(bvh) => bvh.occluded_k(s, &ray, rays.t_max, rest, from.prim, hint),
+                None => brute::spheres_occluded_k(s, 0..s.len(), &ray, rays.t_max, rest, from.prim, hint),
+            };
         if (blocked | !live).all() {
             return blocked;
         }

@@ -194,6 +194,7 @@ impl Bvh {
         t_max: F,
         live: F::Mask,
         skip: F::Ids,
+        blocker: &mut u32,
     ) -> F::Mask {
         let rays = SlabRays::new(ray, live, self.interval_culling);
         let mut stack = Stack::<Entry<F>>::new();
@@ -210,7 +211,15 @@ impl Bvh {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
                 blocked = blocked
-                    | spheres_occluded_k(s, first..first + usize::from(e.count), ray, t_max, lanes, skip);
+                    | spheres_occluded_k(
+                        s,
+                        first..first + usize::from(e.count),
+                        ray,
+                        t_max,
+                        lanes,
+                        skip,
+                        blocker,
+                    );
                 if (blocked | !live).all() {
                     break;
                 }

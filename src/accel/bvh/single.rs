@@ -99,7 +99,7 @@ impl Bvh {
     }
 
     /// Whether one ray is blocked within `t_max`; stops at the first blocker found.
-    fn occluded_1(&self, s: &Spheres, ray: &Ray<f32>, t_max: f32, skip: u32) -> bool {
+    fn occluded_1(&self, s: &Spheres, ray: &Ray<f32>, t_max: f32, skip: u32, blocker: &mut u32) -> bool {
         let slab = SlabRay::new(ray);
         let mut stack = Stack::<Entry>::new();
         self.push_near_last(&self.nodes[0], &slab, t_max, &mut stack);
@@ -108,7 +108,8 @@ impl Bvh {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                if spheres_occluded_k(s, first..first + usize::from(e.count), ray, t_max, true, skip) {
+                if spheres_occluded_k(s, first..first + usize::from(e.count), ray, t_max, true, skip, blocker)
+                {
                     blocked = true;
                     break;
                 }
@@ -147,7 +148,7 @@ impl Bvh {
     }
 
     /// Lanes of `live` blocked by a sphere within their `t_max`: packet traversal, or one ray at a time when
-    /// at most [`SINGLE_RAY_MAX_LANES`] lanes are live.
+    /// at most [`SINGLE_RAY_MAX_LANES`] lanes are live. `blocker` is set to a sphere that blocked a lane.
     pub fn occluded_k<F: Lanes>(
         &self,
         s: &Spheres,
@@ -155,14 +156,15 @@ impl Bvh {
         t_max: F,
         live: F::Mask,
         skip: F::Ids,
+        blocker: &mut u32,
     ) -> F::Mask {
         let bits = F::move_mask(live);
         if F::K > 1 && bits.count_ones() > SINGLE_RAY_MAX_LANES {
-            return self.occluded_packet(s, ray, t_max, live, skip);
+            return self.occluded_packet(s, ray, t_max, live, skip, blocker);
         }
         let blocked = (0..F::K)
             .filter(|i| bits >> i & 1 == 1)
-            .filter(|&i| self.occluded_1(s, &lane_ray(ray, i), t_max.lane(i), skip.lane(i)))
+            .filter(|&i| self.occluded_1(s, &lane_ray(ray, i), t_max.lane(i), skip.lane(i), blocker))
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
