@@ -11,57 +11,74 @@ use crate::simd::{IdLanes, Lanes};
 
 use super::{Geometry, PrimRef, Spheres};
 
-/// Closest hits of every sphere, lanes = rays, the departure sphere of each lane excluded.
-pub fn spheres_intersect_k<F: Lanes>(
-    s: &Spheres,
-    range: std::ops::Range<usize>,
-    ray: &Ray<F>,
-    t_max: F,
-    live: F::Mask,
-    skip: F::Ids,
-    best: &mut HitPacket<F>,
-) {
-    for i in range {
-        // Most spheres of a leaf miss every lane: skip the roots' division and square root for them.
-        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray);
-        if !(line.meets() & live).any() {
-            continue;
-        }
-        let id = F::Ids::splat(i as u32);
-        let (hit, t) = first_root(&line.roots(), t_max);
-        best.update(live & hit & !F::ids_eq(id, skip), t, id, F::Ids::splat(s.key[i]));
-    }
+/// A sphere query as every kernel and traversal takes it: the spheres, the rays, each ray's exclusive end
+/// `t_max`, and the sphere each ray leaves (`skip`, never reported).
+#[derive(Clone, Copy)]
+pub struct SphereQuery<'a, F: Lanes> {
+    /// The spheres.
+    pub spheres: &'a Spheres,
+    /// The rays.
+    pub ray: Ray<F>,
+    /// Exclusive end of each ray's range.
+    pub t_max: F,
+    /// The departure sphere of each ray.
+    pub skip: F::Ids,
 }
 
-/// Lanes of `live` blocked by a sphere in `range` (the departure sphere excluded); `blocker` is set to a
-/// sphere that blocked some lane, if any did.
-pub fn spheres_occluded_k<F: Lanes>(
-    s: &Spheres,
-    range: std::ops::Range<usize>,
-    ray: &Ray<F>,
-    t_max: F,
-    live: F::Mask,
-    skip: F::Ids,
-    blocker: &mut u32,
-) -> F::Mask {
-    let mut blocked = F::mask_from_bits(0);
-    for i in range {
-        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), ray);
-        if !(line.meets() & live).any() {
-            continue;
-        }
-        let id = F::Ids::splat(i as u32);
-        let (hit, _) = first_root(&line.roots(), t_max);
-        let now = live & hit & !F::ids_eq(id, skip);
-        if now.any() {
-            *blocker = i as u32;
-        }
-        blocked = blocked | now;
-        if (blocked | !live).all() {
-            break;
+impl<F: Lanes> SphereQuery<'_, F> {
+    /// Lane `i` as a one-ray query.
+    #[inline(always)]
+    pub fn lane(&self, i: usize) -> SphereQuery<'_, f32> {
+        let v = |p: crate::math::V3<F>| crate::math::V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
+        SphereQuery {
+            spheres: self.spheres,
+            ray: Ray::new(v(self.ray.origin), v(self.ray.dir)),
+            t_max: self.t_max.lane(i),
+            skip: self.skip.lane(i),
         }
     }
-    blocked
+
+    /// Sphere `i`'s hits for the lanes of `live`: the lanes it is hit in (the departure sphere excluded) and
+    /// their t, or `None` when no live lane's line meets it — most spheres of a leaf, which skip the roots'
+    /// division and square root.
+    #[inline(always)]
+    fn sphere(&self, i: usize, live: F::Mask) -> Option<(F::Mask, F)> {
+        let s = self.spheres;
+        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), &self.ray);
+        if !(line.meets() & live).any() {
+            return None;
+        }
+        let (hit, t) = first_root(&line.roots(), self.t_max);
+        Some((live & hit & !F::ids_eq(F::Ids::splat(i as u32), self.skip), t))
+    }
+
+    /// Closest hits of the spheres in `range` for the lanes of `live`, merged into `best`.
+    #[inline(always)]
+    pub fn intersect(&self, range: std::ops::Range<usize>, live: F::Mask, best: &mut HitPacket<F>) {
+        for i in range {
+            if let Some((hit, t)) = self.sphere(i, live) {
+                best.update(hit, t, F::Ids::splat(i as u32), F::Ids::splat(self.spheres.key[i]));
+            }
+        }
+    }
+
+    /// Lanes of `live` blocked by a sphere in `range`; `blocker` is set to a sphere that blocked some lane,
+    /// if any did. Stops as soon as every live lane is blocked.
+    #[inline(always)]
+    pub fn occluded(&self, range: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask {
+        let mut blocked = F::mask_from_bits(0);
+        for i in range {
+            let Some((hit, _)) = self.sphere(i, live) else { continue };
+            if hit.any() {
+                *blocker = i as u32;
+                blocked = blocked | hit;
+                if (blocked | !live).all() {
+                    break;
+                }
+            }
+        }
+        blocked
+    }
 }
 
 impl Geometry {

@@ -4,6 +4,7 @@
 //! planes are unbounded) are always tested brute force.
 
 mod brute;
+pub use brute::SphereQuery;
 pub mod bvh;
 
 use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, NO_PRIM};
@@ -257,18 +258,10 @@ impl Geometry {
         if !rays.active.any() {
             return best;
         }
-        let ray = rays.ray();
+        let q = self.sphere_query(rays, from);
         match &self.bvh {
-            Some(bvh) => bvh.intersect_k(&self.spheres, &ray, rays.t_max, rays.active, from.prim, &mut best),
-            None => brute::spheres_intersect_k(
-                &self.spheres,
-                0..self.spheres.len(),
-                &ray,
-                rays.t_max,
-                rays.active,
-                from.prim,
-                &mut best,
-            ),
+            Some(bvh) => bvh.intersect_k(&q, rays.active, &mut best),
+            None => q.intersect(0..self.spheres.len(), rays.active, &mut best),
         }
         if self.bvh.is_none() {
             count_work(self.spheres.len(), 0);
@@ -300,13 +293,12 @@ impl Geometry {
         if !live.any() {
             return live;
         }
-        let ray = rays.ray();
-        let s = &self.spheres;
+        let q = self.sphere_query(rays, from);
         let mut blocked = F::mask_from_bits(0);
-        if (*hint as usize) < s.len() {
+        if (*hint as usize) < self.spheres.len() {
             let h = *hint as usize;
             count_work(1, 0);
-            blocked = brute::spheres_occluded_k(s, h..h + 1, &ray, rays.t_max, live, from.prim, hint);
+            blocked = q.occluded(h..h + 1, live, hint);
             if (blocked | !live).all() {
                 return blocked;
             }
@@ -314,14 +306,23 @@ impl Geometry {
         let rest = live & !blocked;
         blocked = blocked
             | match &self.bvh {
-                Some(bvh) => bvh.occluded_k(s, &ray, rays.t_max, rest, from.prim, hint),
-                None => brute::spheres_occluded_k(s, 0..s.len(), &ray, rays.t_max, rest, from.prim, hint),
+                Some(bvh) => bvh.occluded_k(&q, rest, hint),
+                None => q.occluded(0..self.spheres.len(), rest, hint),
             };
         if (blocked | !live).all() {
             return blocked;
         }
         blocked = blocked | self.others_occluded_k(rays, live & !blocked, from.prim);
         blocked | self.departure_exits_k(rays, from).0
+    }
+
+    /// The sphere part of a packet query.
+    fn sphere_query<'a, F: Lanes>(
+        &'a self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> SphereQuery<'a, F> {
+        SphereQuery { spheres: &self.spheres, ray: rays.ray(), t_max: rays.t_max, skip: from.prim }
     }
 
     /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].

@@ -10,8 +10,8 @@
 
 use wide::f32x4;
 
-use super::super::brute::{spheres_intersect_k, spheres_occluded_k};
-use super::super::{count_work, Spheres};
+use super::super::brute::SphereQuery;
+use super::super::count_work;
 use super::{Bvh, Node, Stack};
 use crate::geometry::{HitPacket, Ray};
 use crate::math::{Mask, Real, V3};
@@ -152,17 +152,14 @@ impl Bvh {
     /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal.
     pub(super) fn intersect_packet<F: Lanes>(
         &self,
-        s: &Spheres,
-        ray: &Ray<F>,
-        t_max: F,
+        q: &SphereQuery<F>,
         live: F::Mask,
-        skip: F::Ids,
         best: &mut HitPacket<F>,
     ) {
-        let rays = SlabRays::new(ray, live, self.interval_culling);
+        let rays = SlabRays::new(&q.ray, live, self.interval_culling);
         let mut stack = Stack::<Entry<F>>::new();
         let limit = |lanes: F::Mask, best: &HitPacket<F>| {
-            F::select(lanes, best.t.min_of(t_max), F::splat_f32(f32::NEG_INFINITY))
+            F::select(lanes, best.t.min_of(q.t_max), F::splat_f32(f32::NEG_INFINITY))
         };
         // Counted locally and reported once per packet: a shared counter per node costs measurably.
         let mut boxes = self.push_children(&self.nodes[0], &rays, limit(live, best), &mut stack);
@@ -176,7 +173,7 @@ impl Bvh {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                spheres_intersect_k(s, first..first + usize::from(e.count), ray, t_max, lanes, skip, best);
+                q.intersect(first..first + usize::from(e.count), lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
                 boxes += self.push_children(n, &rays, limit(lanes, best), &mut stack);
@@ -189,17 +186,14 @@ impl Bvh {
     /// live lane is.
     pub(super) fn occluded_packet<F: Lanes>(
         &self,
-        s: &Spheres,
-        ray: &Ray<F>,
-        t_max: F,
+        q: &SphereQuery<F>,
         live: F::Mask,
-        skip: F::Ids,
         blocker: &mut u32,
     ) -> F::Mask {
-        let rays = SlabRays::new(ray, live, self.interval_culling);
+        let rays = SlabRays::new(&q.ray, live, self.interval_culling);
         let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
-        let limit = |lanes: F::Mask| F::select(lanes, t_max, F::splat_f32(f32::NEG_INFINITY));
+        let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
         let mut boxes = self.push_children(&self.nodes[0], &rays, limit(live), &mut stack);
         let mut prims = 0;
         while let Some(e) = stack.pop() {
@@ -210,16 +204,7 @@ impl Bvh {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                blocked = blocked
-                    | spheres_occluded_k(
-                        s,
-                        first..first + usize::from(e.count),
-                        ray,
-                        t_max,
-                        lanes,
-                        skip,
-                        blocker,
-                    );
+                blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
                 if (blocked | !live).all() {
                     break;
                 }

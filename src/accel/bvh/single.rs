@@ -5,12 +5,12 @@
 
 use wide::f32x4;
 
-use super::super::brute::{spheres_intersect_k, spheres_occluded_k};
-use super::super::{count_work, Spheres};
+use super::super::brute::SphereQuery;
+use super::super::count_work;
 use super::packet::{inverse, WIDEN};
 use super::{far_to_near, Bvh, Node, Stack, N};
 use crate::geometry::{HitPacket, Ray};
-use crate::math::{Real, V3};
+use crate::math::Real;
 use crate::simd::{IdLanes, Lanes};
 
 /// Packets with at most this many live lanes are traced one ray at a time (measured: PERF.md, "Single-ray
@@ -77,10 +77,10 @@ impl Bvh {
     }
 
     /// The closest hit of one ray, merged into `best`.
-    fn intersect_1(&self, s: &Spheres, ray: &Ray<f32>, t_max: f32, skip: u32, best: &mut HitPacket<f32>) {
-        let slab = SlabRay::new(ray);
+    fn intersect_1(&self, q: &SphereQuery<f32>, best: &mut HitPacket<f32>) {
+        let slab = SlabRay::new(&q.ray);
         let mut stack = Stack::<Entry>::new();
-        self.push_near_last(&self.nodes[0], &slab, best.t.min(t_max), &mut stack);
+        self.push_near_last(&self.nodes[0], &slab, best.t.min(q.t_max), &mut stack);
         let (mut nodes, mut prims) = (1, 0);
         while let Some(e) = stack.pop() {
             if e.near > best.t {
@@ -89,33 +89,32 @@ impl Bvh {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                spheres_intersect_k(s, first..first + usize::from(e.count), ray, t_max, true, skip, best);
+                q.intersect(first..first + usize::from(e.count), true, best);
             } else {
                 nodes += 1;
-                self.push_near_last(&self.nodes[e.child as usize], &slab, best.t.min(t_max), &mut stack);
+                self.push_near_last(&self.nodes[e.child as usize], &slab, best.t.min(q.t_max), &mut stack);
             }
         }
         count_work(prims, N * nodes);
     }
 
-    /// Whether one ray is blocked within `t_max`; stops at the first blocker found.
-    fn occluded_1(&self, s: &Spheres, ray: &Ray<f32>, t_max: f32, skip: u32, blocker: &mut u32) -> bool {
-        let slab = SlabRay::new(ray);
+    /// Whether one ray is blocked within `t_max`; stops at the first blocker found, left in `blocker`.
+    fn occluded_1(&self, q: &SphereQuery<f32>, blocker: &mut u32) -> bool {
+        let slab = SlabRay::new(&q.ray);
         let mut stack = Stack::<Entry>::new();
-        self.push_near_last(&self.nodes[0], &slab, t_max, &mut stack);
+        self.push_near_last(&self.nodes[0], &slab, q.t_max, &mut stack);
         let (mut nodes, mut prims, mut blocked) = (1, 0, false);
         while let Some(e) = stack.pop() {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                if spheres_occluded_k(s, first..first + usize::from(e.count), ray, t_max, true, skip, blocker)
-                {
+                if q.occluded(first..first + usize::from(e.count), true, blocker) {
                     blocked = true;
                     break;
                 }
             } else {
                 nodes += 1;
-                self.push_near_last(&self.nodes[e.child as usize], &slab, t_max, &mut stack);
+                self.push_near_last(&self.nodes[e.child as usize], &slab, q.t_max, &mut stack);
             }
         }
         count_work(prims, N * nodes);
@@ -124,22 +123,14 @@ impl Bvh {
 
     /// Closest hits of the spheres for the live lanes, merged into `best`: packet traversal, or one ray at a
     /// time when at most [`SINGLE_RAY_MAX_LANES`] lanes are live.
-    pub fn intersect_k<F: Lanes>(
-        &self,
-        s: &Spheres,
-        ray: &Ray<F>,
-        t_max: F,
-        live: F::Mask,
-        skip: F::Ids,
-        best: &mut HitPacket<F>,
-    ) {
+    pub fn intersect_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, best: &mut HitPacket<F>) {
         let bits = F::move_mask(live);
         if F::K > 1 && bits.count_ones() > SINGLE_RAY_MAX_LANES {
-            return self.intersect_packet(s, ray, t_max, live, skip, best);
+            return self.intersect_packet(q, live, best);
         }
         for i in (0..F::K).filter(|i| bits >> i & 1 == 1) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
-            self.intersect_1(s, &lane_ray(ray, i), t_max.lane(i), skip.lane(i), &mut hit);
+            self.intersect_1(&q.lane(i), &mut hit);
             let at = F::mask_from_bits(1 << i);
             best.t = F::select(at, F::splat_f32(hit.t), best.t);
             best.prim = F::select_ids(at, F::Ids::splat(hit.prim), best.prim);
@@ -149,29 +140,15 @@ impl Bvh {
 
     /// Lanes of `live` blocked by a sphere within their `t_max`: packet traversal, or one ray at a time when
     /// at most [`SINGLE_RAY_MAX_LANES`] lanes are live. `blocker` is set to a sphere that blocked a lane.
-    pub fn occluded_k<F: Lanes>(
-        &self,
-        s: &Spheres,
-        ray: &Ray<F>,
-        t_max: F,
-        live: F::Mask,
-        skip: F::Ids,
-        blocker: &mut u32,
-    ) -> F::Mask {
+    pub fn occluded_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, blocker: &mut u32) -> F::Mask {
         let bits = F::move_mask(live);
         if F::K > 1 && bits.count_ones() > SINGLE_RAY_MAX_LANES {
-            return self.occluded_packet(s, ray, t_max, live, skip, blocker);
+            return self.occluded_packet(q, live, blocker);
         }
         let blocked = (0..F::K)
             .filter(|i| bits >> i & 1 == 1)
-            .filter(|&i| self.occluded_1(s, &lane_ray(ray, i), t_max.lane(i), skip.lane(i), blocker))
+            .filter(|&i| self.occluded_1(&q.lane(i), blocker))
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
-}
-
-/// Lane `i` of a ray packet.
-fn lane_ray<F: Lanes>(ray: &Ray<F>, i: usize) -> Ray<f32> {
-    let v = |p: V3<F>| V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
-    Ray::new(v(ray.origin), v(ray.dir))
 }
