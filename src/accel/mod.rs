@@ -6,6 +6,8 @@
 mod brute;
 pub use brute::SphereQuery;
 pub mod bvh;
+mod polygons;
+pub use polygons::Polygons;
 
 use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, NO_PRIM};
 use crate::math::{Mask, Vec3f, V3};
@@ -116,100 +118,6 @@ impl Spheres {
         self.r.push(radius);
         self.material.push(material);
     }
-}
-
-/// Planar polygons, stored as triangles that carry their polygon's index: one primitive id per polygon.
-#[derive(Clone, Debug, Default)]
-pub struct Polygons {
-    /// Per triangle: first vertex.
-    pub v0: Vec<Vec3f>,
-    /// Per triangle: second vertex minus the first.
-    pub e1: Vec<Vec3f>,
-    /// Per triangle: third vertex minus the first.
-    pub e2: Vec<Vec3f>,
-    /// Per triangle: the polygon it belongs to (`0..len()`).
-    pub polygon: Vec<u32>,
-    /// Per triangle: unit vertex normals to interpolate (NFF `pp`), or `None` for flat polygons.
-    pub vertex_normals: Vec<Option<[Vec3f; 3]>>,
-    /// Per polygon: its triangles are `first[k]..first[k + 1]` (one more entry than polygons).
-    pub first: Vec<u32>,
-    /// Per polygon: unit geometric normal (right-hand rule over the vertex order).
-    pub normal: Vec<Vec3f>,
-    /// Per polygon: material index.
-    pub material: Vec<u32>,
-}
-
-impl Polygons {
-    /// Number of polygons.
-    pub fn len(&self) -> usize {
-        self.normal.len()
-    }
-    /// True when there are none.
-    pub fn is_empty(&self) -> bool {
-        self.normal.is_empty()
-    }
-    /// Number of triangles.
-    pub fn triangles(&self) -> usize {
-        self.v0.len()
-    }
-    /// Appends a polygon given as triangles `[a, b, c]` over `vertices`, with optional per-vertex normals.
-    pub fn push(
-        &mut self,
-        vertices: &[Vec3f],
-        normals: Option<&[Vec3f]>,
-        triangles: &[[u32; 3]],
-        normal: Vec3f,
-        material: u32,
-    ) {
-        if self.first.is_empty() {
-            self.first.push(0);
-        }
-        let k = self.len() as u32;
-        for t in triangles {
-            let [a, b, c] = t.map(|i| i as usize);
-            self.v0.push(vertices[a]);
-            self.e1.push(vertices[b] - vertices[a]);
-            self.e2.push(vertices[c] - vertices[a]);
-            self.polygon.push(k);
-            self.vertex_normals.push(normals.map(|n| [n[a], n[b], n[c]]));
-        }
-        self.first.push(self.v0.len() as u32);
-        self.normal.push(normal);
-        self.material.push(material);
-    }
-
-    /// The shading normal of polygon `k` at `point`: interpolated over the triangle that contains the point
-    /// (the one whose smallest barycentric is largest, robust to rounding at shared edges), else geometric.
-    fn shading_normal(&self, k: usize, point: Vec3f) -> Vec3f {
-        let (lo, hi) = (self.first[k] as usize, self.first[k + 1] as usize);
-        let best = (lo..hi)
-            .filter_map(|j| {
-                self.vertex_normals[j].map(|n| (barycentric(self.v0[j], self.e1[j], self.e2[j], point), n))
-            })
-            .max_by(|(a, _), (b, _)| min3(*a).total_cmp(&min3(*b)));
-        let Some(([b0, b1, b2], [n0, n1, n2])) = best else { return self.normal[k] };
-        let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize();
-        if n.x.is_finite() && n.y.is_finite() && n.z.is_finite() {
-            n
-        } else {
-            self.normal[k]
-        }
-    }
-}
-
-fn min3(b: [f32; 3]) -> f32 {
-    b[0].min(b[1]).min(b[2])
-}
-
-/// Barycentric coordinates of `p` (assumed in the plane) in the triangle `(v0, v0 + e1, v0 + e2)`.
-fn barycentric(v0: Vec3f, e1: Vec3f, e2: Vec3f, p: Vec3f) -> [f32; 3] {
-    let w = p - v0;
-    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d20, d21) = (w.dot(e1), w.dot(e2));
-    let denom = d00 * d11 - d01 * d01;
-    let b1 = (d11 * d20 - d01 * d21) / denom;
-    let b2 = (d00 * d21 - d01 * d20) / denom;
-    [1.0 - b1 - b2, b1, b2]
 }
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons.
