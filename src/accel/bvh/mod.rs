@@ -23,6 +23,8 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::BvhBuildParams;
 
 use super::Spheres;
+use crate::math::V3;
+use crate::simd::Lanes;
 
 pub use single::SINGLE_RAY_MAX_LANES;
 
@@ -47,6 +49,8 @@ pub struct Node {
     /// Occupied slots (2 to N, 1 only for a root that is a leaf).
     pub slots: u8,
 }
+
+const _: () = assert!(size_of::<Node>() == 128, "a node is two cache lines");
 
 /// A child slot's box and content, while flattening.
 #[derive(Clone, Copy)]
@@ -88,18 +92,14 @@ impl Node {
 /// order a ray in that octant meets well-separated boxes. Packed 2 bits per slot, nearest first.
 fn front_to_back(children: &[ChildRef], octant: usize) -> u8 {
     let sign = |a: usize| if octant >> a & 1 == 1 { -1.0 } else { 1.0 };
-    let key = |c: usize| (0..3).map(|a| sign(a) * (children[c].lo[a] + children[c].hi[a])).sum::<f32>();
-    let mut slots = [0, 1, 2, 3];
-    let slots = &mut slots[..children.len()];
-    // Insertion sort: at most four slots, and no allocation per node (the collapse makes one per node).
-    for i in 1..slots.len() {
-        let mut j = i;
-        while j > 0 && key(slots[j - 1]) > key(slots[j]) {
-            slots.swap(j - 1, j);
-            j -= 1;
-        }
+    let key = |c: &ChildRef| (0..3).map(|a| sign(a) * (c.lo[a] + c.hi[a])).sum::<f32>();
+    // Farthest first by the negated key is nearest first by the key (negation is exact).
+    let mut order = [(0.0, 0); N];
+    for (slot, c) in children.iter().enumerate() {
+        order[slot] = (-key(c), slot);
     }
-    slots.iter().enumerate().fold(0, |bits, (k, &slot)| bits | (slot as u8) << (2 * k))
+    far_to_near(&mut order[..children.len()]);
+    order[..children.len()].iter().enumerate().fold(0, |bits, (k, &(_, slot))| bits | (slot as u8) << (2 * k))
 }
 
 /// The BVH: `nodes[0]` is the root.
@@ -189,6 +189,36 @@ fn flatten(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> u32 {
     me as u32
 }
 
+/// Exit distances are widened by this factor (2γ₃ rounded up) so rounding never culls a box a ray enters.
+const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+/// `1/d` with a zero component replaced by ±1e-30 first, so no slab product is 0·inf = NaN.
+#[inline(always)]
+fn inverse<F: Lanes>(d: F) -> F {
+    let tiny = F::splat_f32(1e-30);
+    let away = F::select(d.lt(F::splat_f32(0.0)), -tiny, tiny);
+    F::splat_f32(1.0) / F::select(d.abs().lt(tiny), away, d)
+}
+
+/// The slab test both traversals run, in either layout: lanes = rays (one box, corners splatted; packet
+/// traversal) or lanes = boxes (one ray, origin and `1/d` splatted; single-ray traversal). Returns each
+/// lane's entry distance, `inf` where it misses the box or enters beyond `limit`.
+#[inline(always)]
+fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], origin: &V3<F>, inv_dir: &V3<F>, limit: F) -> F {
+    let slab = |lo: F, hi: F, o: F, inv: F| {
+        let (t0, t1) = ((lo - o) * inv, (hi - o) * inv);
+        (t0.fast_min(t1), t0.fast_max(t1))
+    };
+    let (nx, fx) = slab(lo[0], hi[0], origin.x, inv_dir.x);
+    let (ny, fy) = slab(lo[1], hi[1], origin.y, inv_dir.y);
+    let (nz, fz) = slab(lo[2], hi[2], origin.z, inv_dir.z);
+    // Balanced trees keep the dependency chain short; entering before the exit and before the limit is one
+    // comparison against the smaller of the two.
+    let near = nx.fast_max(ny).fast_max(nz.fast_max(F::splat_f32(0.0)));
+    let far = (fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN)).fast_min(limit);
+    F::select(near.le(far), near, F::splat_f32(f32::INFINITY))
+}
+
 /// Deep enough for any tree obvhs builds over 2^32 primitives with its leaf collapsing (a 4-wide node pushes
 /// up to 3 entries per level); checked on push.
 const STACK: usize = 256;
@@ -221,8 +251,6 @@ impl<E: Copy> Stack<E> {
         Some(unsafe { self.items[self.len].assume_init() })
     }
 }
-
-const _: () = assert!(size_of::<Node>() == 128);
 
 /// Sorts up to N (key, slot) pairs so that the largest key comes first: pushed in this order, the nearest
 /// child is popped first.

@@ -12,21 +12,10 @@ use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{Bvh, Node, Stack};
+use super::{inverse, slab_entry, Bvh, Node, Stack, N, WIDEN};
 use crate::geometry::{HitPacket, Ray};
 use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
-
-/// Exit distances are widened by this factor (2γ₃ rounded up) so rounding never culls a box a ray enters.
-pub(super) const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
-
-/// `1/d` with a zero component replaced by ±1e-30 first, so no slab product is 0·inf = NaN.
-#[inline(always)]
-pub(super) fn inverse<F: Lanes>(d: F) -> F {
-    let tiny = F::splat_f32(1e-30);
-    let away = F::select(d.lt(F::splat_f32(0.0)), -tiny, tiny);
-    F::splat_f32(1.0) / F::select(d.abs().lt(tiny), away, d)
-}
 
 /// A ray packet prepared for slab tests.
 struct SlabRays<F: Lanes> {
@@ -52,19 +41,8 @@ impl<F: Lanes> SlabRays<F> {
     /// `limit`.
     #[inline(always)]
     fn enter(&self, n: &Node, c: usize, limit: F) -> F {
-        let slab = |lo: f32, hi: f32, o: F, inv: F| {
-            let t0 = (F::splat_f32(lo) - o) * inv;
-            let t1 = (F::splat_f32(hi) - o) * inv;
-            (t0.fast_min(t1), t0.fast_max(t1))
-        };
-        let (nx, fx) = slab(n.lo[0][c], n.hi[0][c], self.origin.x, self.inv_dir.x);
-        let (ny, fy) = slab(n.lo[1][c], n.hi[1][c], self.origin.y, self.inv_dir.y);
-        let (nz, fz) = slab(n.lo[2][c], n.hi[2][c], self.origin.z, self.inv_dir.z);
-        // Balanced trees keep the dependency chain short; entering before the exit and before the limit is
-        // one comparison against the smaller of the two.
-        let near = nx.fast_max(ny).fast_max(nz.fast_max(F::splat_f32(0.0)));
-        let far = (fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN)).fast_min(limit);
-        F::select(near.le(far), near, F::splat_f32(f32::INFINITY))
+        let corner = |v: &[[f32; N]; 3]| [0, 1, 2].map(|a| F::splat_f32(v[a][c]));
+        slab_entry(corner(&n.lo), corner(&n.hi), &self.origin, &self.inv_dir, limit)
     }
 }
 

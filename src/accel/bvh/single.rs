@@ -7,10 +7,9 @@ use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::packet::{inverse, WIDEN};
-use super::{far_to_near, Bvh, Node, Stack, N};
+use super::{far_to_near, inverse, slab_entry, Bvh, Node, Stack, N};
 use crate::geometry::{HitPacket, Ray};
-use crate::math::Real;
+use crate::math::V3;
 use crate::simd::{IdLanes, Lanes};
 
 /// Packets with at most this many live lanes are traced one ray at a time (measured: PERF.md, "Single-ray
@@ -27,16 +26,16 @@ struct Entry {
 
 /// One ray prepared for slab tests against four boxes at once.
 struct SlabRay {
-    origin: [f32x4; 3],
-    inv_dir: [f32x4; 3],
+    origin: V3<f32x4>,
+    inv_dir: V3<f32x4>,
 }
 
 impl SlabRay {
     fn new(ray: &Ray<f32>) -> Self {
         let (o, d) = (ray.origin, ray.dir);
         Self {
-            origin: [o.x, o.y, o.z].map(f32x4::splat),
-            inv_dir: [inverse(d.x), inverse(d.y), inverse(d.z)].map(f32x4::splat),
+            origin: V3::new(o.x, o.y, o.z).map(f32x4::splat),
+            inv_dir: V3::new(inverse(d.x), inverse(d.y), inverse(d.z)).map(f32x4::splat),
         }
     }
 
@@ -44,16 +43,9 @@ impl SlabRay {
     /// `limit`: the packet traversal's slab test, one child per lane.
     #[inline(always)]
     fn enter(&self, n: &Node, limit: f32) -> [f32; N] {
-        let mut near = f32x4::splat(0.0);
-        let mut far = f32x4::splat(f32::INFINITY);
-        for a in 0..3 {
-            let t0 = (f32x4::from(n.lo[a]) - self.origin[a]) * self.inv_dir[a];
-            let t1 = (f32x4::from(n.hi[a]) - self.origin[a]) * self.inv_dir[a];
-            near = near.fast_max(t0.fast_min(t1));
-            far = far.fast_min(t0.fast_max(t1));
-        }
-        let inside = near.le(far * f32x4::splat(WIDEN)) & near.le(f32x4::splat(limit));
-        <f32x4 as Real>::select(inside, near, f32x4::splat(f32::INFINITY)).to_array()
+        let corners = |v: &[[f32; N]; 3]| v.map(f32x4::from);
+        slab_entry(corners(&n.lo), corners(&n.hi), &self.origin, &self.inv_dir, f32x4::splat(limit))
+            .to_array()
     }
 }
 
