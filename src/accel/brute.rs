@@ -82,12 +82,14 @@ impl<F: Lanes> SphereQuery<'_, F> {
 }
 
 impl Geometry {
-    /// Closest hits of the non-sphere primitives (shapes, polygons), lanes = rays.
-    pub(super) fn others_intersect_k<F: Lanes>(
+    /// Calls `f(hit, t, id)` for each non-sphere primitive (shapes, then polygons' triangles) with the lanes of
+    /// `live` it is hit in within `t_max`, the departure primitive `skip` excluded.
+    fn others_each<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
+        live: F::Mask,
         skip: F::Ids,
-        best: &mut HitPacket<F>,
+        mut f: impl FnMut(F::Mask, F, F::Ids),
     ) {
         super::count_work(self.shapes.len() + self.polygons.triangles(), 0);
         let ray = rays.ray();
@@ -95,7 +97,7 @@ impl Geometry {
         for (k, shape) in self.shapes.iter().enumerate() {
             let id = F::Ids::splat(base + k as u32);
             let (hit, t) = shape.to_lanes::<F>().intersect(&ray, rays.t_max);
-            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id, id);
+            f(live & hit & !F::ids_eq(id, skip), t, id);
         }
         let p = &self.polygons;
         let base = self.polygon_base() as u32;
@@ -103,8 +105,18 @@ impl Geometry {
             let id = F::Ids::splat(base + p.polygon[j]);
             let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
             let (hit, t) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
-            best.update(rays.active & hit & !F::ids_eq(id, skip), t, id, id);
+            f(live & hit & !F::ids_eq(id, skip), t, id);
         }
+    }
+
+    /// Closest hits of the non-sphere primitives, merged into `best` (their ids are their file ids).
+    pub(super) fn others_intersect_k<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        skip: F::Ids,
+        best: &mut HitPacket<F>,
+    ) {
+        self.others_each(rays, rays.active, skip, |hit, t, id| best.update(hit, t, id, id));
     }
 
     /// Lanes of `live` blocked by a non-sphere primitive.
@@ -114,23 +126,8 @@ impl Geometry {
         live: F::Mask,
         skip: F::Ids,
     ) -> F::Mask {
-        super::count_work(self.shapes.len() + self.polygons.triangles(), 0);
-        let ray = rays.ray();
         let mut blocked = F::mask_from_bits(0);
-        let base = self.spheres.len() as u32;
-        for (k, shape) in self.shapes.iter().enumerate() {
-            let id = F::Ids::splat(base + k as u32);
-            let (hit, _) = shape.to_lanes::<F>().intersect(&ray, rays.t_max);
-            blocked = blocked | (live & hit & !F::ids_eq(id, skip));
-        }
-        let p = &self.polygons;
-        let base = self.polygon_base() as u32;
-        for j in 0..p.triangles() {
-            let id = F::Ids::splat(base + p.polygon[j]);
-            let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
-            let (hit, _) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
-            blocked = blocked | (live & hit & !F::ids_eq(id, skip));
-        }
+        self.others_each(rays, live, skip, |hit, _, _| blocked = blocked | hit);
         blocked
     }
 

@@ -169,10 +169,10 @@ impl Geometry {
         let q = self.sphere_query(rays, from);
         match &self.bvh {
             Some(bvh) => bvh.intersect_k(&q, rays.active, &mut best),
-            None => q.intersect(0..self.spheres.len(), rays.active, &mut best),
-        }
-        if self.bvh.is_none() {
-            count_work(self.spheres.len(), 0);
+            None => {
+                count_work(self.spheres.len(), 0);
+                q.intersect(0..self.spheres.len(), rays.active, &mut best);
+            }
         }
         self.others_intersect_k(rays, from.prim, &mut best);
         let (exits, t) = self.departure_exits_k(rays, from);
@@ -183,7 +183,7 @@ impl Geometry {
     /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side
     /// excluded); inactive lanes are false.
     pub fn occluded_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> F::Mask {
-        let mut hint = crate::geometry::NO_PRIM;
+        let mut hint = NO_PRIM;
         self.occluded_hinted_k(rays, from, &mut hint)
     }
 
@@ -246,18 +246,12 @@ impl Geometry {
         self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
     }
 
-    /// The scene-file ids of the lanes' primitives in `lanes` (the others: [`crate::geometry::NO_PRIM`]).
+    /// The scene-file ids of the lanes' primitives in `lanes` (the others: [`NO_PRIM`]).
     fn keys_k<F: Lanes>(&self, prims: F::Ids, lanes: F::Mask) -> F::Ids {
         if !lanes.any() {
-            return F::Ids::splat(crate::geometry::NO_PRIM);
+            return F::Ids::splat(NO_PRIM);
         }
-        F::Ids::from_fn(|i| {
-            if F::mask_lane(lanes, i) {
-                self.file_id(prims.lane(i))
-            } else {
-                crate::geometry::NO_PRIM
-            }
-        })
+        F::Ids::from_fn(|i| if F::mask_lane(lanes, i) { self.file_id(prims.lane(i)) } else { NO_PRIM })
     }
 
     /// The scene-file id of primitive `prim` (spheres are stored in BVH order; other ids are unchanged).
