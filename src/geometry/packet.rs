@@ -8,7 +8,7 @@
 //!   SoA arrays, then a reduction over the lanes.
 //!
 //! Both keep the scalar tie rule: a sphere replaces the best hit only when its t is strictly smaller, so of
-//! equal t the lower id wins (these two assume storage order is file order: no BVH).
+//! equal t the lower id wins. They take storage order for file order (no BVH), so a hit's key is its id.
 
 use crate::accel::Spheres;
 use crate::math::{Mask, V3};
@@ -145,8 +145,8 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
         // `t < best.t` inside the kernel is the strict comparison that lets the lower id keep a tie.
         let hit = hit & packet.active;
         best.t = F::select(hit, t, best.t);
-        best.prim = F::select_ids(hit, F::Ids::splat(i as u32), best.prim);
-        best.key = F::select_ids(hit, F::Ids::splat(spheres.key[i]), best.key);
+        let id = F::Ids::splat(i as u32);
+        (best.prim, best.key) = (F::select_ids(hit, id, best.prim), F::select_ids(hit, id, best.key));
         found = found | hit;
     }
     // Misses report `inf`, not `t_max`, as the scalar query does.
@@ -186,9 +186,8 @@ fn sphere_chunk<F: Lanes>(
     let (hit, t) = intersect_sphere(centre, F::load_partial(&s.r, at, 0.0), ray, best.t);
     let hit = valid.map_or(hit, |v| hit & v);
     best.t = F::select(hit, t, best.t);
-    best.prim = F::select_ids(hit, F::Ids::splat(at as u32) + F::lane_ids(), best.prim);
-    best.key =
-        F::select_ids(hit, F::Ids::from_fn(|i| s.key.get(at + i).copied().unwrap_or(NO_PRIM)), best.key);
+    let id = F::Ids::splat(at as u32) + F::lane_ids();
+    (best.prim, best.key) = (F::select_ids(hit, id, best.prim), F::select_ids(hit, id, best.key));
 }
 
 /// The smallest t over the lanes, of equal t the lowest id: lane `l` saw spheres `l, l + K, …` in order, so
