@@ -92,6 +92,11 @@ impl Spheres {
     pub fn is_empty(&self) -> bool {
         self.r.is_empty()
     }
+    /// Bytes of the arrays' contents.
+    pub fn bytes(&self) -> usize {
+        let floats = [&self.cx, &self.cy, &self.cz, &self.r].map(Vec::len).iter().sum::<usize>();
+        floats * size_of::<f32>() + (self.material.len() + self.key.len()) * size_of::<u32>()
+    }
     /// Centre of sphere `i`.
     #[inline(always)]
     pub fn center(&self, i: usize) -> Vec3f {

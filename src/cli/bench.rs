@@ -93,7 +93,6 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;
     let mut out = std::io::stdout().lock();
-    let bytes = g.spheres.len() * 20 + scene.build.node_bytes;
     if !args.json {
         writeln!(
             out,
@@ -105,7 +104,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
             scene.camera.width,
             scene.camera.height,
             scene.build.seconds,
-            bytes as f64 / g.spheres.len().max(1) as f64,
+            scene.bytes_per_sphere(),
             if args.primary_only { "primary rays only" } else { "full Whitted render" }
         )?;
         writeln!(out, "lanes threads        rays   median s    Mrays/s  vs 1 lane  checksum")?;

@@ -170,12 +170,11 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
     );
     println!("image: {}x{}, {:?}", scene.camera.width, scene.camera.height, scene.render.pattern);
     println!("features: {}", crate::scene::features::Features::of(scene));
-    let bytes = g.spheres.len() * 20 + scene.build.node_bytes;
     println!(
         "accel: {}, build {:.3} s, {:.1} bytes/sphere (spheres + BVH nodes)",
         if g.bvh.is_some() { "BVH" } else { "brute force" },
         scene.build.seconds,
-        bytes as f64 / g.spheres.len().max(1) as f64
+        scene.bytes_per_sphere()
     );
     let c = r.counts;
     println!(

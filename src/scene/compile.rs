@@ -96,6 +96,12 @@ fn reach(desc: &SceneDesc) -> f32 {
 }
 
 impl Scene {
+    /// Memory per sphere of the spheres' arrays and the BVH nodes (what `--stats` and `bench` report).
+    pub fn bytes_per_sphere(&self) -> f64 {
+        let s = &self.geometry.spheres;
+        (s.bytes() + self.build.node_bytes) as f64 / s.len().max(1) as f64
+    }
+
     /// Compiles a description. Fails only on a camera that cannot form an image; everything else was
     /// validated by the reader.
     pub fn compile(desc: &SceneDesc) -> Result<Scene, CameraError> {
