@@ -84,8 +84,8 @@ pub fn render_aovs(
             })
             .collect()
     });
-    let id =
-        hits.prim.iter().map(|&p| if p == NO_PRIM { NO_PRIM } else { scene.geometry.file_id(p) }).collect();
+    // `file_id` leaves NO_PRIM (no primitive) as it is.
+    let id = hits.prim.iter().map(|&p| scene.geometry.file_id(p)).collect();
     Ok(AovImage { width: hits.width, height: hits.height, depth: hits.t, normal, id })
 }
 

@@ -321,9 +321,9 @@ pub fn primary_hits<F: Lanes>(
     let band = width as usize * TILE as usize;
     thread_pool(threads)?.install(|| {
         let bands = hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate();
-        bands.for_each(|(b, (t, prim))| {
+        bands.for_each(|(band, (t, prim))| {
             let camera = scene.camera.to_lanes::<F>();
-            let y0 = b as u32 * TILE;
+            let y0 = band as u32 * TILE;
             for tile in tiles(width, TILE.min(height - y0)) {
                 let tile = Tile { y0, ..tile };
                 for_each_packet(&camera, tile, (0.5, 0.5), |rays, b| {
