@@ -60,6 +60,9 @@ pub trait Real:
     fn fast_max(self, other: Self) -> Self;
     /// `|self|`, exactly (sign bit cleared).
     fn abs(self) -> Self;
+    /// `self · m + a` rounded once (fused multiply-add) in every instance, so a kernel that uses it gives
+    /// the same bits at every width.
+    fn mul_add(self, m: Self, a: Self) -> Self;
 
     /// `self > other`.
     #[inline(always)]
@@ -122,6 +125,10 @@ macro_rules! impl_real_scalar {
             #[inline(always)]
             fn abs(self) -> Self {
                 <$t>::abs(self)
+            }
+            #[inline(always)]
+            fn mul_add(self, m: Self, a: Self) -> Self {
+                <$t>::mul_add(self, m, a)
             }
         }
     };

@@ -169,6 +169,17 @@ macro_rules! impl_lanes {
             fn abs(self) -> Self {
                 $f::abs(self)
             }
+            #[inline(always)]
+            fn mul_add(self, m: Self, a: Self) -> Self {
+                // wide falls back to an unfused `a·b + c` without the FMA feature; fuse lane by lane then,
+                // so the result is still the scalar `f32::mul_add`'s.
+                if cfg!(target_feature = "fma") {
+                    $f::mul_add(self, m, a)
+                } else {
+                    let (x, m, a) = (self.to_array(), m.to_array(), a.to_array());
+                    $f::new(std::array::from_fn(|i| x[i].mul_add(m[i], a[i])))
+                }
+            }
         }
 
         impl IdLanes for $u {

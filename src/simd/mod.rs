@@ -9,8 +9,11 @@
 //!
 //! - `+ − × ÷` are `addps/subps/mulps/divps` (and the `v…256/512` forms); `sqrt` is `sqrtps`. All are IEEE
 //!   correctly rounded, exactly like the scalar `addss/…/sqrtss` the `f32` instance compiles to. Nothing here
-//!   calls `recip`, `recip_sqrt` (approximate `rcpps`/`rsqrtps`) or `mul_add` (FMA), and LLVM does not fuse
-//!   separate `fmul`/`fadd` without fast-math flags, so `a*b + c` rounds twice at every width.
+//!   calls `recip` or `recip_sqrt` (approximate `rcpps`/`rsqrtps`), and LLVM does not fuse separate
+//!   `fmul`/`fadd` without fast-math flags, so `a*b + c` rounds twice at every width.
+//! - Fused multiply-add is used only where asked for, through [`Real::mul_add`]: `vfmadd…ps` in the lane
+//!   types and `f32::mul_add` (`vfmadd…ss`, or libm's correctly rounded `fmaf` without the FMA feature) in
+//!   the scalar one — one rounding in both. (The BVH slab test uses it; the sphere kernels do not.)
 //! - Negation XORs the sign bit, as scalar negation does.
 //! - `simd_lt`/`simd_le` use the *ordered* predicates (`cmpltps`, `_CMP_LT_OQ`, `_CMP_LE_OQ`): a NaN operand
 //!   gives false, like scalar `<`/`<=`. The results are all-ones/all-zeros lanes (AVX-512 compares into a
@@ -25,7 +28,8 @@
 //!   NaN (`minps` semantics) — neither matches Rust's scalar `f32::min`/`max`, which ignore a NaN operand.
 //!   [`Real::min_of`]/[`Real::max_of`] are defined through `lt` + `select`, which every instance evaluates
 //!   identically.
-//! - `recip`, `recip_sqrt` (≈12-bit approximations), `mul_add`/`mul_sub` (fused, one rounding), `reduce_add`
+//! - `recip`, `recip_sqrt` (≈12-bit approximations), wide's own `mul_add`/`mul_sub` (unfused without the
+//!   FMA feature; [`Real::mul_add`] guards that), `reduce_add`
 //!   (tree order, not left to right), and the polynomial `exp`/`ln`/`sin_cos`/`powf` (not correctly rounded,
 //!   and different from libm).
 //! - NaN *payloads*: IEEE and LLVM leave which NaN an operation returns unspecified (x86 returns the first

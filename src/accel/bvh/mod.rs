@@ -35,10 +35,9 @@ pub const N: usize = 4;
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
 pub struct Node {
-    /// Lower corner per axis (x, y, z), per child.
-    pub lo: [[f32; N]; 3],
-    /// Upper corner per axis, per child.
-    pub hi: [[f32; N]; 3],
+    /// `bounds[0]` the lower corner, `bounds[1]` the upper, per axis (x, y, z), per child: indexed by side
+    /// so a ray picks its near and far planes by the signs of its direction.
+    pub bounds: [[[f32; N]; 3]; 2],
     /// Inner child: index of its node; leaf child: index of its first sphere.
     pub child: [u32; N],
     /// Number of spheres of a leaf child (M ≤ obvhs's leaf size, at most 255); 0 for an inner child.
@@ -70,13 +69,26 @@ impl Node {
         assert!(children.len() <= N);
         let c = |i: usize| children.get(i).copied().unwrap_or(EMPTY);
         Node {
-            lo: std::array::from_fn(|a| std::array::from_fn(|i| c(i).lo[a])),
-            hi: std::array::from_fn(|a| std::array::from_fn(|i| c(i).hi[a])),
+            bounds: [
+                std::array::from_fn(|a| std::array::from_fn(|i| c(i).lo[a])),
+                std::array::from_fn(|a| std::array::from_fn(|i| c(i).hi[a])),
+            ],
             child: std::array::from_fn(|i| c(i).child),
             count: std::array::from_fn(|i| c(i).count),
             order: std::array::from_fn(|octant| front_to_back(children, octant)),
             slots: children.len() as u8,
         }
+    }
+
+    /// Lower corners per axis, per child.
+    #[inline(always)]
+    pub fn lo(&self) -> &[[f32; N]; 3] {
+        &self.bounds[0]
+    }
+    /// Upper corners per axis, per child.
+    #[inline(always)]
+    pub fn hi(&self) -> &[[f32; N]; 3] {
+        &self.bounds[1]
     }
 
     /// The occupied slots farthest first for rays in `octant` (the order to push them in), from
@@ -123,8 +135,8 @@ pub struct BuildStats {
 
 /// The padding that keeps culling conservative: the sphere kernel may accept a ray passing up to a few ulps
 /// of the ray's distance outside the sphere, and that distance is at most about the scene's extent `reach`
-/// (the largest coordinate magnitude of any sphere, eye or light). 64 ulps of it is ample and far below any
-/// sphere the scene can resolve.
+/// (the largest coordinate magnitude of any sphere, eye or light); the fused slab test may move a box plane
+/// by up to one more ulp of it ([`WIDEN`]). 64 ulps is ample and far below any sphere the scene can resolve.
 pub fn padding(reach: f32) -> f32 {
     reach * (64.0 * f32::EPSILON)
 }
@@ -189,8 +201,14 @@ fn flatten(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> u32 {
     me as u32
 }
 
-/// Exit distances are widened by this factor (2γ₃ rounded up) so rounding never culls a box a ray enters.
-const WIDEN: f32 = 1.0 + 4.0 * f32::EPSILON;
+/// Exit distances are widened by this factor so rounding never culls a box a ray enters. The fused slab
+/// distance `fma(lo, 1/d, −o·(1/d))` (see [`slab_entry`]) is `(lo − o − o·δ)·(1/d)` rounded, |δ| ≤ u = ε/2:
+/// the box plane moved by at most u·|o| and then relative errors (the rounded `1/d` and the final rounding),
+/// at most γ₂ on every distance. Where |o| ≤ 2·reach the move is at most 2u·reach, inside the boxes'
+/// [`padding`]; where |o| > 2·reach every box plane is more than |o|/2 away, so the move is at most a further
+/// relative 2u. Entry and exit each err by at most γ₂ + 2u(1 + γ₂) < 4.01u; widening the exit by 6ε = 12u
+/// (rounded up, and itself rounded) covers both sides.
+const WIDEN: f32 = 1.0 + 6.0 * f32::EPSILON;
 
 /// `1/d` with a zero component replaced by ±1e-30 first, so no slab product is 0·inf = NaN.
 #[inline(always)]
@@ -200,23 +218,66 @@ fn inverse<F: Lanes>(d: F) -> F {
     F::splat_f32(1.0) / F::select(d.abs().lt(tiny), away, d)
 }
 
+/// A ray (or a packet of them) prepared for slab tests: `1/d` and `−o·(1/d)`, so each box plane costs one
+/// fused multiply-add.
+#[derive(Clone, Copy)]
+struct SlabRay<F> {
+    inv_dir: V3<F>,
+    neg_o_inv: V3<F>,
+}
+
+impl<F: Lanes> SlabRay<F> {
+    #[inline(always)]
+    fn new(origin: &V3<F>, dir: &V3<F>) -> Self {
+        let inv_dir = V3::new(inverse(dir.x), inverse(dir.y), inverse(dir.z));
+        let neg = |o: F, inv: F| -(o * inv);
+        Self {
+            inv_dir,
+            neg_o_inv: V3::new(neg(origin.x, inv_dir.x), neg(origin.y, inv_dir.y), neg(origin.z, inv_dir.z)),
+        }
+    }
+}
+
 /// The slab test both traversals run, in either layout: lanes = rays (one box, corners splatted; packet
-/// traversal) or lanes = boxes (one ray, origin and `1/d` splatted; single-ray traversal). Returns each
-/// lane's entry distance, `inf` where it misses the box or enters beyond `limit`.
+/// traversal) or lanes = boxes (one ray splatted; single-ray traversal). Returns each lane's entry distance,
+/// `inf` where it misses the box or enters beyond `limit`. Conservative by [`WIDEN`] and [`padding`].
 #[inline(always)]
-fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], origin: &V3<F>, inv_dir: &V3<F>, limit: F) -> F {
-    let slab = |lo: F, hi: F, o: F, inv: F| {
-        let (t0, t1) = ((lo - o) * inv, (hi - o) * inv);
+fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], ray: &SlabRay<F>, limit: F) -> F {
+    let slab = |lo: F, hi: F, inv: F, neg_o_inv: F| {
+        let (t0, t1) = (lo.mul_add(inv, neg_o_inv), hi.mul_add(inv, neg_o_inv));
         (t0.fast_min(t1), t0.fast_max(t1))
     };
-    let (nx, fx) = slab(lo[0], hi[0], origin.x, inv_dir.x);
-    let (ny, fy) = slab(lo[1], hi[1], origin.y, inv_dir.y);
-    let (nz, fz) = slab(lo[2], hi[2], origin.z, inv_dir.z);
+    let (i, n) = (&ray.inv_dir, &ray.neg_o_inv);
+    let (nx, fx) = slab(lo[0], hi[0], i.x, n.x);
+    let (ny, fy) = slab(lo[1], hi[1], i.y, n.y);
+    let (nz, fz) = slab(lo[2], hi[2], i.z, n.z);
     // Balanced trees keep the dependency chain short; entering before the exit and before the limit is one
     // comparison against the smaller of the two.
     let near = nx.fast_max(ny).fast_max(nz.fast_max(F::splat_f32(0.0)));
     let far = (fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN)).fast_min(limit);
     F::select(near.le(far), near, F::splat_f32(f32::INFINITY))
+}
+
+/// [`slab_entry`] for rays whose direction signs are known: `near[a]` and `far[a]` are the planes a ray
+/// meets first and last on axis a (lower and upper where `1/d` is positive). Fused rounding is monotone, so
+/// where `1/d > 0` the lower plane's distance is never above the upper's: the min and max of [`slab_entry`]
+/// pick exactly these, and both functions return the same bits — this one in 6 fewer operations.
+#[inline(always)]
+fn slab_entry_ordered<F: Lanes>(near: [F; 3], far: [F; 3], ray: &SlabRay<F>, limit: F) -> F {
+    let (i, n) = (&ray.inv_dir, &ray.neg_o_inv);
+    let t = |p: F, inv: F, neg_o_inv: F| p.mul_add(inv, neg_o_inv);
+    let (nx, ny, nz) = (t(near[0], i.x, n.x), t(near[1], i.y, n.y), t(near[2], i.z, n.z));
+    let (fx, fy, fz) = (t(far[0], i.x, n.x), t(far[1], i.y, n.y), t(far[2], i.z, n.z));
+    let near = nx.fast_max(ny).fast_max(nz.fast_max(F::splat_f32(0.0)));
+    let far = (fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN)).fast_min(limit);
+    F::select(near.le(far), near, F::splat_f32(f32::INFINITY))
+}
+
+/// Per axis, the side (0 lower, 1 upper) of the plane a ray with this `1/d` meets first: 1 where `1/d` is
+/// negative. `inverse` never returns ±0, so the sign is the direction's.
+#[inline(always)]
+fn near_side(inv: f32) -> usize {
+    usize::from(inv < 0.0)
 }
 
 /// Deep enough for any tree obvhs builds over 2^32 primitives with its leaf collapsing (a 4-wide node pushes

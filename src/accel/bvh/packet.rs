@@ -12,29 +12,42 @@ use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{inverse, slab_entry, Bvh, Node, Stack, N, WIDEN};
+use super::{slab_entry, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N, WIDEN};
 use crate::geometry::{HitPacket, Ray};
 use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
 
 /// A ray packet prepared for slab tests.
 struct SlabRays<F: Lanes> {
-    origin: V3<F>,
-    inv_dir: V3<F>,
+    slab: SlabRay<F>,
     /// The octant of the first live lane's direction, which orders the children.
     octant: usize,
+    /// Per axis, the side of the near plane ([`super::near_side`]), when every live lane's is the same.
+    near: Option<[usize; 3]>,
     /// The whole-packet bounds, when asked for and the live lanes share an origin.
     interval: Option<Interval>,
 }
 
 impl<F: Lanes> SlabRays<F> {
     fn new(ray: &Ray<F>, live: F::Mask, interval: bool) -> Self {
-        let inv_dir = V3::new(inverse(ray.dir.x), inverse(ray.dir.y), inverse(ray.dir.z));
+        let slab = SlabRay::new(&ray.origin, &ray.dir);
         let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
         let octant = negative(ray.dir.x) | negative(ray.dir.y) << 1 | negative(ray.dir.z) << 2;
-        let interval = if interval { Interval::new(&ray.origin, &inv_dir, live) } else { None };
-        Self { origin: ray.origin, inv_dir, octant, interval }
+        let interval = if interval { Interval::new(&ray.origin, &slab.inv_dir, live) } else { None };
+        let near = Self::shared_near_side(&slab.inv_dir, live);
+        Self { slab, octant, near, interval }
+    }
+
+    /// The near sides of the live lanes, if they agree on every axis.
+    fn shared_near_side(inv: &V3<F>, live: F::Mask) -> Option<[usize; 3]> {
+        let bits = F::move_mask(live);
+        let side = |v: F| match F::move_mask(v.lt(F::splat_f32(0.0)) & live) {
+            0 => Some(0),
+            negative if negative == bits => Some(1),
+            _ => None,
+        };
+        Some([side(inv.x)?, side(inv.y)?, side(inv.z)?])
     }
 
     /// Entry distance of each lane into child `c` of `n`, `inf` where the lane misses it or enters beyond
@@ -42,7 +55,13 @@ impl<F: Lanes> SlabRays<F> {
     #[inline(always)]
     fn enter(&self, n: &Node, c: usize, limit: F) -> F {
         let corner = |v: &[[f32; N]; 3]| [0, 1, 2].map(|a| F::splat_f32(v[a][c]));
-        slab_entry(corner(&n.lo), corner(&n.hi), &self.origin, &self.inv_dir, limit)
+        match self.near {
+            Some(near) => {
+                let plane = |side: [usize; 3]| [0, 1, 2].map(|a| F::splat_f32(n.bounds[side[a]][a][c]));
+                slab_entry_ordered(plane(near), plane(near.map(|s| 1 - s)), &self.slab, limit)
+            }
+            None => slab_entry(corner(n.lo()), corner(n.hi()), &self.slab, limit),
+        }
     }
 }
 
@@ -86,7 +105,7 @@ impl Interval {
         let mut far = f32x4::splat(f32::INFINITY);
         for a in 0..3 {
             let o = f32x4::splat(self.origin[a]);
-            let (lo, hi) = (f32x4::from(n.lo[a]) - o, f32x4::from(n.hi[a]) - o);
+            let (lo, hi) = (f32x4::from(n.lo()[a]) - o, f32x4::from(n.hi()[a]) - o);
             let (i0, i1) = (f32x4::splat(self.inv_lo[a]), f32x4::splat(self.inv_hi[a]));
             let (p0, p1, p2, p3) = (lo * i0, lo * i1, hi * i0, hi * i1);
             near = near.max(p0.min(p1).min(p2.min(p3)));

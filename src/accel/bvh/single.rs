@@ -7,9 +7,8 @@ use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{far_to_near, inverse, slab_entry, Bvh, Node, Stack, N};
+use super::{far_to_near, near_side, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
 use crate::geometry::{HitPacket, Ray};
-use crate::math::V3;
 use crate::simd::{IdLanes, Lanes};
 
 /// Packets with at most this many live lanes are traced one ray at a time (measured: PERF.md, "Single-ray
@@ -24,18 +23,21 @@ struct Entry {
     near: f32,
 }
 
-/// One ray prepared for slab tests against four boxes at once.
-struct SlabRay {
-    origin: V3<f32x4>,
-    inv_dir: V3<f32x4>,
+/// One ray prepared for slab tests against four boxes at once: prepared as a scalar ray (the packet
+/// traversal's lanes get the same values) and splatted.
+struct SlabRay4 {
+    ray: SlabRay<f32x4>,
+    /// Per axis, the side of the near plane ([`near_side`]).
+    near: [usize; 3],
 }
 
-impl SlabRay {
+impl SlabRay4 {
     fn new(ray: &Ray<f32>) -> Self {
-        let (o, d) = (ray.origin, ray.dir);
+        let s = SlabRay::new(&ray.origin, &ray.dir);
+        let inv = s.inv_dir;
         Self {
-            origin: V3::new(o.x, o.y, o.z).map(f32x4::splat),
-            inv_dir: V3::new(inverse(d.x), inverse(d.y), inverse(d.z)).map(f32x4::splat),
+            ray: SlabRay { inv_dir: inv.map(f32x4::splat), neg_o_inv: s.neg_o_inv.map(f32x4::splat) },
+            near: [near_side(inv.x), near_side(inv.y), near_side(inv.z)],
         }
     }
 
@@ -43,16 +45,16 @@ impl SlabRay {
     /// `limit`: the packet traversal's slab test, one child per lane.
     #[inline(always)]
     fn enter(&self, n: &Node, limit: f32) -> [f32; N] {
-        let corners = |v: &[[f32; N]; 3]| v.map(f32x4::from);
-        slab_entry(corners(&n.lo), corners(&n.hi), &self.origin, &self.inv_dir, f32x4::splat(limit))
-            .to_array()
+        let planes = |side: [usize; 3]| [0, 1, 2].map(|a| f32x4::from(n.bounds[side[a]][a]));
+        let far = self.near.map(|s| 1 - s);
+        slab_entry_ordered(planes(self.near), planes(far), &self.ray, f32x4::splat(limit)).to_array()
     }
 }
 
 impl Bvh {
     /// Pushes the children of `n` the ray enters within `limit`, the nearest last.
     #[inline(always)]
-    fn push_near_last(&self, n: &Node, ray: &SlabRay, limit: f32, stack: &mut Stack<Entry>) {
+    fn push_near_last(&self, n: &Node, ray: &SlabRay4, limit: f32, stack: &mut Stack<Entry>) {
         let near = ray.enter(n, limit);
         let mut order = [(0.0, 0); N];
         let mut hits = 0;
@@ -70,7 +72,7 @@ impl Bvh {
 
     /// The closest hit of one ray, merged into `best`.
     fn intersect_1(&self, q: &SphereQuery<f32>, best: &mut HitPacket<f32>) {
-        let slab = SlabRay::new(&q.ray);
+        let slab = SlabRay4::new(&q.ray);
         let mut stack = Stack::<Entry>::new();
         self.push_near_last(&self.nodes[0], &slab, best.t.min(q.t_max), &mut stack);
         let (mut nodes, mut prims) = (1, 0);
@@ -92,7 +94,7 @@ impl Bvh {
 
     /// Whether one ray is blocked within `t_max`; stops at the first blocker found, left in `blocker`.
     fn occluded_1(&self, q: &SphereQuery<f32>, blocker: &mut u32) -> bool {
-        let slab = SlabRay::new(&q.ray);
+        let slab = SlabRay4::new(&q.ray);
         let mut stack = Stack::<Entry>::new();
         self.push_near_last(&self.nodes[0], &slab, q.t_max, &mut stack);
         let (mut nodes, mut prims, mut blocked) = (1, 0, false);
