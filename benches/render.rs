@@ -37,13 +37,13 @@ fn field_scene() -> Scene {
 }
 
 fn bvh_primary<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, scene: &Scene) {
-    let camera = scene.camera.to_lanes::<F>();
+    let camera = &scene.camera_f64;
     let all = tiles(scene.camera.width, scene.camera.height);
     group.bench_function(BenchmarkId::from_parameter(F::K), |b| {
         b.iter(|| {
             let mut found = 0u32;
             for &tile in &all {
-                for_each_packet(&camera, tile, (0.5, 0.5), |rays, _| {
+                for_each_packet::<F>(camera, tile, (0.5, 0.5), |rays, _| {
                     let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
                     found += F::move_mask(hit.found()).count_ones();
                 });

@@ -78,7 +78,7 @@ pub fn render_aovs(
                 if hits.prim[i] == NO_PRIM {
                     return [0.0; 3];
                 }
-                let ray = scene.camera.ray((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
+                let ray = scene.camera_f64.ray_f32((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
                 let n = scene.geometry.surface(&ray, hits.t[i], hits.prim[i]).normal;
                 [n.x, n.y, n.z]
             })

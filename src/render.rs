@@ -169,7 +169,7 @@ impl Block {
 /// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
 /// `(dx, dy)` from its pixel's corner: the camera rays and the block of pixels they sample.
 pub fn for_each_packet<F: Lanes>(
-    camera: &Camera<F>,
+    camera: &Camera<f64>,
     tile: Tile,
     (dx, dy): (f32, f32),
     mut visit: impl FnMut(&RayPacket<F>, Block),
@@ -183,7 +183,7 @@ pub fn for_each_packet<F: Lanes>(
             let b = Block { x: bx, y: by, w: bw.min(tile.w - bx), h: bh.min(tile.h - by), bw };
             let sx = (F::splat_f32((tile.x0 + bx) as f32) + lane_x) + F::splat_f32(dx);
             let sy = (F::splat_f32((tile.y0 + by) as f32) + lane_y) + F::splat_f32(dy);
-            let ray = camera.ray(sx, sy);
+            let ray = camera.rays(sx, sy);
             let active = if b.w == bw && b.h == bh {
                 F::mask_from_bits(u32::MAX)
             } else {
@@ -203,14 +203,14 @@ fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
 
 /// The pixels of one tile, row by row.
 fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
-    let camera = scene.camera.to_lanes::<F>();
+    let camera = &scene.camera_f64;
     match scene.render.pattern {
         Pattern::Grid(n) => {
             let offsets = grid_offsets(n);
             let scale = 1.0 / offsets.len() as f32;
             let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
             for &offset in &offsets {
-                for_each_packet(&camera, tile, offset, |rays, block| {
+                for_each_packet(camera, tile, offset, |rays, block| {
                     let c = tracer.primary(rays);
                     for (i, x, y) in block.pixels() {
                         let p = (y * tile.w + x) as usize;
@@ -220,14 +220,14 @@ fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Ve
             }
             sum.into_iter().map(|s| s * scale).collect()
         }
-        Pattern::HalfPixel => half_pixel_tile(&camera, tracer, tile),
+        Pattern::HalfPixel => half_pixel_tile(camera, tracer, tile),
     }
 }
 
 /// The 9-sample half-pixel grid: a (2w+1)×(2h+1) lattice at half-pixel spacing over the tile, each interior
 /// sample shared by up to four pixels, combined with the trapezoid weights. Lattice points go out K at a
 /// time along its rows.
-fn half_pixel_tile<F: Lanes>(camera: &Camera<F>, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
+fn half_pixel_tile<F: Lanes>(camera: &Camera<f64>, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
     let (lw, lh) = (2 * tile.w + 1, 2 * tile.h + 1);
     let n = (lw * lh) as usize;
     let mut lattice = Vec::with_capacity(n);
@@ -235,7 +235,7 @@ fn half_pixel_tile<F: Lanes>(camera: &Camera<F>, tracer: &mut Tracer<F>, tile: T
         let point = |i: usize| ((first + i) % lw as usize, (first + i) / lw as usize);
         let sx = F::from_fn(|i| tile.x0 as f32 + point(i).0 as f32 * 0.5);
         let sy = F::from_fn(|i| tile.y0 as f32 + point(i).1 as f32 * 0.5);
-        let ray = camera.ray(sx, sy);
+        let ray = camera.rays(sx, sy);
         let active = F::lanes_below(n - first);
         let rays = RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
         let c = tracer.primary(&rays);
@@ -322,11 +322,11 @@ pub fn primary_hits<F: Lanes>(
     thread_pool(threads)?.install(|| {
         let bands = hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate();
         bands.for_each(|(band, (t, prim))| {
-            let camera = scene.camera.to_lanes::<F>();
+            let camera = &scene.camera_f64;
             let y0 = band as u32 * TILE;
             for tile in tiles(width, TILE.min(height - y0)) {
                 let tile = Tile { y0, ..tile };
-                for_each_packet(&camera, tile, (0.5, 0.5), |rays, b| {
+                for_each_packet::<F>(camera, tile, (0.5, 0.5), |rays, b| {
                     let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
                     let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
                     // Row by row: each row of the block is a run of pixels in the image row.

@@ -135,3 +135,74 @@ fn single_column_window_edges_sweep_looks_straight_ahead() {
     let cam = Camera::new(&d).unwrap();
     assert_close(cam.ray(0.5, 0.5).dir, [0.0, 0.0, -1.0]);
 }
+
+/// The benchmark contract's camera (DESIGN.md), its ray for pixel (i, j) computed by the contract's own
+/// formula in f64.
+fn contract_dir(i: u32, j: u32, w: u32, h: u32) -> DVec3 {
+    let f = DVec3::new(0.0, 0.0, 4.0).normalize();
+    let r = f.cross(DVec3::Y).normalize();
+    let u = r.cross(f);
+    let th = (45f64.to_radians() / 2.0).tan();
+    let px = (2.0 * (f64::from(i) + 0.5) / f64::from(w) - 1.0) * th;
+    let py = (1.0 - 2.0 * (f64::from(j) + 0.5) / f64::from(h)) * th * f64::from(h) / f64::from(w);
+    (f + px * r + py * u).normalize()
+}
+
+#[test]
+fn camera_rays_are_the_contract_rays_rounded_once_at_every_width() {
+    use bareray::simd::Lanes;
+    use wide::{f32x16, f32x4, f32x8};
+    let (w, h) = (1920, 1080);
+    let desc = CameraDesc {
+        eye: DVec3::new(0.0, 0.0, -4.0),
+        aim: Aim::LookAt(DVec3::ZERO),
+        up: DVec3::Y,
+        distance: 1.0,
+        field: Field::HorizontalAngle(45.0),
+        width: w,
+        height: h,
+        sweep: Sweep::PixelCentre,
+    };
+    let cam = Camera::new(&desc).unwrap();
+    let (mut rounded_alike, mut total) = (0, 0);
+    for j in (0..h).step_by(7) {
+        for i in (0..w).step_by(5) {
+            let ray = cam.ray_f32(i as f32 + 0.5, j as f32 + 0.5);
+            assert_eq!(ray.origin, V3::new(0.0, 0.0, -4.0));
+            let d = contract_dir(i, j, w, h);
+            let want = [d.x as f32, d.y as f32, d.z as f32];
+            let got = [ray.dir.x, ray.dir.y, ray.dir.z];
+            // Each component is the f64 contract direction rounded to f32, or (when that f64 value lies
+            // within an f64 ulp or two of a rounding boundary) its neighbour.
+            for (g, w) in got.iter().zip(want) {
+                assert!(
+                    (g.to_bits() as i64 - w.to_bits() as i64).abs() <= 1,
+                    "pixel ({i}, {j}): {got:?} vs {want:?}"
+                );
+            }
+            rounded_alike += usize::from(got == want);
+            total += 1;
+        }
+    }
+    assert!(
+        rounded_alike * 10_000 >= total * 9_999,
+        "{rounded_alike} of {total} rays rounded as the contract's"
+    );
+
+    // Every width generates the same rays as the scalar call.
+    fn lanes_match<F: Lanes>(cam: &Camera<f64>) {
+        let sx = F::from_fn(|i| 100.5 + i as f32);
+        let sy = F::from_fn(|i| 7.5 + (i / 4) as f32);
+        let rays = cam.rays(sx, sy);
+        for i in 0..F::K {
+            let one = cam.ray_f32(sx.lane(i), sy.lane(i));
+            assert_eq!(
+                [rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i)],
+                [one.dir.x, one.dir.y, one.dir.z]
+            );
+        }
+    }
+    lanes_match::<f32x4>(&cam);
+    lanes_match::<f32x8>(&cam);
+    lanes_match::<f32x16>(&cam);
+}

@@ -261,13 +261,12 @@ fn check_shape_kernel<F: Lanes>(case: &Case, shape: &Shape<f32>) -> Result<(), T
     Ok(())
 }
 
-fn check_camera<F: Lanes>(camera: &Camera<f32>, pixels: &[(f32, f32)]) -> Result<(), TestCaseError> {
-    let lanes = camera.to_lanes::<F>();
+fn check_camera<F: Lanes>(camera: &Camera<f64>, pixels: &[(f32, f32)]) -> Result<(), TestCaseError> {
     for chunk in pixels.chunks(F::K) {
         let at = |i: usize| chunk[i.min(chunk.len() - 1)];
-        let rays = lanes.ray(F::from_fn(|i| at(i).0), F::from_fn(|i| at(i).1));
+        let rays = camera.rays(F::from_fn(|i| at(i).0), F::from_fn(|i| at(i).1));
         for (i, &(sx, sy)) in chunk.iter().enumerate() {
-            let want = camera.ray(sx, sy);
+            let want = camera.ray_f32(sx, sy);
             let got = |v: V3<F>| [v.x.lane(i), v.y.lane(i), v.z.lane(i)];
             let expect = |v: Vec3f| [v.x, v.y, v.z];
             for (axis, (g, w)) in got(rays.dir).iter().zip(expect(want.dir)).enumerate() {
@@ -342,7 +341,7 @@ fn shape() -> impl Strategy<Value = Shape<f32>> {
 }
 
 /// A real camera from a description, or an arbitrary frame (the formula does not need an orthonormal one).
-fn camera() -> impl Strategy<Value = Camera<f32>> {
+fn camera() -> impl Strategy<Value = Camera<f64>> {
     let real = (point(), point(), 1u32..4000, 1u32..4000, 1.0f64..170.0).prop_filter_map(
         "degenerate view",
         |(eye, look, width, height, fov)| {
@@ -358,13 +357,14 @@ fn camera() -> impl Strategy<Value = Camera<f32>> {
                 field: bareray::scene::desc::Field::HorizontalAngle(fov),
                 ..CameraDesc::default()
             };
-            Camera::new(&desc).ok().map(|c| c.to_f32())
+            Camera::new(&desc).ok()
         },
     );
     let arbitrary = (point(), direction(), direction(), direction(), prop::array::uniform6(coord()))
         .prop_map(|(eye, forward, right, up, s)| {
-            let mut c = Camera::new(&CameraDesc::default()).unwrap().to_f32();
-            (c.eye, c.forward, c.right, c.up) = (eye, forward, right, up);
+            let mut c = Camera::new(&CameraDesc::default()).unwrap();
+            (c.eye, c.forward, c.right, c.up) = (eye.to_f64(), forward.to_f64(), right.to_f64(), up.to_f64());
+            let s = s.map(f64::from);
             (c.half_w, c.half_h, c.u_scale, c.u_offset, c.v_scale, c.v_offset) =
                 (s[0], s[1], s[2], s[3], s[4], s[5]);
             c

@@ -26,9 +26,10 @@ pub struct Light {
 /// What a render reads: immutable, shared by all threads.
 #[derive(Clone, Debug)]
 pub struct Scene {
-    /// The f32 camera rays are generated from.
+    /// The camera's frame rounded to f32 (resolution, and f32 points on the image plane).
     pub camera: Camera<f32>,
-    /// The same camera in f64 (for the accuracy oracle and reports).
+    /// The camera in f64: camera rays are computed from it and rounded once ([`Camera::rays`]); the f64
+    /// accuracy oracle uses it as it is.
     pub camera_f64: Camera<f64>,
     /// Sampling, depth, background, ambient.
     pub render: RenderDesc,
