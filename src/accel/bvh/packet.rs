@@ -124,8 +124,9 @@ struct Entry<F: Lanes> {
 }
 
 impl Bvh {
-    /// Pushes the children of `n` that some lane enters within its `limit`, the nearest last so it is popped
-    /// first. Returns the number of box tests.
+    /// Of the children of `n` that some lane enters within its `limit`, pushes all but the nearest (farthest
+    /// first) and returns that one, to be visited next without a round trip through the stack. Adds the box
+    /// tests to `tests`.
     #[inline(always)]
     fn push_children<F: Lanes>(
         &self,
@@ -133,17 +134,20 @@ impl Bvh {
         rays: &SlabRays<F>,
         limit: F,
         stack: &mut Stack<Entry<F>>,
-    ) -> usize {
+        tests: &mut usize,
+    ) -> Option<Entry<F>> {
         let maybe = rays.interval.as_ref().map_or(u32::MAX, |interval| interval.maybe_entered(n));
-        let mut tests = 0;
+        let mut nearest = None;
         for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
-            tests += 1;
+            *tests += 1;
             let near = rays.enter(n, c, limit);
             if near.lt(F::splat_f32(f32::INFINITY)).any() {
-                stack.push(Entry { child: n.child[c], count: n.count[c], near });
+                if let Some(farther) = nearest.replace(Entry { child: n.child[c], count: n.count[c], near }) {
+                    stack.push(farther);
+                }
             }
         }
-        tests
+        nearest
     }
 
     /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal.
@@ -159,9 +163,9 @@ impl Bvh {
             F::select(lanes, best.t.min_of(q.t_max), F::splat_f32(f32::NEG_INFINITY))
         };
         // Counted locally and reported once per packet: a shared counter per node costs measurably.
-        let mut boxes = self.push_children(&self.nodes[0], &rays, limit(live, best), &mut stack);
-        let mut prims = 0;
-        while let Some(e) = stack.pop() {
+        let (mut boxes, mut prims) = (0, 0);
+        let mut next = self.push_children(&self.nodes[0], &rays, limit(live, best), &mut stack, &mut boxes);
+        while let Some(e) = next.take().or_else(|| stack.pop()) {
             // Lanes that entered this subtree no farther than their best hit so far.
             let lanes = e.near.le(best.t) & live;
             if !lanes.any() {
@@ -173,7 +177,7 @@ impl Bvh {
                 q.intersect(first..first + usize::from(e.count), lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
-                boxes += self.push_children(n, &rays, limit(lanes, best), &mut stack);
+                next = self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
             }
         }
         count_work(prims, boxes);
@@ -191,9 +195,9 @@ impl Bvh {
         let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
-        let mut boxes = self.push_children(&self.nodes[0], &rays, limit(live), &mut stack);
-        let mut prims = 0;
-        while let Some(e) = stack.pop() {
+        let (mut boxes, mut prims) = (0, 0);
+        let mut next = self.push_children(&self.nodes[0], &rays, limit(live), &mut stack, &mut boxes);
+        while let Some(e) = next.take().or_else(|| stack.pop()) {
             let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
             if !lanes.any() {
                 continue;
@@ -206,7 +210,8 @@ impl Bvh {
                     break;
                 }
             } else {
-                boxes += self.push_children(&self.nodes[e.child as usize], &rays, limit(lanes), &mut stack);
+                let n = &self.nodes[e.child as usize];
+                next = self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);
             }
         }
         count_work(prims, boxes);

@@ -52,9 +52,16 @@ impl SlabRay4 {
 }
 
 impl Bvh {
-    /// Pushes the children of `n` the ray enters within `limit`, the nearest last.
+    /// Of the children of `n` the ray enters within `limit`, pushes all but the nearest (farthest first) and
+    /// returns that one, to be visited next.
     #[inline(always)]
-    fn push_near_last(&self, n: &Node, ray: &SlabRay4, limit: f32, stack: &mut Stack<Entry>) {
+    fn push_but_nearest(
+        &self,
+        n: &Node,
+        ray: &SlabRay4,
+        limit: f32,
+        stack: &mut Stack<Entry>,
+    ) -> Option<Entry> {
         let near = ray.enter(n, limit);
         let mut order = [(0.0, 0); N];
         let mut hits = 0;
@@ -65,18 +72,19 @@ impl Bvh {
             }
         }
         far_to_near(&mut order[..hits]);
-        for &(near, c) in &order[..hits] {
-            stack.push(Entry { child: n.child[c], count: n.count[c], near });
-        }
+        let entry = |&(near, c): &(f32, usize)| Entry { child: n.child[c], count: n.count[c], near };
+        let (nearest, farther) = order[..hits].split_last()?;
+        farther.iter().for_each(|e| stack.push(entry(e)));
+        Some(entry(nearest))
     }
 
     /// The closest hit of one ray, merged into `best`.
     fn intersect_1(&self, q: &SphereQuery<f32>, best: &mut HitPacket<f32>) {
         let slab = SlabRay4::new(&q.ray);
         let mut stack = Stack::<Entry>::new();
-        self.push_near_last(&self.nodes[0], &slab, best.t.min(q.t_max), &mut stack);
+        let mut next = self.push_but_nearest(&self.nodes[0], &slab, best.t.min(q.t_max), &mut stack);
         let (mut nodes, mut prims) = (1, 0);
-        while let Some(e) = stack.pop() {
+        while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.near > best.t {
                 continue;
             }
@@ -86,7 +94,8 @@ impl Bvh {
                 q.intersect(first..first + usize::from(e.count), true, best);
             } else {
                 nodes += 1;
-                self.push_near_last(&self.nodes[e.child as usize], &slab, best.t.min(q.t_max), &mut stack);
+                let n = &self.nodes[e.child as usize];
+                next = self.push_but_nearest(n, &slab, best.t.min(q.t_max), &mut stack);
             }
         }
         count_work(prims, N * nodes);
@@ -96,9 +105,9 @@ impl Bvh {
     fn occluded_1(&self, q: &SphereQuery<f32>, blocker: &mut u32) -> bool {
         let slab = SlabRay4::new(&q.ray);
         let mut stack = Stack::<Entry>::new();
-        self.push_near_last(&self.nodes[0], &slab, q.t_max, &mut stack);
+        let mut next = self.push_but_nearest(&self.nodes[0], &slab, q.t_max, &mut stack);
         let (mut nodes, mut prims, mut blocked) = (1, 0, false);
-        while let Some(e) = stack.pop() {
+        while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
@@ -108,7 +117,7 @@ impl Bvh {
                 }
             } else {
                 nodes += 1;
-                self.push_near_last(&self.nodes[e.child as usize], &slab, q.t_max, &mut stack);
+                next = self.push_but_nearest(&self.nodes[e.child as usize], &slab, q.t_max, &mut stack);
             }
         }
         count_work(prims, N * nodes);
