@@ -4,14 +4,14 @@
 # interleaved per level. Wall and CPU times go to results/flakes-<UTC stamp>/times.txt (one line per run),
 # with a header of date, machine, load and commands; images to out/.
 #
-# usage: run_flakes.sh [path/to/bareray]       env: LEVELS="4 5 6" REPS=3 THREADS=2 SIZE=1024 LANES=8
+# usage: run_flakes.sh [path/to/bareray]       env: LEVELS="4 5 6" REPS=3 THREADS=2 SIZE=1024 LANES=16
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 bareray="${1:-$here/../target/release/bareray}"
 stamp="$(date -u +%Y-%m-%dT%H%MZ)"
 res="$here/results/flakes-$stamp"
 mkdir -p "$res" "$here/out"
-size="${SIZE:-1024}"; threads="${THREADS:-2}"; reps="${REPS:-3}"; lanes="${LANES:-8}"
+size="${SIZE:-1024}"; threads="${THREADS:-2}"; reps="${REPS:-3}"; lanes="${LANES:-16}"
 {
   echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ)  host: $(uname -srm)  nproc: $(nproc)"
   echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"

@@ -51,8 +51,9 @@ pub struct RenderArgs {
     /// Print a scene summary, rays by kind and the time split.
     #[arg(long)]
     pub stats: bool,
-    /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16. The image is identical at every width.
-    #[arg(long, default_value_t = 8, value_parser = parse_lanes)]
+    /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16 (the default: fastest on every scene in
+    /// scenes/ but the refraction-heavy whitted.toml, PERF.md). The image is identical at every width.
+    #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
     /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; PERF.md compares them).
     #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
