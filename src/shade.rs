@@ -203,7 +203,16 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             if phong.any() {
                 let mirror = s.normal * (F::splat_f32(2.0) * cos) - l;
                 let along = mirror.dot(view);
-                let highlight = F::from_fn(|i| along.lane(i).max(0.0).powf(s.shininess.lane(i)));
+                // powf only where it matters: lanes outside `phong` are discarded by the select below, and
+                // 0^n is +0 for n > 0 without the call.
+                let highlight = F::from_fn(|i| {
+                    let (base, n) = (along.lane(i).max(0.0), s.shininess.lane(i));
+                    if !F::mask_lane(phong, i) || (base == 0.0 && n > 0.0) {
+                        0.0
+                    } else {
+                        base.powf(n)
+                    }
+                });
                 reflected = V3::select(phong, reflected + V3::all(s.specular * highlight), reflected);
             }
             sum = V3::select(visible, sum + reflected.mul_elem(intensity), sum);
