@@ -104,14 +104,17 @@ impl Spheres {
     }
     /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.
     pub fn permuted(&self, order: &[u32]) -> Spheres {
-        let pick = |v: &[f32]| order.iter().map(|&i| v[i as usize]).collect();
+        use rayon::prelude::*;
+        fn pick<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
+            order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
+        }
         Spheres {
-            cx: pick(&self.cx),
-            cy: pick(&self.cy),
-            cz: pick(&self.cz),
-            r: pick(&self.r),
-            material: order.iter().map(|&i| self.material[i as usize]).collect(),
-            key: order.iter().map(|&i| self.key[i as usize]).collect(),
+            cx: pick(&self.cx, order),
+            cy: pick(&self.cy, order),
+            cz: pick(&self.cz, order),
+            r: pick(&self.r, order),
+            material: pick(&self.material, order),
+            key: pick(&self.key, order),
         }
     }
     /// Appends a sphere.
