@@ -7,7 +7,7 @@
 //! into that order, so leaves index the arrays directly.
 //!
 //! Culling is conservative: boxes are padded by a bound on the sphere kernel's rounding error, and every slab
-//! test widens its exit distance by 2γ₃ (Ize 2013). With the (t, id) order of
+//! test widens its exit distance by 6ε, which covers the fused slab distances' rounding ([`WIDEN`]). With the (t, id) order of
 //! [`crate::geometry::HitPacket::update`] this makes every lane's result equal, bit for bit, to brute force
 //! over the same spheres, whatever order the nodes are visited in and whichever traversal runs.
 
@@ -261,11 +261,7 @@ fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], ray: &SlabRay<F>, limit: F) -> F
     let (nx, fx) = slab(lo[0], hi[0], i.x, n.x);
     let (ny, fy) = slab(lo[1], hi[1], i.y, n.y);
     let (nz, fz) = slab(lo[2], hi[2], i.z, n.z);
-    // Balanced trees keep the dependency chain short; entering before the exit and before the limit is one
-    // comparison against the smaller of the two.
-    let near = nx.fast_max(ny).fast_max(nz.fast_max(F::splat_f32(0.0)));
-    let far = (fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN)).fast_min(limit);
-    F::select(near.le(far), near, F::splat_f32(f32::INFINITY))
+    entry_within([nx, ny, nz], [fx, fy, fz], limit)
 }
 
 /// [`slab_entry`] for rays whose direction signs are known: `near[a]` and `far[a]` are the planes a ray
@@ -278,9 +274,17 @@ fn slab_entry_ordered<F: Lanes>(near: [F; 3], far: [F; 3], ray: &SlabRay<F>, lim
     let t = |p: F, inv: F, neg_o_inv: F| p.mul_add(inv, neg_o_inv);
     let (nx, ny, nz) = (t(near[0], i.x, n.x), t(near[1], i.y, n.y), t(near[2], i.z, n.z));
     let (fx, fy, fz) = (t(far[0], i.x, n.x), t(far[1], i.y, n.y), t(far[2], i.z, n.z));
-    let near = nx.fast_max(ny).fast_max(nz.fast_max(F::splat_f32(0.0)));
-    let far = (fx.fast_min(fy).fast_min(fz) * F::splat_f32(WIDEN)).fast_min(limit);
-    F::select(near.le(far), near, F::splat_f32(f32::INFINITY))
+    entry_within([nx, ny, nz], [fx, fy, fz], limit)
+}
+
+/// The entry distance from each axis's near and far plane distances: entering before the (widened) exit and
+/// before the limit, else `inf`. Balanced trees keep the dependency chains short; entering before the exit
+/// and before the limit is one comparison against the smaller of the two.
+#[inline(always)]
+fn entry_within<F: Lanes>(near: [F; 3], far: [F; 3], limit: F) -> F {
+    let entry = near[0].fast_max(near[1]).fast_max(near[2].fast_max(F::splat_f32(0.0)));
+    let exit = (far[0].fast_min(far[1]).fast_min(far[2]) * F::splat_f32(WIDEN)).fast_min(limit);
+    F::select(entry.le(exit), entry, F::splat_f32(f32::INFINITY))
 }
 
 /// Per axis, the side (0 lower, 1 upper) of the plane a ray with this `1/d` meets first: 1 where `1/d` is
