@@ -155,3 +155,38 @@ fn interval_culling_keeps_the_brute_force_answer() {
         check_width::<f32x16>(&bvh, &brute, &coherent_rays(2000, 16, seed + 100));
     }
 }
+
+/// Packets walk sparse subtrees one ray at a time (`Bvh::single_ray_lanes`): at every threshold, from never
+/// to always, the answer is brute force's.
+#[test]
+fn single_ray_switch_keeps_the_brute_force_answer() {
+    for (n, seed) in [(300, 9), (2000, 10)] {
+        let desc = field(n, seed);
+        let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let packets = coherent_rays(2000, 16, seed + 100);
+        let box_tests = |bvh: &mut Scene, lanes: u32| {
+            bvh.geometry.bvh.as_mut().unwrap().single_ray_lanes = lanes;
+            bareray::accel::set_counting(true);
+            bareray::accel::take_work();
+            for chunk in packets.chunks(16) {
+                let packet = RayPacket::<f32x16>::from_rays(chunk, f32::INFINITY);
+                bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
+            }
+            let tests = bareray::accel::take_work().box_tests;
+            bareray::accel::set_counting(false);
+            tests
+        };
+        // Full packets start above the threshold: a difference can only come from switching inside the tree.
+        let (never, some) = (box_tests(&mut bvh, 0), box_tests(&mut bvh, 3));
+        assert_ne!(never, some, "{n} spheres: no subtree was walked by single rays");
+        for lanes in [0, 1, 3, 8, 16] {
+            bvh.geometry.bvh.as_mut().unwrap().single_ray_lanes = lanes;
+            let random = rays(&desc, 2000, seed + 200);
+            check_width::<f32x4>(&bvh, &brute, &random);
+            check_width::<f32x8>(&bvh, &brute, &random);
+            check_width::<f32x16>(&bvh, &brute, &random);
+            check_width::<f32x16>(&bvh, &brute, &packets);
+        }
+    }
+}

@@ -41,6 +41,10 @@ pub struct BenchArgs {
     /// the packet's direction range). Off by default: measured slower (PERF.md); here to measure it again.
     #[arg(long)]
     pub interval_culling: bool,
+    /// BVH subtrees that a packet enters with at most this many live lanes are walked one ray at a time
+    /// (default: the measured switch, 2; 0 never switches). Here to measure the switch again.
+    #[arg(long, value_name = "LANES", value_parser = clap::value_parser!(u32).range(0..=16))]
+    pub single_ray_lanes: Option<u32>,
     /// Timed repetitions per setting (the median is reported), after one untimed warm-up.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub reps: u32,
@@ -89,6 +93,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let mut scene = Scene::compile_with_preset(&desc, accel, args.bvh_preset)?;
     if let Some(bvh) = &mut scene.geometry.bvh {
         bvh.interval_culling = args.interval_culling;
+        if let Some(lanes) = args.single_ray_lanes {
+            bvh.single_ray_lanes = lanes;
+        }
     }
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;

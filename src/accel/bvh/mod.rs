@@ -23,11 +23,15 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
+use super::brute::SphereQuery;
 use super::Spheres;
+use crate::geometry::HitPacket;
 use crate::math::V3;
 use crate::simd::Lanes;
 
-pub use single::SINGLE_RAY_MAX_LANES;
+/// Subtrees that a packet enters with at most this many live lanes are walked one ray at a time (measured:
+/// PERF.md, "Single-ray switch").
+pub const SINGLE_RAY_MAX_LANES: u32 = 2;
 
 /// Children per node (Embree's N).
 pub const N: usize = 4;
@@ -123,6 +127,29 @@ pub struct Bvh {
     /// Test each node against shared-origin packets as a whole first ([`packet`]'s interval test). Off by
     /// default: measured slower on every field (PERF.md, "Whole-packet culling").
     pub interval_culling: bool,
+    /// Subtrees entered by at most this many live lanes of a packet are walked one ray at a time
+    /// ([`SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
+    pub single_ray_lanes: u32,
+}
+
+impl Bvh {
+    /// Closest hits of the spheres for the live lanes, merged into `best`: one ray at a time for K = 1,
+    /// else the packet traversal, which switches to single rays in sparse subtrees.
+    pub fn intersect_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, best: &mut HitPacket<F>) {
+        if F::K == 1 {
+            return self.intersect_lanes(0, q, &SlabRay::new(&q.ray.origin, &q.ray.dir), live, best);
+        }
+        self.intersect_packet(q, live, best)
+    }
+
+    /// Lanes of `live` blocked by a sphere within their `t_max`, like [`Bvh::intersect_k`]. `blocker` is set
+    /// to a sphere that blocked a lane.
+    pub fn occluded_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, blocker: &mut u32) -> F::Mask {
+        if F::K == 1 {
+            return self.occluded_lanes(0, q, &SlabRay::new(&q.ray.origin, &q.ray.dir), live, blocker);
+        }
+        self.occluded_packet(q, live, blocker)
+    }
 }
 
 /// What building cost.
@@ -161,7 +188,7 @@ pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, B
     *spheres = permuted;
     let stats =
         BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: nodes.len() * size_of::<Node>() };
-    (Bvh { nodes, interval_culling: false }, stats)
+    (Bvh { nodes, interval_culling: false, single_ray_lanes: SINGLE_RAY_MAX_LANES }, stats)
 }
 
 /// bareray's 4-wide nodes from obvhs's binary tree.

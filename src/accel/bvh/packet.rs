@@ -123,6 +123,13 @@ struct Entry<F: Lanes> {
     near: F,
 }
 
+impl<F: Lanes> Entry<F> {
+    /// The root node, entered by every lane (its box is not tested: its children's are).
+    fn root() -> Self {
+        Self { child: 0, count: 0, near: F::splat_f32(f32::NEG_INFINITY) }
+    }
+}
+
 impl Bvh {
     /// Of the children of `n` that some lane enters within its `limit`, pushes all but the nearest (farthest
     /// first) and returns that one, to be visited next without a round trip through the stack. Adds the box
@@ -150,7 +157,8 @@ impl Bvh {
         nearest
     }
 
-    /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal.
+    /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal; subtrees
+    /// entered by at most [`Bvh::single_ray_lanes`] live lanes are walked one ray at a time.
     pub(super) fn intersect_packet<F: Lanes>(
         &self,
         q: &SphereQuery<F>,
@@ -164,7 +172,7 @@ impl Bvh {
         };
         // Counted locally and reported once per packet: a shared counter per node costs measurably.
         let (mut boxes, mut prims) = (0, 0);
-        let mut next = self.push_children(&self.nodes[0], &rays, limit(live, best), &mut stack, &mut boxes);
+        let mut next = Some(Entry::root());
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             // Lanes that entered this subtree no farther than their best hit so far.
             let lanes = e.near.le(best.t) & live;
@@ -175,6 +183,8 @@ impl Bvh {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
                 q.intersect(first..first + usize::from(e.count), lanes, best);
+            } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
+                self.intersect_lanes(e.child, q, &rays.slab, lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
                 next = self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
@@ -183,8 +193,8 @@ impl Bvh {
         count_work(prims, boxes);
     }
 
-    /// Lanes of `live` blocked by a sphere within their `t_max`, by packet traversal; stops as soon as every
-    /// live lane is.
+    /// Lanes of `live` blocked by a sphere within their `t_max`, by packet traversal (subtrees entered by at
+    /// most [`Bvh::single_ray_lanes`] unblocked lanes one ray at a time); stops as soon as every live lane is.
     pub(super) fn occluded_packet<F: Lanes>(
         &self,
         q: &SphereQuery<F>,
@@ -196,7 +206,7 @@ impl Bvh {
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
         let (mut boxes, mut prims) = (0, 0);
-        let mut next = self.push_children(&self.nodes[0], &rays, limit(live), &mut stack, &mut boxes);
+        let mut next = Some(Entry::root());
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
             if !lanes.any() {
@@ -206,12 +216,15 @@ impl Bvh {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
                 blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
-                if (blocked | !live).all() {
-                    break;
-                }
+            } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
+                blocked = blocked | self.occluded_lanes(e.child, q, &rays.slab, lanes, blocker);
             } else {
                 let n = &self.nodes[e.child as usize];
                 next = self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);
+                continue;
+            }
+            if (blocked | !live).all() {
+                break;
             }
         }
         count_work(prims, boxes);

@@ -1,19 +1,17 @@
 //! Single-ray traversal over the same 4-wide nodes, SIMD over the children: one ray's slab test against all
-//! four boxes of a node in one `f32x4` pass. It serves K = 1 and packets with few live lanes (incoherent
-//! secondary rays after a bounce), where the packet traversal would carry mostly dead lanes: each live lane
-//! then walks the tree alone, and its result is merged back into its lane.
+//! four boxes of a node in one `f32x4` pass. It serves K = 1 and every subtree that a packet enters with few
+//! live lanes (incoherent secondary rays after a bounce, and camera packets that have spread over many small
+//! spheres deep in the tree), where the packet traversal would carry mostly dead lanes: each live lane then
+//! walks the subtree alone, and its result is merged back into its lane (Embree's "hybrid" traversal).
 
 use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
 use super::{far_to_near, near_side, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
-use crate::geometry::{HitPacket, Ray};
+use crate::geometry::HitPacket;
+use crate::math::{Real, V3};
 use crate::simd::{IdLanes, Lanes};
-
-/// Packets with at most this many live lanes are traced one ray at a time (measured: PERF.md, "Single-ray
-/// switch").
-pub const SINGLE_RAY_MAX_LANES: u32 = 2;
 
 /// A pending subtree of the single-ray traversal and the ray's entry distance.
 #[derive(Clone, Copy)]
@@ -23,8 +21,8 @@ struct Entry {
     near: f32,
 }
 
-/// One ray prepared for slab tests against four boxes at once: prepared as a scalar ray (the packet
-/// traversal's lanes get the same values) and splatted.
+/// One ray prepared for slab tests against four boxes at once: lane `i` of a prepared packet (whose lanes
+/// hold the bits a scalar ray's preparation gives) splatted.
 struct SlabRay4 {
     ray: SlabRay<f32x4>,
     /// Per axis, the side of the near plane ([`near_side`]).
@@ -32,22 +30,20 @@ struct SlabRay4 {
 }
 
 impl SlabRay4 {
-    fn new(ray: &Ray<f32>) -> Self {
-        let s = SlabRay::new(&ray.origin, &ray.dir);
-        let inv = s.inv_dir;
-        Self {
-            ray: SlabRay { inv_dir: inv.map(f32x4::splat), neg_o_inv: s.neg_o_inv.map(f32x4::splat) },
-            near: [near_side(inv.x), near_side(inv.y), near_side(inv.z)],
-        }
+    fn lane<F: Lanes>(packet: &SlabRay<F>, i: usize) -> Self {
+        let lane = |v: &V3<F>| [v.x.lane(i), v.y.lane(i), v.z.lane(i)];
+        let (inv, neg_o_inv) = (lane(&packet.inv_dir), lane(&packet.neg_o_inv));
+        let splat = |v: [f32; 3]| V3::new(f32x4::splat(v[0]), f32x4::splat(v[1]), f32x4::splat(v[2]));
+        Self { ray: SlabRay { inv_dir: splat(inv), neg_o_inv: splat(neg_o_inv) }, near: inv.map(near_side) }
     }
 
     /// The ray's entry distance into each child of `n`, `inf` where it misses the child or enters beyond
     /// `limit`: the packet traversal's slab test, one child per lane.
     #[inline(always)]
-    fn enter(&self, n: &Node, limit: f32) -> [f32; N] {
+    fn enter(&self, n: &Node, limit: f32) -> f32x4 {
         let planes = |side: [usize; 3]| [0, 1, 2].map(|a| f32x4::from(n.bounds[side[a]][a]));
         let far = self.near.map(|s| 1 - s);
-        slab_entry_ordered(planes(self.near), planes(far), &self.ray, f32x4::splat(limit)).to_array()
+        slab_entry_ordered(planes(self.near), planes(far), &self.ray, f32x4::splat(limit))
     }
 }
 
@@ -63,26 +59,31 @@ impl Bvh {
         stack: &mut Stack<Entry>,
     ) -> Option<Entry> {
         let near = ray.enter(n, limit);
+        // Bit c for each child entered; empty slots (boxes at +inf) never are.
+        let entered = f32x4::move_mask(Real::lt(near, f32x4::splat(f32::INFINITY)));
+        let near = near.to_array();
+        let entry = |c: usize| Entry { child: n.child[c], count: n.count[c], near: near[c] };
+        // One entered child is the common case deep in the tree: no ordering, no stack.
+        if entered & entered.wrapping_sub(1) == 0 {
+            return (entered != 0).then(|| entry(entered.trailing_zeros() as usize));
+        }
         let mut order = [(0.0, 0); N];
         let mut hits = 0;
-        for (c, &t) in near.iter().enumerate().take(n.slots as usize) {
-            if t < f32::INFINITY {
-                order[hits] = (t, c);
-                hits += 1;
-            }
+        for c in (0..N).filter(|c| entered >> c & 1 == 1) {
+            order[hits] = (near[c], c);
+            hits += 1;
         }
         far_to_near(&mut order[..hits]);
-        let entry = |&(near, c): &(f32, usize)| Entry { child: n.child[c], count: n.count[c], near };
         let (nearest, farther) = order[..hits].split_last()?;
-        farther.iter().for_each(|e| stack.push(entry(e)));
-        Some(entry(nearest))
+        farther.iter().for_each(|&(_, c)| stack.push(entry(c)));
+        Some(entry(nearest.1))
     }
 
-    /// The closest hit of one ray, merged into `best`.
-    fn intersect_1(&self, q: &SphereQuery<f32>, best: &mut HitPacket<f32>) {
-        let slab = SlabRay4::new(&q.ray);
+    /// The closest hit of one ray in the subtree of node `root` (which the ray enters), merged into `best`.
+    fn intersect_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, best: &mut HitPacket<f32>) {
         let mut stack = Stack::<Entry>::new();
-        let mut next = self.push_but_nearest(&self.nodes[0], &slab, best.t.min(q.t_max), &mut stack);
+        let top = &self.nodes[root as usize];
+        let mut next = self.push_but_nearest(top, slab, best.t.min(q.t_max), &mut stack);
         let (mut nodes, mut prims) = (1, 0);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.near > best.t {
@@ -95,17 +96,17 @@ impl Bvh {
             } else {
                 nodes += 1;
                 let n = &self.nodes[e.child as usize];
-                next = self.push_but_nearest(n, &slab, best.t.min(q.t_max), &mut stack);
+                next = self.push_but_nearest(n, slab, best.t.min(q.t_max), &mut stack);
             }
         }
         count_work(prims, N * nodes);
     }
 
-    /// Whether one ray is blocked within `t_max`; stops at the first blocker found, left in `blocker`.
-    fn occluded_1(&self, q: &SphereQuery<f32>, blocker: &mut u32) -> bool {
-        let slab = SlabRay4::new(&q.ray);
+    /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
+    /// found, left in `blocker`.
+    fn occluded_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, blocker: &mut u32) -> bool {
         let mut stack = Stack::<Entry>::new();
-        let mut next = self.push_but_nearest(&self.nodes[0], &slab, q.t_max, &mut stack);
+        let mut next = self.push_but_nearest(&self.nodes[root as usize], slab, q.t_max, &mut stack);
         let (mut nodes, mut prims, mut blocked) = (1, 0, false);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.count > 0 {
@@ -117,23 +118,27 @@ impl Bvh {
                 }
             } else {
                 nodes += 1;
-                next = self.push_but_nearest(&self.nodes[e.child as usize], &slab, q.t_max, &mut stack);
+                next = self.push_but_nearest(&self.nodes[e.child as usize], slab, q.t_max, &mut stack);
             }
         }
         count_work(prims, N * nodes);
         blocked
     }
 
-    /// Closest hits of the spheres for the live lanes, merged into `best`: packet traversal, or one ray at a
-    /// time when at most [`SINGLE_RAY_MAX_LANES`] lanes are live.
-    pub fn intersect_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, best: &mut HitPacket<F>) {
-        let bits = F::move_mask(live);
-        if F::K > 1 && bits.count_ones() > SINGLE_RAY_MAX_LANES {
-            return self.intersect_packet(q, live, best);
-        }
+    /// The lanes of `lanes` walk the subtree of node `root` one ray at a time; their hits are merged into
+    /// `best`. `slab` is the packet prepared for slab tests.
+    pub(super) fn intersect_lanes<F: Lanes>(
+        &self,
+        root: u32,
+        q: &SphereQuery<F>,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        best: &mut HitPacket<F>,
+    ) {
+        let bits = F::move_mask(lanes);
         for i in (0..F::K).filter(|i| bits >> i & 1 == 1) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
-            self.intersect_1(&q.lane(i), &mut hit);
+            self.intersect_1(root, &q.lane(i), &SlabRay4::lane(slab, i), &mut hit);
             let at = F::mask_from_bits(1 << i);
             best.t = F::select(at, F::splat_f32(hit.t), best.t);
             best.prim = F::select_ids(at, F::Ids::splat(hit.prim), best.prim);
@@ -141,16 +146,19 @@ impl Bvh {
         }
     }
 
-    /// Lanes of `live` blocked by a sphere within their `t_max`: packet traversal, or one ray at a time when
-    /// at most [`SINGLE_RAY_MAX_LANES`] lanes are live. `blocker` is set to a sphere that blocked a lane.
-    pub fn occluded_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, blocker: &mut u32) -> F::Mask {
-        let bits = F::move_mask(live);
-        if F::K > 1 && bits.count_ones() > SINGLE_RAY_MAX_LANES {
-            return self.occluded_packet(q, live, blocker);
-        }
+    /// The lanes of `lanes` blocked within their `t_max` in the subtree of node `root`, one ray at a time.
+    pub(super) fn occluded_lanes<F: Lanes>(
+        &self,
+        root: u32,
+        q: &SphereQuery<F>,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        blocker: &mut u32,
+    ) -> F::Mask {
+        let bits = F::move_mask(lanes);
         let blocked = (0..F::K)
             .filter(|i| bits >> i & 1 == 1)
-            .filter(|&i| self.occluded_1(&q.lane(i), blocker))
+            .filter(|&i| self.occluded_1(root, &q.lane(i), &SlabRay4::lane(slab, i), blocker))
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
