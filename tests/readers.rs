@@ -211,6 +211,37 @@ fn xyzr_errors_name_the_line() {
     assert_eq!(xyzr_err("# nothing\n\n").line, 0);
 }
 
+/// Lists of several megabytes are read in parallel chunks: spheres stay in file order, and errors name the
+/// file's line, also deep in a later chunk, and the first bad line when several chunks have one.
+#[test]
+fn long_xyzr_lists_keep_order_and_line_numbers() {
+    // About 5 MB, with comment and blank lines (and CRLF endings) so that lines and spheres are counted apart.
+    let mut src = String::new();
+    for i in 0..200_000 {
+        match i % 10 {
+            3 => src.push_str("# comment\r\n"),
+            7 => src.push('\n'),
+            _ => src.push_str(&format!("{i} -{i}.5 0.25 {}\n", 1 + i % 5)),
+        }
+    }
+    let d = xyzr::parse(Path::new("t.xyzr"), &src).unwrap();
+    assert_eq!(d.spheres.len(), 160_000);
+    for (k, s) in d.spheres.iter().enumerate() {
+        // Sphere k is on line i + 1, where i skips the comment and blank lines.
+        let i = (k / 8) * 10 + [0, 1, 2, 4, 5, 6, 8, 9][k % 8];
+        assert_eq!((s.center.x, s.center.y, s.radius), (i as f64, -(i as f64) - 0.5, (1 + i % 5) as f64));
+    }
+    let lines: Vec<&str> = src.split_inclusive('\n').collect();
+    let with_errors = |bad: &[usize]| {
+        let mut text = lines.clone();
+        bad.iter().for_each(|&l| text[l - 1] = "1 2 3 oops\n");
+        xyzr_err(&text.concat())
+    };
+    assert_eq!(with_errors(&[123_457]).line, 123_457);
+    assert_eq!(with_errors(&[180_001, 2, 99_999]).line, 2);
+    assert_eq!(with_errors(&[180_001, 99_999]).line, 99_999);
+}
+
 // ---------------------------------------------------------------------------------------------------- field
 
 // Expected spheres were computed independently in Python 3.11 from DESIGN.md's contract text: a direct

@@ -122,6 +122,7 @@ impl Scene {
     ) -> Result<Scene, CameraError> {
         let camera_f64 = Camera::new(&desc.camera)?;
         let mut geometry = Geometry::default();
+        geometry.spheres.reserve_exact(desc.spheres.len());
         for s in &desc.spheres {
             geometry.spheres.push(V3::from(s.center).to_f32(), s.radius as f32, s.material);
         }

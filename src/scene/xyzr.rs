@@ -11,6 +11,7 @@
 use std::path::Path;
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use crate::math::Rgb;
 
@@ -24,21 +25,54 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     parse(path, &source)
 }
 
-/// Parses `.xyzr` text; `path` names it in errors.
+/// Parses `.xyzr` text; `path` names it in errors. Chunks of whole lines are parsed in parallel (a 1e7-sphere
+/// list is 460 MB of text) and joined in file order, so ids, and the first error reported, are those of a
+/// sequential read.
 pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
-    let mut spheres = Vec::new();
-    for (i, line) in source.lines().enumerate() {
-        let text = line.trim();
-        if text.is_empty() || text.starts_with('#') {
-            continue;
-        }
-        let s = sphere(text).map_err(|m| SceneError::at_line(path, i + 1, m))?;
-        spheres.push(s);
+    let parsed: Vec<_> = line_chunks(source, CHUNK_BYTES)
+        .into_par_iter()
+        .map(|(text, first)| parse_lines(path, text, first))
+        .collect();
+    let mut spheres = Vec::with_capacity(parsed.iter().map(|r| r.as_ref().map_or(0, Vec::len)).sum());
+    for chunk in parsed {
+        spheres.extend(chunk?);
     }
     if spheres.is_empty() {
         return Err(SceneError::whole_file(path, "no spheres: expected lines of `x y z r`"));
     }
     Ok(scene_around(spheres))
+}
+
+/// Bytes of text per parallel chunk.
+const CHUNK_BYTES: usize = 1 << 20;
+
+/// `source` cut after a newline every `size` bytes or so: each piece and the line number it starts at.
+fn line_chunks(source: &str, size: usize) -> Vec<(&str, usize)> {
+    let bytes = source.as_bytes();
+    let (mut chunks, mut start, mut line) = (Vec::new(), 0, 1);
+    while start < bytes.len() {
+        let cut = (start + size).min(bytes.len());
+        let end = bytes[cut..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| cut + p + 1);
+        // `end` follows a '\n' or is the end, so it is a char boundary.
+        let text = &source[start..end];
+        chunks.push((text, line));
+        line += text.bytes().filter(|&b| b == b'\n').count();
+        start = end;
+    }
+    chunks
+}
+
+/// The spheres of `text`, whose first line is line `first` of the file.
+fn parse_lines(path: &Path, text: &str, first: usize) -> Result<Vec<SphereDesc>, SceneError> {
+    let mut spheres = Vec::new();
+    for (i, line) in text.lines().enumerate() {
+        let text = line.trim();
+        if text.is_empty() || text.starts_with('#') {
+            continue;
+        }
+        spheres.push(sphere(text).map_err(|m| SceneError::at_line(path, first + i, m))?);
+    }
+    Ok(spheres)
 }
 
 /// One `x y z r` line.

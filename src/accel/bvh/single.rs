@@ -67,6 +67,13 @@ impl Bvh {
         if entered & entered.wrapping_sub(1) == 0 {
             return (entered != 0).then(|| entry(entered.trailing_zeros() as usize));
         }
+        if entered.count_ones() == 2 {
+            let (a, b) =
+                (entered.trailing_zeros() as usize, (entered & (entered - 1)).trailing_zeros() as usize);
+            let (nearest, farther) = if near[b] < near[a] { (b, a) } else { (a, b) };
+            stack.push(entry(farther));
+            return Some(entry(nearest));
+        }
         let mut order = [(0.0, 0); N];
         let mut hits = 0;
         for c in (0..N).filter(|c| entered >> c & 1 == 1) {
