@@ -118,7 +118,8 @@ impl Spheres {
         }
     }
 
-    /// Room for `more` spheres in every array (exact sizes keep a 1e7 field's peak memory down).
+    /// Room for `more` spheres in every array: compile knows the count, so each array is allocated once, at
+    /// its final size.
     pub fn reserve_exact(&mut self, more: usize) {
         for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.r] {
             v.reserve_exact(more);

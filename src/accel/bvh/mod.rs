@@ -7,9 +7,10 @@
 //! into that order, so leaves index the arrays directly.
 //!
 //! Culling is conservative: boxes are padded by a bound on the sphere kernel's rounding error, and every slab
-//! test widens its exit distance by 6ε, which covers the fused slab distances' rounding ([`WIDEN`]). With the (t, id) order of
-//! [`crate::geometry::HitPacket::update`] this makes every lane's result equal, bit for bit, to brute force
-//! over the same spheres, whatever order the nodes are visited in and whichever traversal runs.
+//! test widens its exit distance by 6ε, which covers the fused slab distances' rounding ([`WIDEN`]). With the
+//! (t, id) order of [`crate::geometry::HitPacket::update`] this makes every lane's result equal, bit for bit,
+//! to brute force over the same spheres, whatever order the nodes are visited in and whichever traversal
+//! runs.
 
 mod packet;
 mod single;
@@ -25,7 +26,7 @@ use rayon::prelude::*;
 
 use super::brute::SphereQuery;
 use super::Spheres;
-use crate::geometry::HitPacket;
+use crate::geometry::{HitPacket, Ray};
 use crate::math::V3;
 use crate::simd::Lanes;
 
@@ -137,7 +138,7 @@ impl Bvh {
     /// else the packet traversal, which switches to single rays in sparse subtrees.
     pub fn intersect_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, best: &mut HitPacket<F>) {
         if F::K == 1 {
-            return self.intersect_lanes(0, q, &SlabRay::new(&q.ray.origin, &q.ray.dir), live, best);
+            return self.intersect_lanes(0, q, &SlabRay::new(&q.ray), live, best);
         }
         self.intersect_packet(q, live, best)
     }
@@ -146,7 +147,7 @@ impl Bvh {
     /// to a sphere that blocked a lane.
     pub fn occluded_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, blocker: &mut u32) -> F::Mask {
         if F::K == 1 {
-            return self.occluded_lanes(0, q, &SlabRay::new(&q.ray.origin, &q.ray.dir), live, blocker);
+            return self.occluded_lanes(0, q, &SlabRay::new(&q.ray), live, blocker);
         }
         self.occluded_packet(q, live, blocker)
     }
@@ -265,7 +266,8 @@ struct SlabRay<F> {
 
 impl<F: Lanes> SlabRay<F> {
     #[inline(always)]
-    fn new(origin: &V3<F>, dir: &V3<F>) -> Self {
+    fn new(ray: &Ray<F>) -> Self {
+        let (origin, dir) = (&ray.origin, &ray.dir);
         let inv_dir = V3::new(inverse(dir.x), inverse(dir.y), inverse(dir.z));
         let neg = |o: F, inv: F| -(o * inv);
         Self {

@@ -30,7 +30,7 @@ struct SlabRays<F: Lanes> {
 
 impl<F: Lanes> SlabRays<F> {
     fn new(ray: &Ray<F>, live: F::Mask, interval: bool) -> Self {
-        let slab = SlabRay::new(&ray.origin, &ray.dir);
+        let slab = SlabRay::new(ray);
         let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
         let octant = negative(ray.dir.x) | negative(ray.dir.y) << 1 | negative(ray.dir.z) << 2;

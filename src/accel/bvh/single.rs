@@ -67,6 +67,7 @@ impl Bvh {
         if entered & entered.wrapping_sub(1) == 0 {
             return (entered != 0).then(|| entry(entered.trailing_zeros() as usize));
         }
+        // Two: one comparison orders them.
         if entered.count_ones() == 2 {
             let (a, b) =
                 (entered.trailing_zeros() as usize, (entered & (entered - 1)).trailing_zeros() as usize);
@@ -89,8 +90,8 @@ impl Bvh {
     /// The closest hit of one ray in the subtree of node `root` (which the ray enters), merged into `best`.
     fn intersect_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, best: &mut HitPacket<f32>) {
         let mut stack = Stack::<Entry>::new();
-        let top = &self.nodes[root as usize];
-        let mut next = self.push_but_nearest(top, slab, best.t.min(q.t_max), &mut stack);
+        let mut next =
+            self.push_but_nearest(&self.nodes[root as usize], slab, best.t.min(q.t_max), &mut stack);
         let (mut nodes, mut prims) = (1, 0);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.near > best.t {
