@@ -2,6 +2,7 @@
 //! width, for closest hits and occlusion, over random sphere fields and rays (including rays starting inside
 //! spheres, grazing rays and axis-parallel rays), and through whole renders.
 
+use bareray::accel::bvh::Bvh;
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
 use bareray::math::V3;
 use bareray::scene::desc::{SceneDesc, SphereDesc};
@@ -126,33 +127,66 @@ fn bvh_equals_brute_force_at_every_width() {
     }
 }
 
+/// Box tests of `packets` (K = 16, closest hit) after `setting` the BVH's switches.
+fn packet_box_tests(bvh: &mut Scene, packets: &[Ray<f32>], setting: impl Fn(&mut Bvh)) -> u64 {
+    setting(bvh.geometry.bvh.as_mut().unwrap());
+    bareray::accel::set_counting(true);
+    bareray::accel::take_work();
+    for chunk in packets.chunks(16) {
+        let packet = RayPacket::<f32x16>::from_rays(chunk, f32::INFINITY);
+        bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
+    }
+    let tests = bareray::accel::take_work().box_tests;
+    bareray::accel::set_counting(false);
+    tests
+}
+
 #[test]
-fn interval_culling_keeps_the_brute_force_answer() {
+fn frustum_culling_keeps_the_brute_force_answer() {
     for (n, seed) in [(17, 6), (300, 7), (2000, 8)] {
         let desc = field(n, seed);
         let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        bvh.geometry.bvh.as_mut().unwrap().interval_culling = true;
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        // The interval test must rule children out, or this test would not be testing it.
+        // The frustum must rule children out, or this test would not be testing it.
         let packets = coherent_rays(2000, 16, seed + 100);
-        let box_tests = |bvh: &Scene| {
-            bareray::accel::set_counting(true);
-            bareray::accel::take_work();
-            for chunk in packets.chunks(16) {
-                let packet = RayPacket::<f32x16>::from_rays(chunk, f32::INFINITY);
-                bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
-            }
-            bareray::accel::take_work().box_tests
-        };
-        let culled = box_tests(&bvh);
-        bvh.geometry.bvh.as_mut().unwrap().interval_culling = false;
-        let all = box_tests(&bvh);
-        bvh.geometry.bvh.as_mut().unwrap().interval_culling = true;
-        bareray::accel::set_counting(false);
-        assert!(culled < all, "{n} spheres: {culled} box tests with interval culling, {all} without");
+        let all = packet_box_tests(&mut bvh, &packets, |b| b.frustum_culling = false);
+        let culled = packet_box_tests(&mut bvh, &packets, |b| b.frustum_culling = true);
+        assert!(culled < all, "{n} spheres: {culled} box tests with frustum culling, {all} without");
         check_width::<f32x4>(&bvh, &brute, &coherent_rays(2000, 4, seed + 100));
         check_width::<f32x8>(&bvh, &brute, &coherent_rays(2000, 8, seed + 100));
-        check_width::<f32x16>(&bvh, &brute, &coherent_rays(2000, 16, seed + 100));
+        check_width::<f32x16>(&bvh, &brute, &packets);
+    }
+}
+
+/// Camera packets whose rays graze sphere silhouettes (aimed at points a few ulps inside and outside the
+/// rim), from near and from far away, in tight and in wide cones: the frustum's margins must keep every
+/// box an exact ray enters, so each lane still equals brute force bit for bit.
+#[test]
+fn frustum_culling_keeps_grazing_rays_from_near_and_far() {
+    let desc = field(400, 11);
+    let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+    let mut rng = Rng(SplitMix64::new(12));
+    for (distance, spread) in [(4.0, 0.0), (4.0, 0.3), (1e3, 0.0), (1e5, 0.0), (4.0, 2.0)] {
+        let mut rays = Vec::new();
+        for packet in 0..120 {
+            let aim = desc.spheres[packet * 3 % desc.spheres.len()];
+            let dir =
+                DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize();
+            let o = aim.center - dir * distance;
+            for _ in 0..16 {
+                // A point on the silhouette circle (seen from o), nudged by a relative 1e-7 either way.
+                let side = dir.any_orthonormal_pair();
+                let angle = rng.range(0.0, std::f64::consts::TAU);
+                let rim = side.0 * angle.cos() + side.1 * angle.sin();
+                let target = aim.center + rim * aim.radius * (1.0 + rng.range(-1e-7, 1e-7));
+                let jitter = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+                let d = (target - o).normalize() + jitter * spread;
+                rays.push(Ray::new(V3::from(o).to_f32(), V3::from(d).to_f32()));
+            }
+        }
+        check_packets::<f32x16>(&bvh, &brute, &rays, 16);
+        check_packets::<f32x8>(&bvh, &brute, &rays, 8);
     }
 }
 
@@ -165,20 +199,9 @@ fn single_ray_switch_keeps_the_brute_force_answer() {
         let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
         let packets = coherent_rays(2000, 16, seed + 100);
-        let box_tests = |bvh: &mut Scene, lanes: u32| {
-            bvh.geometry.bvh.as_mut().unwrap().single_ray_lanes = lanes;
-            bareray::accel::set_counting(true);
-            bareray::accel::take_work();
-            for chunk in packets.chunks(16) {
-                let packet = RayPacket::<f32x16>::from_rays(chunk, f32::INFINITY);
-                bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
-            }
-            let tests = bareray::accel::take_work().box_tests;
-            bareray::accel::set_counting(false);
-            tests
-        };
         // Full packets start above the threshold: a difference can only come from switching inside the tree.
-        let (never, some) = (box_tests(&mut bvh, 0), box_tests(&mut bvh, 3));
+        let never = packet_box_tests(&mut bvh, &packets, |b| b.single_ray_lanes = 0);
+        let some = packet_box_tests(&mut bvh, &packets, |b| b.single_ray_lanes = 3);
         assert_ne!(never, some, "{n} spheres: no subtree was walked by single rays");
         for lanes in [0, 1, 3, 8, 16] {
             bvh.geometry.bvh.as_mut().unwrap().single_ray_lanes = lanes;

@@ -25,7 +25,7 @@ pub struct Work {
     /// Packet–primitive tests: spheres in visited BVH leaves (or all spheres without a BVH), shapes and
     /// triangles.
     pub prim_tests: u64,
-    /// Packet–box slab tests in BVH traversal (one per visited node and occupied child, fewer where interval
+    /// Packet–box slab tests in BVH traversal (one per visited node and occupied child, fewer where frustum
     /// culling rules children out; for single rays each node's 4-wide test counts as N).
     pub box_tests: u64,
 }

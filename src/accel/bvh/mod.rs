@@ -125,12 +125,14 @@ fn front_to_back(children: &[ChildRef], octant: usize) -> u8 {
 pub struct Bvh {
     /// Flattened nodes, depth-first.
     pub nodes: Vec<Node>,
-    /// Test each node against shared-origin packets as a whole first ([`packet`]'s interval test). Off by
-    /// default: measured slower on every field (PERF.md, "Whole-packet culling").
-    pub interval_culling: bool,
     /// Subtrees entered by at most this many live lanes of a packet are walked one ray at a time
     /// ([`SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
     pub single_ray_lanes: u32,
+    /// Test each node's children against a shared-origin packet as a whole (its frustum, [`packet`])
+    /// before their lanes. On by default (PERF.md, "Frustum culling").
+    pub frustum_culling: bool,
+    /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
+    pub extent: f32,
 }
 
 impl Bvh {
@@ -189,7 +191,14 @@ pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, B
     *spheres = permuted;
     let stats =
         BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: nodes.len() * size_of::<Node>() };
-    (Bvh { nodes, interval_culling: false, single_ray_lanes: SINGLE_RAY_MAX_LANES }, stats)
+    let extent = extent(&nodes[0]);
+    (Bvh { nodes, single_ray_lanes: SINGLE_RAY_MAX_LANES, frustum_culling: true, extent }, stats)
+}
+
+/// The largest coordinate magnitude of the root's occupied child boxes.
+fn extent(root: &Node) -> f32 {
+    let slots = usize::from(root.slots);
+    root.bounds.iter().flatten().flat_map(|axis| axis[..slots].iter()).fold(0.0f32, |m, v| m.max(v.abs()))
 }
 
 /// bareray's 4-wide nodes from obvhs's binary tree.

@@ -3,16 +3,16 @@
 //! is skipped for every lane that has already hit something nearer. Children are pushed in the node's
 //! precomputed order for the octant of the packet's first live lane, so the nearest is popped first.
 //!
-//! With [`Bvh::interval_culling`], packets whose live lanes share one origin (camera rays) first test each
-//! node's children against the whole packet at once by interval arithmetic ([`Interval`]), and run the K-lane
-//! slab test only on the children it cannot rule out. It is off by default: on the contract fields the
-//! bounds on `1/d` are too loose near the view axis to rule out enough children to pay for themselves.
+//! Packets whose live lanes share one origin (camera rays) first test each node's children against the whole
+//! packet at once ([`Frustum`]: four planes, one 4-wide pass) and run the K-lane slab test only on the
+//! children it cannot rule out ([`Bvh::frustum_culling`]). On the contract fields two thirds of the children
+//! a packet visits are missed by all its lanes, and this rules out nearly all of those.
 
 use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{slab_entry, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N, WIDEN};
+use super::{slab_entry, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
 use crate::geometry::{HitPacket, Ray};
 use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
@@ -24,19 +24,20 @@ struct SlabRays<F: Lanes> {
     octant: usize,
     /// Per axis, the side of the near plane ([`super::near_side`]), when every live lane's is the same.
     near: Option<[usize; 3]>,
-    /// The whole-packet bounds, when asked for and the live lanes share an origin.
-    interval: Option<Interval>,
+    /// The whole-packet pyramid, when asked for and the live lanes share an origin.
+    frustum: Option<Frustum>,
 }
 
 impl<F: Lanes> SlabRays<F> {
-    fn new(ray: &Ray<F>, live: F::Mask, interval: bool) -> Self {
+    /// `extent` bounds the boxes' coordinates when frustum culling is wanted.
+    fn new(ray: &Ray<F>, live: F::Mask, extent: Option<f32>) -> Self {
         let slab = SlabRay::new(ray);
         let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
         let octant = negative(ray.dir.x) | negative(ray.dir.y) << 1 | negative(ray.dir.z) << 2;
-        let interval = if interval { Interval::new(&ray.origin, &slab.inv_dir, live) } else { None };
         let near = Self::shared_near_side(&slab.inv_dir, live);
-        Self { slab, octant, near, interval }
+        let frustum = extent.and_then(|extent| Frustum::new(&ray.origin, &ray.dir, live, extent));
+        Self { slab, octant, near, frustum }
     }
 
     /// The near sides of the live lanes, if they agree on every axis.
@@ -65,53 +66,94 @@ impl<F: Lanes> SlabRays<F> {
     }
 }
 
-/// The packet as one interval ray: a shared origin and, per axis, the range of the live lanes' inverse
-/// directions. For a fixed difference `a = lo − o`, the rounded product `a·inv` is monotone in `inv`, so
-/// every lane's slab distances lie between the products at the range's ends: a box whose lower bound on
-/// entry exceeds its upper bound on exit is missed by every lane, exactly as the
-/// lanes' own tests would find. Nothing is culled when a bound is NaN (comparisons are false).
+/// One side of a [`Frustum`]: a plane through the shared origin that every live ray lies on the positive side
+/// of, with the box corner that is farthest along its normal picked per axis.
 #[derive(Clone, Copy)]
-struct Interval {
-    origin: [f32; 3],
-    inv_lo: [f32; 3],
-    inv_hi: [f32; 3],
+struct Side {
+    normal: [f32; 3],
+    /// Per axis, the box side (0 lower, 1 upper) farthest along the normal.
+    far_side: [usize; 3],
+    /// `normal · origin − tolerance`: a box whose farthest corner is below this is outside.
+    offset: f32,
 }
 
-impl Interval {
-    fn new<F: Lanes>(origin: &V3<F>, inv: &V3<F>, live: F::Mask) -> Option<Self> {
+/// The packet as a pyramid: its live lanes share an origin, and four planes through it enclose every live
+/// direction. A box wholly outside one plane is missed by every lane, so the node's K-lane slab tests run
+/// only on the children the pyramid may reach. The planes are widened by margins that cover the rounding of
+/// their construction and of the box test, so the test never rules out a box an exact ray enters.
+#[derive(Clone, Copy)]
+pub(super) struct Frustum {
+    sides: [Side; 4],
+}
+
+impl Frustum {
+    fn new<F: Lanes>(origin: &V3<F>, dir: &V3<F>, live: F::Mask, extent: f32) -> Option<Self> {
         let bits = F::move_mask(live);
         if F::K == 1 || bits == 0 {
             return None;
         }
-        let first = bits.trailing_zeros() as usize;
+        let (first, last) = (bits.trailing_zeros() as usize, 31 - bits.leading_zeros() as usize);
         let o = [origin.x.lane(first), origin.y.lane(first), origin.z.lane(first)];
         let same = |v: F, o: f32| v.le(F::splat_f32(o)) & v.ge(F::splat_f32(o));
         if !(same(origin.x, o[0]) & same(origin.y, o[1]) & same(origin.z, o[2]) | !live).all() {
             return None;
         }
-        let lo = |v: F| F::select(live, v, F::splat_f32(f32::INFINITY)).reduce_min();
-        let hi = |v: F| F::select(live, v, F::splat_f32(f32::NEG_INFINITY)).reduce_max();
+        // Axis: between the first and last live directions (opposite corners of a camera tile); u and v
+        // complete an orthonormal basis. Any axis gives valid planes; a central one gives tight ones.
+        let lane = |i: usize| glam::Vec3::new(dir.x.lane(i), dir.y.lane(i), dir.z.lane(i));
+        let c = (lane(first) + lane(last)).try_normalize()?;
+        let (u, v) = c.any_orthonormal_pair();
+        let along =
+            |b: glam::Vec3| dir.x * F::splat_f32(b.x) + dir.y * F::splat_f32(b.y) + dir.z * F::splat_f32(b.z);
+        let (du, dv, dc) = (along(u), along(v), along(c));
+        if !(dc.gt(F::splat_f32(0.0)) | !live).all() {
+            return None;
+        }
+        let inv = F::splat_f32(1.0) / dc;
+        let (ru, rv) = (du * inv, dv * inv);
+        // The ratios are finite (dc > 0 on live lanes), so plain comparisons fold them.
+        let fold = |r: F, fill: f32, pick: fn(f32, f32) -> f32| {
+            F::select(live, r, F::splat_f32(fill)).to_array().as_ref().iter().copied().fold(fill, pick)
+        };
+        let lo = |r: F| fold(r, f32::INFINITY, |a, b| if b < a { b } else { a });
+        let hi = |r: F| fold(r, f32::NEG_INFINITY, |a, b| if b > a { b } else { a });
+        let (u0, u1, v0, v1) = (lo(ru), hi(ru), lo(rv), hi(rv));
+        let r_max = u0.abs().max(u1.abs()).max(v0.abs()).max(v1.abs());
+        // Wider than about 83° off the axis (or NaN): no frustum.
+        if r_max.is_nan() || r_max > 8.0 {
+            return None;
+        }
+        // |d|₁/dc ≤ √3·|d|/dc = √3·√(1 + ru² + rv²) for the (nearly) orthonormal basis; call it kappa. The
+        // ratios err by at most about 4u·kappa·(1 + |r|), the rounded normals by 2u(1 + |r|) per unit of
+        // |d|₁/dc: 64ε·kappa·(1 + r_max) covers both with room.
+        let kappa = 2.0 * (1.0 + 1.5 * r_max);
+        let margin = 64.0 * f32::EPSILON * kappa * (1.0 + r_max);
+        let normals =
+            [u - (u0 - margin) * c, (u1 + margin) * c - u, v - (v0 - margin) * c, (v1 + margin) * c - v];
+        let o = glam::Vec3::from(o);
+        let reach = extent.max(o.abs().max_element());
         Some(Self {
-            origin: o,
-            inv_lo: [lo(inv.x), lo(inv.y), lo(inv.z)],
-            inv_hi: [hi(inv.x), hi(inv.y), hi(inv.z)],
+            sides: normals.map(|n| Side {
+                normal: n.to_array(),
+                far_side: n.to_array().map(|x| usize::from(x >= 0.0)),
+                // The box test sums 3 products and this offset, all within |n|₁·reach: 16ε of that is ample.
+                offset: n.dot(o) - 16.0 * f32::EPSILON * n.abs().element_sum() * reach,
+            }),
         })
     }
 
     /// Bit `c` set for each child of `n` that some lane may enter.
     #[inline(always)]
     fn maybe_entered(&self, n: &Node) -> u32 {
-        let mut near = f32x4::splat(0.0);
-        let mut far = f32x4::splat(f32::INFINITY);
-        for a in 0..3 {
-            let o = f32x4::splat(self.origin[a]);
-            let (lo, hi) = (f32x4::from(n.lo()[a]) - o, f32x4::from(n.hi()[a]) - o);
-            let (i0, i1) = (f32x4::splat(self.inv_lo[a]), f32x4::splat(self.inv_hi[a]));
-            let (p0, p1, p2, p3) = (lo * i0, lo * i1, hi * i0, hi * i1);
-            near = near.max(p0.min(p1).min(p2.min(p3)));
-            far = far.min(p0.max(p1).max(p2.max(p3)));
+        let mut outside = 0;
+        for side in &self.sides {
+            let plane = |a: usize| f32x4::from(n.bounds[side.far_side[a]][a]);
+            let w = |a: usize| f32x4::splat(side.normal[a]);
+            let s = plane(2)
+                .mul_add(w(2), plane(1).mul_add(w(1), plane(0).mul_add(w(0), f32x4::splat(-side.offset))));
+            outside |= f32x4::move_mask(Real::lt(s, f32x4::splat(0.0)));
         }
-        !f32x4::move_mask(near.gt(far * f32x4::splat(WIDEN)))
+        !outside
     }
 }
 
@@ -143,7 +185,7 @@ impl Bvh {
         stack: &mut Stack<Entry<F>>,
         tests: &mut usize,
     ) -> Option<Entry<F>> {
-        let maybe = rays.interval.as_ref().map_or(u32::MAX, |interval| interval.maybe_entered(n));
+        let maybe = rays.frustum.as_ref().map_or(u32::MAX, |frustum| frustum.maybe_entered(n));
         let mut nearest = None;
         for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
             *tests += 1;
@@ -165,7 +207,7 @@ impl Bvh {
         live: F::Mask,
         best: &mut HitPacket<F>,
     ) {
-        let rays = SlabRays::new(&q.ray, live, self.interval_culling);
+        let rays = SlabRays::new(&q.ray, live, self.frustum_culling.then_some(self.extent));
         let mut stack = Stack::<Entry<F>>::new();
         let limit = |lanes: F::Mask, best: &HitPacket<F>| {
             F::select(lanes, best.t.min_of(q.t_max), F::splat_f32(f32::NEG_INFINITY))
@@ -201,7 +243,7 @@ impl Bvh {
         live: F::Mask,
         blocker: &mut u32,
     ) -> F::Mask {
-        let rays = SlabRays::new(&q.ray, live, self.interval_culling);
+        let rays = SlabRays::new(&q.ray, live, self.frustum_culling.then_some(self.extent));
         let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
