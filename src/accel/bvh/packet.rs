@@ -147,7 +147,8 @@ impl Frustum {
     fn maybe_entered(&self, n: &Node) -> u32 {
         let mut outside = 0;
         for side in &self.sides {
-            let plane = |a: usize| f32x4::from(n.bounds[side.far_side[a]][a]);
+            // `& 1` lets the compiler drop the bounds check (far_side is 0 or 1).
+            let plane = |a: usize| f32x4::from(n.bounds[side.far_side[a] & 1][a]);
             let w = |a: usize| f32x4::splat(side.normal[a]);
             let s = plane(2)
                 .mul_add(w(2), plane(1).mul_add(w(1), plane(0).mul_add(w(0), f32x4::splat(-side.offset))));
@@ -185,7 +186,10 @@ impl Bvh {
         stack: &mut Stack<Entry<F>>,
         tests: &mut usize,
     ) -> Option<Entry<F>> {
-        let maybe = rays.frustum.as_ref().map_or(u32::MAX, |frustum| frustum.maybe_entered(n));
+        let maybe = match &rays.frustum {
+            Some(frustum) => frustum.maybe_entered(n),
+            None => u32::MAX,
+        };
         let mut nearest = None;
         for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
             *tests += 1;
