@@ -292,34 +292,56 @@ pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
     bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
 }
 
-/// [`primary_hits`] at a packet width chosen at run time.
+impl PrimaryHits {
+    /// A frame of misses, to be filled by [`trace_primary`].
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            t: vec![f32::INFINITY; n],
+            prim: vec![crate::geometry::NO_PRIM; n],
+            seconds: 0.0,
+        }
+    }
+}
+
+/// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on a new pool of
+/// `threads` ([`trace_primary`]).
 pub fn primary_hits_lanes(
     scene: &Scene,
     lanes: usize,
     threads: Option<usize>,
 ) -> Result<PrimaryHits, rayon::ThreadPoolBuildError> {
+    let pool = thread_pool(threads)?;
+    let mut hits = PrimaryHits::new(scene.camera.width, scene.camera.height);
+    trace_primary_lanes(scene, lanes, &pool, &mut hits);
+    Ok(hits)
+}
+
+/// [`trace_primary`] at a packet width chosen at run time.
+pub fn trace_primary_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
     match lanes {
-        1 => primary_hits::<f32>(scene, threads),
-        4 => primary_hits::<f32x4>(scene, threads),
-        8 => primary_hits::<f32x8>(scene, threads),
-        16 => primary_hits::<f32x16>(scene, threads),
+        1 => trace_primary::<f32>(scene, pool, hits),
+        4 => trace_primary::<f32x4>(scene, pool, hits),
+        8 => trace_primary::<f32x8>(scene, pool, hits),
+        16 => trace_primary::<f32x16>(scene, pool, hits),
         _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
     }
 }
 
-/// Traces one camera ray per pixel centre in packets of `F::K` and keeps the closest hits.
-pub fn primary_hits<F: Lanes>(
-    scene: &Scene,
-    threads: Option<usize>,
-) -> Result<PrimaryHits, rayon::ThreadPoolBuildError> {
+/// Traces one camera ray per pixel centre in packets of `F::K` on `pool` and writes the closest hits into
+/// `hits` (sized to the camera), every pixel; `hits.seconds` is the wall-clock time of the tracing. Taking
+/// the frame and the pool from the caller lets repeated frames (`bench`) reuse both, as a peer harness
+/// reuses its frame buffers and threads.
+pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
     use crate::geometry::DeparturePacket;
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
-    let n = width as usize * height as usize;
-    let mut hits = PrimaryHits { width, height, t: vec![0.0; n], prim: vec![0; n], seconds: 0.0 };
+    assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the camera's");
     // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
     let band = width as usize * TILE as usize;
-    thread_pool(threads)?.install(|| {
+    pool.install(|| {
         let bands = hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate();
         bands.for_each(|(band, (t, prim))| {
             let camera = &scene.camera_f64;
@@ -342,5 +364,4 @@ pub fn primary_hits<F: Lanes>(
         });
     });
     hits.seconds = start.elapsed().as_secs_f64();
-    Ok(hits)
 }

@@ -10,7 +10,7 @@ use indicatif::ProgressBar;
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes};
-use crate::render::{fnv1a, primary_hits_lanes, render_lanes};
+use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::{Accel, BvhPreset, Scene};
 
 /// Arguments of `bareray bench`.
@@ -163,9 +163,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
 fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
     let mut times = Vec::with_capacity(args.reps as usize);
     let (mut rays, mut checksum) = (0, 0);
+    // Primary rays: one frame and one thread pool for every repetition, as the peer harnesses do.
+    let pool = thread_pool(Some(threads))?;
+    let mut hits = PrimaryHits::new(scene.camera.width, scene.camera.height);
     for rep in 0..=args.reps {
         let seconds = if args.primary_only {
-            let hits = primary_hits_lanes(scene, lanes, Some(threads))?;
+            trace_primary_lanes(scene, lanes, &pool, &mut hits);
             rays = hits.t.len() as u64;
             checksum = hits.checksum(scene);
             hits.seconds
