@@ -164,11 +164,14 @@ fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Res
     let mut times = Vec::with_capacity(args.reps as usize);
     let (mut rays, mut checksum) = (0, 0);
     // Primary rays: one frame and one thread pool for every repetition, as the peer harnesses do.
-    let pool = thread_pool(Some(threads))?;
-    let mut hits = PrimaryHits::new(scene.camera.width, scene.camera.height);
+    let mut frame = if args.primary_only {
+        Some((thread_pool(Some(threads))?, PrimaryHits::new(scene.camera.width, scene.camera.height)))
+    } else {
+        None
+    };
     for rep in 0..=args.reps {
-        let seconds = if args.primary_only {
-            trace_primary_lanes(scene, lanes, &pool, &mut hits);
+        let seconds = if let Some((pool, hits)) = &mut frame {
+            trace_primary_lanes(scene, lanes, pool, hits);
             rays = hits.t.len() as u64;
             checksum = hits.checksum(scene);
             hits.seconds

@@ -29,13 +29,19 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 /// list is 460 MB of text) and joined in file order, so ids, and the first error reported, are those of a
 /// sequential read.
 pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
-    let parsed: Vec<_> = line_chunks(source, CHUNK_BYTES)
-        .into_par_iter()
-        .map(|(text, first)| parse_lines(path, text, first))
-        .collect();
+    let chunks = line_chunks(source, CHUNK_BYTES);
+    let parsed: Vec<_> = chunks.par_iter().map(|text| parse_lines(text)).collect();
     let mut spheres = Vec::with_capacity(parsed.iter().map(|r| r.as_ref().map_or(0, Vec::len)).sum());
-    for chunk in parsed {
-        spheres.extend(chunk?);
+    for (k, chunk) in parsed.into_iter().enumerate() {
+        match chunk {
+            Ok(chunk) => spheres.extend(chunk),
+            // Line numbers are counted only for a report: the chunks before the bad one, then its own line.
+            Err((line, message)) => {
+                let before: usize =
+                    chunks[..k].iter().map(|text| text.bytes().filter(|&b| b == b'\n').count()).sum();
+                return Err(SceneError::at_line(path, before + line, message));
+            }
+        }
     }
     if spheres.is_empty() {
         return Err(SceneError::whole_file(path, "no spheres: expected lines of `x y z r`"));
@@ -46,31 +52,29 @@ pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
 /// Bytes of text per parallel chunk.
 const CHUNK_BYTES: usize = 1 << 20;
 
-/// `source` cut after a newline every `size` bytes or so: each piece and the line number it starts at.
-fn line_chunks(source: &str, size: usize) -> Vec<(&str, usize)> {
+/// `source` cut after a newline every `size` bytes or so.
+fn line_chunks(source: &str, size: usize) -> Vec<&str> {
     let bytes = source.as_bytes();
-    let (mut chunks, mut start, mut line) = (Vec::new(), 0, 1);
+    let (mut chunks, mut start) = (Vec::new(), 0);
     while start < bytes.len() {
         let cut = (start + size).min(bytes.len());
         let end = bytes[cut..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| cut + p + 1);
         // `end` follows a '\n' or is the end, so it is a char boundary.
-        let text = &source[start..end];
-        chunks.push((text, line));
-        line += text.bytes().filter(|&b| b == b'\n').count();
+        chunks.push(&source[start..end]);
         start = end;
     }
     chunks
 }
 
-/// The spheres of `text`, whose first line is line `first` of the file.
-fn parse_lines(path: &Path, text: &str, first: usize) -> Result<Vec<SphereDesc>, SceneError> {
+/// The spheres of `text`, or the first bad line's number within `text` (from 1) and what is wrong with it.
+fn parse_lines(text: &str) -> Result<Vec<SphereDesc>, (usize, String)> {
     let mut spheres = Vec::new();
     for (i, line) in text.lines().enumerate() {
         let text = line.trim();
         if text.is_empty() || text.starts_with('#') {
             continue;
         }
-        spheres.push(sphere(text).map_err(|m| SceneError::at_line(path, first + i, m))?);
+        spheres.push(sphere(text).map_err(|m| (i + 1, m))?);
     }
     Ok(spheres)
 }
