@@ -189,8 +189,19 @@ pub fn for_each_packet<F: Lanes>(
             } else {
                 F::mask_from_fn(|i| (i as u32 % bw) < b.w && (i as u32 / bw) < b.h)
             };
-            let rays =
-                RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
+            // The lanes' own sums at the block's first and last column and row.
+            let span =
+                |at: u32, lanes: u32, d: f32| [(at as f32 + 0.0) + d, (at as f32 + (lanes - 1) as f32) + d];
+            let pyramid = (F::K > 1)
+                .then(|| camera.pyramid(span(tile.x0 + bx, bw, dx), span(tile.y0 + by, bh, dy)))
+                .flatten();
+            let rays = RayPacket {
+                origin: ray.origin,
+                dir: ray.dir,
+                t_max: F::splat_f32(f32::INFINITY),
+                active,
+                pyramid,
+            };
             visit(&rays, b);
         }
     }
@@ -237,7 +248,13 @@ fn half_pixel_tile<F: Lanes>(camera: &Camera<f64>, tracer: &mut Tracer<F>, tile:
         let sy = F::from_fn(|i| tile.y0 as f32 + point(i).1 as f32 * 0.5);
         let ray = camera.rays(sx, sy);
         let active = F::lanes_below(n - first);
-        let rays = RayPacket { origin: ray.origin, dir: ray.dir, t_max: F::splat_f32(f32::INFINITY), active };
+        let rays = RayPacket {
+            origin: ray.origin,
+            dir: ray.dir,
+            t_max: F::splat_f32(f32::INFINITY),
+            active,
+            pyramid: None,
+        };
         let c = tracer.primary(&rays);
         lattice.extend((0..F::K.min(n - first)).map(|i| lane_rgb(&c, i)));
     }

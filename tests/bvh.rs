@@ -167,17 +167,22 @@ fn frustum_culling_keeps_grazing_rays_from_near_and_far() {
     let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
     let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
     let mut rng = Rng(SplitMix64::new(12));
-    for (distance, spread) in [(4.0, 0.0), (4.0, 0.3), (1e3, 0.0), (1e5, 0.0), (4.0, 2.0)] {
+    // Arc: the packet's rays aim around the whole silhouette, or all at one point of it (a thin pyramid
+    // tangent to the sphere, which the leaf's sphere test must not rule out).
+    let cases =
+        [(4.0, 0.0), (4.0, 0.3), (1e3, 0.0), (1e5, 0.0), (4.0, 2.0)].map(|c| (c, std::f64::consts::TAU));
+    for ((distance, spread), arc) in cases.into_iter().chain([((4.0, 0.0), 1e-6), ((1e3, 0.0), 1e-6)]) {
         let mut rays = Vec::new();
         for packet in 0..120 {
             let aim = desc.spheres[packet * 3 % desc.spheres.len()];
             let dir =
                 DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)).normalize();
             let o = aim.center - dir * distance;
+            let start = rng.range(0.0, std::f64::consts::TAU);
             for _ in 0..16 {
                 // A point on the silhouette circle (seen from o), nudged by a relative 1e-7 either way.
                 let side = dir.any_orthonormal_pair();
-                let angle = rng.range(0.0, std::f64::consts::TAU);
+                let angle = start + rng.range(0.0, arc);
                 let rim = side.0 * angle.cos() + side.1 * angle.sin();
                 let target = aim.center + rim * aim.radius * (1.0 + rng.range(-1e-7, 1e-7));
                 let jitter = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));

@@ -206,3 +206,67 @@ fn camera_rays_are_the_contract_rays_rounded_once_at_every_width() {
     lanes_match::<f32x8>(&cam);
     lanes_match::<f32x16>(&cam);
 }
+
+/// `n · d` in f64: exact products of f32 values, so its sign is the exact one unless d lies within about
+/// 1e-16 of the plane.
+fn side(n: &[f32; 3], d: &V3<f32>) -> f64 {
+    f64::from(n[0]) * f64::from(d.x) + f64::from(n[1]) * f64::from(d.y) + f64::from(n[2]) * f64::from(d.z)
+}
+
+#[test]
+fn block_pyramids_enclose_their_rays_and_exclude_the_next_pixels() {
+    use proptest::prelude::*;
+    use proptest::test_runner::{Config, TestRunner};
+    let angle = prop_oneof![0.001f64..1.0, 1.0f64..170.0, 170.0f64..179.9];
+    let vector = || [-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0];
+    let cameras = (vector(), vector(), vector(), -1e4f64..1e4, angle, 1u32..5000, 1u32..5000, 0.0f32..1.0);
+    let mut runner = TestRunner::new(Config { cases: 400, ..Config::default() });
+    runner
+        .run(&cameras, |(eye, aim, up, scale, theta, width, height, offset)| {
+            let v = |a: [f64; 3]| DVec3::from_array(a);
+            let desc = CameraDesc {
+                eye: v(eye) * scale,
+                aim: Aim::Direction(v(aim)),
+                up: v(up),
+                distance: 1.0,
+                field: Field::HorizontalAngle(theta),
+                width,
+                height,
+                sweep: Sweep::PixelCentre,
+            };
+            let Ok(cam) = Camera::new(&desc) else { return Ok(()) };
+            // 4 × 4 blocks at the corners and the middle of the image, sampled at `offset` in the pixel.
+            let (w, h) = (width as f32, height as f32);
+            for (x0, y0) in [(0.0, 0.0), (w - 4.0, h - 4.0), ((w / 2.0).floor(), (h / 2.0).floor())] {
+                let (sx, sy) = ([x0 + offset, x0 + 3.0 + offset], [y0 + offset, y0 + 3.0 + offset]);
+                let Some(p) = cam.pyramid(sx, sy) else {
+                    prop_assert!(
+                        cam.half_w + cam.half_h > 400.0,
+                        "no pyramid for a {}×{} window",
+                        cam.half_w,
+                        cam.half_h
+                    );
+                    continue;
+                };
+                for (i, j) in (0..4).flat_map(|j| (0..4).map(move |i| (i as f32, j as f32))) {
+                    let ray = cam.ray_f32(sx[0] + i, sy[0] + j);
+                    prop_assert_eq!([ray.origin.x, ray.origin.y, ray.origin.z], p.apex);
+                    for n in &p.normals {
+                        prop_assert!(side(n, &ray.dir) >= 0.0, "ray ({i}, {j}) outside {n:?}");
+                    }
+                }
+                // Tight: the next pixel beyond each side is outside it, where a pixel is far wider than the
+                // margins (about 1e-6 of the view).
+                if (1.0..=170.0).contains(&theta) && width.max(height) <= 4096 {
+                    // Window v falls as the row rises: the third side bounds the bottom row, the fourth the top.
+                    let beyond = [(-1.0, 0.0), (4.0, 0.0), (0.0, 4.0), (0.0, -1.0)];
+                    for (n, (i, j)) in p.normals.iter().zip(beyond) {
+                        let ray = cam.ray_f32(sx[0] + i, sy[0] + j);
+                        prop_assert!(side(n, &ray.dir) < 0.0, "pixel ({i}, {j}) beyond {n:?} is inside");
+                    }
+                }
+            }
+            Ok(())
+        })
+        .unwrap();
+}

@@ -23,6 +23,8 @@ pub struct SphereQuery<'a, F: Lanes> {
     pub t_max: F,
     /// The departure sphere of each ray.
     pub skip: F::Ids,
+    /// Planes enclosing the live rays, from the packet's maker ([`crate::geometry::RayPacket::pyramid`]).
+    pub pyramid: Option<crate::geometry::Pyramid>,
 }
 
 impl<F: Lanes> SphereQuery<'_, F> {
@@ -35,6 +37,7 @@ impl<F: Lanes> SphereQuery<'_, F> {
             ray: Ray::new(v(self.ray.origin), v(self.ray.dir)),
             t_max: self.t_max.lane(i),
             skip: self.skip.lane(i),
+            pyramid: None,
         }
     }
 
@@ -52,10 +55,10 @@ impl<F: Lanes> SphereQuery<'_, F> {
         Some((live & hit & !F::ids_eq(F::Ids::splat(i as u32), self.skip), t))
     }
 
-    /// Closest hits of the spheres in `range` for the lanes of `live`, merged into `best`.
+    /// Closest hits of `spheres` (indices) for the lanes of `live`, merged into `best`.
     #[inline(always)]
-    pub fn intersect(&self, range: std::ops::Range<usize>, live: F::Mask, best: &mut HitPacket<F>) {
-        for i in range {
+    pub fn intersect(&self, spheres: impl Iterator<Item = usize>, live: F::Mask, best: &mut HitPacket<F>) {
+        for i in spheres {
             if let Some((hit, t)) = self.sphere(i, live) {
                 best.update(hit, t, F::Ids::splat(i as u32), F::Ids::splat(self.spheres.key[i]));
             }

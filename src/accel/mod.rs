@@ -250,19 +250,25 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> SphereQuery<'a, F> {
-        SphereQuery { spheres: &self.spheres, ray: rays.ray(), t_max: rays.t_max, skip: from.prim }
+        SphereQuery {
+            spheres: &self.spheres,
+            ray: rays.ray(),
+            t_max: rays.t_max,
+            skip: from.prim,
+            pyramid: rays.pyramid,
+        }
     }
 
     /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].
     pub fn intersect(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> Hit {
-        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true };
+        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true, pyramid: None };
         let hit = self.intersect_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward });
         Hit { t: hit.t, prim: hit.prim }
     }
 
     /// Whether one ray meets anything in `[0, t_max)`: the K = 1 instance of [`Geometry::occluded_k`].
     pub fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
-        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true };
+        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true, pyramid: None };
         self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
     }
 

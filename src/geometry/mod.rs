@@ -8,7 +8,7 @@ mod ray;
 mod shape;
 mod sphere;
 
-pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, RayPacket};
+pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
 pub use polygon::intersect_triangle;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};

@@ -31,6 +31,20 @@ pub struct RayPacket<F: Lanes> {
     pub t_max: F,
     /// Lanes that carry a ray; the others are ignored by every kernel and report misses.
     pub active: F::Mask,
+    /// Planes enclosing every active ray, when the packet's maker knows them (camera blocks): the BVH culls
+    /// a node's children for the whole packet by them. `None` leaves it to the BVH to find its own.
+    pub pyramid: Option<Pyramid>,
+}
+
+/// Four planes through a point that enclose a packet's rays: every active lane's origin is `apex`, and its
+/// direction `d` satisfies `n · d ≥ 0` for each normal `n`, evaluated exactly on the stored f32 values
+/// (whoever builds one widens it past the rounding of the rays and of the normals).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Pyramid {
+    /// The rays' shared origin.
+    pub apex: [f32; 3],
+    /// Inward normals of the four sides.
+    pub normals: [[f32; 3]; 4],
 }
 
 impl<F: Lanes> RayPacket<F> {
@@ -49,6 +63,7 @@ impl<F: Lanes> RayPacket<F> {
             dir: V3::new(get(|l| l.0.dir.x), get(|l| l.0.dir.y), get(|l| l.0.dir.z)),
             t_max: get(|l| l.1),
             active: F::mask_from_fn(|i| lanes[i].2),
+            pyramid: None,
         }
     }
 

@@ -133,6 +133,8 @@ pub struct Bvh {
     pub frustum_culling: bool,
     /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
     pub extent: f32,
+    /// The padding the spheres' boxes were built with ([`padding`]): the frustum's sphere test pads by it too.
+    pub pad: f32,
 }
 
 impl Bvh {
@@ -192,7 +194,7 @@ pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, B
     let stats =
         BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: nodes.len() * size_of::<Node>() };
     let extent = extent(&nodes[0]);
-    (Bvh { nodes, single_ray_lanes: SINGLE_RAY_MAX_LANES, frustum_culling: true, extent }, stats)
+    (Bvh { nodes, single_ray_lanes: SINGLE_RAY_MAX_LANES, frustum_culling: true, extent, pad }, stats)
 }
 
 /// The largest coordinate magnitude of the root's occupied child boxes.

@@ -6,14 +6,16 @@
 //! Packets whose live lanes share one origin (camera rays) first test each node's children against the whole
 //! packet at once ([`Frustum`]: four planes, one 4-wide pass) and run the K-lane slab test only on the
 //! children it cannot rule out ([`Bvh::frustum_culling`]). On the contract fields two thirds of the children
-//! a packet visits are missed by all its lanes, and this rules out nearly all of those.
+//! a packet visits are missed by all its lanes, and this rules out nearly all of those. In leaves the same
+//! planes rule out single spheres before their K-lane test. The planes come with the packet when its maker
+//! knows them (the camera's blocks, [`crate::camera::Camera::pyramid`]), else they are fitted to the lanes.
 
 use wide::f32x4;
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
 use super::{slab_entry, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
-use crate::geometry::{HitPacket, Ray};
+use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
 
@@ -29,14 +31,20 @@ struct SlabRays<F: Lanes> {
 }
 
 impl<F: Lanes> SlabRays<F> {
-    /// `extent` bounds the boxes' coordinates when frustum culling is wanted.
-    fn new(ray: &Ray<F>, live: F::Mask, extent: Option<f32>) -> Self {
+    /// `extent` bounds the boxes' coordinates when frustum culling is wanted; the query's own pyramid is
+    /// used when it carries one, else one is fitted to the live lanes.
+    fn new(q: &SphereQuery<F>, live: F::Mask, extent: Option<f32>) -> Self {
+        let ray = &q.ray;
         let slab = SlabRay::new(ray);
         let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
         let octant = negative(ray.dir.x) | negative(ray.dir.y) << 1 | negative(ray.dir.z) << 2;
         let near = Self::shared_near_side(&slab.inv_dir, live);
-        let frustum = extent.and_then(|extent| Frustum::new(&ray.origin, &ray.dir, live, extent));
+        let frustum = extent.and_then(|extent| {
+            let pyramid = q.pyramid.or_else(|| fit_pyramid(&ray.origin, &ray.dir, live))?;
+            debug_assert!(encloses(&pyramid, ray, live), "{pyramid:?} misses a live ray");
+            Some(Frustum::new(&pyramid, extent))
+        });
         Self { slab, octant, near, frustum }
     }
 
@@ -84,62 +92,53 @@ struct Side {
 #[derive(Clone, Copy)]
 pub(super) struct Frustum {
     sides: [Side; 4],
+    /// The four sides again, one per lane, for the sphere test: normal components, `|n|` rounded up, and
+    /// the offsets.
+    nx: f32x4,
+    ny: f32x4,
+    nz: f32x4,
+    norm: f32x4,
+    offset: f32x4,
 }
 
 impl Frustum {
-    fn new<F: Lanes>(origin: &V3<F>, dir: &V3<F>, live: F::Mask, extent: f32) -> Option<Self> {
-        let bits = F::move_mask(live);
-        if F::K == 1 || bits == 0 {
-            return None;
-        }
-        let (first, last) = (bits.trailing_zeros() as usize, 31 - bits.leading_zeros() as usize);
-        let o = [origin.x.lane(first), origin.y.lane(first), origin.z.lane(first)];
-        let same = |v: F, o: f32| v.le(F::splat_f32(o)) & v.ge(F::splat_f32(o));
-        if !(same(origin.x, o[0]) & same(origin.y, o[1]) & same(origin.z, o[2]) | !live).all() {
-            return None;
-        }
-        // Axis: between the first and last live directions (opposite corners of a camera tile); u and v
-        // complete an orthonormal basis. Any axis gives valid planes; a central one gives tight ones.
-        let lane = |i: usize| glam::Vec3::new(dir.x.lane(i), dir.y.lane(i), dir.z.lane(i));
-        let c = (lane(first) + lane(last)).try_normalize()?;
-        let (u, v) = c.any_orthonormal_pair();
-        let along =
-            |b: glam::Vec3| dir.x * F::splat_f32(b.x) + dir.y * F::splat_f32(b.y) + dir.z * F::splat_f32(b.z);
-        let (du, dv, dc) = (along(u), along(v), along(c));
-        if !(dc.gt(F::splat_f32(0.0)) | !live).all() {
-            return None;
-        }
-        let inv = F::splat_f32(1.0) / dc;
-        let (ru, rv) = (du * inv, dv * inv);
-        // The ratios are finite (dc > 0 on live lanes), so plain comparisons fold them.
-        let fold = |r: F, fill: f32, pick: fn(f32, f32) -> f32| {
-            F::select(live, r, F::splat_f32(fill)).to_array().as_ref().iter().copied().fold(fill, pick)
-        };
-        let lo = |r: F| fold(r, f32::INFINITY, |a, b| if b < a { b } else { a });
-        let hi = |r: F| fold(r, f32::NEG_INFINITY, |a, b| if b > a { b } else { a });
-        let (u0, u1, v0, v1) = (lo(ru), hi(ru), lo(rv), hi(rv));
-        let r_max = u0.abs().max(u1.abs()).max(v0.abs()).max(v1.abs());
-        // Wider than about 83° off the axis (or NaN): no frustum.
-        if r_max.is_nan() || r_max > 8.0 {
-            return None;
-        }
-        // |d|₁/dc ≤ √3·|d|/dc = √3·√(1 + ru² + rv²) for the (nearly) orthonormal basis; call it kappa. The
-        // ratios err by at most about 4u·kappa·(1 + |r|), the rounded normals by 2u(1 + |r|) per unit of
-        // |d|₁/dc: 64ε·kappa·(1 + r_max) covers both with room.
-        let kappa = 2.0 * (1.0 + 1.5 * r_max);
-        let margin = 64.0 * f32::EPSILON * kappa * (1.0 + r_max);
-        let normals =
-            [u - (u0 - margin) * c, (u1 + margin) * c - u, v - (v0 - margin) * c, (v1 + margin) * c - v];
-        let o = glam::Vec3::from(o);
+    /// The box test's sides from `p`, with slack for the test's own rounding: it sums 3 products and the
+    /// offset, all within |n|₁·reach, so 16ε of that is ample.
+    #[inline(always)]
+    fn new(p: &Pyramid, extent: f32) -> Self {
+        let o = glam::Vec3::from(p.apex);
         let reach = extent.max(o.abs().max_element());
-        Some(Self {
-            sides: normals.map(|n| Side {
+        let sides = p.normals.map(|n| {
+            let n = glam::Vec3::from(n);
+            Side {
                 normal: n.to_array(),
                 far_side: n.to_array().map(|x| usize::from(x >= 0.0)),
-                // The box test sums 3 products and this offset, all within |n|₁·reach: 16ε of that is ample.
                 offset: n.dot(o) - 16.0 * f32::EPSILON * n.abs().element_sum() * reach,
-            }),
-        })
+            }
+        });
+        let lanes = |f: &dyn Fn(&Side) -> f32| f32x4::from(sides.each_ref().map(f));
+        Self {
+            nx: lanes(&|s| s.normal[0]),
+            ny: lanes(&|s| s.normal[1]),
+            nz: lanes(&|s| s.normal[2]),
+            norm: lanes(&|s| glam::Vec3::from(s.normal).length() * (1.0 + 4.0 * f32::EPSILON)),
+            offset: lanes(&|s| s.offset),
+            sides,
+        }
+    }
+
+    /// Whether some lane may meet the ball of radius `r` around `c` (a sphere of the leaf, `r` padded as
+    /// its box was): false when the ball lies wholly outside a side. The ball is inside its padded box and
+    /// its centre within `reach`, so the slack in the offsets covers this test's rounding as it does the
+    /// box test's (the extra term `r·|n|` adds one rounding of a value below |n|₁·reach).
+    #[inline(always)]
+    fn may_meet(&self, c: V3<f32>, r: f32) -> bool {
+        let s = self.nz.mul_add(
+            f32x4::splat(c.z),
+            self.ny
+                .mul_add(f32x4::splat(c.y), self.nx.mul_add(f32x4::splat(c.x), self.norm * r - self.offset)),
+        );
+        f32x4::move_mask(Real::lt(s, f32x4::splat(0.0))) == 0
     }
 
     /// Bit `c` set for each child of `n` that some lane may enter.
@@ -156,6 +155,65 @@ impl Frustum {
         }
         !outside
     }
+}
+
+/// A [`Pyramid`] around the live lanes of a packet, if they share an origin and lie within about 83° of a
+/// common axis.
+fn fit_pyramid<F: Lanes>(origin: &V3<F>, dir: &V3<F>, live: F::Mask) -> Option<Pyramid> {
+    let bits = F::move_mask(live);
+    if F::K == 1 || bits == 0 {
+        return None;
+    }
+    let (first, last) = (bits.trailing_zeros() as usize, 31 - bits.leading_zeros() as usize);
+    let o = [origin.x.lane(first), origin.y.lane(first), origin.z.lane(first)];
+    let same = |v: F, o: f32| v.le(F::splat_f32(o)) & v.ge(F::splat_f32(o));
+    if !(same(origin.x, o[0]) & same(origin.y, o[1]) & same(origin.z, o[2]) | !live).all() {
+        return None;
+    }
+    // Axis: between the first and last live directions (opposite corners of a camera tile); u and v
+    // complete an orthonormal basis. Any axis gives valid planes; a central one gives tight ones.
+    let lane = |i: usize| glam::Vec3::new(dir.x.lane(i), dir.y.lane(i), dir.z.lane(i));
+    let c = (lane(first) + lane(last)).try_normalize()?;
+    let (u, v) = c.any_orthonormal_pair();
+    let along =
+        |b: glam::Vec3| dir.x * F::splat_f32(b.x) + dir.y * F::splat_f32(b.y) + dir.z * F::splat_f32(b.z);
+    let (du, dv, dc) = (along(u), along(v), along(c));
+    if !(dc.gt(F::splat_f32(0.0)) | !live).all() {
+        return None;
+    }
+    let inv = F::splat_f32(1.0) / dc;
+    let (ru, rv) = (du * inv, dv * inv);
+    // The ratios are finite (dc > 0 on live lanes), so plain comparisons fold them.
+    let fold = |r: F, fill: f32, pick: fn(f32, f32) -> f32| {
+        F::select(live, r, F::splat_f32(fill)).to_array().as_ref().iter().copied().fold(fill, pick)
+    };
+    let lo = |r: F| fold(r, f32::INFINITY, |a, b| if b < a { b } else { a });
+    let hi = |r: F| fold(r, f32::NEG_INFINITY, |a, b| if b > a { b } else { a });
+    let (u0, u1, v0, v1) = (lo(ru), hi(ru), lo(rv), hi(rv));
+    let r_max = u0.abs().max(u1.abs()).max(v0.abs()).max(v1.abs());
+    // Wider than about 83° off the axis (or NaN): no frustum.
+    if r_max.is_nan() || r_max > 8.0 {
+        return None;
+    }
+    // |d|₁/dc ≤ √3·|d|/dc = √3·√(1 + ru² + rv²) for the (nearly) orthonormal basis; call it kappa. The
+    // ratios err by at most about 4u·kappa·(1 + |r|), the rounded normals by 2u(1 + |r|) per unit of
+    // |d|₁/dc: 64ε·kappa·(1 + r_max) covers both with room.
+    let kappa = 2.0 * (1.0 + 1.5 * r_max);
+    let margin = 64.0 * f32::EPSILON * kappa * (1.0 + r_max);
+    let normals =
+        [u - (u0 - margin) * c, (u1 + margin) * c - u, v - (v0 - margin) * c, (v1 + margin) * c - v];
+    Some(Pyramid { apex: o, normals: normals.map(|n| n.to_array()) })
+}
+
+/// Whether every live lane starts at the apex and lies on the inner side of every plane, evaluated in f64
+/// (exact products, so only a direction within 1e-16 of a plane could be misjudged).
+fn encloses<F: Lanes>(p: &Pyramid, ray: &Ray<F>, live: F::Mask) -> bool {
+    (0..F::K).filter(|&i| F::mask_lane(live, i)).all(|i| {
+        let o = [ray.origin.x.lane(i), ray.origin.y.lane(i), ray.origin.z.lane(i)];
+        let d = [ray.dir.x.lane(i), ray.dir.y.lane(i), ray.dir.z.lane(i)];
+        let dot = |n: &[f32; 3]| (0..3).map(|a| f64::from(n[a]) * f64::from(d[a])).sum::<f64>();
+        o == p.apex && p.normals.iter().all(|n| dot(n) >= 0.0)
+    })
 }
 
 /// A pending subtree: its reference and each lane's entry distance.
@@ -211,7 +269,7 @@ impl Bvh {
         live: F::Mask,
         best: &mut HitPacket<F>,
     ) {
-        let rays = SlabRays::new(&q.ray, live, self.frustum_culling.then_some(self.extent));
+        let rays = SlabRays::new(q, live, self.frustum_culling.then_some(self.extent));
         let mut stack = Stack::<Entry<F>>::new();
         let limit = |lanes: F::Mask, best: &HitPacket<F>| {
             F::select(lanes, best.t.min_of(q.t_max), F::splat_f32(f32::NEG_INFINITY))
@@ -227,8 +285,16 @@ impl Bvh {
             }
             if e.count > 0 {
                 let first = e.child as usize;
+                let spheres = first..first + usize::from(e.count);
                 prims += usize::from(e.count);
-                q.intersect(first..first + usize::from(e.count), lanes, best);
+                match &rays.frustum {
+                    Some(f) => q.intersect(
+                        spheres.filter(|&i| f.may_meet(q.spheres.center(i), q.spheres.r[i] + self.pad)),
+                        lanes,
+                        best,
+                    ),
+                    None => q.intersect(spheres, lanes, best),
+                }
             } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
                 self.intersect_lanes(e.child, q, &rays.slab, lanes, best);
             } else {
@@ -247,7 +313,7 @@ impl Bvh {
         live: F::Mask,
         blocker: &mut u32,
     ) -> F::Mask {
-        let rays = SlabRays::new(&q.ray, live, self.frustum_culling.then_some(self.extent));
+        let rays = SlabRays::new(q, live, self.frustum_culling.then_some(self.extent));
         let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
