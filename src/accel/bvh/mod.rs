@@ -128,8 +128,8 @@ pub struct Bvh {
     /// Subtrees entered by at most this many live lanes of a packet are walked one ray at a time
     /// ([`SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
     pub single_ray_lanes: u32,
-    /// Test each node's children against a shared-origin packet as a whole (its frustum, [`packet`])
-    /// before their lanes. On by default (PERF.md, "Frustum culling").
+    /// Test each node's children and each leaf's spheres against a shared-origin packet as a whole (its
+    /// frustum, [`packet`]) before their lanes. On by default (PERF.md, "Frustum culling").
     pub frustum_culling: bool,
     /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
     pub extent: f32,
