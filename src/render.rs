@@ -103,8 +103,11 @@ pub fn render<F: Lanes>(
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
     let traced: Vec<(Tile, Vec<Rgb>, RayCounts, Work)> = thread_pool(threads)?.install(|| {
+        // One job per tile (with_max_len): rayon otherwise runs whole quarters of the image as single
+        // jobs, which a thread slowed by the host cannot hand over (PERF.md, session 6).
         tiles
             .par_iter()
+            .with_max_len(1)
             .map(|&tile| {
                 take_work();
                 let mut tracer = Tracer::<F>::new(scene);
@@ -323,6 +326,16 @@ impl PrimaryHits {
     }
 }
 
+/// Copies the first `dst.len()` values of `src` into `dst`: a whole 4-pixel row as one fixed-size copy (a
+/// `memmove` call per short row cost 2–3% of a small field's frame), a partial one value by value.
+#[inline(always)]
+fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
+    match (<&mut [T; 4]>::try_from(&mut *dst), src.first_chunk::<4>()) {
+        (Ok(whole), Some(row)) => *whole = *row,
+        _ => dst.iter_mut().zip(src).for_each(|(d, s)| *d = *s),
+    }
+}
+
 /// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on a new pool of
 /// `threads` ([`trace_primary`]).
 pub fn primary_hits_lanes(
@@ -359,7 +372,9 @@ pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &m
     // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
     let band = width as usize * TILE as usize;
     pool.install(|| {
-        let bands = hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate();
+        // One job per band, as for tiles in `render`.
+        let bands =
+            hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate().with_max_len(1);
         bands.for_each(|(band, (t, prim))| {
             let camera = &scene.camera_f64;
             let y0 = band as u32 * TILE;
@@ -373,8 +388,8 @@ pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &m
                         let lane = r * b.bw as usize;
                         let at = (b.y as usize + r) * width as usize + (tile.x0 + b.x) as usize;
                         let n = b.w as usize;
-                        t[at..at + n].copy_from_slice(&ts.as_ref()[lane..lane + n]);
-                        prim[at..at + n].copy_from_slice(&ids.as_ref()[lane..lane + n]);
+                        copy_row(&mut t[at..at + n], &ts.as_ref()[lane..]);
+                        copy_row(&mut prim[at..at + n], &ids.as_ref()[lane..]);
                     }
                 });
             }
