@@ -199,25 +199,26 @@ impl Camera<f64> {
     /// the normal X − U₀·Z gives t·n = U − U₀ ≥ 0 for every U ≥ U₀, and likewise for the other three sides.
     /// The traced direction is t/|t| rounded to f32, within 2⁻²⁴ of the exact one (the f64 steps add far
     /// less), and the stored normal is rounded too. Widening each normal by m·Z, m = 16·2⁻²⁴·|n|·L with
-    /// L ≥ |t|, keeps n·d ≥ 0 with eight times the room those two roundings need, as Z·d ≥ 1/L − 2⁻²⁴.
+    /// L ≥ |t|, keeps n·d ≥ 0 with at least five times the room those two roundings need (about 3·2⁻²⁴·|n|),
+    /// as Z·d ≥ 1/L − 2⁻²⁴.
     pub fn pyramid(&self, sx: [f32; 2], sy: [f32; 2]) -> Option<Pyramid> {
         // `directions4`'s operations: the edge lanes get these very U and V, and since rounding is
         // monotone every lane between them lies between.
         let window = |s: f32, scale: f64, offset: f64, half: f64| (f64::from(s) * scale + offset) * half;
         let range = |a: f64, b: f64| (a.min(b), a.max(b));
-        let (u, w) = ((self.u_scale, self.u_offset, self.half_w), (self.v_scale, self.v_offset, self.half_h));
-        let (u0, u1) = range(window(sx[0], u.0, u.1, u.2), window(sx[1], u.0, u.1, u.2));
-        let (v0, v1) = range(window(sy[0], w.0, w.1, w.2), window(sy[1], w.0, w.1, w.2));
+        let u = |s: f32| window(s, self.u_scale, self.u_offset, self.half_w);
+        let v = |s: f32| window(s, self.v_scale, self.v_offset, self.half_h);
+        let ((u0, u1), (v0, v1)) = (range(u(sx[0]), u(sx[1])), range(v(sy[0]), v(sy[1])));
         // |t| = √(1 + U² + V²) ≤ 1 + |U| + |V| = L; beyond 1000 (θ near 180°) Z·d is too small to lean on.
-        let reach = 1.0 + u0.abs().max(u1.abs()) + v0.abs().max(v1.abs());
-        if reach.is_nan() || reach > 1e3 {
+        let length_bound = 1.0 + u0.abs().max(u1.abs()) + v0.abs().max(v1.abs());
+        if length_bound.is_nan() || length_bound > 1e3 {
             return None;
         }
         let (z, x, y) = (self.forward, self.right, self.up);
         // Each side as (a, b) with normal a·X + b·Y + c·Z; |n| ≤ 1 + |c|.
         let sides = [(1.0, 0.0, -u0), (-1.0, 0.0, u1), (0.0, 1.0, -v0), (0.0, -1.0, v1)];
         let normals = sides.map(|(a, b, c): (f64, f64, f64)| {
-            let widen = 8.0 * f64::from(f32::EPSILON) * (1.0 + c.abs()) * reach;
+            let widen = 8.0 * f64::from(f32::EPSILON) * (1.0 + c.abs()) * length_bound;
             let n = x * a + y * b + z * (c + widen);
             [n.x as f32, n.y as f32, n.z as f32]
         });

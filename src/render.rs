@@ -192,11 +192,10 @@ pub fn for_each_packet<F: Lanes>(
             } else {
                 F::mask_from_fn(|i| (i as u32 % bw) < b.w && (i as u32 / bw) < b.h)
             };
-            // The lanes' own sums at the block's first and last column and row.
-            let span =
-                |at: u32, lanes: u32, d: f32| [(at as f32 + 0.0) + d, (at as f32 + (lanes - 1) as f32) + d];
+            // The block's first and last sample positions, taken from the lanes themselves.
+            let (last_column, last_row) = ((bw - 1) as usize, ((bh - 1) * bw) as usize);
             let pyramid = (F::K > 1)
-                .then(|| camera.pyramid(span(tile.x0 + bx, bw, dx), span(tile.y0 + by, bh, dy)))
+                .then(|| camera.pyramid([sx.lane(0), sx.lane(last_column)], [sy.lane(0), sy.lane(last_row)]))
                 .flatten();
             let rays = RayPacket {
                 origin: ray.origin,
@@ -330,6 +329,7 @@ impl PrimaryHits {
 /// `memmove` call per short row cost 2–3% of a small field's frame), a partial one value by value.
 #[inline(always)]
 fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
+    debug_assert!(src.len() >= dst.len(), "a row of {} from {} values", dst.len(), src.len());
     match (<&mut [T; 4]>::try_from(&mut *dst), src.first_chunk::<4>()) {
         (Ok(whole), Some(row)) => *whole = *row,
         _ => dst.iter_mut().zip(src).for_each(|(d, s)| *d = *s),

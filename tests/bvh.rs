@@ -218,3 +218,33 @@ fn single_ray_switch_keeps_the_brute_force_answer() {
         }
     }
 }
+
+/// Camera packets bring their own pyramid (`Camera::pyramid`, normals up to |n| ≈ 1 + |U| on wide views),
+/// which culls boxes and leaf spheres: every pixel's hit equals brute force's with scalar rays (no pyramid),
+/// on wide and narrow views from inside and outside the field.
+#[test]
+fn camera_pyramids_keep_the_brute_force_answer() {
+    use bareray::scene::desc::{Aim, Field};
+    let mut desc = field(3000, 21);
+    for (eye, theta) in [
+        (DVec3::new(0.3, -0.2, -4.0), 120.0),
+        (DVec3::new(0.0, 0.1, 0.05), 150.0),
+        (DVec3::new(-3.0, 2.0, -3.0), 8.0),
+    ] {
+        desc.camera.eye = eye;
+        desc.camera.aim = Aim::LookAt(DVec3::ZERO);
+        desc.camera.field = Field::HorizontalAngle(theta);
+        (desc.camera.width, desc.camera.height) = (203, 157);
+        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let want = bareray::render::primary_hits_lanes(&brute, 1, Some(1)).unwrap();
+        let got = bareray::render::primary_hits_lanes(&bvh, 16, Some(2)).unwrap();
+        let bits = |t: &[f32]| t.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got.t), bits(&want.t), "t differs, eye {eye}, θ {theta}");
+        let (hits, prims) = (want.prim.iter().filter(|&&p| p != u32::MAX).count(), got.prim.len());
+        assert!(hits > prims / 50, "only {hits} of {prims} pixels hit something");
+        // Ids: brute force stores spheres in file order, the BVH in leaf order.
+        let file_ids: Vec<u32> = got.prim.iter().map(|&p| bvh.geometry.file_id(p)).collect();
+        assert_eq!(file_ids, want.prim, "ids differ, eye {eye}, θ {theta}");
+    }
+}

@@ -3,8 +3,8 @@
 //! not depend on the order of the loops.
 
 use crate::geometry::{
-    far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, DeparturePacket, HitPacket, Ray,
-    RayPacket,
+    far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, DeparturePacket, HitPacket,
+    Pyramid, Ray, RayPacket,
 };
 use crate::math::Mask;
 use crate::simd::{IdLanes, Lanes};
@@ -24,7 +24,7 @@ pub struct SphereQuery<'a, F: Lanes> {
     /// The departure sphere of each ray.
     pub skip: F::Ids,
     /// Planes enclosing the live rays, from the packet's maker ([`crate::geometry::RayPacket::pyramid`]).
-    pub pyramid: Option<crate::geometry::Pyramid>,
+    pub pyramid: Option<Pyramid>,
 }
 
 impl<F: Lanes> SphereQuery<'_, F> {
