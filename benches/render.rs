@@ -43,10 +43,16 @@ fn bvh_primary<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, scene: &Scene) {
         b.iter(|| {
             let mut found = 0u32;
             for &tile in &all {
-                for_each_packet::<F>(camera, tile, (0.5, 0.5), |rays, _| {
-                    let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
-                    found += F::move_mask(hit.found()).count_ones();
-                });
+                for_each_packet::<F>(
+                    camera,
+                    tile,
+                    (0.5, 0.5),
+                    scene.geometry.culls_by_pyramid(),
+                    |rays, _| {
+                        let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+                        found += F::move_mask(hit.found()).count_ones();
+                    },
+                );
             }
             found
         })

@@ -170,11 +170,14 @@ impl Block {
 }
 
 /// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
-/// `(dx, dy)` from its pixel's corner: the camera rays and the block of pixels they sample.
+/// `(dx, dy)` from its pixel's corner: the camera rays and the block of pixels they sample. With `pyramids`
+/// (the scene culls by them, [`crate::accel::Geometry::culls_by_pyramid`]) each packet carries its block's
+/// [`Camera::pyramid`].
 pub fn for_each_packet<F: Lanes>(
     camera: &Camera<f64>,
     tile: Tile,
     (dx, dy): (f32, f32),
+    pyramids: bool,
     mut visit: impl FnMut(&RayPacket<F>, Block),
 ) {
     let (bw, bh) = block::<F>();
@@ -194,15 +197,12 @@ pub fn for_each_packet<F: Lanes>(
             };
             // The block's first and last sample positions, taken from the lanes themselves.
             let (last_column, last_row) = ((bw - 1) as usize, ((bh - 1) * bw) as usize);
-            let pyramid = (F::K > 1)
+            let pyramid = (pyramids && F::K > 1)
                 .then(|| camera.pyramid([sx.lane(0), sx.lane(last_column)], [sy.lane(0), sy.lane(last_row)]))
                 .flatten();
             let rays = RayPacket {
-                origin: ray.origin,
-                dir: ray.dir,
-                t_max: F::splat_f32(f32::INFINITY),
-                active,
                 pyramid,
+                ..RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), active)
             };
             visit(&rays, b);
         }
@@ -223,7 +223,7 @@ fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Ve
             let scale = 1.0 / offsets.len() as f32;
             let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
             for &offset in &offsets {
-                for_each_packet(camera, tile, offset, |rays, block| {
+                for_each_packet(camera, tile, offset, scene.geometry.culls_by_pyramid(), |rays, block| {
                     let c = tracer.primary(rays);
                     for (i, x, y) in block.pixels() {
                         let p = (y * tile.w + x) as usize;
@@ -250,13 +250,7 @@ fn half_pixel_tile<F: Lanes>(camera: &Camera<f64>, tracer: &mut Tracer<F>, tile:
         let sy = F::from_fn(|i| tile.y0 as f32 + point(i).1 as f32 * 0.5);
         let ray = camera.rays(sx, sy);
         let active = F::lanes_below(n - first);
-        let rays = RayPacket {
-            origin: ray.origin,
-            dir: ray.dir,
-            t_max: F::splat_f32(f32::INFINITY),
-            active,
-            pyramid: None,
-        };
+        let rays = RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), active);
         let c = tracer.primary(&rays);
         lattice.extend((0..F::K.min(n - first)).map(|i| lane_rgb(&c, i)));
     }
@@ -326,13 +320,12 @@ impl PrimaryHits {
 }
 
 /// Copies the first `dst.len()` values of `src` into `dst`: a whole 4-pixel row as one fixed-size copy (a
-/// `memmove` call per short row cost 2–3% of a small field's frame), a partial one value by value.
+/// `memmove` call per short row cost 2–3% of a small field's frame), a partial one as a slice.
 #[inline(always)]
 fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
-    debug_assert!(src.len() >= dst.len(), "a row of {} from {} values", dst.len(), src.len());
     match (<&mut [T; 4]>::try_from(&mut *dst), src.first_chunk::<4>()) {
         (Ok(whole), Some(row)) => *whole = *row,
-        _ => dst.iter_mut().zip(src).for_each(|(d, s)| *d = *s),
+        _ => dst.copy_from_slice(&src[..dst.len()]),
     }
 }
 
@@ -371,6 +364,7 @@ pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &m
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the camera's");
     // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
     let band = width as usize * TILE as usize;
+    let pyramids = scene.geometry.culls_by_pyramid();
     pool.install(|| {
         // One job per band, as for tiles in `render`.
         let bands =
@@ -380,7 +374,7 @@ pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &m
             let y0 = band as u32 * TILE;
             for tile in tiles(width, TILE.min(height - y0)) {
                 let tile = Tile { y0, ..tile };
-                for_each_packet::<F>(camera, tile, (0.5, 0.5), |rays, b| {
+                for_each_packet::<F>(camera, tile, (0.5, 0.5), pyramids, |rays, b| {
                     let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
                     let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
                     // Row by row: each row of the block is a run of pixels in the image row.

@@ -191,7 +191,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 continue;
             }
             self.counts.shadow += lanes_set::<F>(lit);
-            let shadow = RayPacket { origin: s.point, dir: l, t_max: dist, active: lit, pyramid: None };
+            let shadow = RayPacket::new(s.point, l, dist, lit);
             let visible =
                 lit & !self.scene.geometry.occluded_hinted_k(&shadow, from, &mut self.shadow_hints[k]);
             let intensity = match light.falloff {
@@ -256,13 +256,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             self.counts.reflection += lanes_set::<F>(mirror);
             let d = rays.dir;
             let dir = (d - s.normal * (F::splat_f32(2.0) * d.dot(s.normal))).normalize();
-            let next = RayPacket {
-                origin: s.point,
-                dir,
-                t_max: F::splat_f32(f32::INFINITY),
-                active: mirror,
-                pyramid: None,
-            };
+            let next = RayPacket::new(s.point, dir, F::splat_f32(f32::INFINITY), mirror);
             let from = DeparturePacket { prim, inward: s.inside };
             let c = self.trace(&next, &from, depth + 1, weight * kr);
             color = V3::select(mirror, color + c * kr, color);
@@ -271,13 +265,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             let glass = through & (kt * weight).gt(min_weight);
             if glass.any() {
                 self.counts.refraction += lanes_set::<F>(glass);
-                let next = RayPacket {
-                    origin: s.point,
-                    dir,
-                    t_max: F::splat_f32(f32::INFINITY),
-                    active: glass,
-                    pyramid: None,
-                };
+                let next = RayPacket::new(s.point, dir, F::splat_f32(f32::INFINITY), glass);
                 let from = DeparturePacket { prim, inward: !s.inside };
                 let c = self.trace(&next, &from, depth + 1, weight * kt);
                 color = V3::select(glass, color + c * kt, color);

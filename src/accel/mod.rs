@@ -259,16 +259,22 @@ impl Geometry {
         }
     }
 
+    /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's
+    /// while to compute one.
+    pub fn culls_by_pyramid(&self) -> bool {
+        self.bvh.as_ref().is_some_and(|bvh| bvh.frustum_culling)
+    }
+
     /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].
     pub fn intersect(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> Hit {
-        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true, pyramid: None };
+        let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         let hit = self.intersect_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward });
         Hit { t: hit.t, prim: hit.prim }
     }
 
     /// Whether one ray meets anything in `[0, t_max)`: the K = 1 instance of [`Geometry::occluded_k`].
     pub fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
-        let rays = RayPacket::<f32> { origin: ray.origin, dir: ray.dir, t_max, active: true, pyramid: None };
+        let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
     }
 

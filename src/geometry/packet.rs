@@ -48,6 +48,12 @@ pub struct Pyramid {
 }
 
 impl<F: Lanes> RayPacket<F> {
+    /// Rays over `[0, t_max)` in the `active` lanes, with no known pyramid.
+    #[inline(always)]
+    pub fn new(origin: V3<F>, dir: V3<F>, t_max: F, active: F::Mask) -> Self {
+        Self { origin, dir, t_max, active, pyramid: None }
+    }
+
     /// The rays as a [`Ray`] of lanes, the form the generic kernels take.
     #[inline(always)]
     pub fn ray(&self) -> Ray<F> {
@@ -58,13 +64,12 @@ impl<F: Lanes> RayPacket<F> {
     pub fn from_fn(mut f: impl FnMut(usize) -> (Ray<f32>, f32, bool)) -> Self {
         let lanes: Vec<_> = (0..F::K).map(&mut f).collect();
         let get = |g: fn(&(Ray<f32>, f32, bool)) -> f32| F::from_fn(|i| g(&lanes[i]));
-        Self {
-            origin: V3::new(get(|l| l.0.origin.x), get(|l| l.0.origin.y), get(|l| l.0.origin.z)),
-            dir: V3::new(get(|l| l.0.dir.x), get(|l| l.0.dir.y), get(|l| l.0.dir.z)),
-            t_max: get(|l| l.1),
-            active: F::mask_from_fn(|i| lanes[i].2),
-            pyramid: None,
-        }
+        Self::new(
+            V3::new(get(|l| l.0.origin.x), get(|l| l.0.origin.y), get(|l| l.0.origin.z)),
+            V3::new(get(|l| l.0.dir.x), get(|l| l.0.dir.y), get(|l| l.0.dir.z)),
+            get(|l| l.1),
+            F::mask_from_fn(|i| lanes[i].2),
+        )
     }
 
     /// Up to K rays sharing one `t_max`; lanes past `rays.len()` are inactive (and zero).
