@@ -52,6 +52,36 @@ fn lanes_set<F: Lanes>(m: F::Mask) -> u64 {
     u64::from(F::move_mask(m).count_ones())
 }
 
+/// Whether a secondary packet has so few live lanes (at most 3/4 of K) that tracing them one by one beats
+/// tracing the packet: below that, the packet walk visits nodes for lanes that are not there. The share was
+/// measured on sphereflakes at K = 8 and 16 (PERF.md, session 8): anything from 1/2 to 7/8 of K gave about
+/// the same; all of K lost on the coherent first reflections; never going scalar was 10–15% slower.
+fn is_sparse<F: Lanes>(active: F::Mask) -> bool {
+    4 * lanes_set::<F>(active) <= 3 * F::K as u64
+}
+
+/// The live lanes of a secondary packet traced one at a time by the scalar tracer. A lane's scalar trace
+/// computes the same bits as the packet trace, so only the time changes.
+fn trace_lane_by_lane<F: Lanes>(
+    scalar: &mut Tracer<'_, f32>,
+    rays: &RayPacket<F>,
+    from: &DeparturePacket<F>,
+    depth: u32,
+    weight: F,
+) -> V3<F> {
+    let mut rgb = [[0.0f32; 16]; 3];
+    for i in (0..F::K).filter(|&i| F::mask_lane(rays.active, i)) {
+        let (ray, t_max, _) = rays.lane(i);
+        let one = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
+        let d = from.lane(i);
+        let c =
+            scalar.trace(&one, &DeparturePacket { prim: d.prim, inward: d.inward }, depth, weight.lane(i));
+        (rgb[0][i], rgb[1][i], rgb[2][i]) = (c.x, c.y, c.z);
+    }
+    let channel = |k: usize| F::from_lanes(&rgb[k][..F::K]);
+    V3::new(channel(0), channel(1), channel(2))
+}
+
 /// A colour in every lane.
 fn splat_rgb<F: Lanes>(c: Rgb) -> V3<F> {
     F::splat_v3(c)
@@ -83,6 +113,9 @@ pub struct Tracer<'a, F: Lanes> {
     /// Per light, a sphere that blocked the last shadow packet toward it: tested first for the next one
     /// (the shadow cache of Haines & Greenberg; it changes what is tested first, never the answer).
     shadow_hints: Vec<u32>,
+    /// The scalar tracer that secondary packets with few live lanes are handed to, lane by lane (`None`
+    /// for K = 1).
+    sparse: Option<Box<Tracer<'a, f32>>>,
     lanes: PhantomData<F>,
 }
 
@@ -90,7 +123,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     /// A tracer over `scene` with zero counts.
     pub fn new(scene: &'a Scene) -> Self {
         let shadow_hints = vec![crate::geometry::NO_PRIM; scene.lights.len()];
-        Self { scene, counts: RayCounts::default(), shadow_hints, lanes: PhantomData }
+        let sparse = (F::K > 1).then(|| Box::new(Tracer::<f32>::new(scene)));
+        Self { scene, counts: RayCounts::default(), shadow_hints, sparse, lanes: PhantomData }
     }
 
     /// Radiance along each active camera ray (zero in inactive lanes).
@@ -100,6 +134,13 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 
     fn trace(&mut self, rays: &RayPacket<F>, from: &DeparturePacket<F>, depth: u32, weight: F) -> V3<F> {
+        if depth > 0 && is_sparse::<F>(rays.active) {
+            if let Some(scalar) = self.sparse.as_deref_mut() {
+                let color = trace_lane_by_lane(scalar, rays, from, depth, weight);
+                self.counts += std::mem::take(&mut scalar.counts);
+                return color;
+            }
+        }
         let hit = self.scene.geometry.intersect_k(rays, from);
         let found = hit.found() & rays.active;
         let zero = V3::all(F::splat_f32(0.0));
