@@ -90,7 +90,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
         AccelArg::Bvh => Accel::Bvh,
         AccelArg::Brute => Accel::Brute,
     };
-    let mut scene = Scene::compile_with_preset(&desc, accel, args.bvh_preset)?;
+    // The build runs on as many threads as the largest setting measured, not on every core: a 1-thread
+    // bench builds on one thread, as a 1-thread peer run does.
+    let build_threads = args.threads.iter().copied().max();
+    let mut scene = crate::render::thread_pool(build_threads)?
+        .install(|| Scene::compile_with_preset(&desc, accel, args.bvh_preset))?;
     if let Some(bvh) = &mut scene.geometry.bvh {
         bvh.frustum_culling = args.frustum_culling;
         if let Some(lanes) = args.single_ray_lanes {

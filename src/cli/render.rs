@@ -87,11 +87,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     apply_overrides(&mut desc, &args)?;
     time.parse = clock.elapsed().as_secs_f64();
 
+    let threads = args.threads.map(|t| t as usize);
     let clock = Instant::now();
-    let scene = Scene::compile_with_preset(&desc, Accel::Auto, args.bvh_preset).context("camera")?;
+    // The build runs on the render's threads too: `--threads 1` means one core throughout.
+    let scene = crate::render::thread_pool(threads)?
+        .install(|| Scene::compile_with_preset(&desc, Accel::Auto, args.bvh_preset))
+        .context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
-    let threads = args.threads.map(|t| t as usize);
     crate::accel::set_counting(args.stats);
     let progress = progress_bar(args.quiet);
     let rendered = render_lanes(&scene, args.lanes, threads, &progress)?;
