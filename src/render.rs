@@ -102,7 +102,8 @@ pub fn render<F: Lanes>(
     let (width, height) = (scene.camera.width, scene.camera.height);
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
-    let traced: Vec<(Tile, Vec<Rgb>, RayCounts, Work)> = thread_pool(threads)?.install(|| {
+    let pool = thread_pool(threads)?;
+    let traced: Vec<(Tile, Vec<Rgb>, RayCounts, Work)> = pool.install(|| {
         // One job per tile (with_max_len): rayon otherwise runs whole quarters of the image as single
         // jobs, which a thread slowed by the host cannot hand over (PERF.md, session 6).
         tiles
@@ -118,15 +119,12 @@ pub fn render<F: Lanes>(
             .collect()
     });
     let mut image = Image::new(width, height);
+    pool.install(|| assemble(&mut image, &traced));
     let mut counts = RayCounts::default();
     let mut work = Work::default();
-    for (tile, pixels, c, w) in traced {
-        counts += c;
-        work += w;
-        for (i, p) in pixels.into_iter().enumerate() {
-            let i = i as u32;
-            image.set(tile.x0 + i % tile.w, tile.y0 + i / tile.w, p);
-        }
+    for (_, _, c, w) in &traced {
+        counts += *c;
+        work += *w;
     }
     if scene.render.postfilter == PostFilter::Lecture3x3 {
         image = lecture_3x3(&image);
@@ -210,6 +208,23 @@ pub fn for_each_packet<F: Lanes>(
 }
 
 /// Lane `i` of a colour packet.
+/// Copies the traced tiles into `image`, one band of tile rows per job: done serially, pixel by pixel, it
+/// was 4–5% of a 1024² sphereflake's wall time on 2 threads, the first touch of the image's pages included
+/// (PERF.md, session 9). `traced` holds the tiles in [`tiles`] order.
+fn assemble(image: &mut Image, traced: &[(Tile, Vec<Rgb>, RayCounts, Work)]) {
+    let width = image.width as usize;
+    let per_band = image.width.div_ceil(TILE) as usize;
+    let bands = image.pixels.par_chunks_mut(TILE as usize * width.max(1));
+    bands.zip(traced.par_chunks(per_band.max(1))).for_each(|(band, tiles)| {
+        for (tile, pixels, _, _) in tiles {
+            let (x0, w) = (tile.x0 as usize, tile.w as usize);
+            for (y, row) in pixels.chunks_exact(w).enumerate() {
+                band[y * width + x0..][..w].copy_from_slice(row);
+            }
+        }
+    });
+}
+
 fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
     Rgb::new(c.x.lane(i), c.y.lane(i), c.z.lane(i))
 }

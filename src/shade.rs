@@ -69,16 +69,16 @@ fn trace_lane_by_lane<F: Lanes>(
     depth: u32,
     weight: F,
 ) -> V3<F> {
-    let mut rgb = [[0.0f32; 16]; 3];
+    let mut rgb = [F::splat_f32(0.0).to_array(); 3];
     for i in (0..F::K).filter(|&i| F::mask_lane(rays.active, i)) {
         let (ray, t_max, _) = rays.lane(i);
         let one = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         let d = from.lane(i);
         let c =
             scalar.trace(&one, &DeparturePacket { prim: d.prim, inward: d.inward }, depth, weight.lane(i));
-        (rgb[0][i], rgb[1][i], rgb[2][i]) = (c.x, c.y, c.z);
+        (rgb[0].as_mut()[i], rgb[1].as_mut()[i], rgb[2].as_mut()[i]) = (c.x, c.y, c.z);
     }
-    let channel = |k: usize| F::from_lanes(&rgb[k][..F::K]);
+    let channel = |k: usize| F::from_lanes(rgb[k].as_ref());
     V3::new(channel(0), channel(1), channel(2))
 }
 
@@ -166,7 +166,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
 
     /// Gathers each found lane's surface point and material with the scalar code.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
-        let mut v = [[0.0f32; 16]; 16];
+        // K lanes per row, not 16: the scalar tracer gathers once per ray, and zeroing 1 KB each time showed.
+        let mut v = [F::splat_f32(0.0).to_array(); 16];
         let mut fresnel = 0u32;
         for i in (0..F::K).filter(|&i| F::mask_lane(found, i)) {
             let (ray, _, _) = rays.lane(i);
@@ -192,11 +193,11 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 m.ior,
             ];
             for (k, x) in row.into_iter().enumerate() {
-                v[k][i] = x;
+                v[k].as_mut()[i] = x;
             }
             fresnel |= u32::from(m.fresnel) << i;
         }
-        let lane = |k: usize| F::from_lanes(&v[k][..F::K]);
+        let lane = |k: usize| F::from_lanes(v[k].as_ref());
         let v3 = |k: usize| V3::new(lane(k), lane(k + 1), lane(k + 2));
         let normal = v3(3);
         let inside = normal.dot(rays.dir).gt(F::splat_f32(0.0));
