@@ -13,6 +13,7 @@ pub mod camera;
 pub mod cli;
 pub mod film;
 pub mod geometry;
+pub mod huge_pages;
 pub mod math;
 pub mod output;
 pub mod render;
