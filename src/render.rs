@@ -103,28 +103,32 @@ pub fn render<F: Lanes>(
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
     let pool = thread_pool(threads)?;
-    let traced: Vec<(Tile, Vec<Rgb>, RayCounts, Work)> = pool.install(|| {
+    let mut image = Image::new(width, height);
+    let rows = tile_rows(&mut image.pixels, width, &tiles);
+    let traced: Vec<(RayCounts, Work)> = pool.install(|| {
         // One job per tile (with_max_len): rayon otherwise runs whole quarters of the image as single
         // jobs, which a thread slowed by the host cannot hand over (PERF.md, session 6).
         tiles
             .par_iter()
+            .zip(rows)
             .with_max_len(1)
-            .map(|&tile| {
+            .map(|(&tile, mut rows)| {
                 take_work();
                 let mut tracer = Tracer::<F>::new(scene);
                 let pixels = trace_tile(scene, &mut tracer, tile);
+                for (row, traced) in rows.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
+                    row.copy_from_slice(traced);
+                }
                 progress.inc(1);
-                (tile, pixels, tracer.counts, take_work())
+                (tracer.counts, take_work())
             })
             .collect()
     });
-    let mut image = Image::new(width, height);
-    pool.install(|| assemble(&mut image, &traced));
     let mut counts = RayCounts::default();
     let mut work = Work::default();
-    for (_, _, c, w) in &traced {
-        counts += *c;
-        work += *w;
+    for (c, w) in traced {
+        counts += c;
+        work += w;
     }
     if scene.render.postfilter == PostFilter::Lecture3x3 {
         image = lecture_3x3(&image);
@@ -208,21 +212,23 @@ pub fn for_each_packet<F: Lanes>(
 }
 
 /// Lane `i` of a colour packet.
-/// Copies the traced tiles into `image`, one band of tile rows per job: done serially, pixel by pixel, it
-/// was 4–5% of a 1024² sphereflake's wall time on 2 threads, the first touch of the image's pages included
-/// (PERF.md, session 9). `traced` holds the tiles in [`tiles`] order.
-fn assemble(image: &mut Image, traced: &[(Tile, Vec<Rgb>, RayCounts, Work)]) {
-    let width = image.width as usize;
-    let per_band = image.width.div_ceil(TILE) as usize;
-    let bands = image.pixels.par_chunks_mut(TILE as usize * width.max(1));
-    bands.zip(traced.par_chunks(per_band.max(1))).for_each(|(band, tiles)| {
-        for (tile, pixels, _, _) in tiles {
-            let (x0, w) = (tile.x0 as usize, tile.w as usize);
-            for (y, row) in pixels.chunks_exact(w).enumerate() {
-                band[y * width + x0..][..w].copy_from_slice(row);
-            }
+/// The image's pixels as one list of row slices per tile, in `tiles` order, so each tile's job writes its
+/// own pixels in place. Before, every tile returned its pixels and they were merged after the trace: the
+/// merge (first serial, then parallel) and the first touch of 4096 live tile buffers cost 1–5% of a 1024²
+/// sphereflake (PERF.md, session 9).
+fn tile_rows<'a>(pixels: &'a mut [Rgb], width: u32, tiles: &[Tile]) -> Vec<Vec<&'a mut [Rgb]>> {
+    let mut out: Vec<Vec<&mut [Rgb]>> = tiles.iter().map(|t| Vec::with_capacity(t.h as usize)).collect();
+    let per_band = width.div_ceil(TILE) as usize;
+    for (y, row) in pixels.chunks_mut(width.max(1) as usize).enumerate() {
+        let first = y / TILE as usize * per_band;
+        let mut rest = row;
+        for (tile, rows) in tiles[first..first + per_band].iter().zip(&mut out[first..first + per_band]) {
+            let (mine, after) = std::mem::take(&mut rest).split_at_mut(tile.w as usize);
+            rows.push(mine);
+            rest = after;
         }
-    });
+    }
+    out
 }
 
 fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
