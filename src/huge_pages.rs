@@ -6,13 +6,18 @@
 use std::alloc::{GlobalAlloc, Layout, System};
 
 /// The size of a transparent huge page on x86-64 and of the alignment the kernel needs to use one.
+#[cfg(target_os = "linux")]
 const HUGE_PAGE: usize = 2 << 20;
 
 /// Blocks of at least this size are advised: smaller ones hold at most one whole huge page.
+#[cfg(target_os = "linux")]
 const ADVISED: usize = 2 * HUGE_PAGE;
 
 /// [`System`], advising every block of at least 4 MiB onto huge pages (`madvise(MADV_HUGEPAGE)` on the whole
-/// 2 MiB-aligned pages inside it, before the pages are first touched).
+/// 2 MiB-aligned pages inside it). The advice helps pages not yet touched: a fresh block's, or a grown
+/// block's new part; memory that glibc hands out again from its heap keeps the advice after it is freed, so
+/// later blocks there may also get huge pages. Installed in the `bareray` binary only (`main.rs`): tests and
+/// benchmarks use the plain system allocator.
 pub struct HugePages;
 
 // SAFETY: every call is forwarded to `System` with the same arguments; `advise` only gives the kernel advice
@@ -36,17 +41,25 @@ unsafe impl GlobalAlloc for HugePages {
     }
 }
 
-/// Advises the whole huge pages inside the `size` bytes at `block` (nothing for small or null blocks, or off
-/// Linux); returns `block`. A kernel without THP refuses the advice, which changes nothing.
+/// Advises the whole huge pages inside the `size` bytes at `block` (nothing for small or null blocks); returns
+/// `block`. A kernel without THP refuses the advice, which changes nothing.
+#[cfg(target_os = "linux")]
 fn advise(block: *mut u8, size: usize) -> *mut u8 {
-    #[cfg(target_os = "linux")]
     if !block.is_null() && size >= ADVISED {
-        let start = (block as usize).next_multiple_of(HUGE_PAGE);
-        let end = (block as usize + size) / HUGE_PAGE * HUGE_PAGE;
+        let at = block as usize;
+        let start = at.next_multiple_of(HUGE_PAGE);
+        let end = (at + size) / HUGE_PAGE * HUGE_PAGE;
         if end > start {
-            // SAFETY: [start, end) lies inside the block just allocated; MADV_HUGEPAGE changes no contents.
-            unsafe { libc::madvise(start as *mut libc::c_void, end - start, libc::MADV_HUGEPAGE) };
+            // SAFETY: [start, end) lies inside the block just allocated (the pointer keeps the block's
+            // provenance); MADV_HUGEPAGE changes no contents.
+            unsafe { libc::madvise(block.wrapping_add(start - at).cast(), end - start, libc::MADV_HUGEPAGE) };
         }
     }
+    block
+}
+
+/// Elsewhere there is no advice to give.
+#[cfg(not(target_os = "linux"))]
+fn advise(block: *mut u8, _size: usize) -> *mut u8 {
     block
 }

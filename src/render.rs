@@ -116,6 +116,7 @@ pub fn render<F: Lanes>(
                 take_work();
                 let mut tracer = Tracer::<F>::new(scene);
                 let pixels = trace_tile(scene, &mut tracer, tile);
+                debug_assert_eq!(pixels.len(), rows.len() * tile.w as usize, "tile {tile:?}");
                 for (row, traced) in rows.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
                     row.copy_from_slice(traced);
                 }
@@ -211,26 +212,30 @@ pub fn for_each_packet<F: Lanes>(
     }
 }
 
-/// Lane `i` of a colour packet.
-/// The image's pixels as one list of row slices per tile, in `tiles` order, so each tile's job writes its
-/// own pixels in place. Before, every tile returned its pixels and they were merged after the trace: the
-/// merge (first serial, then parallel) and the first touch of 4096 live tile buffers cost 1–5% of a 1024²
-/// sphereflake (PERF.md, session 9).
+/// The image's pixels as one list of row slices per tile, in the order of `tiles`, which must be
+/// [`tiles`]`(width, height)` (row-major bands of TILE rows), so each tile's job writes its own pixels in
+/// place. Before, every tile returned its pixels and they were merged after the trace: the merge (first
+/// serial, then parallel) and the first touch of 4096 live tile buffers cost 1–5% of a 1024² sphereflake
+/// (PERF.md, session 9).
 fn tile_rows<'a>(pixels: &'a mut [Rgb], width: u32, tiles: &[Tile]) -> Vec<Vec<&'a mut [Rgb]>> {
     let mut out: Vec<Vec<&mut [Rgb]>> = tiles.iter().map(|t| Vec::with_capacity(t.h as usize)).collect();
     let per_band = width.div_ceil(TILE) as usize;
     for (y, row) in pixels.chunks_mut(width.max(1) as usize).enumerate() {
         let first = y / TILE as usize * per_band;
-        let mut rest = row;
+        let (mut rest, mut x) = (row, 0);
         for (tile, rows) in tiles[first..first + per_band].iter().zip(&mut out[first..first + per_band]) {
+            debug_assert_eq!((tile.x0, tile.y0 / TILE), (x, y as u32 / TILE), "tiles out of order");
+            x += tile.w;
             let (mine, after) = std::mem::take(&mut rest).split_at_mut(tile.w as usize);
             rows.push(mine);
             rest = after;
         }
+        debug_assert!(rest.is_empty(), "the band's tiles do not cover row {y}");
     }
     out
 }
 
+/// Lane `i` of a colour packet.
 fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
     Rgb::new(c.x.lane(i), c.y.lane(i), c.z.lane(i))
 }

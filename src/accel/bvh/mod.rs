@@ -438,8 +438,9 @@ fn far_to_near(order: &mut [(f32, usize)]) {
 mod tests {
     use super::*;
 
-    /// Boxes of `n` small cubes spread by a fixed LCG: a tree of many levels for large `n`.
-    fn tree(n: usize) -> Vec<Bvh2Node> {
+    /// obvhs's binary tree over `n` small cubes spread by a fixed LCG, with leaves of at most `leaf`
+    /// boxes: many levels for large `n`, inner nodes with leaf and inner children mixed for small ones.
+    fn tree(n: usize, leaf: u32) -> Vec<Bvh2Node> {
         let mut state = 0x2545_f491_4f6c_dd1du64;
         let mut next = || {
             state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
@@ -451,26 +452,32 @@ mod tests {
                 Aabb { min: c - 0.01, max: c + 0.01 }
             })
             .collect();
-        build_bvh2(&boxes, BvhBuildParams::fast_build(), &mut Default::default()).nodes
+        let params = BvhBuildParams { max_prims_per_leaf: leaf, ..BvhBuildParams::fast_build() };
+        build_bvh2(&boxes, params, &mut Default::default()).nodes
+    }
+
+    /// Levels of 4-wide nodes from `nodes[i]` down.
+    fn depth(nodes: &[Node], i: usize) -> u32 {
+        let n = &nodes[i];
+        let inner = (0..usize::from(n.slots)).filter(|&c| n.count[c] == 0);
+        1 + inner.map(|c| depth(nodes, n.child[c] as usize)).max().unwrap_or(0)
     }
 
     #[test]
     fn parallel_collapse_is_the_serial_layout() {
-        for n in [1, 2, 3, 5, 9, 40, 1000, 30_000] {
-            let src = tree(n);
-            let serial = if src[0].prim_count > 0 {
-                collapse(&src)
-            } else {
-                let mut out = Vec::new();
-                flatten(&src, 0, &mut out);
-                out
-            };
+        for (n, leaf) in [(1, 8), (5, 8), (2, 1), (3, 1), (5, 1), (9, 1), (40, 1), (1000, 2), (30_000, 8)] {
+            let src = tree(n, leaf);
             let parallel = collapse(&src);
-            assert_eq!(parallel.len(), serial.len(), "{n} boxes");
+            if src[0].prim_count > 0 {
+                assert_eq!(parallel.len(), 1, "{n} boxes in one leaf make one node");
+                continue;
+            }
+            let mut serial = Vec::new();
+            flatten(&src, 0, &mut serial);
             assert!(parallel == serial, "{n} boxes: the parallel collapse differs from the serial one");
             if n >= 1000 {
-                // Deep enough that every parallel level was used.
-                assert!(serial.len() > 100, "{n} boxes gave only {} nodes", serial.len());
+                // Deeper than the parallel levels, so every level of jobs ran.
+                assert!(depth(&serial, 0) > PARALLEL_LEVELS + 1, "{n} boxes: depth {}", depth(&serial, 0));
             }
         }
     }
