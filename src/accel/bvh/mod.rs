@@ -247,14 +247,13 @@ fn flatten_parallel(src: &[Bvh2Node], i: usize, levels: u32) -> Vec<Node> {
     out.push(Node::new(&[]));
     let mut children = [EMPTY; N];
     for (k, subtree) in subtrees.into_iter().enumerate() {
-        let n = &src[open[k]];
-        let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
         children[k] = match subtree {
             None => child_ref(src, open[k], &mut out),
             Some(nodes) => {
                 let base = out.len() as u32;
                 out.extend(nodes.into_iter().map(|node| node.shifted(base)));
-                ChildRef { lo, hi, child: base, count: 0 }
+                let aabb = &src[open[k]].aabb;
+                ChildRef { lo: aabb.min.to_array(), hi: aabb.max.to_array(), child: base, count: 0 }
             }
         };
     }
