@@ -3,8 +3,8 @@
 //! not depend on the order of the loops.
 
 use crate::geometry::{
-    far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, DeparturePacket, HitPacket,
-    Pyramid, Ray, RayPacket,
+    far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, stays_off_plane,
+    DeparturePacket, HitPacket, Pyramid, Ray, RayPacket,
 };
 use crate::math::Mask;
 use crate::simd::{IdLanes, Lanes};
@@ -86,15 +86,18 @@ impl<F: Lanes> SphereQuery<'_, F> {
 
 impl Geometry {
     /// Calls `f(hit, t, id)` for each non-sphere primitive (shapes, then polygons' triangles) with the lanes of
-    /// `live` it is hit in within `t_max`, the departure primitive `skip` excluded.
+    /// `live` it is hit in within `t_max`, the departure primitive `skip` excluded. Polygons are tested only
+    /// in lanes whose ray reaches their plane before `reach` (at most `t_max`; a closest-hit query passes its
+    /// best hit so far).
     fn others_each<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
         live: F::Mask,
         skip: F::Ids,
+        reach: F,
         mut f: impl FnMut(F::Mask, F, F::Ids),
     ) {
-        super::count_work(self.shapes.len() + self.polygons.triangles(), 0);
+        let mut tests = self.shapes.len();
         let ray = rays.ray();
         let base = self.spheres.len() as u32;
         for (k, shape) in self.shapes.iter().enumerate() {
@@ -104,12 +107,23 @@ impl Geometry {
         }
         let p = &self.polygons;
         let base = self.polygon_base() as u32;
-        for j in 0..p.triangles() {
-            let id = F::Ids::splat(base + p.polygon[j]);
-            let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
-            let (hit, t) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
-            f(live & hit & !F::ids_eq(id, skip), t, id);
+        for k in 0..p.len() {
+            let id = F::Ids::splat(base + k as u32);
+            let (anchor, normal) = (F::splat_v3(p.anchor[k]), F::splat_v3(p.normal[k]));
+            let off = stays_off_plane(anchor, normal, F::splat_f32(p.thickness[k]), &ray, reach);
+            let lanes = live & !F::ids_eq(id, skip) & !off;
+            if !lanes.any() {
+                continue;
+            }
+            let triangles = p.first[k] as usize..p.first[k + 1] as usize;
+            tests += triangles.len();
+            for j in triangles {
+                let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
+                let (hit, t) = intersect_triangle(v0, e1, e2, &ray, rays.t_max);
+                f(lanes & hit, t, id);
+            }
         }
+        super::count_work(tests, 0);
     }
 
     /// Closest hits of the non-sphere primitives, merged into `best` (their ids are their file ids).
@@ -119,7 +133,8 @@ impl Geometry {
         skip: F::Ids,
         best: &mut HitPacket<F>,
     ) {
-        self.others_each(rays, rays.active, skip, |hit, t, id| best.update(hit, t, id, id));
+        let reach = best.t.min_of(rays.t_max);
+        self.others_each(rays, rays.active, skip, reach, |hit, t, id| best.update(hit, t, id, id));
     }
 
     /// Lanes of `live` blocked by a non-sphere primitive.
@@ -130,7 +145,7 @@ impl Geometry {
         skip: F::Ids,
     ) -> F::Mask {
         let mut blocked = F::mask_from_bits(0);
-        self.others_each(rays, live, skip, |hit, _, _| blocked = blocked | hit);
+        self.others_each(rays, live, skip, rays.t_max, |hit, _, _| blocked = blocked | hit);
         blocked
     }
 

@@ -19,6 +19,11 @@ pub struct Polygons {
     pub first: Vec<u32>,
     /// Per polygon: unit geometric normal (right-hand rule over the vertex order).
     pub normal: Vec<Vec3f>,
+    /// Per polygon: a vertex, on the plane through which `normal` is taken.
+    pub anchor: Vec<Vec3f>,
+    /// Per polygon: how far (at most) its vertices lie off that plane, rounded up: polygons need only be
+    /// planar to a tolerance.
+    pub thickness: Vec<f32>,
     /// Per polygon: material index.
     pub material: Vec<u32>,
 }
@@ -58,6 +63,21 @@ impl Polygons {
             self.vertex_normals.push(normals.map(|n| [n[a], n[b], n[c]]));
         }
         self.first.push(self.v0.len() as u32);
+        let anchor = vertices[0];
+        let offset = |v: &Vec3f| [v.x - anchor.x, v.y - anchor.y, v.z - anchor.z];
+        let n = [normal.x, normal.y, normal.z];
+        let height = |v: &Vec3f| {
+            let d =
+                [(v.x, anchor.x), (v.y, anchor.y), (v.z, anchor.z)].map(|(a, b)| f64::from(a) - f64::from(b));
+            (0..3).map(|i| f64::from(n[i]) * d[i]).sum::<f64>().abs()
+        };
+        // The triangles' edges are stored rounded (ε/2 of their 1-norm, at most twice the farthest
+        // vertex's); the heights are computed in f64 from the stored values, and the factor rounds them up.
+        let far = vertices.iter().map(|v| offset(v).iter().map(|x| f64::from(x.abs())).sum::<f64>());
+        let rounding = f64::from(f32::EPSILON) * 2.0 * far.fold(0.0, f64::max);
+        let thickness = (vertices.iter().map(height).fold(0.0, f64::max) + rounding) * (1.0 + 1e-6);
+        self.anchor.push(anchor);
+        self.thickness.push((thickness as f32).max(f32::MIN_POSITIVE));
         self.normal.push(normal);
         self.material.push(material);
     }
@@ -94,4 +114,33 @@ fn barycentric(v0: Vec3f, e1: Vec3f, e2: Vec3f, p: Vec3f) -> [f32; 3] {
     let b1 = (d11 * d20 - d01 * d21) / denom;
     let b2 = (d00 * d21 - d01 * d20) / denom;
     [1.0 - b1 - b2, b1, b2]
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::{intersect_triangle, stays_off_plane, Ray};
+    use crate::math::V3;
+
+    /// A polygon that is planar only to a tolerance gets a thickness that covers its vertices, so the plane
+    /// cull keeps a ray that hits it near its lifted corner.
+    #[test]
+    fn thickness_covers_a_lifted_vertex() {
+        let lift = 5e-5;
+        let vertices =
+            [V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(1.0, 1.0, lift), V3::new(0.0, 1.0, 0.0)];
+        let mut p = Polygons::default();
+        p.push(&vertices, None, &[[0, 1, 2], [0, 2, 3]], V3::new(0.0, 0.0, 1.0), 0);
+        assert!(p.thickness[0] >= lift, "thickness {}", p.thickness[0]);
+        // Just above the plane z = 0, ending just below the lifted corner's triangle.
+        let ray = Ray::new(V3::new(0.9, 0.8, 1e-3), V3::new(0.0, 0.0, -1.0));
+        let reach = 1e-3 - 0.5 * lift;
+        let (hit, _) = intersect_triangle(p.v0[0], p.e1[0], p.e2[0], &ray, reach);
+        assert!(hit, "the lifted triangle is hit within reach");
+        assert!(!stays_off_plane(p.anchor[0], p.normal[0], p.thickness[0], &ray, reach));
+        assert!(
+            stays_off_plane(p.anchor[0], p.normal[0], 0.0, &ray, reach),
+            "without thickness it would be culled"
+        );
+    }
 }
