@@ -71,17 +71,18 @@ struct Tok<'a> {
     line: usize,
 }
 
-/// Whitespace-separated tokens with line numbers, `#` comments removed, one token of look-ahead.
+/// Tokens separated by ASCII whitespace (byte-wise, several times faster than Unicode splitting on large
+/// scenes), with line numbers, `#` comments removed, one token of look-ahead.
 struct Tokens<'a> {
     lines: std::iter::Enumerate<std::str::Lines<'a>>,
-    words: std::str::SplitWhitespace<'a>,
+    words: std::str::SplitAsciiWhitespace<'a>,
     line: usize,
     peeked: Option<Tok<'a>>,
 }
 
 impl<'a> Tokens<'a> {
     fn new(source: &'a str) -> Self {
-        Self { lines: source.lines().enumerate(), words: "".split_whitespace(), line: 0, peeked: None }
+        Self { lines: source.lines().enumerate(), words: "".split_ascii_whitespace(), line: 0, peeked: None }
     }
 
     fn next(&mut self) -> Option<Tok<'a>> {
@@ -91,12 +92,12 @@ impl<'a> Tokens<'a> {
         loop {
             match self.words.next() {
                 // A comment runs to the end of the line: drop the rest of its words.
-                Some(w) if w.starts_with('#') => self.words = "".split_whitespace(),
+                Some(w) if w.starts_with('#') => self.words = "".split_ascii_whitespace(),
                 Some(w) => return Some(Tok { text: w, line: self.line }),
                 None => {
                     let (i, l) = self.lines.next()?;
                     self.line = i + 1;
-                    self.words = l.split_whitespace();
+                    self.words = l.split_ascii_whitespace();
                 }
             }
         }

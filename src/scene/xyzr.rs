@@ -82,7 +82,7 @@ fn parse_lines(text: &str) -> Result<Vec<SphereDesc>, (usize, String)> {
 /// One `x y z r` line.
 fn sphere(text: &str) -> Result<SphereDesc, String> {
     let mut v = [0.0f64; 4];
-    let mut words = text.split_whitespace();
+    let mut words = text.split_ascii_whitespace();
     for (k, name) in ["x", "y", "z", "r"].iter().enumerate() {
         let w = words.next().ok_or_else(|| format!("expected 4 numbers `x y z r`, got {k}"))?;
         v[k] = match w.parse::<f64>() {
