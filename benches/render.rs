@@ -8,7 +8,7 @@
 use std::path::Path;
 
 use bareray::geometry::DeparturePacket;
-use bareray::render::{for_each_packet, render, tiles};
+use bareray::render::{for_each_packet, render, thread_pool, tiles};
 use bareray::scene::desc::{Aim, CameraDesc, SceneDesc, SphereDesc};
 use bareray::scene::generate::FieldParams;
 use bareray::scene::{toml, Scene};
@@ -61,7 +61,8 @@ fn bvh_primary<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, scene: &Scene) {
 
 fn shading<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, scene: &Scene) {
     group.bench_function(BenchmarkId::from_parameter(F::K), |b| {
-        b.iter(|| render::<F>(scene, Some(1), &ProgressBar::hidden()).expect("render").counts.total())
+        let pool = thread_pool(Some(1)).expect("thread pool");
+        b.iter(|| render::<F>(scene, &pool, &ProgressBar::hidden()).counts.total())
     });
 }
 
@@ -80,7 +81,8 @@ fn benches(c: &mut Criterion) {
     desc.camera.width = 96;
     desc.camera.height = 72;
     let whitted = Scene::compile(&desc).expect("scene compiles");
-    let rays = render::<f32>(&whitted, Some(1), &ProgressBar::hidden()).expect("render").counts.total();
+    let pool = thread_pool(Some(1)).expect("thread pool");
+    let rays = render::<f32>(&whitted, &pool, &ProgressBar::hidden()).counts.total();
     let mut group = c.benchmark_group("shading");
     group.throughput(Throughput::Elements(rays));
     shading::<f32>(&mut group, &whitted);

@@ -13,7 +13,7 @@ use rayon::prelude::*;
 
 use crate::geometry::NO_PRIM;
 use crate::output::{write_atomic, BoxError};
-use crate::render::{primary_hits_lanes, thread_pool};
+use crate::render::primary_hits_lanes;
 use crate::scene::Scene;
 
 /// One kind of AOV.
@@ -64,14 +64,10 @@ pub struct AovImage {
 }
 
 /// Traces one ray through every pixel centre in packets of `lanes`, and looks up the normals.
-pub fn render_aovs(
-    scene: &Scene,
-    lanes: usize,
-    threads: Option<usize>,
-) -> Result<AovImage, rayon::ThreadPoolBuildError> {
-    let hits = primary_hits_lanes(scene, lanes, threads)?;
+pub fn render_aovs(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> AovImage {
+    let hits = primary_hits_lanes(scene, lanes, pool);
     let w = hits.width as usize;
-    let normal = thread_pool(threads)?.install(|| {
+    let normal = pool.install(|| {
         (0..hits.t.len())
             .into_par_iter()
             .map(|i| {
@@ -86,7 +82,7 @@ pub fn render_aovs(
     });
     // `file_id` leaves NO_PRIM (no primitive) as it is.
     let id = hits.prim.iter().map(|&p| scene.geometry.file_id(p)).collect();
-    Ok(AovImage { width: hits.width, height: hits.height, depth: hits.t, normal, id })
+    AovImage { width: hits.width, height: hits.height, depth: hits.t, normal, id }
 }
 
 /// The AOV file for an image output: `out.png` → `out.aov.exr`.

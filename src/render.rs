@@ -65,8 +65,9 @@ pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
     out
 }
 
-/// A pool of `threads` workers (rayon's default when `None`): each render gets its own pool so that
-/// `--threads` holds even when the caller already runs inside rayon.
+/// A pool of `threads` workers (rayon's default when `None`). A run makes one and does all its parallel
+/// work there (build, render, output): `--threads` then holds even when the caller already runs inside
+/// rayon, and no second pool's threads are started.
 pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
     let mut builder = rayon::ThreadPoolBuilder::new();
     if let Some(n) = threads {
@@ -75,34 +76,28 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, rayon::T
     builder.build()
 }
 
-/// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on `threads` threads.
+/// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on the threads of `pool`.
 pub fn render_lanes(
     scene: &Scene,
     lanes: usize,
-    threads: Option<usize>,
+    pool: &rayon::ThreadPool,
     progress: &ProgressBar,
-) -> Result<Rendered, rayon::ThreadPoolBuildError> {
+) -> Rendered {
     match lanes {
-        1 => render::<f32>(scene, threads, progress),
-        4 => render::<f32x4>(scene, threads, progress),
-        8 => render::<f32x8>(scene, threads, progress),
-        16 => render::<f32x16>(scene, threads, progress),
+        1 => render::<f32>(scene, pool, progress),
+        4 => render::<f32x4>(scene, pool, progress),
+        8 => render::<f32x8>(scene, pool, progress),
+        16 => render::<f32x16>(scene, pool, progress),
         _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
     }
 }
 
-/// Renders `scene` with packets of `F::K` rays on `threads` threads (rayon's default when `None`),
-/// ticking `progress` once per tile.
-pub fn render<F: Lanes>(
-    scene: &Scene,
-    threads: Option<usize>,
-    progress: &ProgressBar,
-) -> Result<Rendered, rayon::ThreadPoolBuildError> {
+/// Renders `scene` with packets of `F::K` rays on the threads of `pool`, ticking `progress` once per tile.
+pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &ProgressBar) -> Rendered {
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let tiles = tiles(width, height);
     progress.set_length(tiles.len() as u64);
-    let pool = thread_pool(threads)?;
     let mut image = Image::new(width, height);
     let rows = tile_rows(&mut image.pixels, width, &tiles);
     let traced: Vec<(RayCounts, Work)> = pool.install(|| {
@@ -134,7 +129,7 @@ pub fn render<F: Lanes>(
     if scene.render.postfilter == PostFilter::Lecture3x3 {
         image = lecture_3x3(&image);
     }
-    Ok(Rendered { image, counts, work, lanes: F::K, seconds: start.elapsed().as_secs_f64() })
+    Rendered { image, counts, work, lanes: F::K, seconds: start.elapsed().as_secs_f64() }
 }
 
 /// Pixel-block shape of a packet: (columns, rows).
@@ -355,17 +350,12 @@ fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
     }
 }
 
-/// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on a new pool of
-/// `threads` ([`trace_primary`]).
-pub fn primary_hits_lanes(
-    scene: &Scene,
-    lanes: usize,
-    threads: Option<usize>,
-) -> Result<PrimaryHits, rayon::ThreadPoolBuildError> {
-    let pool = thread_pool(threads)?;
+/// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on the threads
+/// of `pool` ([`trace_primary`]).
+pub fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> PrimaryHits {
     let mut hits = PrimaryHits::new(scene.camera.width, scene.camera.height);
-    trace_primary_lanes(scene, lanes, &pool, &mut hits);
-    Ok(hits)
+    trace_primary_lanes(scene, lanes, pool, &mut hits);
+    hits
 }
 
 /// [`trace_primary`] at a packet width chosen at run time.

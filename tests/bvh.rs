@@ -237,8 +237,9 @@ fn camera_pyramids_keep_the_brute_force_answer() {
         (desc.camera.width, desc.camera.height) = (203, 157);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        let want = bareray::render::primary_hits_lanes(&brute, 1, Some(1)).unwrap();
-        let got = bareray::render::primary_hits_lanes(&bvh, 16, Some(2)).unwrap();
+        let pool = |threads| bareray::render::thread_pool(Some(threads)).unwrap();
+        let want = bareray::render::primary_hits_lanes(&brute, 1, &pool(1));
+        let got = bareray::render::primary_hits_lanes(&bvh, 16, &pool(2));
         let bits = |t: &[f32]| t.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
         assert_eq!(bits(&got.t), bits(&want.t), "t differs, eye {eye}, θ {theta}");
         let (hits, prims) = (want.prim.iter().filter(|&&p| p != u32::MAX).count(), got.prim.len());

@@ -3,14 +3,15 @@
 use std::path::Path;
 
 use bareray::film::Image;
-use bareray::render::render_lanes;
+use bareray::render::{render_lanes, thread_pool};
 use bareray::scene::{toml, Scene};
 use indicatif::ProgressBar;
 
 fn render_toml(src: &str, threads: usize) -> Image {
     let desc = toml::parse(Path::new("test.toml"), src).expect("scene parses");
     let scene = Scene::compile(&desc).expect("scene compiles");
-    render_lanes(&scene, 8, Some(threads), &ProgressBar::hidden()).expect("render").image
+    let pool = thread_pool(Some(threads)).expect("thread pool");
+    render_lanes(&scene, 8, &pool, &ProgressBar::hidden()).image
 }
 
 /// pbrt's inside-out test: the camera sits inside a diffuse sphere of radius R with a point light of intensity
@@ -160,9 +161,10 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
         desc.camera.width = 96;
         desc.camera.height = 64;
         let scene = Scene::compile(&desc).unwrap();
-        let reference = render_lanes(&scene, 1, Some(1), &ProgressBar::hidden()).unwrap();
+        let reference = render_lanes(&scene, 1, &thread_pool(Some(1)).unwrap(), &ProgressBar::hidden());
         for (lanes, threads) in [(1, 2), (4, 1), (4, 2), (8, 1), (8, 2), (16, 1), (16, 2)] {
-            let rendered = render_lanes(&scene, lanes, Some(threads), &ProgressBar::hidden()).unwrap();
+            let rendered =
+                render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
             assert_eq!(
                 rendered.counts, reference.counts,
                 "{path:?} counts at lanes {lanes}, threads {threads}"

@@ -29,7 +29,7 @@ use bareray::geometry::{
     ShapeKind, NO_PRIM,
 };
 use bareray::math::{Affine, Vec3f, V3};
-use bareray::render::render_lanes;
+use bareray::render::{render_lanes, thread_pool};
 use bareray::scene::desc::{
     Aim, CameraDesc, Falloff, Field, PolygonDesc, SceneDesc, ShapeDesc, SphereDesc, Sweep,
 };
@@ -46,7 +46,7 @@ const EPS32: f64 = f32::EPSILON as f64 / 2.0;
 
 /// The one place the renderer is called, so an API change (lanes, options) is adapted here only.
 fn render_image(scene: &Scene) -> Image {
-    render_lanes(scene, 8, Some(2), &ProgressBar::hidden()).expect("render").image
+    render_lanes(scene, 8, &thread_pool(Some(2)).expect("thread pool"), &ProgressBar::hidden()).image
 }
 
 fn compile(desc: &SceneDesc) -> Scene {

@@ -167,20 +167,17 @@ pub fn run(args: BenchArgs) -> Result<()> {
 fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
     let mut times = Vec::with_capacity(args.reps as usize);
     let (mut rays, mut checksum) = (0, 0);
-    // Primary rays: one frame and one thread pool for every repetition, as the peer harnesses do.
-    let mut frame = if args.primary_only {
-        Some((thread_pool(Some(threads))?, PrimaryHits::new(scene.camera.width, scene.camera.height)))
-    } else {
-        None
-    };
+    // One thread pool for every repetition, and for primary rays one frame, as the peer harnesses do.
+    let pool = thread_pool(Some(threads))?;
+    let mut frame = args.primary_only.then(|| PrimaryHits::new(scene.camera.width, scene.camera.height));
     for rep in 0..=args.reps {
-        let seconds = if let Some((pool, hits)) = &mut frame {
-            trace_primary_lanes(scene, lanes, pool, hits);
+        let seconds = if let Some(hits) = &mut frame {
+            trace_primary_lanes(scene, lanes, &pool, hits);
             rays = hits.t.len() as u64;
             checksum = hits.checksum(scene);
             hits.seconds
         } else {
-            let r = render_lanes(scene, lanes, Some(threads), &ProgressBar::hidden())?;
+            let r = render_lanes(scene, lanes, &pool, &ProgressBar::hidden());
             rays = r.counts.total();
             checksum = image_checksum(&r.image);
             r.seconds

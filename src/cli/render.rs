@@ -90,14 +90,14 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let threads = args.threads.map(|t| t as usize);
     let clock = Instant::now();
     // The build runs on the render's threads too: `--threads 1` means one core throughout.
-    let scene = crate::render::thread_pool(threads)?
-        .install(|| Scene::compile_with_preset(&desc, Accel::Auto, args.bvh_preset))
-        .context("camera")?;
+    let pool = crate::render::thread_pool(threads)?;
+    let scene =
+        pool.install(|| Scene::compile_with_preset(&desc, Accel::Auto, args.bvh_preset)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     crate::accel::set_counting(args.stats);
     let progress = progress_bar(args.quiet);
-    let rendered = render_lanes(&scene, args.lanes, threads, &progress)?;
+    let rendered = render_lanes(&scene, args.lanes, &pool, &progress);
     progress.finish_and_clear();
     time.render = rendered.seconds;
 
@@ -105,13 +105,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
         None => None,
         Some(which) => {
             let clock = Instant::now();
-            let img = aov::render_aovs(&scene, args.lanes, threads)?;
+            let img = aov::render_aovs(&scene, args.lanes, &pool);
             time.aov = clock.elapsed().as_secs_f64();
             Some((img, which))
         }
     };
     let clock = Instant::now();
-    write_image(&rendered.image, &output)?;
+    pool.install(|| write_image(&rendered.image, &output))?;
     if let Some((img, which)) = aovs {
         let path = aov::aov_path(&output);
         aov::write_exr(&img, &which.0, scene.geometry.len(), &path)
