@@ -164,8 +164,57 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         V3::select(found, color, background)
     }
 
-    /// Gathers each found lane's surface point and material with the scalar code.
+    /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
+    /// of one plain material (most packets), else lane by lane with the scalar code.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
+        self.sphere_surface(rays, hit, found).unwrap_or_else(|| self.surface_by_lane(rays, hit, found))
+    }
+
+    /// [`Tracer::surface`] for packets whose found lanes all hit spheres of one material without a checker:
+    /// point and normal from the SoA sphere arrays in lanes, by [`crate::accel::Geometry::surface`]'s
+    /// operations in its order (so each lane gets the scalar bits), and the material splatted. `None` for
+    /// any other packet.
+    fn sphere_surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Option<Surface<F>> {
+        let spheres = &self.scene.geometry.spheres;
+        let bits = F::move_mask(found);
+        let lanes = || (0..F::K).filter(move |&i| bits >> i & 1 == 1);
+        let first = lanes().next()?;
+        let sphere = |i: usize| hit.prim.lane(i) as usize;
+        let material = *spheres.material.get(sphere(first))?;
+        if !lanes().all(|i| spheres.material.get(sphere(i)) == Some(&material)) {
+            return None;
+        }
+        let m = &self.scene.materials[material as usize];
+        if m.checker.is_some() {
+            return None;
+        }
+        // Lanes that found nothing take the first found lane's sphere and are zeroed below.
+        let index = |i: usize| if bits >> i & 1 == 1 { sphere(i) } else { sphere(first) };
+        let gather = |v: &[f32]| F::from_fn(|i| v[index(i)]);
+        let center = V3::new(gather(&spheres.cx), gather(&spheres.cy), gather(&spheres.cz));
+        let zero = V3::all(F::splat_f32(0.0));
+        let point = V3::select(found, rays.ray().at(hit.t), zero);
+        let normal = V3::select(found, (point - center).normalize(), zero);
+        let inside = found & normal.dot(rays.dir).gt(F::splat_f32(0.0));
+        let splat = F::splat_f32;
+        Some(Surface {
+            point,
+            normal: V3::select(inside, -normal, normal),
+            inside,
+            base: splat_rgb::<F>(m.color),
+            ambient: splat(m.ambient),
+            diffuse: splat(m.diffuse),
+            specular: splat(m.specular),
+            shininess: splat(m.shininess),
+            reflect: splat(m.reflect),
+            transmit: splat(m.transmit),
+            ior: splat(m.ior),
+            fresnel: F::mask_from_bits(if m.fresnel { bits } else { 0 }),
+        })
+    }
+
+    /// [`Tracer::surface`] lane by lane with the scalar code: any primitives and materials.
+    fn surface_by_lane(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
         // K lanes per row, not 16: the scalar tracer gathers once per ray, and zeroing 1 KB each time showed.
         let mut v = [F::splat_f32(0.0).to_array(); 16];
         let mut fresnel = 0u32;
@@ -351,6 +400,52 @@ pub fn refract<F: Real>(d: V3<F>, n: V3<F>, eta: F) -> (F::Mask, V3<F>, F) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The lane-arithmetic sphere surface is the scalar one, bit for bit, in every found lane: point,
+    /// normal, side and material, for rays from outside and from inside the spheres.
+    #[test]
+    fn sphere_lanes_give_the_scalar_surface() {
+        use crate::geometry::Ray;
+        use crate::scene::desc::{SceneDesc, SphereDesc};
+        use crate::scene::generate::SplitMix64;
+        use wide::f32x8;
+        let mut rng = SplitMix64::new(11);
+        let mut unit = move || rng.unit() * 2.0 - 1.0;
+        let mut desc = SceneDesc::default();
+        for _ in 0..300 {
+            let center = glam::DVec3::new(unit(), unit(), unit());
+            desc.spheres.push(SphereDesc { center, radius: 0.05 + 0.1 * unit().abs(), material: 0 });
+        }
+        let scene = Scene::compile(&desc).expect("scene");
+        let tracer = Tracer::<f32x8>::new(&scene);
+        let mut checked = 0;
+        for p in 0..400 {
+            let rays = RayPacket::<f32x8>::from_fn(|i| {
+                let inside = desc.spheres[(p * 8 + i) % 300].center;
+                let origin = if p % 2 == 0 { V3::new(unit(), unit(), -3.0) } else { V3::from(inside) };
+                let dir = V3::new(unit() * 0.3, unit() * 0.3, 1.0);
+                (Ray::new(origin.to_f32(), dir.to_f32()), f32::INFINITY, (p + i) % 7 != 0)
+            });
+            let hit = scene.geometry.intersect_k(&rays, &DeparturePacket::camera());
+            let found = hit.found() & rays.active;
+            let Some(lanes) = tracer.sphere_surface(&rays, &hit, found) else { continue };
+            let scalar = tracer.surface_by_lane(&rays, &hit, found);
+            let bits = |v: V3<f32x8>, i: usize| [v.x, v.y, v.z].map(|c| c.lane(i).to_bits());
+            for i in (0..8).filter(|&i| f32x8::mask_lane(found, i)) {
+                assert_eq!(bits(lanes.point, i), bits(scalar.point, i), "packet {p} lane {i}");
+                assert_eq!(bits(lanes.normal, i), bits(scalar.normal, i), "packet {p} lane {i}");
+                assert_eq!(bits(lanes.base, i), bits(scalar.base, i), "packet {p} lane {i}");
+                assert_eq!(f32x8::mask_lane(lanes.inside, i), f32x8::mask_lane(scalar.inside, i));
+                let fields = |s: &Surface<f32x8>| {
+                    [s.ambient, s.diffuse, s.specular, s.shininess, s.reflect, s.transmit, s.ior]
+                        .map(|f| f.lane(i).to_bits())
+                };
+                assert_eq!(fields(&lanes), fields(&scalar), "packet {p} lane {i}");
+                checked += 1;
+            }
+        }
+        assert!(checked > 1000, "only {checked} lanes checked");
+    }
 
     #[test]
     fn refraction_obeys_snell_and_fresnel_at_normal_incidence() {
