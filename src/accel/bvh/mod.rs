@@ -387,29 +387,26 @@ fn near_side(inv: f32) -> usize {
     usize::from(inv < 0.0)
 }
 
-/// A traversal stack: `CAP` entries on the call stack, the rest (deep trees only) in a heap vector. A heap
-/// vector per packet costs more than a small BVH's whole traversal, and a deep fixed array (256 packet
-/// entries were 32 KB) costs a page probe per call and still has a depth limit.
-struct Stack<E: Copy, const CAP: usize> {
-    items: [std::mem::MaybeUninit<E>; CAP],
-    /// Entries on the stack: the first `CAP` in `items`, the rest in `spill`.
+/// Deep enough for any tree obvhs builds over 2^32 primitives with its leaf collapsing (a 4-wide node pushes
+/// up to 3 entries per level); checked on push.
+const STACK: usize = 256;
+
+/// A fixed-capacity traversal stack on the call stack (a heap vector per packet costs more than a small
+/// BVH's whole traversal).
+struct Stack<E: Copy> {
+    items: [std::mem::MaybeUninit<E>; STACK],
     len: usize,
-    /// Entries past the first `CAP`, in push order (allocated only when used).
-    spill: Vec<E>,
 }
 
-impl<E: Copy, const CAP: usize> Stack<E, CAP> {
+impl<E: Copy> Stack<E> {
     #[inline(always)]
     fn new() -> Self {
-        Self { items: [const { std::mem::MaybeUninit::uninit() }; CAP], len: 0, spill: Vec::new() }
+        Self { items: [const { std::mem::MaybeUninit::uninit() }; STACK], len: 0 }
     }
     #[inline(always)]
     fn push(&mut self, e: E) {
-        if self.len < CAP {
-            self.items[self.len].write(e);
-        } else {
-            self.spill_push(e);
-        }
+        assert!(self.len < STACK, "BVH deeper than the traversal stack");
+        self.items[self.len].write(e);
         self.len += 1;
     }
     #[inline(always)]
@@ -418,16 +415,8 @@ impl<E: Copy, const CAP: usize> Stack<E, CAP> {
             return None;
         }
         self.len -= 1;
-        if self.len >= CAP {
-            return self.spill.pop();
-        }
-        // SAFETY: entries below `len` (and `CAP`) were written by `push` and are plain `Copy` data.
+        // SAFETY: entries below `len` were written by `push` and are plain `Copy` data.
         Some(unsafe { self.items[self.len].assume_init() })
-    }
-    #[cold]
-    #[inline(never)]
-    fn spill_push(&mut self, e: E) {
-        self.spill.push(e);
     }
 }
 
@@ -447,19 +436,6 @@ fn far_to_near(order: &mut [(f32, usize)]) {
 #[cfg(test)]
 mod tests {
     use super::*;
-
-    /// Past its inline capacity the stack spills to the heap and still pops last in, first out.
-    #[test]
-    fn stack_spills_and_stays_lifo() {
-        let mut stack = Stack::<u32, 3>::new();
-        for round in 0..2 {
-            (0..10).for_each(|v| stack.push(v + round));
-            assert!(!stack.spill.is_empty());
-            let popped: Vec<u32> = std::iter::from_fn(|| stack.pop()).collect();
-            assert_eq!(popped, (0..10).rev().map(|v| v + round).collect::<Vec<_>>());
-            assert!(stack.spill.is_empty());
-        }
-    }
 
     /// obvhs's binary tree over `n` small cubes spread by a fixed LCG, with leaves of at most `leaf`
     /// boxes: many levels for large `n`, inner nodes with leaf and inner children mixed for small ones.

@@ -19,11 +19,6 @@ use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
 
-/// Stack entries kept on the call stack: a K = 16 entry is 128 bytes, so 24 keep the frame under a page;
-/// deeper walks spill to the heap.
-const PACKET_STACK: usize = 24;
-type PacketStack<F> = Stack<Entry<F>, PACKET_STACK>;
-
 /// A ray packet prepared for slab tests.
 struct SlabRays<F: Lanes> {
     slab: SlabRay<F>,
@@ -246,7 +241,7 @@ impl Bvh {
         n: &Node,
         rays: &SlabRays<F>,
         limit: F,
-        stack: &mut PacketStack<F>,
+        stack: &mut Stack<Entry<F>>,
         tests: &mut usize,
     ) -> Option<Entry<F>> {
         let maybe = match &rays.frustum {
@@ -275,7 +270,7 @@ impl Bvh {
         best: &mut HitPacket<F>,
     ) {
         let rays = SlabRays::new(q, live, self.frustum_culling.then_some(self.extent));
-        let mut stack = PacketStack::<F>::new();
+        let mut stack = Stack::<Entry<F>>::new();
         let limit = |lanes: F::Mask, best: &HitPacket<F>| {
             F::select(lanes, best.t.min_of(q.t_max), F::splat_f32(f32::NEG_INFINITY))
         };
@@ -319,7 +314,7 @@ impl Bvh {
         blocker: &mut u32,
     ) -> F::Mask {
         let rays = SlabRays::new(q, live, self.frustum_culling.then_some(self.extent));
-        let mut stack = PacketStack::<F>::new();
+        let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
         let (mut boxes, mut prims) = (0, 0);

@@ -13,11 +13,6 @@ use crate::geometry::HitPacket;
 use crate::math::{Real, V3};
 use crate::simd::{IdLanes, Lanes};
 
-/// Stack entries kept on the call stack (12 bytes each; deeper walks spill to the heap). A 4-wide walk
-/// pushes at most 3 per level, so 64 cover trees 21 levels deep.
-const RAY_STACK: usize = 64;
-type RayStack = Stack<Entry, RAY_STACK>;
-
 /// A pending subtree of the single-ray traversal and the ray's entry distance.
 #[derive(Clone, Copy)]
 struct Entry {
@@ -56,7 +51,13 @@ impl Bvh {
     /// Of the children of `n` the ray enters within `limit`, pushes all but the nearest (farthest first) and
     /// returns that one, to be visited next.
     #[inline(always)]
-    fn push_but_nearest(&self, n: &Node, ray: &SlabRay4, limit: f32, stack: &mut RayStack) -> Option<Entry> {
+    fn push_but_nearest(
+        &self,
+        n: &Node,
+        ray: &SlabRay4,
+        limit: f32,
+        stack: &mut Stack<Entry>,
+    ) -> Option<Entry> {
         let near = ray.enter(n, limit);
         // Bit c for each child entered; empty slots (boxes at +inf) never are.
         let entered = f32x4::move_mask(Real::lt(near, f32x4::splat(f32::INFINITY)));
@@ -88,7 +89,7 @@ impl Bvh {
 
     /// The closest hit of one ray in the subtree of node `root` (which the ray enters), merged into `best`.
     fn intersect_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, best: &mut HitPacket<f32>) {
-        let mut stack = RayStack::new();
+        let mut stack = Stack::<Entry>::new();
         let mut next =
             self.push_but_nearest(&self.nodes[root as usize], slab, best.t.min(q.t_max), &mut stack);
         let (mut nodes, mut prims) = (1, 0);
@@ -112,7 +113,7 @@ impl Bvh {
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
     /// found, left in `blocker`.
     fn occluded_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, blocker: &mut u32) -> bool {
-        let mut stack = RayStack::new();
+        let mut stack = Stack::<Entry>::new();
         let mut next = self.push_but_nearest(&self.nodes[root as usize], slab, q.t_max, &mut stack);
         let (mut nodes, mut prims, mut blocked) = (1, 0, false);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
