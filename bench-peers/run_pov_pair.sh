@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# POV-Ray 3.7 and one or more bareray builds on the level-4 sphereflake (1024², 1 spp, depth 5, THREADS
+# threads), alternated run by run, ROUNDS rounds: on a host whose speed drifts, each round's ratio compares
+# runs made seconds apart. Prints each round's wall times (ms) and per build the median POV-Ray / bareray
+# ratio; writes them to results/povpair-<UTC stamp>.txt.
+#
+# usage: run_pov_pair.sh path/to/bareray [more builds...]     env: ROUNDS=8 THREADS=2
+set -euo pipefail
+here="$(cd "$(dirname "$0")" && pwd)"
+[ $# -ge 1 ] || { echo "usage: $0 path/to/bareray [more builds...]" >&2; exit 2; }
+threads="${THREADS:-2}"
+flake="$here/out/balls4.nff"; pov="$here/out/balls4.pov"
+[ -f "$flake" ] || "$1" gen flake --level 4 -o "$flake" >&2
+[ -f "$pov" ] || python3 "$here/nff2pov.py" "$flake" -o "$pov" --width 1024 --height 1024 --angle-mode spd \
+  --max-trace-level 5 >&2
+out="$here/results/povpair-$(date -u +%Y-%m-%dT%H%MZ).txt"
+ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $(( (e - s) / 1000000 )); }
+{
+  echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ)  nproc: $(nproc)  cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
+  echo "# povray +W1024 +H1024 -A +WT$threads -D +FN; bareray render --width 1024 --height 1024 --spp 1 --depth 5 --threads $threads -q"
+  for r in $(seq "${ROUNDS:-8}"); do
+    line="pov $(ms povray +I"$pov" +O"$here/out/balls4.pair.pov.png" +W1024 +H1024 -A +WT"$threads" -D +FN \
+      File_Gamma=1.0 Display_Gamma=1.0)"
+    for b in "$@"; do
+      line="$line $(basename "$b") $(ms "$b" render "$flake" -o "$here/out/balls4.pair.png" --width 1024 \
+        --height 1024 --spp 1 --depth 5 --threads "$threads" -q)"
+    done
+    echo "$line"
+  done
+} | tee "$out" | python3 -c "
+import sys, statistics as st
+rows = [l.split() for l in sys.stdin if not l.startswith('#')]
+for k, name in enumerate(rows[0][2::2]):
+    walls = [int(r[3 + 2 * k]) for r in rows]
+    ratios = [int(r[1]) / w for r, w in zip(rows, walls)]
+    print(f'{name}: POV-Ray / bareray median {st.median(ratios):.2f}x (min {min(ratios):.2f}, max {max(ratios):.2f});'
+          f' median wall {st.median(walls)} ms, POV-Ray {st.median(int(r[1]) for r in rows)} ms')
+" | tee -a "$out"
+echo "results: $out" >&2
