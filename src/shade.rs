@@ -82,6 +82,13 @@ fn trace_lane_by_lane<F: Lanes>(
     V3::new(channel(0), channel(1), channel(2))
 }
 
+/// The outward `normal` turned toward rays along `dir`, and the lanes where it was flipped (hit from
+/// inside: the lecture's case 4). Zero normals (lanes that found nothing) stay unflipped.
+fn facing<F: Lanes>(normal: V3<F>, dir: V3<F>) -> (V3<F>, F::Mask) {
+    let inside = normal.dot(dir).gt(F::splat_f32(0.0));
+    (V3::select(inside, -normal, normal), inside)
+}
+
 /// A colour in every lane.
 fn splat_rgb<F: Lanes>(c: Rgb) -> V3<F> {
     F::splat_v3(c)
@@ -194,12 +201,11 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let center = V3::new(gather(&spheres.cx), gather(&spheres.cy), gather(&spheres.cz));
         let zero = V3::all(F::splat_f32(0.0));
         let point = V3::select(found, rays.ray().at(hit.t), zero);
-        let normal = V3::select(found, (point - center).normalize(), zero);
-        let inside = found & normal.dot(rays.dir).gt(F::splat_f32(0.0));
+        let (normal, inside) = facing(V3::select(found, (point - center).normalize(), zero), rays.dir);
         let splat = F::splat_f32;
         Some(Surface {
             point,
-            normal: V3::select(inside, -normal, normal),
+            normal,
             inside,
             base: splat_rgb::<F>(m.color),
             ambient: splat(m.ambient),
@@ -248,11 +254,10 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         }
         let lane = |k: usize| F::from_lanes(v[k].as_ref());
         let v3 = |k: usize| V3::new(lane(k), lane(k + 1), lane(k + 2));
-        let normal = v3(3);
-        let inside = normal.dot(rays.dir).gt(F::splat_f32(0.0));
+        let (normal, inside) = facing(v3(3), rays.dir);
         Surface {
             point: v3(0),
-            normal: V3::select(inside, -normal, normal),
+            normal,
             inside,
             base: v3(6),
             ambient: lane(9),
