@@ -64,18 +64,18 @@ impl Polygons {
         }
         self.first.push(self.v0.len() as u32);
         let anchor = vertices[0];
-        let offset = |v: &Vec3f| [v.x - anchor.x, v.y - anchor.y, v.z - anchor.z];
-        let n = [normal.x, normal.y, normal.z];
-        let height = |v: &Vec3f| {
-            let d =
-                [(v.x, anchor.x), (v.y, anchor.y), (v.z, anchor.z)].map(|(a, b)| f64::from(a) - f64::from(b));
-            (0..3).map(|i| f64::from(n[i]) * d[i]).sum::<f64>().abs()
-        };
-        // The triangles' edges are stored rounded (ε/2 of their 1-norm, at most twice the farthest
-        // vertex's); the heights are computed in f64 from the stored values, and the factor rounds them up.
-        let far = vertices.iter().map(|v| offset(v).iter().map(|x| f64::from(x.abs())).sum::<f64>());
-        let rounding = f64::from(f32::EPSILON) * 2.0 * far.fold(0.0, f64::max);
-        let thickness = (vertices.iter().map(height).fold(0.0, f64::max) + rounding) * (1.0 + 1e-6);
+        // Each vertex's offset from the anchor, in f64 from the stored f32 values.
+        let offsets = vertices.iter().map(|v| {
+            [(v.x, anchor.x), (v.y, anchor.y), (v.z, anchor.z)].map(|(a, b)| f64::from(a) - f64::from(b))
+        });
+        let n = [normal.x, normal.y, normal.z].map(f64::from);
+        let (height, far) = offsets.fold((0.0f64, 0.0f64), |(height, far), d| {
+            let h = (0..3).map(|i| n[i] * d[i]).sum::<f64>().abs();
+            (height.max(h), far.max(d.iter().map(|x| x.abs()).sum()))
+        });
+        // The triangles' edges are stored rounded (ε/2 of their 1-norm, at most twice the farthest vertex's
+        // `far`); the factor rounds the f64 heights up.
+        let thickness = (height + f64::from(f32::EPSILON) * 2.0 * far) * (1.0 + 1e-6);
         self.anchor.push(anchor);
         self.thickness.push((thickness as f32).max(f32::MIN_POSITIVE));
         self.normal.push(normal);
