@@ -7,7 +7,7 @@ use crate::geometry::{
     DeparturePacket, HitPacket, Pyramid, Ray, RayPacket,
 };
 use crate::math::Mask;
-use crate::simd::{IdLanes, Lanes};
+use crate::simd::{set_bits, IdLanes, Lanes};
 
 use super::{Geometry, PrimRef, Spheres};
 
@@ -81,6 +81,64 @@ impl<F: Lanes> SphereQuery<'_, F> {
             }
         }
         blocked
+    }
+}
+
+/// The lane type of a single ray's leaf test, one sphere per lane: obvhs leaves hold at most 8 spheres
+/// (`max_prims_per_leaf` of every preset bareray uses), so one pass covers a leaf.
+pub type LeafLanes = wide::f32x8;
+
+impl SphereQuery<'_, f32> {
+    /// Spheres `at..at + min(count, L::K)` against the one ray (lanes = spheres, the transpose of
+    /// [`SphereQuery::sphere`]; each lane computes that kernel's bits): bit j set where sphere `at + j` is hit
+    /// within `t_max` (the departure sphere excluded), with each lane's t. `None` when the ray's line meets
+    /// none of them, which skips the roots' division and square root for the whole chunk.
+    #[inline(always)]
+    fn leaf_chunk<L: Lanes>(&self, at: usize, count: usize) -> Option<(u32, L)> {
+        let s = self.spheres;
+        let ray = Ray::new(L::splat_v3(self.ray.origin), L::splat_v3(self.ray.dir));
+        // Lanes past the array's end read a zero sphere at the origin; `valid` drops them.
+        let centre = L::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
+        let line = sphere_approach(centre, L::load_partial(&s.r, at, 0.0), &ray);
+        let valid = L::lanes_below(count);
+        if !(line.meets() & valid).any() {
+            return None;
+        }
+        let (hit, t) = first_root(&line.roots(), L::splat_f32(self.t_max));
+        let ids = L::Ids::splat(at as u32) + L::lane_ids();
+        let hit = hit & valid & !L::ids_eq(ids, L::Ids::splat(self.skip));
+        Some((L::move_mask(hit), t))
+    }
+
+    /// [`SphereQuery::intersect`] over the leaf `first..first + count`, [`LeafLanes`] spheres at a time:
+    /// the same hits, merged by the same (t, id) order.
+    #[inline(always)]
+    pub fn intersect_leaf(&self, first: usize, count: usize, best: &mut HitPacket<f32>) {
+        let end = first + count;
+        for at in (first..end).step_by(LeafLanes::K) {
+            let Some((bits, t)) = self.leaf_chunk::<LeafLanes>(at, end - at) else { continue };
+            for j in set_bits(bits) {
+                let i = at + j;
+                best.update(true, t.lane(j), i as u32, self.spheres.key[i]);
+            }
+        }
+    }
+
+    /// [`SphereQuery::occluded`] over the leaf `first..first + count` for the one ray, [`LeafLanes`]
+    /// spheres at a time; `blocker` is set to the lowest-index blocking sphere, as the scalar loop finds it.
+    #[inline(always)]
+    pub fn occluded_leaf(&self, first: usize, count: usize, blocker: &mut u32) -> bool {
+        let end = first + count;
+        for at in (first..end).step_by(LeafLanes::K) {
+            match self.leaf_chunk::<LeafLanes>(at, end - at) {
+                Some((bits, _)) if bits != 0 => {
+                    *blocker = (at + bits.trailing_zeros() as usize) as u32;
+                    return true;
+                }
+                _ => {}
+            }
+        }
+        false
     }
 }
 
@@ -163,7 +221,7 @@ impl Geometry {
         }
         let mut t = F::splat_f32(f32::INFINITY).to_array();
         let mut found = 0u32;
-        for i in (0..F::K).filter(|&i| F::mask_lane(inward, i)) {
+        for i in set_bits(F::move_mask(inward)) {
             let (ray, t_max, _) = rays.lane(i);
             if let Some(exit) = self.exit_of_departure(&ray, from.prim.lane(i), t_max) {
                 t.as_mut()[i] = exit;
@@ -183,5 +241,55 @@ impl Geometry {
         };
         let (hit, t) = far_root(&roots, t_max);
         hit.then_some(t)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::V3;
+    use crate::scene::generate::SplitMix64;
+
+    /// The leaf kernel (lanes = spheres) gives the scalar loop's closest hit and blocker, bit for bit: over
+    /// leaves of every size from 1 to past one chunk, at the array's end (partial loads), with rays from
+    /// outside, from sphere surfaces that skip their own sphere, and with short `t_max`.
+    #[test]
+    fn leaf_lanes_give_the_scalar_loop() {
+        let mut rng = SplitMix64::new(5);
+        let mut unit = move || rng.unit() as f32 * 2.0 - 1.0;
+        let mut spheres = Spheres::default();
+        for _ in 0..40 {
+            spheres.push(V3::new(unit(), unit(), unit()) * 0.6, 0.05 + 0.3 * unit().abs(), 0);
+        }
+        let n = spheres.len();
+        let (mut hits, mut blocked) = (0, 0);
+        for k in 0..4000 {
+            let count = 1 + k % 12;
+            let first = if k % 5 == 0 { n - count } else { k * 7 % (n - count + 1) };
+            let skip = if k % 3 == 0 { (first + k % count) as u32 } else { crate::geometry::NO_PRIM };
+            let origin = match skip as usize {
+                s if s < n => spheres.center(s) + V3::new(unit(), unit(), unit()).normalize() * spheres.r[s],
+                _ => V3::new(unit(), unit(), -2.0),
+            };
+            // Aimed near a sphere of the leaf, so most rays meet some of them.
+            let aim = spheres.center(first + k / 3 % count) + V3::new(unit(), unit(), unit()) * 0.2;
+            let dir = aim - origin;
+            let t_max = if k % 4 == 0 { 0.5 + unit().abs() } else { f32::INFINITY };
+            let q = SphereQuery { spheres: &spheres, ray: Ray::new(origin, dir), t_max, skip, pyramid: None };
+            let (mut lanes, mut scalar) = (HitPacket::<f32>::miss(), HitPacket::<f32>::miss());
+            q.intersect_leaf(first, count, &mut lanes);
+            q.intersect(first..first + count, true, &mut scalar);
+            assert_eq!(
+                (lanes.t.to_bits(), lanes.prim, lanes.key),
+                (scalar.t.to_bits(), scalar.prim, scalar.key)
+            );
+            let (mut b_lanes, mut b_scalar) = (u32::MAX, u32::MAX);
+            let got = q.occluded_leaf(first, count, &mut b_lanes);
+            assert_eq!(got, q.occluded(first..first + count, true, &mut b_scalar), "leaf {k}");
+            assert_eq!(b_lanes, b_scalar, "leaf {k}");
+            hits += usize::from(scalar.prim != crate::geometry::NO_PRIM);
+            blocked += usize::from(got);
+        }
+        assert!(hits > 2000 && blocked > 2000, "only {hits} hits, {blocked} blocked");
     }
 }

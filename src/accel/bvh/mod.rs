@@ -409,6 +409,14 @@ impl<E: Copy> Stack<E> {
         self.items[self.len].write(e);
         self.len += 1;
     }
+    /// Pushes `e` when `keep`, without a branch on `keep`: the entry is written either way and the length
+    /// moves by `keep`, so a child entered by an unpredictable set of lanes costs no misprediction.
+    #[inline(always)]
+    fn push_if(&mut self, e: E, keep: bool) {
+        assert!(self.len < STACK, "BVH deeper than the traversal stack");
+        self.items[self.len].write(e);
+        self.len += usize::from(keep);
+    }
     #[inline(always)]
     fn pop(&mut self) -> Option<E> {
         if self.len == 0 {

@@ -232,9 +232,8 @@ impl<F: Lanes> Entry<F> {
 }
 
 impl Bvh {
-    /// Of the children of `n` that some lane enters within its `limit`, pushes all but the nearest (farthest
-    /// first) and returns that one, to be visited next without a round trip through the stack. Adds the box
-    /// tests to `tests`.
+    /// Pushes the children of `n` that some lane enters within its `limit`, farthest first, so the nearest
+    /// is popped next. Adds the box tests to `tests`.
     #[inline(always)]
     fn push_children<F: Lanes>(
         &self,
@@ -243,22 +242,17 @@ impl Bvh {
         limit: F,
         stack: &mut Stack<Entry<F>>,
         tests: &mut usize,
-    ) -> Option<Entry<F>> {
+    ) {
         let maybe = match &rays.frustum {
             Some(frustum) => frustum.maybe_entered(n),
             None => u32::MAX,
         };
-        let mut nearest = None;
         for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
             *tests += 1;
             let near = rays.enter(n, c, limit);
-            if near.lt(F::splat_f32(f32::INFINITY)).any() {
-                if let Some(farther) = nearest.replace(Entry { child: n.child[c], count: n.count[c], near }) {
-                    stack.push(farther);
-                }
-            }
+            let entered = near.lt(F::splat_f32(f32::INFINITY)).any();
+            stack.push_if(Entry { child: n.child[c], count: n.count[c], near }, entered);
         }
-        nearest
     }
 
     /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal; subtrees
@@ -276,8 +270,8 @@ impl Bvh {
         };
         // Counted locally and reported once per packet: a shared counter per node costs measurably.
         let (mut boxes, mut prims) = (0, 0);
-        let mut next = Some(Entry::root());
-        while let Some(e) = next.take().or_else(|| stack.pop()) {
+        stack.push(Entry::root());
+        while let Some(e) = stack.pop() {
             // Lanes that entered this subtree no farther than their best hit so far.
             let lanes = e.near.le(best.t) & live;
             if !lanes.any() {
@@ -299,7 +293,7 @@ impl Bvh {
                 self.intersect_lanes(e.child, q, &rays.slab, lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
-                next = self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
+                self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
             }
         }
         count_work(prims, boxes);
@@ -318,8 +312,8 @@ impl Bvh {
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
         let (mut boxes, mut prims) = (0, 0);
-        let mut next = Some(Entry::root());
-        while let Some(e) = next.take().or_else(|| stack.pop()) {
+        stack.push(Entry::root());
+        while let Some(e) = stack.pop() {
             let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
             if !lanes.any() {
                 continue;
@@ -332,7 +326,7 @@ impl Bvh {
                 blocked = blocked | self.occluded_lanes(e.child, q, &rays.slab, lanes, blocker);
             } else {
                 let n = &self.nodes[e.child as usize];
-                next = self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);
+                self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);
                 continue;
             }
             if (blocked | !live).all() {

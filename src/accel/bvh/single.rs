@@ -11,7 +11,7 @@ use super::super::count_work;
 use super::{far_to_near, near_side, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
 use crate::geometry::HitPacket;
 use crate::math::{Real, V3};
-use crate::simd::{IdLanes, Lanes};
+use crate::simd::{set_bits, IdLanes, Lanes};
 
 /// A pending subtree of the single-ray traversal and the ray's entry distance.
 #[derive(Clone, Copy)]
@@ -100,7 +100,7 @@ impl Bvh {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                q.intersect(first..first + usize::from(e.count), true, best);
+                q.intersect_leaf(first, usize::from(e.count), best);
             } else {
                 nodes += 1;
                 let n = &self.nodes[e.child as usize];
@@ -120,7 +120,7 @@ impl Bvh {
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                if q.occluded(first..first + usize::from(e.count), true, blocker) {
+                if q.occluded_leaf(first, usize::from(e.count), blocker) {
                     blocked = true;
                     break;
                 }
@@ -144,7 +144,7 @@ impl Bvh {
         best: &mut HitPacket<F>,
     ) {
         let bits = F::move_mask(lanes);
-        for i in (0..F::K).filter(|i| bits >> i & 1 == 1) {
+        for i in set_bits(bits) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
             self.intersect_1(root, &q.lane(i), &SlabRay4::lane(slab, i), &mut hit);
             let at = F::mask_from_bits(1 << i);
@@ -164,8 +164,7 @@ impl Bvh {
         blocker: &mut u32,
     ) -> F::Mask {
         let bits = F::move_mask(lanes);
-        let blocked = (0..F::K)
-            .filter(|i| bits >> i & 1 == 1)
+        let blocked = set_bits(bits)
             .filter(|&i| self.occluded_1(root, &q.lane(i), &SlabRay4::lane(slab, i), blocker))
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
