@@ -4,7 +4,7 @@
 
 use bareray::accel::bvh::Bvh;
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
-use bareray::math::V3;
+use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{SceneDesc, SphereDesc};
 use bareray::scene::generate::SplitMix64;
 use bareray::scene::{Accel, Scene};
@@ -125,6 +125,29 @@ fn bvh_equals_brute_force_at_every_width() {
         check_width::<f32x8>(&bvh, &brute, &rays);
         check_width::<f32x16>(&bvh, &brute, &rays);
     }
+}
+
+/// A scene that traces shadow rays gets the 8-wide single-ray tree, which K = 1 walks from the root; packets
+/// keep the 4-wide tree. Both give brute force's answer, bit for bit.
+#[test]
+fn single_ray_tree_equals_brute_force() {
+    use bareray::scene::desc::{Falloff, LightDesc};
+    for (n, seed) in [(1, 11), (9, 12), (300, 13), (2000, 14), (20_000, 15)] {
+        let mut desc = field(n, seed);
+        let light =
+            LightDesc { position: DVec3::new(0.0, 3.0, -3.0), color: Rgb::all(1.0), falloff: Falloff::None };
+        desc.lights.push(light);
+        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let tree = bvh.geometry.bvh.as_ref().unwrap();
+        assert!(tree.wide.is_some(), "a lit scene builds the single-ray tree");
+        let rays = rays(&desc, 3000, seed + 100);
+        check_width::<f32>(&bvh, &brute, &rays);
+        check_width::<f32x16>(&bvh, &brute, &rays);
+    }
+    // Without lights or mirrors nothing walks one ray from the root: no single-ray tree.
+    let plain = Scene::compile_with(&field(300, 4), Accel::Bvh).unwrap();
+    assert!(plain.geometry.bvh.as_ref().unwrap().wide.is_none());
 }
 
 /// Box tests of `packets` (K = 16, closest hit) after `setting` the BVH's switches.

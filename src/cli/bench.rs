@@ -83,6 +83,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let clock = Instant::now();
     let mut desc = load_scene(&args.scene)?;
     args.camera.apply(&mut desc)?;
+    if args.primary_only {
+        // Primary hits need no lights and no bounces; without them the build skips the single-ray tree.
+        desc.lights.clear();
+        desc.render.max_depth = 0;
+    }
     let parse_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     let accel = match args.accel {

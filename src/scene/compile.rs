@@ -154,7 +154,12 @@ impl Scene {
         if use_bvh {
             let pad = bvh::padding(reach(desc));
             let params = preset.params();
-            let (tree, stats) = bvh::build(&mut geometry.spheres, pad, params);
+            // The 8-wide single-ray tree serves the scalar tracer's secondary rays: only scenes that
+            // trace them pay for its build.
+            let deep = desc.render.max_depth > 0
+                && desc.materials.iter().any(|m| m.reflect > 0.0 || m.transmit > 0.0);
+            let secondary = !desc.lights.is_empty() || deep;
+            let (tree, stats) = bvh::build(&mut geometry.spheres, pad, params, secondary);
             geometry.bvh = Some(tree);
             build = stats;
         }

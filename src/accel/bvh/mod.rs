@@ -12,8 +12,11 @@
 //! to brute force over the same spheres, whatever order the nodes are visited in and whichever traversal
 //! runs.
 
+mod node8;
 mod packet;
 mod single;
+
+pub use node8::{WideNode, WIDE_N};
 
 use std::time::Instant;
 
@@ -70,20 +73,35 @@ struct ChildRef {
 /// inverted box, lo = +inf and hi = −inf, would give every slab (−inf, +inf) and be entered by every ray.)
 const EMPTY: ChildRef = ChildRef { lo: [f32::INFINITY; 3], hi: [f32::INFINITY; 3], child: 0, count: 0 };
 
+/// The SoA slots of a `W`-wide node over `children`: boxes (`[side][axis][slot]`), references and sphere
+/// counts, with [`EMPTY`] past the last child.
+type Slots<const W: usize> = ([[[f32; W]; 3]; 2], [u32; W], [u8; W]);
+
+fn slots<const W: usize>(children: &[ChildRef]) -> Slots<W> {
+    assert!(children.len() <= W);
+    let c = |i: usize| children.get(i).copied().unwrap_or(EMPTY);
+    let bounds = [
+        std::array::from_fn(|a| std::array::from_fn(|i| c(i).lo[a])),
+        std::array::from_fn(|a| std::array::from_fn(|i| c(i).hi[a])),
+    ];
+    (bounds, std::array::from_fn(|i| c(i).child), std::array::from_fn(|i| c(i).count))
+}
+
+/// Moves the inner children's node indices (count 0) of the first `slots` up by `base`: a subtree flattened
+/// on its own, placed at `base` in the whole array.
+fn shift_inner(child: &mut [u32], count: &[u8], slots: u8, base: u32) {
+    for c in 0..usize::from(slots) {
+        if count[c] == 0 {
+            child[c] += base;
+        }
+    }
+}
+
 impl Node {
     fn new(children: &[ChildRef]) -> Node {
-        assert!(children.len() <= N);
-        let c = |i: usize| children.get(i).copied().unwrap_or(EMPTY);
-        Node {
-            bounds: [
-                std::array::from_fn(|a| std::array::from_fn(|i| c(i).lo[a])),
-                std::array::from_fn(|a| std::array::from_fn(|i| c(i).hi[a])),
-            ],
-            child: std::array::from_fn(|i| c(i).child),
-            count: std::array::from_fn(|i| c(i).count),
-            order: std::array::from_fn(|octant| front_to_back(children, octant)),
-            slots: children.len() as u8,
-        }
+        let (bounds, child, count) = slots::<N>(children);
+        let order = std::array::from_fn(|octant| front_to_back(children, octant));
+        Node { bounds, child, count, order, slots: children.len() as u8 }
     }
 
     /// Lower corners per axis, per child.
@@ -100,11 +118,7 @@ impl Node {
     /// The node with its inner children's indices moved up by `base`: a subtree flattened on its own, placed
     /// at `base` in the whole array.
     fn shifted(mut self, base: u32) -> Node {
-        for c in 0..usize::from(self.slots) {
-            if self.count[c] == 0 {
-                self.child[c] += base;
-            }
-        }
+        shift_inner(&mut self.child, &self.count, self.slots, base);
         self
     }
 
@@ -114,6 +128,43 @@ impl Node {
     pub fn slots_far_to_near(&self, octant: usize) -> impl Iterator<Item = usize> {
         let order = self.order[octant];
         (0..usize::from(self.slots)).rev().map(move |k| usize::from(order >> (2 * k) & 3))
+    }
+}
+
+/// A node as the collapse builds it and the single-ray walk reads it: up to `WIDTH` children, one per lane of
+/// `Lanes` in the walk's slab test. Implemented by the 4-wide packet [`Node`] and the 8-wide [`WideNode`].
+trait RayNode: Copy + Send + Sync {
+    /// Children per node.
+    const WIDTH: usize;
+    /// One lane per child.
+    type Lanes: Lanes;
+    /// A node over `children` (at most `WIDTH`).
+    fn new(children: &[ChildRef]) -> Self;
+    /// The `side` (0 lower, 1 upper) planes on `axis` of every child.
+    fn planes(&self, side: usize, axis: usize) -> Self::Lanes;
+    /// Child `c`'s reference and sphere count (0 for an inner node).
+    fn child(&self, c: usize) -> (u32, u8);
+    /// The node with its inner children's indices moved up by `base`.
+    fn shifted(self, base: u32) -> Self;
+}
+
+impl RayNode for Node {
+    const WIDTH: usize = N;
+    type Lanes = wide::f32x4;
+
+    fn new(children: &[ChildRef]) -> Self {
+        Node::new(children)
+    }
+    #[inline(always)]
+    fn planes(&self, side: usize, axis: usize) -> wide::f32x4 {
+        wide::f32x4::from(self.bounds[side][axis])
+    }
+    #[inline(always)]
+    fn child(&self, c: usize) -> (u32, u8) {
+        (self.child[c], self.count[c])
+    }
+    fn shifted(self, base: u32) -> Self {
+        Node::shifted(self, base)
     }
 }
 
@@ -146,6 +197,9 @@ pub struct Bvh {
     pub extent: f32,
     /// The padding the spheres' boxes were built with ([`padding`]): the frustum's sphere test pads by it too.
     pub pad: f32,
+    /// The same tree in 8-wide nodes for rays walked alone from the root ([`node8`]), when the scene traces
+    /// secondary rays.
+    pub wide: Option<Vec<WideNode>>,
 }
 
 impl Bvh {
@@ -153,7 +207,11 @@ impl Bvh {
     /// else the packet traversal, which switches to single rays in sparse subtrees.
     pub fn intersect_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, best: &mut HitPacket<F>) {
         if F::K == 1 {
-            return self.intersect_lanes(0, q, &SlabRay::new(&q.ray), live, best);
+            let slab = SlabRay::new(&q.ray);
+            return match &self.wide {
+                Some(wide) => self.intersect_lanes(wide, 0, q, &slab, live, best),
+                None => self.intersect_lanes(&self.nodes, 0, q, &slab, live, best),
+            };
         }
         self.intersect_packet(q, live, best)
     }
@@ -162,7 +220,11 @@ impl Bvh {
     /// to a sphere that blocked a lane.
     pub fn occluded_k<F: Lanes>(&self, q: &SphereQuery<F>, live: F::Mask, blocker: &mut u32) -> F::Mask {
         if F::K == 1 {
-            return self.occluded_lanes(0, q, &SlabRay::new(&q.ray), live, blocker);
+            let slab = SlabRay::new(&q.ray);
+            return match &self.wide {
+                Some(wide) => self.occluded_lanes(wide, 0, q, &slab, live, blocker),
+                None => self.occluded_lanes(&self.nodes, 0, q, &slab, live, blocker),
+            };
         }
         self.occluded_packet(q, live, blocker)
     }
@@ -185,9 +247,15 @@ pub fn padding(reach: f32) -> f32 {
     reach * (64.0 * f32::EPSILON)
 }
 
-/// Builds the BVH and reorders `spheres` into its leaf order (their `key` keeps each one's file index).
-/// Returns the BVH and build statistics.
-pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, BuildStats) {
+/// Builds the BVH and reorders `spheres` into its leaf order (their `key` keeps each one's file index), with
+/// the 8-wide single-ray tree too when `single_ray_tree` (scenes that trace secondary rays). Returns the BVH
+/// and build statistics.
+pub fn build(
+    spheres: &mut Spheres,
+    pad: f32,
+    params: BvhBuildParams,
+    single_ray_tree: bool,
+) -> (Bvh, BuildStats) {
     let start = Instant::now();
     let boxes: Vec<Aabb> = (0..spheres.len())
         .into_par_iter()
@@ -198,14 +266,18 @@ pub fn build(spheres: &mut Spheres, pad: f32, params: BvhBuildParams) -> (Bvh, B
         })
         .collect();
     let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
-    // Reordering the spheres and collapsing the tree are independent: run them side by side.
-    let (permuted, nodes) =
-        rayon::join(|| spheres.permuted(&bvh2.primitive_indices), || collapse(&bvh2.nodes));
+    // Reordering the spheres and collapsing the trees are independent: run them side by side.
+    let (permuted, (nodes, wide)) = rayon::join(
+        || spheres.permuted(&bvh2.primitive_indices),
+        || rayon::join(|| collapse::<Node>(&bvh2.nodes), || single_ray_tree.then(|| collapse(&bvh2.nodes))),
+    );
     *spheres = permuted;
-    let stats =
-        BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: nodes.len() * size_of::<Node>() };
+    let wide_bytes = wide.as_ref().map_or(0, |w: &Vec<WideNode>| w.len() * size_of::<WideNode>());
+    let node_bytes = nodes.len() * size_of::<Node>() + wide_bytes;
+    let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes };
     let extent = extent(&nodes[0]);
-    (Bvh { nodes, single_ray_lanes: SINGLE_RAY_MAX_LANES, frustum_culling: true, extent, pad }, stats)
+    let single_ray_lanes = SINGLE_RAY_MAX_LANES;
+    (Bvh { nodes, single_ray_lanes, frustum_culling: true, extent, pad, wide }, stats)
 }
 
 /// The largest coordinate magnitude of the root's occupied child boxes.
@@ -214,13 +286,14 @@ fn extent(root: &Node) -> f32 {
     root.bounds.iter().flatten().flat_map(|axis| axis[..slots].iter()).fold(0.0f32, |m, v| m.max(v.abs()))
 }
 
-/// bareray's 4-wide nodes from obvhs's binary tree, in depth-first order. The top [`PARALLEL_LEVELS`] levels
-/// flatten their subtrees in parallel; the layout is the serial one ([`flatten`]) node for node.
-fn collapse(src: &[Bvh2Node]) -> Vec<Node> {
+/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from obvhs's binary tree, in depth-first order.
+/// The top [`PARALLEL_LEVELS`] levels flatten their subtrees in parallel; the layout is the serial one
+/// ([`flatten`]) node for node.
+fn collapse<T: RayNode>(src: &[Bvh2Node]) -> Vec<T> {
     if src[0].prim_count > 0 {
         let mut nodes = Vec::with_capacity(1);
-        let leaf = child_ref(src, 0, &mut nodes);
-        nodes.push(Node::new(&[leaf]));
+        let leaf = child_ref::<T>(src, 0, &mut nodes);
+        nodes.push(T::new(&[leaf]));
         return nodes;
     }
     flatten_parallel(src, 0, PARALLEL_LEVELS)
@@ -232,20 +305,20 @@ const PARALLEL_LEVELS: u32 = 3;
 
 /// [`flatten`] of obvhs inner node `i` into a vector of its own (the subtree's root first, indices local to
 /// it), its inner children's subtrees flattened in parallel for `levels` more levels.
-fn flatten_parallel(src: &[Bvh2Node], i: usize, levels: u32) -> Vec<Node> {
+fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> Vec<T> {
     let mut out = Vec::new();
     if levels == 0 {
         flatten(src, i, &mut out);
         return out;
     }
-    let (open, len) = open_children(src, i);
-    let subtrees: Vec<Option<Vec<Node>>> = open[..len]
+    let (open, len) = open_children(src, i, T::WIDTH);
+    let subtrees: Vec<Option<Vec<T>>> = open[..len]
         .par_iter()
         .map(|&j| (src[j].prim_count == 0).then(|| flatten_parallel(src, j, levels - 1)))
         .collect();
     out.reserve_exact(1 + subtrees.iter().flatten().map(Vec::len).sum::<usize>());
-    out.push(Node::new(&[]));
-    let mut children = [EMPTY; N];
+    out.push(T::new(&[]));
+    let mut children = [EMPTY; MAX_WIDTH];
     for (k, subtree) in subtrees.into_iter().enumerate() {
         children[k] = match subtree {
             None => child_ref(src, open[k], &mut out),
@@ -257,12 +330,12 @@ fn flatten_parallel(src: &[Bvh2Node], i: usize, levels: u32) -> Vec<Node> {
             }
         };
     }
-    out[0] = Node::new(&children[..len]);
+    out[0] = T::new(&children[..len]);
     out
 }
 
 /// The reference to obvhs node `i` from its parent: a leaf as it is, an inner node flattened first.
-fn child_ref(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> ChildRef {
+fn child_ref<T: RayNode>(src: &[Bvh2Node], i: usize, out: &mut Vec<T>) -> ChildRef {
     let n = &src[i];
     let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
     if n.prim_count > 0 {
@@ -272,13 +345,17 @@ fn child_ref(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> ChildRef {
     ChildRef { lo, hi, child: flatten(src, i, out), count: 0 }
 }
 
-/// The obvhs nodes that become the children of the 4-wide node for obvhs inner node `i` (the first `len` of
-/// the array): its two children, then repeatedly the inner one of largest surface area (the likeliest to be
-/// entered) replaced by its two children, until there are N.
-fn open_children(src: &[Bvh2Node], i: usize) -> ([usize; N], usize) {
+/// The widest node: the bound of [`RayNode::WIDTH`].
+const MAX_WIDTH: usize = WIDE_N;
+
+/// The obvhs nodes that become the children of the `width`-wide node for obvhs inner node `i` (the first
+/// `len` of the array): its two children, then repeatedly the inner one of largest surface area (the
+/// likeliest to be entered) replaced by its two children, until there are `width`.
+fn open_children(src: &[Bvh2Node], i: usize, width: usize) -> ([usize; MAX_WIDTH], usize) {
     let first = src[i].first_index as usize;
-    let (mut open, mut len) = ([first, first + 1, 0, 0], 2);
-    while len < N {
+    let (mut open, mut len) = ([0; MAX_WIDTH], 2);
+    (open[0], open[1]) = (first, first + 1);
+    while len < width {
         let area = |j: usize| src[j].aabb.half_area();
         let inner = (0..len).filter(|&k| src[open[k]].prim_count == 0);
         let Some(at) = inner.max_by(|&a, &b| area(open[a]).total_cmp(&area(open[b]))) else { break };
@@ -291,15 +368,15 @@ fn open_children(src: &[Bvh2Node], i: usize) -> ([usize; N], usize) {
 
 /// Appends the subtree of obvhs inner node `i` and returns its node index ([`open_children`] gives the
 /// node's children).
-fn flatten(src: &[Bvh2Node], i: usize, out: &mut Vec<Node>) -> u32 {
-    let (open, len) = open_children(src, i);
+fn flatten<T: RayNode>(src: &[Bvh2Node], i: usize, out: &mut Vec<T>) -> u32 {
+    let (open, len) = open_children(src, i, T::WIDTH);
     let me = out.len();
-    out.push(Node::new(&[]));
-    let mut children = [EMPTY; N];
+    out.push(T::new(&[]));
+    let mut children = [EMPTY; MAX_WIDTH];
     for k in 0..len {
         children[k] = child_ref(src, open[k], out);
     }
-    out[me] = Node::new(&children[..len]);
+    out[me] = T::new(&children[..len]);
     me as u32
 }
 
@@ -470,18 +547,25 @@ mod tests {
         1 + inner.map(|c| depth(nodes, n.child[c] as usize)).max().unwrap_or(0)
     }
 
+    /// The parallel collapse of `src` into `T` nodes, checked against the serial one.
+    fn collapse_both_ways<T: RayNode + PartialEq>(src: &[Bvh2Node]) -> Vec<T> {
+        let parallel = collapse::<T>(src);
+        if src[0].prim_count > 0 {
+            assert_eq!(parallel.len(), 1, "boxes in one leaf make one node");
+            return parallel;
+        }
+        let mut serial = Vec::new();
+        flatten(src, 0, &mut serial);
+        assert!(parallel == serial, "{} boxes: the parallel collapse differs from the serial one", src.len());
+        serial
+    }
+
     #[test]
     fn parallel_collapse_is_the_serial_layout() {
         for (n, leaf) in [(1, 8), (5, 8), (2, 1), (3, 1), (5, 1), (9, 1), (40, 1), (1000, 2), (30_000, 8)] {
             let src = tree(n, leaf);
-            let parallel = collapse(&src);
-            if src[0].prim_count > 0 {
-                assert_eq!(parallel.len(), 1, "{n} boxes in one leaf make one node");
-                continue;
-            }
-            let mut serial = Vec::new();
-            flatten(&src, 0, &mut serial);
-            assert!(parallel == serial, "{n} boxes: the parallel collapse differs from the serial one");
+            let serial = collapse_both_ways::<Node>(&src);
+            collapse_both_ways::<WideNode>(&src);
             if n >= 1000 {
                 // Deeper than the parallel levels, so every level of jobs ran.
                 assert!(depth(&serial, 0) > PARALLEL_LEVELS + 1, "{n} boxes: depth {}", depth(&serial, 0));

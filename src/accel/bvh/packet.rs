@@ -290,7 +290,7 @@ impl Bvh {
                     None => q.intersect(spheres, lanes, best),
                 }
             } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                self.intersect_lanes(e.child, q, &rays.slab, lanes, best);
+                self.intersect_lanes(&self.nodes, e.child, q, &rays.slab, lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
                 self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
@@ -323,7 +323,7 @@ impl Bvh {
                 prims += usize::from(e.count);
                 blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
             } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                blocked = blocked | self.occluded_lanes(e.child, q, &rays.slab, lanes, blocker);
+                blocked = blocked | self.occluded_lanes(&self.nodes, e.child, q, &rays.slab, lanes, blocker);
             } else {
                 let n = &self.nodes[e.child as usize];
                 self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);

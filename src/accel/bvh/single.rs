@@ -1,14 +1,14 @@
-//! Single-ray traversal over the same 4-wide nodes, SIMD over the children: one ray's slab test against all
-//! four boxes of a node in one `f32x4` pass. It serves K = 1 and every subtree that a packet enters with few
-//! live lanes (incoherent secondary rays after a bounce, and camera packets that have spread over many small
-//! spheres deep in the tree), where the packet traversal would carry mostly dead lanes: each live lane then
-//! walks the subtree alone, and its result is merged back into its lane (Embree's "hybrid" traversal).
-
-use wide::f32x4;
+//! Single-ray traversal, SIMD over a node's children: one ray's slab test against all of a node's boxes in one
+//! pass (`f32x4` over the 4-wide packet nodes, `f32x8` over the 8-wide single-ray tree; the walk is generic
+//! over [`RayNode`]). It serves K = 1 from the root (over the 8-wide tree when the scene has one) and every
+//! subtree of the 4-wide tree that a packet enters with few live lanes (incoherent secondary rays after a
+//! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
+//! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
+//! merged back into its lane (Embree's "hybrid" traversal).
 
 use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{far_to_near, near_side, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
+use super::{far_to_near, near_side, slab_entry_ordered, Bvh, RayNode, SlabRay, Stack, MAX_WIDTH};
 use crate::geometry::HitPacket;
 use crate::math::{Real, V3};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -21,29 +21,29 @@ struct Entry {
     near: f32,
 }
 
-/// One ray prepared for slab tests against four boxes at once: lane `i` of a prepared packet (whose lanes
-/// hold the bits a scalar ray's preparation gives) splatted.
-struct SlabRay4 {
-    ray: SlabRay<f32x4>,
+/// One ray prepared for slab tests against a node's boxes at once (one per lane of `L`): lane `i` of a
+/// prepared packet (whose lanes hold the bits a scalar ray's preparation gives) splatted.
+struct SlabRayN<L: Lanes> {
+    ray: SlabRay<L>,
     /// Per axis, the side of the near plane ([`near_side`]).
     near: [usize; 3],
 }
 
-impl SlabRay4 {
+impl<L: Lanes> SlabRayN<L> {
     fn lane<F: Lanes>(packet: &SlabRay<F>, i: usize) -> Self {
         let lane = |v: &V3<F>| [v.x.lane(i), v.y.lane(i), v.z.lane(i)];
         let (inv, neg_o_inv) = (lane(&packet.inv_dir), lane(&packet.neg_o_inv));
-        let splat = |v: [f32; 3]| V3::new(f32x4::splat(v[0]), f32x4::splat(v[1]), f32x4::splat(v[2]));
+        let splat = |v: [f32; 3]| V3::new(L::splat_f32(v[0]), L::splat_f32(v[1]), L::splat_f32(v[2]));
         Self { ray: SlabRay { inv_dir: splat(inv), neg_o_inv: splat(neg_o_inv) }, near: inv.map(near_side) }
     }
 
     /// The ray's entry distance into each child of `n`, `inf` where it misses the child or enters beyond
     /// `limit`: the packet traversal's slab test, one child per lane.
     #[inline(always)]
-    fn enter(&self, n: &Node, limit: f32) -> f32x4 {
-        let planes = |side: [usize; 3]| [0, 1, 2].map(|a| f32x4::from(n.bounds[side[a]][a]));
+    fn enter<T: RayNode<Lanes = L>>(&self, n: &T, limit: f32) -> L {
+        let planes = |side: [usize; 3]| [0, 1, 2].map(|a| n.planes(side[a], a));
         let far = self.near.map(|s| 1 - s);
-        slab_entry_ordered(planes(self.near), planes(far), &self.ray, f32x4::splat(limit))
+        slab_entry_ordered(planes(self.near), planes(far), &self.ray, L::splat_f32(limit))
     }
 }
 
@@ -51,18 +51,22 @@ impl Bvh {
     /// Of the children of `n` the ray enters within `limit`, pushes all but the nearest (farthest first) and
     /// returns that one, to be visited next.
     #[inline(always)]
-    fn push_but_nearest(
+    fn push_but_nearest<T: RayNode>(
         &self,
-        n: &Node,
-        ray: &SlabRay4,
+        n: &T,
+        ray: &SlabRayN<T::Lanes>,
         limit: f32,
         stack: &mut Stack<Entry>,
     ) -> Option<Entry> {
         let near = ray.enter(n, limit);
         // Bit c for each child entered; empty slots (boxes at +inf) never are.
-        let entered = f32x4::move_mask(Real::lt(near, f32x4::splat(f32::INFINITY)));
+        let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY)));
         let near = near.to_array();
-        let entry = |c: usize| Entry { child: n.child[c], count: n.count[c], near: near[c] };
+        let near = near.as_ref();
+        let entry = |c: usize| {
+            let (child, count) = n.child(c);
+            Entry { child, count, near: near[c] }
+        };
         // One entered child is the common case deep in the tree: no ordering, no stack.
         if entered & entered.wrapping_sub(1) == 0 {
             return (entered != 0).then(|| entry(entered.trailing_zeros() as usize));
@@ -75,9 +79,9 @@ impl Bvh {
             stack.push(entry(farther));
             return Some(entry(nearest));
         }
-        let mut order = [(0.0, 0); N];
+        let mut order = [(0.0, 0); MAX_WIDTH];
         let mut hits = 0;
-        for c in (0..N).filter(|c| entered >> c & 1 == 1) {
+        for c in set_bits(entered) {
             order[hits] = (near[c], c);
             hits += 1;
         }
@@ -88,11 +92,17 @@ impl Bvh {
     }
 
     /// The closest hit of one ray in the subtree of node `root` (which the ray enters), merged into `best`.
-    fn intersect_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, best: &mut HitPacket<f32>) {
+    fn intersect_1<T: RayNode>(
+        &self,
+        nodes: &[T],
+        root: u32,
+        q: &SphereQuery<f32>,
+        slab: &SlabRayN<T::Lanes>,
+        best: &mut HitPacket<f32>,
+    ) {
         let mut stack = Stack::<Entry>::new();
-        let mut next =
-            self.push_but_nearest(&self.nodes[root as usize], slab, best.t.min(q.t_max), &mut stack);
-        let (mut nodes, mut prims) = (1, 0);
+        let mut next = self.push_but_nearest(&nodes[root as usize], slab, best.t.min(q.t_max), &mut stack);
+        let (mut visits, mut prims) = (1, 0);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.near > best.t {
                 continue;
@@ -102,20 +112,27 @@ impl Bvh {
                 prims += usize::from(e.count);
                 q.intersect_leaf(first, usize::from(e.count), best);
             } else {
-                nodes += 1;
-                let n = &self.nodes[e.child as usize];
+                visits += 1;
+                let n = &nodes[e.child as usize];
                 next = self.push_but_nearest(n, slab, best.t.min(q.t_max), &mut stack);
             }
         }
-        count_work(prims, N * nodes);
+        count_work(prims, T::WIDTH * visits);
     }
 
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
     /// found, left in `blocker`.
-    fn occluded_1(&self, root: u32, q: &SphereQuery<f32>, slab: &SlabRay4, blocker: &mut u32) -> bool {
+    fn occluded_1<T: RayNode>(
+        &self,
+        nodes: &[T],
+        root: u32,
+        q: &SphereQuery<f32>,
+        slab: &SlabRayN<T::Lanes>,
+        blocker: &mut u32,
+    ) -> bool {
         let mut stack = Stack::<Entry>::new();
-        let mut next = self.push_but_nearest(&self.nodes[root as usize], slab, q.t_max, &mut stack);
-        let (mut nodes, mut prims, mut blocked) = (1, 0, false);
+        let mut next = self.push_but_nearest(&nodes[root as usize], slab, q.t_max, &mut stack);
+        let (mut visits, mut prims, mut blocked) = (1, 0, false);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.count > 0 {
                 let first = e.child as usize;
@@ -125,18 +142,19 @@ impl Bvh {
                     break;
                 }
             } else {
-                nodes += 1;
-                next = self.push_but_nearest(&self.nodes[e.child as usize], slab, q.t_max, &mut stack);
+                visits += 1;
+                next = self.push_but_nearest(&nodes[e.child as usize], slab, q.t_max, &mut stack);
             }
         }
-        count_work(prims, N * nodes);
+        count_work(prims, T::WIDTH * visits);
         blocked
     }
 
-    /// The lanes of `lanes` walk the subtree of node `root` one ray at a time; their hits are merged into
+    /// The lanes of `lanes` walk the subtree of `nodes[root]` one ray at a time; their hits are merged into
     /// `best`. `slab` is the packet prepared for slab tests.
-    pub(super) fn intersect_lanes<F: Lanes>(
+    pub(super) fn intersect_lanes<F: Lanes, T: RayNode>(
         &self,
+        nodes: &[T],
         root: u32,
         q: &SphereQuery<F>,
         slab: &SlabRay<F>,
@@ -146,7 +164,7 @@ impl Bvh {
         let bits = F::move_mask(lanes);
         for i in set_bits(bits) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
-            self.intersect_1(root, &q.lane(i), &SlabRay4::lane(slab, i), &mut hit);
+            self.intersect_1(nodes, root, &q.lane(i), &SlabRayN::lane(slab, i), &mut hit);
             let at = F::mask_from_bits(1 << i);
             best.t = F::select(at, F::splat_f32(hit.t), best.t);
             best.prim = F::select_ids(at, F::Ids::splat(hit.prim), best.prim);
@@ -154,9 +172,10 @@ impl Bvh {
         }
     }
 
-    /// The lanes of `lanes` blocked within their `t_max` in the subtree of node `root`, one ray at a time.
-    pub(super) fn occluded_lanes<F: Lanes>(
+    /// The lanes of `lanes` blocked within their `t_max` in the subtree of `nodes[root]`, one ray at a time.
+    pub(super) fn occluded_lanes<F: Lanes, T: RayNode>(
         &self,
+        nodes: &[T],
         root: u32,
         q: &SphereQuery<F>,
         slab: &SlabRay<F>,
@@ -165,7 +184,7 @@ impl Bvh {
     ) -> F::Mask {
         let bits = F::move_mask(lanes);
         let blocked = set_bits(bits)
-            .filter(|&i| self.occluded_1(root, &q.lane(i), &SlabRay4::lane(slab, i), blocker))
+            .filter(|&i| self.occluded_1(nodes, root, &q.lane(i), &SlabRayN::lane(slab, i), blocker))
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
