@@ -13,7 +13,7 @@ use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
 use crate::scene::desc::{Falloff, Material};
 use crate::scene::Scene;
-use crate::simd::{IdLanes, Lanes};
+use crate::simd::{set_bits, IdLanes, Lanes};
 
 /// Secondary rays whose contribution to the pixel would be below this weight are not traced.
 const MIN_WEIGHT: f32 = 1.0 / 1024.0;
@@ -70,7 +70,7 @@ fn trace_lane_by_lane<F: Lanes>(
     weight: F,
 ) -> V3<F> {
     let mut rgb = [F::splat_f32(0.0).to_array(); 3];
-    for i in (0..F::K).filter(|&i| F::mask_lane(rays.active, i)) {
+    for i in set_bits(F::move_mask(rays.active)) {
         let (ray, t_max, _) = rays.lane(i);
         let one = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         let d = from.lane(i);
@@ -184,7 +184,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     fn sphere_surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Option<Surface<F>> {
         let spheres = &self.scene.geometry.spheres;
         let bits = F::move_mask(found);
-        let lanes = || (0..F::K).filter(move |&i| bits >> i & 1 == 1);
+        let lanes = || set_bits(bits);
         let first = lanes().next()?;
         let sphere = |i: usize| hit.prim.lane(i) as usize;
         let material = *spheres.material.get(sphere(first))?;
@@ -224,7 +224,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         // K lanes per row, not 16: the scalar tracer gathers once per ray, and zeroing 1 KB each time showed.
         let mut v = [F::splat_f32(0.0).to_array(); 16];
         let mut fresnel = 0u32;
-        for i in (0..F::K).filter(|&i| F::mask_lane(found, i)) {
+        for i in set_bits(F::move_mask(found)) {
             let (ray, _, _) = rays.lane(i);
             let sp = self.scene.geometry.surface(&ray, hit.t.lane(i), hit.prim.lane(i));
             let m = &self.scene.materials[sp.material as usize];
@@ -301,14 +301,14 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 let along = mirror.dot(view);
                 // powf only where it matters: lanes outside `phong` are discarded by the select below, and
                 // 0^n is +0 for n > 0 without the call.
-                let highlight = F::from_fn(|i| {
+                let mut highlight = F::splat_f32(0.0).to_array();
+                for i in set_bits(F::move_mask(phong)) {
                     let (base, n) = (along.lane(i).max(0.0), s.shininess.lane(i));
-                    if !F::mask_lane(phong, i) || (base == 0.0 && n > 0.0) {
-                        0.0
-                    } else {
-                        base.powf(n)
+                    if base != 0.0 || n <= 0.0 {
+                        highlight.as_mut()[i] = base.powf(n);
                     }
-                });
+                }
+                let highlight = F::from_lanes(highlight.as_ref());
                 reflected = V3::select(phong, reflected + V3::all(s.specular * highlight), reflected);
             }
             sum = V3::select(visible, sum + reflected.mul_elem(intensity), sum);
