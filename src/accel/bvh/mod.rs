@@ -97,6 +97,12 @@ fn shift_inner(child: &mut [u32], count: &[u8], slots: u8, base: u32) {
     }
 }
 
+/// Bit c set where `count[c]` is not 0: the leaf slots (empty slots have count 0 and are never entered).
+#[inline(always)]
+fn leaf_bits(count: &[u8]) -> u32 {
+    count.iter().enumerate().fold(0, |bits, (c, &n)| bits | u32::from(n != 0) << c)
+}
+
 impl Node {
     fn new(children: &[ChildRef]) -> Node {
         let (bounds, child, count) = slots::<N>(children);
@@ -144,6 +150,8 @@ trait RayNode: Copy + Send + Sync {
     fn planes(&self, side: usize, axis: usize) -> Self::Lanes;
     /// Child `c`'s reference and sphere count (0 for an inner node).
     fn child(&self, c: usize) -> (u32, u8);
+    /// Bit c set for each leaf child.
+    fn leaves(&self) -> u32;
     /// The node with its inner children's indices moved up by `base`.
     fn shifted(self, base: u32) -> Self;
 }
@@ -162,6 +170,10 @@ impl RayNode for Node {
     #[inline(always)]
     fn child(&self, c: usize) -> (u32, u8) {
         (self.child[c], self.count[c])
+    }
+    #[inline(always)]
+    fn leaves(&self) -> u32 {
+        leaf_bits(&self.count)
     }
     fn shifted(self, base: u32) -> Self {
         Node::shifted(self, base)

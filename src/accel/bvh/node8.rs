@@ -5,7 +5,7 @@
 
 use wide::f32x8;
 
-use super::{shift_inner, slots, ChildRef, RayNode};
+use super::{leaf_bits, shift_inner, slots, ChildRef, RayNode};
 
 /// Children per node of the single-ray tree (its N).
 pub const WIDE_N: usize = 8;
@@ -44,6 +44,11 @@ impl RayNode for WideNode {
     #[inline(always)]
     fn child(&self, c: usize) -> (u32, u8) {
         (self.child[c], self.count[c])
+    }
+
+    #[inline(always)]
+    fn leaves(&self) -> u32 {
+        leaf_bits(&self.count)
     }
 
     fn shifted(mut self, base: u32) -> Self {

@@ -121,7 +121,8 @@ impl Bvh {
     }
 
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
-    /// found, left in `blocker`.
+    /// found, left in `blocker`. Any hit will do, so a node's entered leaves are tested on the spot, before
+    /// its entered inner children are pushed, and nothing is ordered by distance.
     fn occluded_1<T: RayNode>(
         &self,
         nodes: &[T],
@@ -130,20 +131,26 @@ impl Bvh {
         slab: &SlabRayN<T::Lanes>,
         blocker: &mut u32,
     ) -> bool {
-        let mut stack = Stack::<Entry>::new();
-        let mut next = self.push_but_nearest(&nodes[root as usize], slab, q.t_max, &mut stack);
-        let (mut visits, mut prims, mut blocked) = (1, 0, false);
-        while let Some(e) = next.take().or_else(|| stack.pop()) {
-            if e.count > 0 {
-                let first = e.child as usize;
-                prims += usize::from(e.count);
-                if q.occluded_leaf(first, usize::from(e.count), blocker) {
+        let mut stack = Stack::<u32>::new();
+        let (mut visits, mut prims, mut blocked) = (0, 0, false);
+        let mut next = Some(root);
+        'walk: while let Some(node) = next.take().or_else(|| stack.pop()) {
+            visits += 1;
+            let n = &nodes[node as usize];
+            let near = slab.enter(n, q.t_max);
+            // Bit c for each child entered; empty slots (boxes at +inf) never are.
+            let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY)));
+            let leaves = n.leaves();
+            for c in set_bits(entered & leaves) {
+                let (first, count) = n.child(c);
+                prims += usize::from(count);
+                if q.occluded_leaf(first as usize, usize::from(count), blocker) {
                     blocked = true;
-                    break;
+                    break 'walk;
                 }
-            } else {
-                visits += 1;
-                next = self.push_but_nearest(&nodes[e.child as usize], slab, q.t_max, &mut stack);
+            }
+            for c in set_bits(entered & !leaves) {
+                stack.push(n.child(c).0);
             }
         }
         count_work(prims, T::WIDTH * visits);
