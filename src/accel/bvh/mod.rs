@@ -121,13 +121,6 @@ impl Node {
         &self.bounds[1]
     }
 
-    /// The node with its inner children's indices moved up by `base`: a subtree flattened on its own, placed
-    /// at `base` in the whole array.
-    fn shifted(mut self, base: u32) -> Node {
-        shift_inner(&mut self.child, &self.count, self.slots, base);
-        self
-    }
-
     /// The occupied slots farthest first for rays in `octant` (the order to push them in), from
     /// [`Node::order`].
     #[inline(always)]
@@ -136,6 +129,30 @@ impl Node {
         (0..usize::from(self.slots)).rev().map(move |k| usize::from(order >> (2 * k) & 3))
     }
 }
+
+/// The [`RayNode`] methods that only read or shift the SoA slots (`bounds`, `child`, `count`, `slots`), alike
+/// for every node width; `$lanes` holds one child per lane.
+macro_rules! slot_access {
+    ($lanes:ty) => {
+        #[inline(always)]
+        fn planes(&self, side: usize, axis: usize) -> $lanes {
+            <$lanes>::from(self.bounds[side][axis])
+        }
+        #[inline(always)]
+        fn child(&self, c: usize) -> (u32, u8) {
+            (self.child[c], self.count[c])
+        }
+        #[inline(always)]
+        fn leaves(&self) -> u32 {
+            leaf_bits(&self.count)
+        }
+        fn shifted(mut self, base: u32) -> Self {
+            shift_inner(&mut self.child, &self.count, self.slots, base);
+            self
+        }
+    };
+}
+use slot_access;
 
 /// A node as the collapse builds it and the single-ray walk reads it: up to `WIDTH` children, one per lane of
 /// `Lanes` in the walk's slab test. Implemented by the 4-wide packet [`Node`] and the 8-wide [`WideNode`].
@@ -163,21 +180,7 @@ impl RayNode for Node {
     fn new(children: &[ChildRef]) -> Self {
         Node::new(children)
     }
-    #[inline(always)]
-    fn planes(&self, side: usize, axis: usize) -> wide::f32x4 {
-        wide::f32x4::from(self.bounds[side][axis])
-    }
-    #[inline(always)]
-    fn child(&self, c: usize) -> (u32, u8) {
-        (self.child[c], self.count[c])
-    }
-    #[inline(always)]
-    fn leaves(&self) -> u32 {
-        leaf_bits(&self.count)
-    }
-    fn shifted(self, base: u32) -> Self {
-        Node::shifted(self, base)
-    }
+    slot_access!(wide::f32x4);
 }
 
 /// The children sorted by the projection of their box centres on the octant's diagonal direction: the

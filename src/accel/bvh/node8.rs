@@ -5,7 +5,7 @@
 
 use wide::f32x8;
 
-use super::{leaf_bits, shift_inner, slots, ChildRef, RayNode};
+use super::{leaf_bits, shift_inner, slot_access, slots, ChildRef, RayNode};
 
 /// Children per node of the single-ray tree (its N).
 pub const WIDE_N: usize = 8;
@@ -36,23 +36,5 @@ impl RayNode for WideNode {
         WideNode { bounds, child, count, slots: children.len() as u8 }
     }
 
-    #[inline(always)]
-    fn planes(&self, side: usize, axis: usize) -> f32x8 {
-        f32x8::from(self.bounds[side][axis])
-    }
-
-    #[inline(always)]
-    fn child(&self, c: usize) -> (u32, u8) {
-        (self.child[c], self.count[c])
-    }
-
-    #[inline(always)]
-    fn leaves(&self) -> u32 {
-        leaf_bits(&self.count)
-    }
-
-    fn shifted(mut self, base: u32) -> Self {
-        shift_inner(&mut self.child, &self.count, self.slots, base);
-        self
-    }
+    slot_access!(f32x8);
 }
