@@ -11,6 +11,7 @@ use crate::math::{Affine, Rgb, Vec3f, V3};
 use obvhs::BvhBuildParams;
 
 use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
+use super::features;
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -150,15 +151,18 @@ impl Scene {
                 Accel::Bvh => !geometry.spheres.is_empty(),
                 Accel::Brute => false,
             };
+        let mut materials = desc.materials.clone();
+        if materials.is_empty() {
+            materials.push(Material::default());
+        }
         let mut build = BuildStats::default();
         if use_bvh {
             let pad = bvh::padding(reach(desc));
             let params = preset.params();
             // The 8-wide single-ray tree serves the scalar tracer's secondary rays: only scenes that
             // trace them pay for its build.
-            let deep = desc.render.max_depth > 0
-                && desc.materials.iter().any(|m| m.reflect > 0.0 || m.transmit > 0.0);
-            let secondary = !desc.lights.is_empty() || deep;
+            let secondary = features::lights_shade(!desc.lights.is_empty(), &materials)
+                || features::bounces(desc.render.max_depth, &materials);
             let (tree, stats) = bvh::build(&mut geometry.spheres, pad, params, secondary);
             geometry.bvh = Some(tree);
             build = stats;
@@ -168,10 +172,6 @@ impl Scene {
             .iter()
             .map(|l| Light { position: V3::from(l.position).to_f32(), color: l.color, falloff: l.falloff })
             .collect();
-        let mut materials = desc.materials.clone();
-        if materials.is_empty() {
-            materials.push(Material::default());
-        }
         Ok(Scene {
             camera: camera_f64.to_f32(),
             camera_f64,

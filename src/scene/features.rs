@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::desc::{Pattern, PostFilter};
+use super::desc::{Material, Pattern, PostFilter};
 use super::Scene;
 use crate::geometry::ShapeKind;
 
@@ -42,8 +42,8 @@ impl Features {
             ellipsoids: kind(ShapeKind::Sphere),
             planes: kind(ShapeKind::Plane),
             polygons: !g.polygons.is_empty(),
-            direct: !scene.lights.is_empty() && m.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0),
-            reflection: deep && m.iter().any(|m| m.reflect > 0.0 || m.transmit > 0.0),
+            direct: lights_shade(!scene.lights.is_empty(), m),
+            reflection: bounces(scene.render.max_depth, m),
             refraction: deep && m.iter().any(|m| m.transmit > 0.0),
             antialiasing: scene.render.pattern != Pattern::Grid(1)
                 || scene.render.postfilter != PostFilter::None,
@@ -63,6 +63,16 @@ impl Features {
             ("antialiasing", self.antialiasing),
         ]
     }
+}
+
+/// Whether lights shade anything: there are some, and some material has a Lambert or Phong term.
+pub(crate) fn lights_shade(has_lights: bool, materials: &[Material]) -> bool {
+    has_lights && materials.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0)
+}
+
+/// Whether rays bounce: a depth limit above 0 and some mirror or transmissive material.
+pub(crate) fn bounces(max_depth: u32, materials: &[Material]) -> bool {
+    max_depth > 0 && materials.iter().any(|m| m.reflect > 0.0 || m.transmit > 0.0)
 }
 
 impl fmt::Display for Features {
