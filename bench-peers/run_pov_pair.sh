@@ -4,7 +4,11 @@
 # runs made seconds apart. Prints each round's wall times (ms) and per build the median POV-Ray / bareray
 # ratio; writes them to results/povpair-<UTC stamp>.txt.
 #
-# usage: run_pov_pair.sh path/to/bareray [more builds...]     env: ROUNDS=8 THREADS=2
+# With DROP_CACHES=1 (root) the page cache is dropped before every run and the run's files read back in, so
+# each run's program text lands on fresh physical pages: on these VMs one load of a binary can run 10-15%
+# slower than another load of the same bytes, for as long as its pages stay cached (PERF.md, session 12).
+#
+# usage: run_pov_pair.sh path/to/bareray [more builds...]     env: ROUNDS=8 THREADS=2 DROP_CACHES=0
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 [ $# -ge 1 ] || { echo "usage: $0 path/to/bareray [more builds...]" >&2; exit 2; }
@@ -14,14 +18,23 @@ flake="$here/out/balls4.nff"; pov="$here/out/balls4.pov"
 [ -f "$pov" ] || python3 "$here/nff2pov.py" "$flake" -o "$pov" --width 1024 --height 1024 --angle-mode spd \
   --max-trace-level 5 >&2
 out="$here/results/povpair-$(date -u +%Y-%m-%dT%H%MZ).txt"
+# Fresh page-cache pages for the program and its inputs, read in before the clock starts.
+fresh() {
+  [ "${DROP_CACHES:-0}" = 1 ] || return 0
+  sync; echo 1 > /proc/sys/vm/drop_caches
+  cat "$@" "$flake" "$pov" > /dev/null
+}
 ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $(( (e - s) / 1000000 )); }
 {
   echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ)  nproc: $(nproc)  cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
+  echo "# drop caches before each run: ${DROP_CACHES:-0}"
   echo "# povray +W1024 +H1024 -A +WT$threads -D +FN; bareray render --width 1024 --height 1024 --spp 1 --depth 5 --threads $threads -q"
   for r in $(seq "${ROUNDS:-8}"); do
+    fresh "$(command -v povray)" $(ldd "$(command -v povray)" | awk '$3 ~ /^\// {print $3}')
     line="pov $(ms povray +I"$pov" +O"$here/out/balls4.pair.pov.png" +W1024 +H1024 -A +WT"$threads" -D +FN \
       File_Gamma=1.0 Display_Gamma=1.0)"
     for b in "$@"; do
+      fresh "$b"
       line="$line $(basename "$b") $(ms "$b" render "$flake" -o "$here/out/balls4.pair.png" --width 1024 \
         --height 1024 --spp 1 --depth 5 --threads "$threads" -q)"
     done
