@@ -33,6 +33,7 @@ struct SlabRays<F: Lanes> {
 impl<F: Lanes> SlabRays<F> {
     /// `extent` bounds the boxes' coordinates when frustum culling is wanted; the query's own pyramid is
     /// used when it carries one, else one is fitted to the live lanes.
+    #[inline(always)]
     fn new(q: &SphereQuery<F>, live: F::Mask, extent: Option<f32>) -> Self {
         let ray = &q.ray;
         let slab = SlabRay::new(ray);
