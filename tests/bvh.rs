@@ -150,6 +150,29 @@ fn single_ray_tree_equals_brute_force() {
     assert!(plain.geometry.bvh.as_ref().unwrap().wide.is_none());
 }
 
+#[test]
+fn coincident_spheres_get_a_tree_the_walks_can_hold() {
+    use bareray::scene::desc::{Falloff, LightDesc};
+    // A pile of copies of one sphere made obvhs's tree a chain as long as the pile: at 400 copies the
+    // traversal stacks overflowed (a panic), at 20 000 the collapse's recursion overflowed the thread's stack.
+    // 400 is caught by the stack check after the collapse, 1500 by the depth check before it.
+    for (copies, seed) in [(400, 31), (1500, 32)] {
+        let mut desc = field(300, seed);
+        let pile = SphereDesc { center: DVec3::new(0.1, -0.2, 0.3), radius: 0.05, material: 0 };
+        desc.spheres.extend(std::iter::repeat_n(pile, copies));
+        let position = DVec3::new(0.0, 3.0, -3.0);
+        desc.lights.push(LightDesc { position, color: Rgb::all(1.0), falloff: Falloff::None });
+        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        assert!(bvh.geometry.bvh.as_ref().unwrap().wide.is_some());
+        // A third of the rays start at sphere centres, most of them inside the pile.
+        let rays = rays(&desc, 3000, seed + 100);
+        check_width::<f32>(&bvh, &brute, &rays);
+        check_width::<f32x4>(&bvh, &brute, &rays);
+        check_width::<f32x16>(&bvh, &brute, &rays);
+    }
+}
+
 /// Box tests of `packets` (K = 16, closest hit) after `setting` the BVH's switches.
 fn packet_box_tests(bvh: &mut Scene, packets: &[Ray<f32>], setting: impl Fn(&mut Bvh)) -> u64 {
     setting(bvh.geometry.bvh.as_mut().unwrap());

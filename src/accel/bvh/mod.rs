@@ -281,11 +281,28 @@ pub fn build(
         })
         .collect();
     let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
-    // Reordering the spheres and collapsing the trees are independent: run them side by side.
-    let (permuted, (nodes, wide)) = rayon::join(
-        || spheres.permuted(&bvh2.primitive_indices),
-        || rayon::join(|| collapse::<Node>(&bvh2.nodes), || single_ray_tree.then(|| collapse(&bvh2.nodes))),
-    );
+    let trees = |(tree, order): &(Vec<Bvh2Node>, Vec<u32>)| {
+        rayon::join(
+            || spheres.permuted(order),
+            || rayon::join(|| collapse::<Node>(tree), || single_ray_tree.then(|| collapse::<WideNode>(tree))),
+        )
+    };
+    let fits = |(_, need): &(Vec<Node>, usize), wide: &Option<(Vec<WideNode>, usize)>| {
+        *need <= STACK && wide.as_ref().is_none_or(|(_, need)| *need <= STACK)
+    };
+    let (mut permuted, (mut packet_tree, mut wide)) = trees(&(bvh2.nodes, bvh2.primitive_indices));
+    // Coincident spheres can make obvhs's tree a chain as long as their number: too deep for the traversal
+    // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). Such a scene gets
+    // the balanced tree instead.
+    if !fits(&packet_tree, &wide) {
+        (permuted, (packet_tree, wide)) = trees(&balanced(&boxes));
+        assert!(
+            fits(&packet_tree, &wide),
+            "a balanced tree of {} spheres fits the traversal stacks",
+            boxes.len()
+        );
+    }
+    let (nodes, wide) = (packet_tree.0, wide.map(|(w, _)| w));
     *spheres = permuted;
     let wide_bytes = wide.as_ref().map_or(0, |w: &Vec<WideNode>| w.len() * size_of::<WideNode>());
     let node_bytes = nodes.len() * size_of::<Node>() + wide_bytes;
@@ -301,17 +318,60 @@ fn extent(root: &Node) -> f32 {
     root.bounds.iter().flatten().flat_map(|axis| axis[..slots].iter()).fold(0.0f32, |m, v| m.max(v.abs()))
 }
 
-/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from obvhs's binary tree, in depth-first order.
-/// The top [`PARALLEL_LEVELS`] levels flatten their subtrees in parallel; the layout is the serial one
-/// ([`flatten`]) node for node.
-fn collapse<T: RayNode>(src: &[Bvh2Node]) -> Vec<T> {
+/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from obvhs's binary tree, in depth-first order,
+/// and the stack entries a walk of them may need ([`stack_need`]; `usize::MAX` for a tree deeper than
+/// [`MAX_COLLAPSE_LEVELS`], whose nodes are then incomplete). The top [`PARALLEL_LEVELS`] levels flatten their
+/// subtrees in parallel; the layout is the serial one ([`flatten`]) node for node.
+fn collapse<T: RayNode>(src: &[Bvh2Node]) -> (Vec<T>, usize) {
     if src[0].prim_count > 0 {
         let mut nodes = Vec::with_capacity(1);
-        let leaf = child_ref::<T>(src, 0, &mut nodes);
+        let (leaf, _) = child_ref::<T>(src, 0, &mut nodes, 0);
         nodes.push(T::new(&[leaf]));
-        return nodes;
+        return (nodes, 1);
     }
     flatten_parallel(src, 0, PARALLEL_LEVELS)
+}
+
+/// Levels of the collapsed tree past which the collapse gives up (its recursion would risk the thread's
+/// stack): far more than any tree whose walks fit [`STACK`] entries, each level holding at least one.
+const MAX_COLLAPSE_LEVELS: usize = STACK;
+
+/// The most entries a walk holds on its stack at once in the subtree of a node with `slots` children whose
+/// inner children's subtrees need `below` at most: the walk pushes up to `slots` entries, then goes on into
+/// one of them with the others still pending.
+fn stack_need(slots: usize, below: usize) -> usize {
+    slots.saturating_sub(1).saturating_add(below.max(1))
+}
+
+/// Spheres per leaf of [`balanced`].
+const BALANCED_LEAF: usize = 4;
+
+/// A binary tree over `boxes` in obvhs's layout (nodes, and the primitive order its leaves index), split at
+/// the median centre along the widest spread of centres: about log2(n / 4) levels whatever the boxes, for
+/// scenes whose obvhs tree is too deep. Built without recursion.
+fn balanced(boxes: &[Aabb]) -> (Vec<Bvh2Node>, Vec<u32>) {
+    let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
+    let mut nodes = vec![Bvh2Node::new(Aabb::empty(), 0, 0)];
+    let mut pending = vec![(0usize, 0usize, boxes.len())];
+    while let Some((at, lo, hi)) = pending.pop() {
+        let part = &mut order[lo..hi];
+        let bounds = part.iter().fold(Aabb::empty(), |b, &i| b.union(&boxes[i as usize]));
+        if part.len() <= BALANCED_LEAF {
+            nodes[at] = Bvh2Node::new(bounds, part.len() as u32, lo as u32);
+            continue;
+        }
+        let mut centres = Aabb::empty();
+        part.iter().for_each(|&i| _ = centres.extend(boxes[i as usize].center()));
+        let axis = centres.largest_axis();
+        let key = |i: &u32| boxes[*i as usize].center_axis(axis);
+        let mid = part.len() / 2;
+        part.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
+        let first = nodes.len();
+        nodes.extend([Bvh2Node::new(Aabb::empty(), 0, 0); 2]);
+        nodes[at] = Bvh2Node::new(bounds, 0, first as u32);
+        pending.extend([(first, lo, lo + mid), (first + 1, lo + mid, hi)]);
+    }
+    (nodes, order)
 }
 
 /// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on
@@ -319,25 +379,27 @@ fn collapse<T: RayNode>(src: &[Bvh2Node]) -> Vec<T> {
 const PARALLEL_LEVELS: u32 = 3;
 
 /// [`flatten`] of obvhs inner node `i` into a vector of its own (the subtree's root first, indices local to
-/// it), its inner children's subtrees flattened in parallel for `levels` more levels.
-fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> Vec<T> {
+/// it), its inner children's subtrees flattened in parallel for `levels` more levels; with the subtree's
+/// stack need.
+fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> (Vec<T>, usize) {
     let mut out = Vec::new();
     if levels == 0 {
-        flatten(src, i, &mut out);
-        return out;
+        let (_, need) = flatten(src, i, &mut out, (PARALLEL_LEVELS + 1) as usize);
+        return (out, need);
     }
     let (open, len) = open_children(src, i, T::WIDTH);
-    let subtrees: Vec<Option<Vec<T>>> = open[..len]
+    let subtrees: Vec<Option<(Vec<T>, usize)>> = open[..len]
         .par_iter()
         .map(|&j| (src[j].prim_count == 0).then(|| flatten_parallel(src, j, levels - 1)))
         .collect();
-    out.reserve_exact(1 + subtrees.iter().flatten().map(Vec::len).sum::<usize>());
+    out.reserve_exact(1 + subtrees.iter().flatten().map(|(nodes, _)| nodes.len()).sum::<usize>());
     out.push(T::new(&[]));
-    let mut children = [EMPTY; MAX_WIDTH];
+    let (mut children, mut below) = ([EMPTY; MAX_WIDTH], 0);
     for (k, subtree) in subtrees.into_iter().enumerate() {
         children[k] = match subtree {
-            None => child_ref(src, open[k], &mut out),
-            Some(nodes) => {
+            None => child_ref(src, open[k], &mut out, 0).0,
+            Some((nodes, need)) => {
+                below = below.max(need);
                 let base = out.len() as u32;
                 out.extend(nodes.into_iter().map(|node| node.shifted(base)));
                 let aabb = &src[open[k]].aabb;
@@ -346,18 +408,20 @@ fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> Vec<
         };
     }
     out[0] = T::new(&children[..len]);
-    out
+    (out, stack_need(len, below))
 }
 
-/// The reference to obvhs node `i` from its parent: a leaf as it is, an inner node flattened first.
-fn child_ref<T: RayNode>(src: &[Bvh2Node], i: usize, out: &mut Vec<T>) -> ChildRef {
+/// The reference to obvhs node `i` from its parent, whose node is at `level` of the collapsed tree: a leaf as
+/// it is, an inner node flattened first; with the stack need of what it refers to (0 for a leaf).
+fn child_ref<T: RayNode>(src: &[Bvh2Node], i: usize, out: &mut Vec<T>, level: usize) -> (ChildRef, usize) {
     let n = &src[i];
     let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
     if n.prim_count > 0 {
         let count = u8::try_from(n.prim_count).expect("obvhs leaf of more than 255 spheres");
-        return ChildRef { lo, hi, child: n.first_index, count };
+        return (ChildRef { lo, hi, child: n.first_index, count }, 0);
     }
-    ChildRef { lo, hi, child: flatten(src, i, out), count: 0 }
+    let (child, need) = flatten(src, i, out, level + 1);
+    (ChildRef { lo, hi, child, count: 0 }, need)
 }
 
 /// The widest node: the bound of [`RayNode::WIDTH`].
@@ -381,18 +445,24 @@ fn open_children(src: &[Bvh2Node], i: usize, width: usize) -> ([usize; MAX_WIDTH
     (open, len)
 }
 
-/// Appends the subtree of obvhs inner node `i` and returns its node index ([`open_children`] gives the
-/// node's children).
-fn flatten<T: RayNode>(src: &[Bvh2Node], i: usize, out: &mut Vec<T>) -> u32 {
+/// Appends the subtree of obvhs inner node `i` at `level` of the collapsed tree and returns its node index
+/// and stack need ([`open_children`] gives the node's children). Past [`MAX_COLLAPSE_LEVELS`] it appends
+/// nothing and returns a need of `usize::MAX`.
+fn flatten<T: RayNode>(src: &[Bvh2Node], i: usize, out: &mut Vec<T>, level: usize) -> (u32, usize) {
+    if level > MAX_COLLAPSE_LEVELS {
+        return (0, usize::MAX);
+    }
     let (open, len) = open_children(src, i, T::WIDTH);
     let me = out.len();
     out.push(T::new(&[]));
-    let mut children = [EMPTY; MAX_WIDTH];
+    let (mut children, mut below) = ([EMPTY; MAX_WIDTH], 0);
     for k in 0..len {
-        children[k] = child_ref(src, open[k], out);
+        let need;
+        (children[k], need) = child_ref(src, open[k], out, level);
+        below = below.max(need);
     }
     out[me] = T::new(&children[..len]);
-    me as u32
+    (me as u32, stack_need(len, below))
 }
 
 /// Exit distances are widened by this factor so rounding never culls a box a ray enters. The fused slab
@@ -564,13 +634,13 @@ mod tests {
 
     /// The parallel collapse of `src` into `T` nodes, checked against the serial one.
     fn collapse_both_ways<T: RayNode + PartialEq>(src: &[Bvh2Node]) -> Vec<T> {
-        let parallel = collapse::<T>(src);
+        let (parallel, _) = collapse::<T>(src);
         if src[0].prim_count > 0 {
             assert_eq!(parallel.len(), 1, "boxes in one leaf make one node");
             return parallel;
         }
         let mut serial = Vec::new();
-        flatten(src, 0, &mut serial);
+        flatten(src, 0, &mut serial, 0);
         assert!(parallel == serial, "{} boxes: the parallel collapse differs from the serial one", src.len());
         serial
     }
