@@ -18,11 +18,11 @@ flake="$here/out/balls4.nff"; pov="$here/out/balls4.pov"
 [ -f "$pov" ] || python3 "$here/nff2pov.py" "$flake" -o "$pov" --width 1024 --height 1024 --angle-mode spd \
   --max-trace-level 5 >&2
 out="$here/results/povpair-$(date -u +%Y-%m-%dT%H%MZ).txt"
-# Fresh page-cache pages for the program and its inputs, read in before the clock starts.
+# Fresh page-cache pages for a program, its shared libraries and the inputs, read in before the clock starts.
 fresh() {
   [ "${DROP_CACHES:-0}" = 1 ] || return 0
   sync; echo 1 > /proc/sys/vm/drop_caches
-  cat "$@" "$flake" "$pov" > /dev/null
+  cat "$1" $(ldd "$1" | awk '{for (i = 1; i <= NF; i++) if ($i ~ /^\//) print $i}') "$flake" "$pov" > /dev/null
 }
 ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $(( (e - s) / 1000000 )); }
 {
@@ -30,7 +30,7 @@ ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $
   echo "# drop caches before each run: ${DROP_CACHES:-0}"
   echo "# povray +W1024 +H1024 -A +WT$threads -D +FN; bareray render --width 1024 --height 1024 --spp 1 --depth 5 --threads $threads -q"
   for r in $(seq "${ROUNDS:-8}"); do
-    fresh "$(command -v povray)" $(ldd "$(command -v povray)" | awk '$3 ~ /^\// {print $3}')
+    fresh "$(command -v povray)"
     line="pov $(ms povray +I"$pov" +O"$here/out/balls4.pair.pov.png" +W1024 +H1024 -A +WT"$threads" -D +FN \
       File_Gamma=1.0 Display_Gamma=1.0)"
     for b in "$@"; do
