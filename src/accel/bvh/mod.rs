@@ -14,6 +14,7 @@
 
 mod node8;
 mod packet;
+mod piles;
 mod single;
 
 pub use node8::{WideNode, WIDE_N};
@@ -280,7 +281,13 @@ pub fn build(
             Aabb { min: c - r, max: c + r }
         })
         .collect();
-    let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
+    let binary = match piles::has_piles(&boxes) {
+        true => piles::build_over_piles(&boxes, params),
+        false => {
+            let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
+            (bvh2.nodes, bvh2.primitive_indices)
+        }
+    };
     let trees = |(tree, order): &(Vec<Bvh2Node>, Vec<u32>)| {
         rayon::join(
             || spheres.permuted(order),
@@ -290,7 +297,7 @@ pub fn build(
     let fits = |(_, need): &(Vec<Node>, usize), wide: &Option<(Vec<WideNode>, usize)>| {
         *need <= STACK && wide.as_ref().is_none_or(|(_, need)| *need <= STACK)
     };
-    let (mut permuted, (mut packet_tree, mut wide)) = trees(&(bvh2.nodes, bvh2.primitive_indices));
+    let (mut permuted, (mut packet_tree, mut wide)) = trees(&binary);
     // Coincident spheres can make obvhs's tree a chain as long as their number: too deep for the traversal
     // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). Such a scene gets
     // the balanced tree instead.
@@ -348,11 +355,25 @@ const BALANCED_LEAF: usize = 4;
 
 /// A binary tree over `boxes` in obvhs's layout (nodes, and the primitive order its leaves index), split at
 /// the median centre along the widest spread of centres: about log2(n / 4) levels whatever the boxes, for
-/// scenes whose obvhs tree is too deep. Built without recursion.
+/// scenes whose obvhs tree is too deep.
 fn balanced(boxes: &[Aabb]) -> (Vec<Bvh2Node>, Vec<u32>) {
-    let mut order: Vec<u32> = (0..boxes.len() as u32).collect();
-    let mut nodes = vec![Bvh2Node::new(Aabb::empty(), 0, 0)];
-    let mut pending = vec![(0usize, 0usize, boxes.len())];
+    let (mut nodes, mut order) = (vec![Bvh2Node::new(Aabb::empty(), 0, 0)], Vec::with_capacity(boxes.len()));
+    balanced_into(boxes, 0..boxes.len() as u32, &mut nodes, &mut order, 0);
+    (nodes, order)
+}
+
+/// [`balanced`] over the boxes `items`, written as the subtree at `nodes[at]`: its nodes appended to
+/// `nodes`, its leaves' primitives to `order`. Built without recursion.
+fn balanced_into(
+    boxes: &[Aabb],
+    items: impl IntoIterator<Item = u32>,
+    nodes: &mut Vec<Bvh2Node>,
+    order: &mut Vec<u32>,
+    at: usize,
+) {
+    let base = order.len();
+    order.extend(items);
+    let mut pending = vec![(at, base, order.len())];
     while let Some((at, lo, hi)) = pending.pop() {
         let part = &mut order[lo..hi];
         let bounds = part.iter().fold(Aabb::empty(), |b, &i| b.union(&boxes[i as usize]));
@@ -371,7 +392,6 @@ fn balanced(boxes: &[Aabb]) -> (Vec<Bvh2Node>, Vec<u32>) {
         nodes[at] = Bvh2Node::new(bounds, 0, first as u32);
         pending.extend([(first, lo, lo + mid), (first + 1, lo + mid, hi)]);
     }
-    (nodes, order)
 }
 
 /// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on
