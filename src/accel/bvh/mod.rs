@@ -299,16 +299,20 @@ pub fn build(
     };
     let (mut permuted, (mut packet_tree, mut wide)) = trees(&binary);
     // Coincident spheres can make obvhs's tree a chain as long as their number: too deep for the traversal
-    // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). Such a scene gets
-    // the balanced tree instead.
-    if !fits(&packet_tree, &wide) {
-        (permuted, (packet_tree, wide)) = trees(&balanced(&boxes));
-        assert!(
-            fits(&packet_tree, &wide),
-            "a balanced tree of {} spheres fits the traversal stacks",
-            boxes.len()
-        );
+    // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). A pile the sample
+    // missed is then built over one box per distinct sphere; anything still too deep gets the balanced tree.
+    let fallbacks: [&dyn Fn() -> _; 2] = [&|| piles::build_over_piles(&boxes, params), &|| balanced(&boxes)];
+    for fallback in fallbacks {
+        if fits(&packet_tree, &wide) {
+            break;
+        }
+        (permuted, (packet_tree, wide)) = trees(&fallback());
     }
+    assert!(
+        fits(&packet_tree, &wide),
+        "a balanced tree of {} spheres fits the traversal stacks",
+        boxes.len()
+    );
     let (nodes, wide) = (packet_tree.0, wide.map(|(w, _)| w));
     *spheres = permuted;
     let wide_bytes = wide.as_ref().map_or(0, |w: &Vec<WideNode>| w.len() * size_of::<WideNode>());
