@@ -361,7 +361,7 @@ const BALANCED_LEAF: usize = 4;
 /// the median centre along the widest spread of centres: about log2(n / 4) levels whatever the boxes, for
 /// scenes whose obvhs tree is too deep.
 fn balanced(boxes: &[Aabb]) -> (Vec<Bvh2Node>, Vec<u32>) {
-    let (mut nodes, mut order) = (vec![Bvh2Node::new(Aabb::empty(), 0, 0)], Vec::with_capacity(boxes.len()));
+    let (mut nodes, mut order) = tree_for(boxes.len());
     balanced_into(boxes, 0..boxes.len() as u32, &mut nodes, &mut order, 0);
     (nodes, order)
 }
@@ -392,10 +392,20 @@ fn balanced_into(
         let mid = part.len() / 2;
         part.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
         let first = nodes.len();
-        nodes.extend([Bvh2Node::new(Aabb::empty(), 0, 0); 2]);
+        nodes.extend([unset(); 2]);
         nodes[at] = Bvh2Node::new(bounds, 0, first as u32);
         pending.extend([(first, lo, lo + mid), (first + 1, lo + mid, hi)]);
     }
+}
+
+/// A node slot reserved for a node written later (the root, or an inner node's two children).
+fn unset() -> Bvh2Node {
+    Bvh2Node::new(Aabb::empty(), 0, 0)
+}
+
+/// An obvhs-layout tree to be built over `n` boxes: the root's slot, and room for the leaves' order.
+fn tree_for(n: usize) -> (Vec<Bvh2Node>, Vec<u32>) {
+    (vec![unset()], Vec::with_capacity(n))
 }
 
 /// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on

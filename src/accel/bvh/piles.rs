@@ -9,7 +9,7 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use super::balanced_into;
+use super::{balanced_into, tree_for, unset};
 
 /// Spheres sampled to look for piles.
 const SAMPLE: usize = 4096;
@@ -48,14 +48,14 @@ pub(super) fn build_over_piles(boxes: &[Aabb], params: BvhBuildParams) -> (Vec<B
     let members: Vec<u32> = by_key.into_iter().map(|(_, i)| i).collect();
     let copies = |g: u32| members[start[g as usize]..start[g as usize + 1]].iter().copied();
     let bvh2 = build_bvh2(&distinct, params, &mut Default::default());
-    let (mut nodes, mut order) = (vec![Bvh2Node::new(Aabb::empty(), 0, 0)], Vec::with_capacity(boxes.len()));
+    let (mut nodes, mut order) = tree_for(boxes.len());
     // (obvhs node, its slot in `nodes`), walked without recursion.
     let mut pending = vec![(0usize, 0usize)];
     while let Some((i, at)) = pending.pop() {
         let n = &bvh2.nodes[i];
         if n.prim_count == 0 {
             let first = nodes.len();
-            nodes.extend([Bvh2Node::new(Aabb::empty(), 0, 0); 2]);
+            nodes.extend([unset(); 2]);
             nodes[at] = Bvh2Node::new(n.aabb, 0, first as u32);
             let child = n.first_index as usize;
             pending.extend([(child, first), (child + 1, first + 1)]);
