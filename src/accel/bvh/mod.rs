@@ -418,7 +418,8 @@ const PARALLEL_LEVELS: u32 = 3;
 fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> (Vec<T>, usize) {
     let mut out = Vec::new();
     if levels == 0 {
-        let (_, need) = flatten(src, i, &mut out, (PARALLEL_LEVELS + 1) as usize);
+        // This node is at level PARALLEL_LEVELS: the root, at 0, was called with PARALLEL_LEVELS levels left.
+        let (_, need) = flatten(src, i, &mut out, PARALLEL_LEVELS as usize);
         return (out, need);
     }
     let (open, len) = open_children(src, i, T::WIDTH);
