@@ -12,6 +12,7 @@
 //! to brute force over the same spheres, whatever order the nodes are visited in and whichever traversal
 //! runs.
 
+mod binary;
 mod node8;
 mod packet;
 mod piles;
@@ -23,7 +24,6 @@ use std::time::Instant;
 
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
@@ -284,7 +284,7 @@ pub fn build(
     let binary = match piles::has_piles(&boxes) {
         true => piles::build_over_piles(&boxes, params),
         false => {
-            let bvh2 = build_bvh2(&boxes, params, &mut Default::default());
+            let bvh2 = binary::build_binary(&boxes, params);
             (bvh2.nodes, bvh2.primitive_indices)
         }
     };
@@ -657,7 +657,7 @@ mod tests {
             })
             .collect();
         let params = BvhBuildParams { max_prims_per_leaf: leaf, ..BvhBuildParams::fast_build() };
-        build_bvh2(&boxes, params, &mut Default::default()).nodes
+        binary::build_binary(&boxes, params).nodes
     }
 
     /// Levels of 4-wide nodes from `nodes[i]` down.

@@ -4,7 +4,6 @@
 //! sphere, and the copies then hang under their box's leaf as a balanced subtree.
 
 use obvhs::aabb::Aabb;
-use obvhs::bvh2::builder::build_bvh2;
 use obvhs::bvh2::node::Bvh2Node;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
@@ -47,7 +46,7 @@ pub(super) fn build_over_piles(boxes: &[Aabb], params: BvhBuildParams) -> (Vec<B
     start.push(by_key.len());
     let members: Vec<u32> = by_key.into_iter().map(|(_, i)| i).collect();
     let copies = |g: u32| members[start[g as usize]..start[g as usize + 1]].iter().copied();
-    let bvh2 = build_bvh2(&distinct, params, &mut Default::default());
+    let bvh2 = super::binary::build_binary(&distinct, params);
     let (mut nodes, mut order) = tree_for(boxes.len());
     // (obvhs node, its slot in `nodes`), walked without recursion.
     let mut pending = vec![(0usize, 0usize)];
