@@ -23,6 +23,8 @@ pub struct WideNode {
     pub count: [u8; WIDE_N],
     /// Occupied slots.
     pub slots: u8,
+    /// Bit c set where slot c is a leaf.
+    pub leaves: u8,
 }
 
 const _: () = assert!(size_of::<WideNode>() == 256, "a wide node is four cache lines");
@@ -33,7 +35,7 @@ impl RayNode for WideNode {
 
     fn new(children: &[ChildRef]) -> Self {
         let (bounds, child, count) = slots::<WIDE_N>(children);
-        WideNode { bounds, child, count, slots: children.len() as u8 }
+        WideNode { bounds, child, count, slots: children.len() as u8, leaves: leaf_bits(&count) }
     }
 
     slot_access!(f32x8);
