@@ -9,7 +9,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 bareray="${1:-$here/../target/release/bareray}"
 make -s -C "$here/embree"
 mkdir -p "$here/results" "$here/out"
-out="$here/results/accuracy-$(date -u +%Y-%m-%dT%H%MZ).txt"
+out="$here/results/accuracy-$(date -u +%Y-%m-%dT%H%M%SZ).txt"
 cam=(--eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080)
 run() { echo "\$ $*" | sed "s#$here/##g" >> "$out"; "$@" >> "$out" 2>&1; }
 echo "# $(date -u +%Y-%m-%dT%H:%M:%SZ), $("$bareray" --version), contract camera 1920x1080" > "$out"

@@ -12,7 +12,7 @@ make -s -C "$here/embree"
 mkdir -p "$here/results" "$here/out"
 f="$here/out/field-1e7.xyzr"
 [ -f "$f" ] || "$bareray" gen field --count 1e7 -o "$f" >&2
-out="$here/results/1e7-$(date -u +%Y-%m-%dT%H%MZ).txt"
+out="$here/results/1e7-$(date -u +%Y-%m-%dT%H%M%SZ).txt"
 threads="${THREADS:-2}"
 reps="${REPS:-3}"
 cam=(--eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080)

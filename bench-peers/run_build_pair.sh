@@ -17,7 +17,7 @@ n="${N:-1e6}"; threads="${THREADS:-2}"
 field="$here/out/field-$n.xyzr"
 [ -f "$field" ] || "$1" gen field --count "$n" -o "$field" >&2
 mkdir -p "$here/results"
-out="$here/results/buildpair-$(date -u +%Y-%m-%dT%H%MZ).txt"
+out="$here/results/buildpair-$(date -u +%Y-%m-%dT%H%M%SZ).txt"
 fresh() {
   [ "${DROP_CACHES:-0}" = 1 ] || return 0
   sync; echo 1 > /proc/sys/vm/drop_caches

@@ -8,7 +8,7 @@ set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 make -s -C "$here/embree"
 mkdir -p "$here/results"
-stamp="$(date -u +%Y-%m-%dT%H%MZ)"
+stamp="$(date -u +%Y-%m-%dT%H%M%SZ)"
 out="$here/results/embree-$stamp.jsonl"
 meta="$here/results/embree-$stamp.txt"
 {

@@ -8,7 +8,7 @@
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
 bareray="${1:-$here/../target/release/bareray}"
-stamp="$(date -u +%Y-%m-%dT%H%MZ)"
+stamp="$(date -u +%Y-%m-%dT%H%M%SZ)"
 res="$here/results/flakes-$stamp"
 mkdir -p "$res" "$here/out"
 size="${SIZE:-1024}"; threads="${THREADS:-2}"; reps="${REPS:-3}"; lanes="${LANES:-16}"

@@ -17,7 +17,7 @@ flake="$here/out/balls4.nff"; pov="$here/out/balls4.pov"
 [ -f "$flake" ] || "$1" gen flake --level 4 -o "$flake" >&2
 [ -f "$pov" ] || python3 "$here/nff2pov.py" "$flake" -o "$pov" --width 1024 --height 1024 --angle-mode spd \
   --max-trace-level 5 >&2
-out="$here/results/povpair-$(date -u +%Y-%m-%dT%H%MZ).txt"
+out="$here/results/povpair-$(date -u +%Y-%m-%dT%H%M%SZ).txt"
 # Fresh page-cache pages for a program, its shared libraries and the inputs, read in before the clock starts.
 fresh() {
   [ "${DROP_CACHES:-0}" = 1 ] || return 0

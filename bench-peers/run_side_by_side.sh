@@ -16,7 +16,7 @@ here="$(cd "$(dirname "$0")" && pwd)"
 bareray="${1:-$here/../target/release/bareray}"
 make -s -C "$here/embree"
 mkdir -p "$here/results" "$here/out"
-stamp="$(date -u +%Y-%m-%dT%H%MZ)"
+stamp="$(date -u +%Y-%m-%dT%H%M%SZ)"
 out="$here/results/side-$stamp.txt"
 cam=(--eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080)
 reps="${REPS:-7}"
