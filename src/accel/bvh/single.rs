@@ -133,8 +133,8 @@ impl Bvh {
     ) -> bool {
         let mut stack = Stack::<u32>::new();
         let (mut visits, mut prims, mut blocked) = (0, 0, false);
-        let mut next = Some(root);
-        'walk: while let Some(node) = next.take().or_else(|| stack.pop()) {
+        stack.push(root);
+        'walk: while let Some(node) = stack.pop() {
             visits += 1;
             let n = &nodes[node as usize];
             let near = slab.enter(n, q.t_max);
