@@ -44,17 +44,15 @@ pub(super) fn build_binary(boxes: &[Aabb], params: BvhBuildParams) -> Bvh2 {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::scene::generate::SplitMix64;
     use glam::Vec3A;
 
     /// The same tree as obvhs's own helper, for every preset bareray offers, on clustered boxes of several
     /// sizes (coincident ones included).
     #[test]
     fn builds_the_tree_obvhs_builds() {
-        let mut state = 7u64;
-        let mut next = move || {
-            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
-            (state >> 40) as f32 / (1u64 << 24) as f32
-        };
+        let mut rng = SplitMix64::new(7);
+        let mut next = move || rng.unit() as f32;
         let boxes: Vec<Aabb> = (0..3000)
             .map(|i| {
                 let c = if i % 7 == 0 { Vec3A::ONE } else { Vec3A::new(next(), next(), next()) * 10.0 };

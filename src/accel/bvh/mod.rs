@@ -57,7 +57,7 @@ pub struct Node {
     pub order: [u8; 8],
     /// Occupied slots (2 to N, 1 only for a root that is a leaf).
     pub slots: u8,
-    /// Bit c set where slot c is a leaf ([`leaf_bits`] of `count`).
+    /// Bit c set where slot c is a leaf (`count[c]` not 0).
     pub leaves: u8,
 }
 
