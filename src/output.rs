@@ -216,7 +216,7 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
     match format {
         Format::Png => {
             // Paeth on every row rather than the adaptive choice per row: on balls4 at 1024², 3.4 against
-            // 4.2 ms to encode and a smaller file (PERF.md, session 11).
+            // 4.2 ms to encode and a smaller file (PERF.md, session 12).
             let png = PngEncoder::new_with_quality(&mut file, CompressionType::Fast, FilterType::Paeth);
             to_srgb8(img).write_with_encoder(png)?
         }

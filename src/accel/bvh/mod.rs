@@ -284,7 +284,8 @@ pub fn build(
             Aabb { min: c - r, max: c + r }
         })
         .collect();
-    let binary = match piles::has_piles(&boxes) {
+    let over_piles = piles::has_piles(&boxes);
+    let binary = match over_piles {
         true => piles::build_over_piles(&boxes, params),
         false => {
             let bvh2 = binary::build_binary(&boxes, params);
@@ -303,9 +304,10 @@ pub fn build(
     let (mut permuted, (mut packet_tree, mut wide)) = trees(&binary);
     // Coincident spheres can make obvhs's tree a chain as long as their number: too deep for the traversal
     // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). A pile the sample
-    // missed is then built over one box per distinct sphere; anything still too deep gets the balanced tree.
+    // missed is then built over one box per distinct sphere (unless that was the first build); anything still
+    // too deep gets the balanced tree.
     let fallbacks: [&dyn Fn() -> _; 2] = [&|| piles::build_over_piles(&boxes, params), &|| balanced(&boxes)];
-    for fallback in fallbacks {
+    for fallback in fallbacks.into_iter().skip(usize::from(over_piles)) {
         if fits(&packet_tree, &wide) {
             break;
         }
