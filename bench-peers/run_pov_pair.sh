@@ -8,6 +8,9 @@
 # each run's program text lands on fresh physical pages: on these VMs one load of a binary can run 10-15%
 # slower than another load of the same bytes, for as long as its pages stay cached (PERF.md, session 12).
 #
+# The header and footer give the load average and the share of CPU time the hypervisor took (steal): the ratio
+# has measured 10.4-10.5x on a quiet host and 9.4-9.9x on a loaded one (PERF.md, sessions 13-14).
+#
 # usage: run_pov_pair.sh path/to/bareray [more builds...]     env: ROUNDS=8 THREADS=2 DROP_CACHES=0
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -24,10 +27,16 @@ fresh() {
   sync; echo 1 > /proc/sys/vm/drop_caches
   cat "$1" $(ldd "$1" | awk '{for (i = 1; i <= NF; i++) if ($i ~ /^\//) print $i}') "$flake" "$pov" > /dev/null
 }
+# The cpu line of /proc/stat: its 8th number is the time the hypervisor gave this VM's CPUs to others (steal).
+cpu_ticks() { head -1 /proc/stat | cut -d' ' -f3-; }
+steal_share() {
+  python3 -c "import sys; a, b = [list(map(int, x.split())) for x in sys.argv[1:]]; d = [y - x for x, y in zip(a, b)]; print(f'{100 * d[7] / max(1, sum(d)):.1f}%')" "$1" "$2"
+}
 ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $(( (e - s) / 1000000 )); }
+before="$(cpu_ticks)"
 {
   echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ)  nproc: $(nproc)  cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
-  echo "# drop caches before each run: ${DROP_CACHES:-0}"
+  echo "# drop caches before each run: ${DROP_CACHES:-0}  load at start: $(cut -d' ' -f1-3 /proc/loadavg)"
   echo "# povray +W1024 +H1024 -A +WT$threads -D +FN; bareray render --width 1024 --height 1024 --spp 1 --depth 5 --threads $threads -q"
   for r in $(seq "${ROUNDS:-8}"); do
     fresh "$(command -v povray)"
@@ -40,6 +49,7 @@ ms() { local s e; s=$(date +%s%N); "$@" >/dev/null 2>&1; e=$(date +%s%N); echo $
     done
     echo "$line"
   done
+  echo "# load at end: $(cut -d' ' -f1-3 /proc/loadavg)  CPU time stolen by the host: $(steal_share "$before" "$(cpu_ticks)")"
 } | tee "$out" | python3 -c "
 import sys, statistics as st
 rows = [l.split() for l in sys.stdin if not l.startswith('#')]
