@@ -9,7 +9,7 @@
 # slower than another load of the same bytes, for as long as its pages stay cached (PERF.md, session 12).
 #
 # The header and footer give the load average and the share of CPU time the hypervisor took (steal): the ratio
-# has measured 10.4-10.5x on a quiet host and 9.4-9.9x on a loaded one (PERF.md, sessions 13-14).
+# has measured 10.4-10.6x on a quiet host and 9.4-9.9x on a loaded one (PERF.md, sessions 13-14).
 #
 # usage: run_pov_pair.sh path/to/bareray [more builds...]     env: ROUNDS=8 THREADS=2 DROP_CACHES=0
 set -euo pipefail
