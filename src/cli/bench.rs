@@ -99,7 +99,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     // bench builds on one thread, as a 1-thread peer run does.
     let build_threads = args.threads.iter().copied().max();
     let mut scene = crate::render::thread_pool(build_threads)?
-        .install(|| Scene::compile_with_preset(&desc, accel, args.bvh_preset))?;
+        .install(|| Scene::compile_owned(desc, accel, args.bvh_preset))?;
     if let Some(bvh) = &mut scene.geometry.bvh {
         bvh.frustum_culling = args.frustum_culling;
         if let Some(lanes) = args.single_ray_lanes {

@@ -92,7 +92,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // The build runs on the render's threads too: `--threads 1` means one core throughout.
     let pool = crate::render::thread_pool(threads)?;
     let scene =
-        pool.install(|| Scene::compile_with_preset(&desc, Accel::Auto, args.bvh_preset)).context("camera")?;
+        pool.install(|| Scene::compile_owned(desc, Accel::Auto, args.bvh_preset)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     crate::accel::set_counting(args.stats);

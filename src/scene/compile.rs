@@ -121,6 +121,27 @@ impl Scene {
         accel: Accel,
         preset: BvhPreset,
     ) -> Result<Scene, CameraError> {
+        let (mut scene, job) = Self::assemble(desc, accel, preset)?;
+        scene.build_bvh(job);
+        Ok(scene)
+    }
+
+    /// [`Scene::compile_with_preset`] taking the description, which is freed before the BVH build: the
+    /// build is the peak of a large scene's memory, and the description's spheres (40 bytes each, in f64)
+    /// are no longer needed then.
+    pub fn compile_owned(desc: SceneDesc, accel: Accel, preset: BvhPreset) -> Result<Scene, CameraError> {
+        let (mut scene, job) = Self::assemble(&desc, accel, preset)?;
+        drop(desc);
+        scene.build_bvh(job);
+        Ok(scene)
+    }
+
+    /// Everything but the BVH: the scene without one, and the build it needs, if any.
+    fn assemble(
+        desc: &SceneDesc,
+        accel: Accel,
+        preset: BvhPreset,
+    ) -> Result<(Scene, Option<BvhJob>), CameraError> {
         let camera_f64 = Camera::new(&desc.camera)?;
         let mut geometry = Geometry::default();
         geometry.spheres.reserve_exact(desc.spheres.len());
@@ -155,33 +176,49 @@ impl Scene {
         if materials.is_empty() {
             materials.push(Material::default());
         }
-        let mut build = BuildStats::default();
-        if use_bvh {
-            let pad = bvh::padding(reach(desc));
-            let params = preset.params();
+        let job = use_bvh.then(|| BvhJob {
+            pad: bvh::padding(reach(desc)),
+            params: preset.params(),
             // The 8-wide single-ray tree serves the scalar tracer's secondary rays: only scenes that
             // trace them pay for its build.
-            let secondary = features::lights_shade(!desc.lights.is_empty(), &materials)
-                || features::bounces(desc.render.max_depth, &materials);
-            let (tree, stats) = bvh::build(&mut geometry.spheres, pad, params, secondary);
-            geometry.bvh = Some(tree);
-            build = stats;
-        }
+            single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
+                || features::bounces(desc.render.max_depth, &materials),
+        });
         let lights = desc
             .lights
             .iter()
             .map(|l| Light { position: V3::from(l.position).to_f32(), color: l.color, falloff: l.falloff })
             .collect();
-        Ok(Scene {
+        let scene = Scene {
             camera: camera_f64.to_f32(),
             camera_f64,
             render: desc.render,
             geometry,
             materials,
             lights,
-            build,
-        })
+            build: BuildStats::default(),
+        };
+        Ok((scene, job))
     }
+
+    /// Builds the BVH over the spheres (reordering them) when `job` asks for one.
+    fn build_bvh(&mut self, job: Option<BvhJob>) {
+        if let Some(job) = job {
+            let (tree, stats) =
+                bvh::build(&mut self.geometry.spheres, job.pad, job.params, job.single_ray_tree);
+            self.geometry.bvh = Some(tree);
+            self.build = stats;
+        }
+    }
+}
+
+/// A BVH build that [`Scene::assemble`] found the scene needs.
+struct BvhJob {
+    /// Box padding for the scene's extent ([`bvh::padding`]).
+    pad: f32,
+    params: obvhs::BvhBuildParams,
+    /// Whether to build the 8-wide single-ray tree too.
+    single_ray_tree: bool,
 }
 
 /// Triangulates one polygon into `out` (in f64, then rounded). A polygon the readers would have rejected
@@ -199,4 +236,33 @@ fn push_polygon(out: &mut Polygons, p: &PolygonDesc) {
         .filter(|ns| ns.len() == p.vertices.len())
         .map(|ns| ns.iter().map(|v| unit(*v)).collect::<Vec<_>>());
     out.push(&vertices, normals.as_deref(), &triangles, unit(newell_normal(&p.vertices)), p.material);
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::nff;
+
+    /// Compiling from a moved description (freed before the build) gives the scene compiling from a borrowed
+    /// one gives: the same spheres in the same order, the same trees, lights and materials.
+    #[test]
+    fn owned_and_borrowed_descriptions_compile_alike() {
+        let text = crate::scene::generate::flake_nff(2).expect("flake");
+        let desc = nff::parse(std::path::Path::new("flake.nff"), &text).expect("parse");
+        let borrowed = Scene::compile_with_preset(&desc, Accel::Auto, BvhPreset::default()).expect("compile");
+        let owned = Scene::compile_owned(desc, Accel::Auto, BvhPreset::default()).expect("compile");
+        let (a, b) = (&borrowed.geometry, &owned.geometry);
+        let arrays = |s: &crate::accel::Spheres| {
+            (s.cx.clone(), s.cy.clone(), s.cz.clone(), s.r.clone(), s.material.clone(), s.key.clone())
+        };
+        assert!(a.spheres.len() > 90, "a level-2 flake has 91 spheres");
+        assert_eq!(arrays(&a.spheres), arrays(&b.spheres));
+        let (ta, tb) = (a.bvh.as_ref().expect("bvh"), b.bvh.as_ref().expect("bvh"));
+        assert_eq!(ta.nodes, tb.nodes);
+        assert!(ta.wide.is_some(), "a shaded flake gets the single-ray tree");
+        assert_eq!(ta.wide, tb.wide);
+        assert_eq!(borrowed.build.node_bytes, owned.build.node_bytes);
+        assert_eq!(borrowed.lights.len(), owned.lights.len());
+        assert_eq!(borrowed.materials, owned.materials);
+    }
 }
