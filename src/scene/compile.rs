@@ -216,6 +216,7 @@ impl Scene {
 struct BvhJob {
     /// Box padding for the scene's extent ([`bvh::padding`]).
     pad: f32,
+    /// obvhs's settings for the chosen preset.
     params: obvhs::BvhBuildParams,
     /// Whether to build the 8-wide single-ray tree too.
     single_ray_tree: bool,
