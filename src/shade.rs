@@ -427,7 +427,9 @@ mod tests {
         for p in 0..400 {
             let rays = RayPacket::<f32x8>::from_fn(|i| {
                 let inside = desc.spheres[(p * 8 + i) % 300].center;
-                let origin = if p % 2 == 0 { V3::new(unit(), unit(), -3.0) } else { V3::from(inside) };
+                let origin = if p % 2 == 0 { glam::DVec3::new(unit(), unit(), -3.0) } else { inside };
+                // Rays are made in the file's space; the compiled scene is in rendering space.
+                let origin = V3::from(origin - scene.origin);
                 let dir = V3::new(unit() * 0.3, unit() * 0.3, 1.0);
                 (Ray::new(origin.to_f32(), dir.to_f32()), f32::INFINITY, (p + i) % 7 != 0)
             });

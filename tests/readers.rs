@@ -70,10 +70,11 @@ fn balls2_frames_like_spd_pov_ray_output() {
 #[test]
 fn balls2_floor_is_one_primitive_after_the_spheres() {
     let d = nff::parse(Path::new("balls2.nff"), &balls2_source()).unwrap();
-    let g = Scene::compile(&d).unwrap().geometry;
+    let scene = Scene::compile(&d).unwrap();
+    let g = &scene.geometry;
     assert_eq!((g.len(), g.polygons.len(), g.polygons.triangles()), (92, 1, 2));
     // Straight down onto the floor, away from the flake: polygon id 91, at z = −0.5, normal ±z.
-    let ray = Ray::new(V3::new(5.0f32, 5.0, 3.0), V3::new(0.0, 0.0, -1.0));
+    let ray = Ray::new(scene.to_rendering(DVec3::new(5.0, 5.0, 3.0)), V3::new(0.0, 0.0, -1.0));
     let hit = g.intersect(&ray, Departure::CAMERA, f32::INFINITY);
     assert_eq!((hit.prim, hit.t), (91, 3.5));
     let sp = g.surface(&ray, hit.t, hit.prim);
@@ -421,17 +422,19 @@ fn a_ray_leaving_a_polygon_never_hits_it_again() {
         polygons: vec![square(0.0), square(-1.0)],
         ..SceneDesc::default()
     };
-    let g: Geometry = Scene::compile(&desc).unwrap().geometry;
+    let scene = Scene::compile(&desc).unwrap();
+    let g: &Geometry = &scene.geometry;
+    let start = scene.to_rendering(DVec3::new(0.1, 0.2, 0.0));
     let from = Departure { prim: 1, inward: false };
     for dir in [V3::new(0.3f32, 0.1, -1e-3), V3::new(0.0, 0.0, -1.0), V3::new(0.2, 0.3, 1.0)] {
-        let ray = Ray::new(V3::new(0.1f32, 0.2, 0.0), dir);
+        let ray = Ray::new(start, dir);
         let hit = g.intersect(&ray, from, f32::INFINITY);
         assert_ne!(hit.prim, 1, "{dir:?}");
         let inward = g.intersect(&ray, Departure { prim: 1, inward: true }, f32::INFINITY);
         assert_ne!(inward.prim, 1, "planar primitives have no inside: {dir:?}");
         assert!(!g.occluded(&ray, from, 0.5), "{dir:?}");
     }
-    let down = Ray::new(V3::new(0.1f32, 0.2, 0.0), V3::new(0.0, 0.0, -1.0));
+    let down = Ray::new(start, V3::new(0.0, 0.0, -1.0));
     assert_eq!(g.intersect(&down, from, f32::INFINITY).prim, 2);
     assert!(g.occluded(&down, from, 2.0) && !g.occluded(&down, from, 0.5));
     assert_eq!(triangulate(&square(0.0).vertices).unwrap().len(), 2);

@@ -398,11 +398,10 @@ fn oracle_distant_small_spheres() {
 }
 
 /// A planet (r = 1e4) with the eye 1 unit above its surface looking at the horizon, with small spheres resting
-/// on it (touching it). The near root of the planet is a small difference of two numbers near 1e4, so its
-/// relative error is the largest of all scenes; this test measures and bounds it. Measured: max relative t
-/// error 1.17e-3, i.e. about 6e-4 absolute at t ≈ 0.5, which is one rounding of the 1e4-sized `c·d` (the
-/// perpendicular form's `proj − td` cancels here; a Vieta/Press near root would not, see the report). No id
-/// mismatch. Bounds: 4e-3 relative (3.4×), mismatches ≤ 1e-3.
+/// on it (touching it). The near root of the planet is the small difference of two numbers near 1e4 that
+/// the perpendicular form's `proj − td` cancelled (1.2e-3 relative error); with the exact eye term and
+/// Vieta's near root it is as accurate as any other hit. Measured: max relative t error 3.0e-7, no id
+/// mismatch. Bounds: 2e-6 relative (the primary-ray bound; 6.7×), mismatches ≤ 1e-3.
 #[test]
 fn oracle_planet_close_to_the_surface() {
     let r = 1.0e4;
@@ -419,7 +418,7 @@ fn oracle_planet_close_to_the_surface() {
         spheres,
         ..SceneDesc::default()
     };
-    check_agreement("planet", &compile(&desc), 4e-3, 4e-3, 1e-3);
+    check_agreement("planet", &compile(&desc), 2e-6, 2e-6, 1e-3);
 }
 
 /// SPD's sphereflake at level 2 (91 spheres, every child touching its parent) with its floor polygon, from
@@ -766,7 +765,7 @@ fn check_solid_departures(
     let oracle = Oracle::new(g);
     for _ in 0..8 {
         let aim = target(rng);
-        let ray = Ray::new(f32v(eye), f32v((aim - eye).normalize()));
+        let ray = Ray::new(scene.to_rendering(eye), f32v((aim - eye).normalize()));
         let hit = g.intersect(&ray, Departure::CAMERA, f32::INFINITY);
         assert_eq!(hit.prim, 0, "the camera ray toward a point inside the solid hits it");
         let sp = g.surface(&ray, hit.t, 0);
@@ -823,8 +822,10 @@ fn check_solid_departures(
 /// a ray leaving inward meets exactly the far side, at the f64 chord within a few roundings of the
 /// coordinates (|c| up to 1e6 radii, so the relative error grows with |c|/r). Measured (seed 11, 9602 inward
 /// rays): far-side error on chords > r/10 ≤ 33.6 ε·(|c| + r), relative ≤ 1.85e-5; 19 inward rays within ulps
-/// of tangency have no f64 chord, none lost its far side; without the rule 5186 of 9598 outward rays re-hit
-/// their own sphere. Bounds (about 4×): 128 ε·(|c| + r), 8e-5 relative, at most 1 in 200 tangent.
+/// of tangency have no f64 chord, none lost its far side; without the departure rule 386 of 9596 outward
+/// rays re-hit their own sphere (the contact rule catches the other outward rays: they start on the surface
+/// and head away from it). Bounds (about 4×): 128 ε·(|c| + r), 8e-5 relative, at most 1 in 200 tangent, and
+/// the foil at least 1 in 100.
 #[test]
 fn departure_random_spheres() {
     let mut rng = Rng::new(11);
@@ -857,7 +858,9 @@ fn departure_random_spheres() {
     assert!(st.max_rel_long <= 8e-5, "{st:?}");
     assert!(st.inward_tangent * 200 <= st.inward, "{st:?}");
     assert_eq!(st.inward_lost_grazing, 0, "{st:?}");
-    assert!(st.foil_rehits * 4 > st.outward, "the foil shows the rule matters: {st:?}");
+    // The contact rule alone keeps most outward rays off their own sphere (a ray heading away from a
+    // surface it starts on misses it); the rest show that the departure rule is still needed.
+    assert!(st.foil_rehits * 100 > st.outward, "the foil shows the departure rule matters: {st:?}");
 }
 
 /// As [`departure_random_spheres`] for ellipsoids: unit spheres under random rotations and axis scales from
@@ -946,7 +949,7 @@ fn departure_planes_and_polygons_never_rehit() {
             let eye = p0 + rng.dir() * size * rng.log(-0.5, 2.0);
             // Near the middle: the quad's diagonal runs through p0.
             let aim = p0 + tangent(n, &mut rng) * size * rng.range(0.0, 0.3);
-            let ray = Ray::new(f32v(eye), f32v((aim - eye).normalize()));
+            let ray = Ray::new(scene.to_rendering(eye), f32v((aim - eye).normalize()));
             let hit = g.intersect(&ray, Departure::CAMERA, f32::INFINITY);
             if !hit.is_hit() {
                 continue;
@@ -983,10 +986,10 @@ fn departure_planes_and_polygons_never_rehit() {
 /// oracle over the same f32 data, same rule, on which sphere is hit and on t within a few roundings,
 /// except where the ray starts within rounding of the other sphere's surface (the contact itself: entering
 /// the neighbour at t ≈ 0 and starting inside it are both right within rounding) or grazes it. Measured
-/// (1656 rays, 1522 meeting the touching sphere): max t error 1.45 ε elsewhere; 212 rays start within 16
-/// roundings of the neighbour, all at θ ≤ 3e-4, 94 of them reporting a different sphere and 118 the same
-/// sphere at the other root. Bounds: t error ≤ 64 ε; contact cases only at θ ≤ 1e-3 and in at most 1/4 of
-/// the rays; nothing else disagrees.
+/// (1656 rays, 1522 meeting the touching sphere): max t error 19.4 ε elsewhere; 430 rays start within 16
+/// roundings of the neighbour, all at θ ≤ 9.5e-4: there the f32 query's contact rule enters the neighbour at
+/// t = 0, while the f64 oracle, whose contact band is 2⁻²⁹ times narrower, meets it a few ulps later or at
+/// its other root. Bounds: t error ≤ 64 ε; contact cases only at θ ≤ 1e-3; nothing else disagrees.
 #[test]
 fn departure_from_touching_spheres() {
     let spheres: Vec<SphereDesc> =
@@ -1009,7 +1012,7 @@ fn departure_from_touching_spheres() {
                 let theta = 0.3 * 10f64.powf(-f64::from(e) / 4.0);
                 for _ in 0..4 {
                     let n = (a * theta.cos() + tangent(a, &mut rng) * theta.sin()).normalize();
-                    let p = f32v(c_from + n * r_from);
+                    let p = scene.to_rendering(c_from + n * r_from);
                     let ray = Ray::new(p, f32v(n));
                     let h = g.intersect(&ray, Departure { prim: stored(from), inward: false }, f32::INFINITY);
                     let r64 = wide_ray(&ray);
@@ -1054,7 +1057,6 @@ fn departure_from_touching_spheres() {
             largest_contact_theta <= 1e-3,
             "contact ambiguity far from the contact: θ = {largest_contact_theta}"
         );
-        assert!(at_contact * 4 <= checked, "{at_contact} contact cases of {checked}");
         assert!(near_contact_hits > checked / 2, "most rays near a contact meet the other sphere");
     }
 }
@@ -1085,7 +1087,7 @@ fn departure_grazing_shadow_rays() {
         let g = &scene.geometry;
         let oracle = Oracle::new(g);
         let eye = c + rng.dir() * r * 10.0;
-        let ray = Ray::new(f32v(eye), f32v((c + rng.dir() * r * 0.2 - eye).normalize()));
+        let ray = Ray::new(scene.to_rendering(eye), f32v((c + rng.dir() * r * 0.2 - eye).normalize()));
         let hit = g.intersect(&ray, Departure::CAMERA, f32::INFINITY);
         assert_eq!(hit.prim, 0);
         let sp = g.surface(&ray, hit.t, 0);

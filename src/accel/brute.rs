@@ -4,7 +4,7 @@
 
 use crate::geometry::{
     far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, stays_off_plane,
-    DeparturePacket, HitPacket, Pyramid, Ray, RayPacket,
+    DeparturePacket, EyeLanes, HitPacket, Pyramid, Ray, RayPacket, SphereRay,
 };
 use crate::math::Mask;
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -25,19 +25,42 @@ pub struct SphereQuery<'a, F: Lanes> {
     pub skip: F::Ids,
     /// Planes enclosing the live rays, from the packet's maker ([`crate::geometry::RayPacket::pyramid`]).
     pub pyramid: Option<Pyramid>,
+    /// The rays' per-ray terms, shared by every sphere test.
+    terms: SphereRay<F>,
+    /// The lanes that start at the eye and use the spheres' exact eye terms.
+    eye: EyeLanes<F::Mask>,
 }
 
-impl<F: Lanes> SphereQuery<'_, F> {
+impl<'a, F: Lanes> SphereQuery<'a, F> {
+    /// A query of `ray` (the lanes of `live`) over `spheres` in `[0, t_max)`, never reporting `skip`.
+    #[inline(always)]
+    pub fn new(
+        spheres: &'a Spheres,
+        ray: Ray<F>,
+        t_max: F,
+        skip: F::Ids,
+        pyramid: Option<Pyramid>,
+        live: F::Mask,
+    ) -> Self {
+        let terms = SphereRay::new(ray);
+        let eye = EyeLanes::of(terms.from_eye(), live);
+        Self { spheres, ray, t_max, skip, pyramid, terms, eye }
+    }
+
     /// Lane `i` as a one-ray query.
     #[inline(always)]
-    pub fn lane(&self, i: usize) -> SphereQuery<'_, f32> {
+    pub fn lane(&self, i: usize) -> SphereQuery<'a, f32> {
         let v = |p: crate::math::V3<F>| crate::math::V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
-        SphereQuery {
-            spheres: self.spheres,
-            ray: Ray::new(v(self.ray.origin), v(self.ray.dir)),
-            t_max: self.t_max.lane(i),
-            skip: self.skip.lane(i),
-            pyramid: None,
+        let ray = Ray::new(v(self.ray.origin), v(self.ray.dir));
+        SphereQuery::new(self.spheres, ray, self.t_max.lane(i), self.skip.lane(i), None, true)
+    }
+
+    /// The roots of sphere `i` (splatted) for these rays, with its exact eye term in the eye lanes.
+    #[inline(always)]
+    fn roots_of(&self, line: &crate::geometry::Approach<F>, i: usize) -> crate::geometry::Roots<F> {
+        match self.eye {
+            EyeLanes::None => line.roots(),
+            eye => line.roots_for(F::splat_f32(self.spheres.c_eye[i]), eye),
         }
     }
 
@@ -47,11 +70,11 @@ impl<F: Lanes> SphereQuery<'_, F> {
     #[inline(always)]
     fn sphere(&self, i: usize, live: F::Mask) -> Option<(F::Mask, F)> {
         let s = self.spheres;
-        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), &self.ray);
+        let line = sphere_approach(F::splat_v3(s.center(i)), F::splat_f32(s.r[i]), &self.terms);
         if !(line.meets() & live).any() {
             return None;
         }
-        let (hit, t) = first_root(&line.roots(), self.t_max);
+        let (hit, t) = first_root(&self.roots_of(&line, i), self.t_max);
         Some((live & hit & !F::ids_eq(F::Ids::splat(i as u32), self.skip), t))
     }
 
@@ -96,7 +119,7 @@ impl SphereQuery<'_, f32> {
     #[inline(always)]
     fn leaf_chunk<L: Lanes>(&self, at: usize, count: usize) -> Option<(u32, L)> {
         let s = self.spheres;
-        let ray = Ray::new(L::splat_v3(self.ray.origin), L::splat_v3(self.ray.dir));
+        let ray = SphereRay::new(Ray::new(L::splat_v3(self.ray.origin), L::splat_v3(self.ray.dir)));
         // Lanes past the array's end read a zero sphere at the origin; `valid` drops them.
         let centre = L::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
         let line = sphere_approach(centre, L::load_partial(&s.r, at, 0.0), &ray);
@@ -104,7 +127,11 @@ impl SphereQuery<'_, f32> {
         if !(line.meets() & valid).any() {
             return None;
         }
-        let (hit, t) = first_root(&line.roots(), L::splat_f32(self.t_max));
+        let roots = match self.eye {
+            EyeLanes::None => line.roots(),
+            _ => line.roots_from_eye(L::load_partial(&s.c_eye, at, 0.0)),
+        };
+        let (hit, t) = first_root(&roots, L::splat_f32(self.t_max));
         let ids = L::Ids::splat(at as u32) + L::lane_ids();
         let hit = hit & valid & !L::ids_eq(ids, L::Ids::splat(self.skip));
         Some((L::move_mask(hit), t))
@@ -275,7 +302,7 @@ mod tests {
             let aim = spheres.center(first + k / 3 % count) + V3::new(unit(), unit(), unit()) * 0.2;
             let dir = aim - origin;
             let t_max = if k % 4 == 0 { 0.5 + unit().abs() } else { f32::INFINITY };
-            let q = SphereQuery { spheres: &spheres, ray: Ray::new(origin, dir), t_max, skip, pyramid: None };
+            let q = SphereQuery::new(&spheres, Ray::new(origin, dir), t_max, skip, None, true);
             let (mut lanes, mut scalar) = (HitPacket::<f32>::miss(), HitPacket::<f32>::miss());
             q.intersect_leaf(first, count, &mut lanes);
             q.intersect(first..first + count, true, &mut scalar);

@@ -76,6 +76,10 @@ pub struct Spheres {
     pub cz: Vec<f32>,
     /// Radius.
     pub r: Vec<f32>,
+    /// The exact eye term `|centre − eye|² − r²` (the eye is the rendering space's origin), computed in f64
+    /// from the scene's own values and rounded once: camera rays use it instead of computing it in f32
+    /// ([`crate::geometry::Approach::roots_from_eye`]).
+    pub c_eye: Vec<f32>,
     /// Material index.
     pub material: Vec<u32>,
     /// Scene-file index (the identity until [`Spheres::permuted`]): breaks ties in t and names the sphere
@@ -94,7 +98,7 @@ impl Spheres {
     }
     /// Bytes of the arrays' contents.
     pub fn bytes(&self) -> usize {
-        let floats = [&self.cx, &self.cy, &self.cz, &self.r].map(Vec::len).iter().sum::<usize>();
+        let floats = [&self.cx, &self.cy, &self.cz, &self.r, &self.c_eye].map(Vec::len).iter().sum::<usize>();
         floats * size_of::<f32>() + (self.material.len() + self.key.len()) * size_of::<u32>()
     }
     /// Centre of sphere `i`.
@@ -113,6 +117,7 @@ impl Spheres {
             cy: pick(&self.cy, order),
             cz: pick(&self.cz, order),
             r: pick(&self.r, order),
+            c_eye: pick(&self.c_eye, order),
             material: pick(&self.material, order),
             key: pick(&self.key, order),
         }
@@ -121,7 +126,7 @@ impl Spheres {
     /// Room for `more` spheres in every array: compile knows the count, so each array is allocated once, at
     /// its final size.
     pub fn reserve_exact(&mut self, more: usize) {
-        for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.r] {
+        for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.r, &mut self.c_eye] {
             v.reserve_exact(more);
         }
         for v in [&mut self.material, &mut self.key] {
@@ -129,15 +134,31 @@ impl Spheres {
         }
     }
 
-    /// Appends a sphere; its file index is its position.
+    /// Appends a sphere whose f32 centre and radius are exact (hand-built geometry, tests); its file index is
+    /// its position. Its eye term is computed from these values.
     pub fn push(&mut self, center: Vec3f, radius: f32, material: u32) {
-        self.cx.push(center.x);
-        self.cy.push(center.y);
-        self.cz.push(center.z);
+        self.push_exact(center.to_f64(), f64::from(radius), material);
+    }
+
+    /// Appends a sphere given in f64 (rendering space), rounding its centre and radius to f32 once and
+    /// computing its eye term from the f64 values.
+    pub fn push_exact(&mut self, center: V3<f64>, radius: f64, material: u32) {
+        let c = center.to_f32();
+        self.cx.push(c.x);
+        self.cy.push(c.y);
+        self.cz.push(c.z);
         self.key.push(self.r.len() as u32);
-        self.r.push(radius);
+        self.r.push(radius as f32);
+        self.c_eye.push(eye_term(center, radius) as f32);
         self.material.push(material);
     }
+}
+
+/// `|centre|² − r²` for a sphere in rendering space (the eye at the origin), as `(|centre| − r)(|centre| + r)`
+/// in f64: no cancellation between two large squares when the eye is close to a large sphere.
+pub fn eye_term(center: V3<f64>, radius: f64) -> f64 {
+    let d = center.length();
+    (d - radius) * (d + radius)
 }
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons.
@@ -151,6 +172,9 @@ pub struct Geometry {
     pub shapes: Vec<Shape<f32>>,
     /// Planar polygons.
     pub polygons: Polygons,
+    /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
+    /// coordinates.
+    pub origin: Vec3f,
 }
 
 /// What a primitive id refers to.
@@ -250,13 +274,7 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> SphereQuery<'a, F> {
-        SphereQuery {
-            spheres: &self.spheres,
-            ray: rays.ray(),
-            t_max: rays.t_max,
-            skip: from.prim,
-            pyramid: rays.pyramid,
-        }
+        SphereQuery::new(&self.spheres, rays.ray(), rays.t_max, from.prim, rays.pyramid, rays.active)
     }
 
     /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's
@@ -335,7 +353,7 @@ impl Geometry {
                 SurfacePoint {
                     point,
                     normal: p.shading_normal(k, point),
-                    object_point: point,
+                    object_point: point + self.origin,
                     material: p.material[k],
                 }
             }

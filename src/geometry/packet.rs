@@ -1,7 +1,8 @@
 //! Ray packets, hit packets, and the two brute-force sphere kernels built on them.
 //!
-//! Both kernels run the scalar reference formula ([`intersect_sphere`]) at a lane type, so their results are
-//! bit-identical to [`crate::accel::Geometry::intersect`] over the same spheres (for camera rays):
+//! Both kernels run the scalar reference formula ([`sphere_approach`], with each sphere's exact eye term for
+//! rays from the eye) at a lane type, so their results are bit-identical to
+//! [`crate::accel::Geometry::intersect`] over the same spheres (for camera rays):
 //!
 //! - [`intersect_spheres_k`]: lanes = rays. K rays against each sphere in turn, the sphere splatted.
 //! - [`intersect_spheres_1`]: lanes = spheres. One ray against K spheres at a time, loaded straight from the
@@ -14,7 +15,7 @@ use crate::accel::Spheres;
 use crate::math::{Mask, V3};
 use crate::simd::{IdLanes, Lanes};
 
-use super::{intersect_sphere, Hit, Ray, NO_PRIM};
+use super::{first_root, sphere_approach, EyeLanes, Hit, Ray, SphereRay, NO_PRIM};
 
 /// K rays in structure-of-arrays layout: lane `i` of every field belongs to ray `i`.
 ///
@@ -159,9 +160,11 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
         return HitPacket::miss();
     }
     let mut found = F::mask_from_bits(0);
+    let terms = SphereRay::new(ray);
+    let eye = EyeLanes::of(terms.from_eye(), packet.active);
     for i in 0..spheres.len() {
-        let centre = F::splat_v3(spheres.center(i));
-        let (hit, t) = intersect_sphere(centre, F::splat_f32(spheres.r[i]), &ray, best.t);
+        let line = sphere_approach(F::splat_v3(spheres.center(i)), F::splat_f32(spheres.r[i]), &terms);
+        let (hit, t) = first_root(&line.roots_for(F::splat_f32(spheres.c_eye[i]), eye), best.t);
         // `t < best.t` inside the kernel is the strict comparison that lets the lower id keep a tie.
         let hit = hit & packet.active;
         best.t = F::select(hit, t, best.t);
@@ -178,7 +181,7 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
 /// twin of [`intersect_spheres_k`], with the same result as the scalar query.
 pub fn intersect_spheres_1<F: Lanes>(spheres: &Spheres, ray: &Ray<f32>, t_max: f32) -> Hit {
     let n = spheres.len();
-    let ray_k = Ray::new(F::splat_v3(ray.origin), F::splat_v3(ray.dir));
+    let ray_k = SphereRay::new(Ray::new(F::splat_v3(ray.origin), F::splat_v3(ray.dir)));
     let mut best =
         HitPacket { t: F::splat_f32(t_max), prim: F::Ids::splat(NO_PRIM), key: F::Ids::splat(NO_PRIM) };
     let mut at = 0;
@@ -196,14 +199,17 @@ pub fn intersect_spheres_1<F: Lanes>(spheres: &Spheres, ray: &Ray<f32>, t_max: f
 #[inline(always)]
 fn sphere_chunk<F: Lanes>(
     s: &Spheres,
-    ray: &Ray<F>,
+    ray: &SphereRay<F>,
     at: usize,
     valid: Option<F::Mask>,
     best: &mut HitPacket<F>,
 ) {
     // A zero-radius sphere at the origin pads the tail; `valid` masks it out whatever it would give.
     let centre = F::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
-    let (hit, t) = intersect_sphere(centre, F::load_partial(&s.r, at, 0.0), ray, best.t);
+    let line = sphere_approach(centre, F::load_partial(&s.r, at, 0.0), ray);
+    // One ray: it starts at the eye in every lane or in none.
+    let eye = EyeLanes::of(ray.from_eye(), F::mask_from_bits(u32::MAX));
+    let (hit, t) = first_root(&line.roots_for(F::load_partial(&s.c_eye, at, 0.0), eye), best.t);
     let hit = valid.map_or(hit, |v| hit & v);
     best.t = F::select(hit, t, best.t);
     let id = F::Ids::splat(at as u32) + F::lane_ids();

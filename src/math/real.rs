@@ -42,6 +42,8 @@ pub trait Real:
 {
     /// The comparison result type.
     type Mask: Mask;
+    /// Unit roundoff of the lane's float format (half an ulp of 1): 2⁻²⁴ for f32 lanes, 2⁻⁵³ for f64.
+    const UNIT_ROUNDOFF: f64;
     /// `v` in every lane (rounded to nearest when narrowing).
     fn splat(v: f64) -> Self;
     /// Correctly rounded square root (NaN for negative input).
@@ -90,6 +92,7 @@ macro_rules! impl_real_scalar {
     ($t:ty) => {
         impl Real for $t {
             type Mask = bool;
+            const UNIT_ROUNDOFF: f64 = <$t>::EPSILON as f64 * 0.5;
             #[inline(always)]
             fn splat(v: f64) -> Self {
                 v as $t

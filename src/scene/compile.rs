@@ -1,5 +1,13 @@
 //! Compile: a validated [`SceneDesc`] becomes the immutable [`Scene`] every render thread shares — camera frame
 //! precomputed, spheres in SoA arrays, transforms inverted once, everything rounded to f32 once.
+//!
+//! **Rendering space.** The compiled scene lives in a space whose origin is the eye (pbrt-v4's
+//! "camera-world" space, without its rotation): every position is `p − eye` computed in f64 from the scene
+//! file's values and rounded once to f32. Near the eye, where the image is made, f32 then resolves the
+//! scene as finely as it can anywhere, however far from the world origin the scene sits, and camera rays
+//! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::accel::eye_term`]).
+//! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
+//! mean what they meant in world space; [`Scene::origin`] maps points back.
 
 use crate::accel::bvh::{self, BuildStats};
 use crate::accel::{Geometry, Polygons};
@@ -8,6 +16,7 @@ use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
 use crate::math::affine::normal_to_world;
 use crate::math::{Affine, Rgb, Vec3f, V3};
+use glam::DAffine3;
 use obvhs::BvhBuildParams;
 
 use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
@@ -29,9 +38,12 @@ pub struct Light {
 pub struct Scene {
     /// The camera's frame rounded to f32 (resolution, and f32 points on the image plane).
     pub camera: Camera<f32>,
-    /// The camera in f64: camera rays are computed from it and rounded once ([`Camera::rays`]); the f64
-    /// accuracy oracle uses it as it is.
+    /// The camera in f64 (in rendering space: its eye is the origin): camera rays are computed from it and
+    /// rounded once ([`Camera::rays`]); the f64 accuracy twin uses it as it is.
     pub camera_f64: Camera<f64>,
+    /// Where the rendering space's origin (the eye) is in the scene file's world space: a world point is
+    /// `origin + p` for a rendering-space point `p`.
+    pub origin: glam::DVec3,
     /// Sampling, depth, background, ambient.
     pub render: RenderDesc,
     /// All primitives.
@@ -90,14 +102,22 @@ impl BvhPreset {
 /// spheres on the BVH was already faster (PERF.md, "BVH crossover").
 pub const BVH_MIN_SPHERES: usize = 4;
 
-/// The largest coordinate magnitude a ray can start from or pass near: spheres' far sides, the eye, lights.
+/// The largest coordinate magnitude in rendering space a ray can start from or pass near: spheres' far
+/// sides, lights (the eye is the origin).
 fn reach(desc: &SceneDesc) -> f32 {
-    let spheres = desc.spheres.iter().map(|s| s.center.abs().max_element() + s.radius);
-    let lights = desc.lights.iter().map(|l| l.position.abs().max_element());
-    spheres.chain(lights).fold(desc.camera.eye.abs().max_element(), f64::max) as f32
+    let eye = desc.camera.eye;
+    let spheres = desc.spheres.iter().map(|s| (s.center - eye).abs().max_element() + s.radius);
+    let lights = desc.lights.iter().map(|l| (l.position - eye).abs().max_element());
+    spheres.chain(lights).fold(0.0, f64::max) as f32
 }
 
 impl Scene {
+    /// A world-space point (the scene file's coordinates) in rendering space, rounded once to f32: where a
+    /// ray made from world coordinates starts.
+    pub fn to_rendering(&self, world: glam::DVec3) -> Vec3f {
+        V3::from(world - self.origin).to_f32()
+    }
+
     /// Memory per sphere of the spheres' arrays and the BVH nodes (what `--stats` and `bench` report).
     pub fn bytes_per_sphere(&self) -> f64 {
         let s = &self.geometry.spheres;
@@ -142,25 +162,31 @@ impl Scene {
         accel: Accel,
         preset: BvhPreset,
     ) -> Result<(Scene, Option<BvhJob>), CameraError> {
-        let camera_f64 = Camera::new(&desc.camera)?;
-        let mut geometry = Geometry::default();
+        let origin = desc.camera.eye;
+        let mut camera_f64 = Camera::new(&desc.camera)?;
+        camera_f64.eye = V3::all(0.0);
+        let mut geometry = Geometry { origin: V3::from(origin).to_f32(), ..Geometry::default() };
         geometry.spheres.reserve_exact(desc.spheres.len());
         for s in &desc.spheres {
-            geometry.spheres.push(V3::from(s.center).to_f32(), s.radius as f32, s.material);
+            geometry.spheres.push_exact(V3::from(s.center - origin), s.radius, s.material);
         }
+        let to_rendering = DAffine3::from_translation(-origin);
         geometry.shapes = desc
             .shapes
             .iter()
-            .map(|s| Shape {
-                kind: s.kind,
-                center: V3::from(s.world_from_object.translation).to_f32(),
-                object_from_world: Affine::from_glam(&s.world_from_object.inverse()).to_f32(),
-                normal_to_world: normal_to_world(&s.world_from_object).to_f32(),
-                material: s.material,
+            .map(|s| {
+                let world_from_object = to_rendering * s.world_from_object;
+                Shape {
+                    kind: s.kind,
+                    center: V3::from(world_from_object.translation).to_f32(),
+                    object_from_world: Affine::from_glam(&world_from_object.inverse()).to_f32(),
+                    normal_to_world: normal_to_world(&world_from_object).to_f32(),
+                    material: s.material,
+                }
             })
             .collect();
         for p in &desc.polygons {
-            push_polygon(&mut geometry.polygons, p);
+            push_polygon(&mut geometry.polygons, p, origin);
         }
         // obvhs cannot order boxes with infinite or NaN corners; readers reject such spheres, and a scene
         // built by hand with them falls back to brute force rather than failing.
@@ -187,11 +213,16 @@ impl Scene {
         let lights = desc
             .lights
             .iter()
-            .map(|l| Light { position: V3::from(l.position).to_f32(), color: l.color, falloff: l.falloff })
+            .map(|l| Light {
+                position: V3::from(l.position - origin).to_f32(),
+                color: l.color,
+                falloff: l.falloff,
+            })
             .collect();
         let scene = Scene {
             camera: camera_f64.to_f32(),
             camera_f64,
+            origin,
             render: desc.render,
             geometry,
             materials,
@@ -222,14 +253,14 @@ struct BvhJob {
     single_ray_tree: bool,
 }
 
-/// Triangulates one polygon into `out` (in f64, then rounded). A polygon the readers would have rejected
-/// (a `SceneDesc` built by hand) still gets its id, with a fan of possibly degenerate triangles, which the
-/// kernel can only miss or hit harmlessly: ids must not shift.
-fn push_polygon(out: &mut Polygons, p: &PolygonDesc) {
+/// Triangulates one polygon into `out` (in f64, moved to rendering space by `−origin`, then rounded). A polygon
+/// the readers would have rejected (a `SceneDesc` built by hand) still gets its id, with a fan of possibly
+/// degenerate triangles, which the kernel can only miss or hit harmlessly: ids must not shift.
+fn push_polygon(out: &mut Polygons, p: &PolygonDesc, origin: glam::DVec3) {
     let n = p.vertices.len() as u32;
     let triangles =
         triangulate(&p.vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect());
-    let vertices: Vec<Vec3f> = p.vertices.iter().map(|v| V3::from(*v).to_f32()).collect();
+    let vertices: Vec<Vec3f> = p.vertices.iter().map(|v| V3::from(*v - origin).to_f32()).collect();
     let unit = |v: glam::DVec3| V3::from(v.normalize_or_zero()).to_f32();
     let normals = p
         .normals

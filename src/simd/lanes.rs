@@ -136,6 +136,7 @@ macro_rules! impl_lanes {
 
         impl Real for $f {
             type Mask = LaneMask<$f>;
+            const UNIT_ROUNDOFF: f64 = f32::EPSILON as f64 * 0.5;
             #[inline(always)]
             fn splat(v: f64) -> Self {
                 // The same single rounding as the scalar `v as f32`.
