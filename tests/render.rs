@@ -147,13 +147,20 @@ fn half_pixel_pattern_agrees_with_a_fine_grid() {
     assert!(err(&half) < 0.5 * err(&one), "half-pixel {} vs one sample {}", err(&half), err(&one));
 }
 
-/// Every scene in scenes/ renders to the same pixels, bit for bit, at 1, 4, 8 and 16 lanes and on 1 and 2
-/// threads: the packet path and the scalar reference path are one computation. The ray counts agree too
-/// (secondary packets with few live lanes are handed to the scalar tracer, whose counts must not be lost).
+/// Every scene in scenes/ and scenes/stress/ renders to the same pixels, bit for bit, at 1, 4, 8 and 16
+/// lanes and on 1 and 2 threads: the packet path and the scalar reference path are one computation. The ray
+/// counts agree too (secondary packets with few live lanes are handed to the scalar tracer, whose counts must
+/// not be lost).
 #[test]
 fn every_scene_is_identical_at_every_width_and_thread_count() {
-    let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut scenes: Vec<_> = std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()).collect();
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let is_scene =
+        |p: &std::path::PathBuf| p.extension().is_some_and(|e| e == "toml" || e == "nff" || e == "xyzr");
+    let mut scenes: Vec<_> = [root.clone(), root.join("stress")]
+        .iter()
+        .flat_map(|dir| std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()))
+        .filter(is_scene)
+        .collect();
     scenes.sort();
     let mut checked = 0;
     for path in &scenes {
@@ -179,5 +186,5 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
         }
         checked += 1;
     }
-    assert!(checked >= 7, "toml, nff and xyzr scenes: {checked}");
+    assert!(checked >= 18, "toml, nff and xyzr scenes, and the stress scenes: {checked}");
 }
