@@ -54,7 +54,8 @@ pub const K_GRAZE: f64 = 16.0;
 pub const K_TIE: f64 = 64.0;
 /// Tolerance of the "start" and "light" explanations, in ε32 of the magnitudes involved.
 pub const K_START: f64 = 16.0;
-/// Distance from the origin within which a secondary ray's hit counts as a self-hit, in ε32 of `|o| + r`.
+/// Distance from the origin within which a secondary ray's hit counts as a self-hit, in ε32 of `|o|` (the
+/// origin's distance from the eye).
 pub const K_SELF: f64 = 16.0;
 
 /// What to measure.
@@ -736,8 +737,9 @@ impl Comparer<'_> {
         let eye32 = ray32.origin.to_f64();
         let o32 = sp.point.to_f64() - eye32;
         let origin_slack = len(o32 - p64);
-        let size = self.twin.size(h64.prim);
-        let self_tol = K_SELF * EPS32 * (len(p64) + if size.is_finite() { size } else { 0.0 });
+        // A hit this close to the origin is a re-hit of the surface the ray starts on: the f32 origin is off
+        // by a few ε32 of its distance from the eye.
+        let self_tol = K_SELF * EPS32 * len(p64);
 
         for (k, light32) in self.scene.lights.iter().enumerate() {
             let (s32, dist32, cos32) = shadow_ray(sp.point, n32, light32.position);

@@ -368,20 +368,6 @@ impl Twin {
         }
     }
 
-    /// A size for primitive `prim`'s curvature: the radius of a sphere, the smallest semi-axis bound
-    /// (1 / the inverse map's norm bound) of an ellipsoid, and infinity for planar primitives.
-    pub fn size(&self, prim: u32) -> f64 {
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        if i < ns {
-            self.spheres[i].1
-        } else if i < ns + self.shapes.len() && self.shapes[i - ns].kind.is_solid() {
-            1.0 / norm_bound(&self.shapes[i - ns].object_from_world)
-        } else {
-            f64::INFINITY
-        }
-    }
-
     /// How big the f32 rounding of a ray near `prim` can be, per ε32, for a ray from `origin`: |origin|
     /// plus the primitive's centre distance and radius (the magnitudes the kernel's f32 operations round).
     fn magnitude(&self, prim: u32, origin: V3<f64>) -> f64 {
