@@ -27,8 +27,8 @@
 //!   carried forward, not a fault of the secondary query.
 //!
 //! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in one
-//! precision is its departure primitive itself, or lies within `K_SELF·ε32·(|o| + r)` of its origin, while
-//! in the other precision it is not. Relative t errors `|t32 − t64| / t64` are taken over rays whose two
+//! precision is its departure primitive itself, or lies within `K_SELF·ε32·|o|` of its origin, while
+//! in the other precision it is not (both hitting the same other primitive is agreement). Relative t errors `|t32 − t64| / t64` are taken over rays whose two
 //! hits agree on the primitive; percentiles are nearest-rank: the p-th of n sorted values is the
 //! ⌈p·n⌉-th.
 
@@ -684,6 +684,18 @@ fn mirror<F: crate::math::Real>(d: V3<F>, n: V3<F>) -> V3<F> {
     (d - n * (F::splat(2.0) * d.dot(n))).normalize()
 }
 
+/// Whether a secondary ray leaving primitive `departed` self-hits in one precision only: its hit (`a` in
+/// f32, `b` in f64) is the departure primitive itself, or lies within `tol` of the origin, in one and not in
+/// the other. Both hitting the same other primitive is agreement, however close to the origin (a neighbour
+/// closer than the f32 rounding of the origin's position).
+fn is_self_hit(a: Hit64, b: Hit64, departed: u32, tol: f64) -> bool {
+    if a.is_hit() && a.prim == b.prim && a.prim != departed {
+        return false;
+    }
+    let selfish = |h: Hit64| h.is_hit() && (h.prim == departed || h.t <= tol);
+    selfish(a) != selfish(b)
+}
+
 /// The per-pixel comparison.
 struct Comparer<'a> {
     scene: &'a Scene,
@@ -768,9 +780,7 @@ impl Comparer<'_> {
             let b32 = g.intersect(&s32, from32, dist32);
             let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
             let b64 = self.twin.intersect(&s64, from64, dist64);
-            let self32 = blocked32 && (b32.prim == h32.prim || b32.t <= self_tol);
-            let self64 = b64.is_hit() && (b64.prim == h64.prim || b64.t <= self_tol);
-            if self32 != self64 {
+            if is_self_hit(b32, b64, h64.prim, self_tol) {
                 acc.shadow.self_hits += 1;
                 acc.example("shadow self-hit", (x, y), Some(k), b32, b64);
             }
@@ -818,9 +828,7 @@ impl Comparer<'_> {
             m64,
             slack,
         );
-        let self32 = m32.is_hit() && (m32.prim == h32.prim || m32.t <= self_tol);
-        let self64 = m64.is_hit() && (m64.prim == h64.prim || m64.t <= self_tol);
-        if self32 != self64 {
+        if is_self_hit(m32, m64, h64.prim, self_tol) {
             acc.reflection.self_hits += 1;
             acc.example("reflection self-hit", (x, y), None, m32, m64);
         }
