@@ -8,6 +8,7 @@
 //! same bits.
 
 pub mod accel;
+pub mod accuracy;
 pub mod aov;
 pub mod camera;
 pub mod cli;

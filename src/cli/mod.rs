@@ -1,5 +1,6 @@
 //! The command line: one file per subcommand; `main.rs` only calls [`main`].
 
+mod accuracy;
 mod bench;
 mod camera_args;
 mod gen;
@@ -26,6 +27,9 @@ enum Command {
     Render(render::RenderArgs),
     /// Measure: trace a scene repeatedly at each packet width and thread count and print a table (or JSON).
     Bench(bench::BenchArgs),
+    /// Compare the f32 renderer's hits with an f64 twin of the scene, ray by ray (primary, and with
+    /// --secondary shadow and mirror rays), and report disagreements and t errors.
+    Accuracy(accuracy::AccuracyArgs),
     /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
     Gen(gen::GenArgs),
 }
@@ -37,6 +41,7 @@ pub fn main() -> ExitCode {
         Command::Render(args) => render::run(args),
         Command::Gen(args) => gen::run(args),
         Command::Bench(args) => bench::run(args),
+        Command::Accuracy(args) => accuracy::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

@@ -1,0 +1,895 @@
+//! `bareray accuracy`: the f32 renderer against an f64 twin of the same scene, ray by ray.
+//!
+//! Every primary ray (one per pixel centre) is traced by the renderer's own primary-hit pass
+//! ([`crate::render::trace_primary_lanes`], packets of K) and by the [`Twin`], an independent f64 tracer
+//! over the exact [`SceneDesc`] in camera-relative space with unrounded f64 camera rays. Only
+//! frame-independent quantities are compared: hit or miss, scene-file primitive id, t (rays have unit
+//! directions in both), and occlusion. With secondary rays, each precision builds its own Whitted rays from
+//! its own hit wherever the two primary hits agree on the primitive: one shadow ray per light that faces
+//! the surface, compared as occluded booleans, and the mirror ray (every hit, whatever its material),
+//! compared like a primary ray.
+//!
+//! A disagreement is *explained* when rounding can account for it; the tolerances are multiples of
+//! ε32 = 2⁻²⁴ ([`EPS32`]) of the magnitudes involved, with the constants below:
+//!
+//! - **graze** ([`K_GRAZE`]): the ray passes within tolerance of tangency with either primitive
+//!   ([`Twin::grazing`]: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
+//!   outlines);
+//! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other;
+//! - **start** ([`K_START`], secondary rays): the ray starts within tolerance of either primitive's surface
+//!   ([`Twin::near_surface`]: contact points of touching spheres);
+//! - **light** ([`K_START`], shadow rays): the light lies within tolerance of the blocker's surface;
+//! - **facing** ([`K_GRAZE`], shadow rays): the light is in front of the surface in one precision only and
+//!   within `K_GRAZE·ε32` of its tangent plane (|cos| in f64);
+//! - **diverge** (secondary rays): none of the above at their own tolerances, but each holds once the
+//!   tolerances grow by how far the f32 ray actually strays from the f64 one (origins and directions differ
+//!   because each starts from its own hit point along its own normal, [`Slack`]): the primary hit's error
+//!   carried forward, not a fault of the secondary query.
+//!
+//! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in one
+//! precision is its departure primitive itself, or lies within `K_SELF·ε32·|o|` of its origin, while
+//! in the other precision it is not (both hitting the same other primitive is agreement). Relative t errors `|t32 − t64| / t64` are taken over rays whose two
+//! hits agree on the primitive; percentiles are nearest-rank: the p-th of n sorted values is the
+//! ⌈p·n⌉-th.
+
+pub mod bvh64;
+pub mod twin;
+
+use std::fmt::Write as _;
+use std::time::Instant;
+
+use anyhow::Result;
+use rayon::prelude::*;
+
+use crate::geometry::{Departure, Ray, NO_PRIM};
+use crate::math::V3;
+use crate::render::{thread_pool, trace_primary_lanes, PrimaryHits};
+use crate::scene::{Scene, SceneDesc};
+
+pub use twin::{Hit64, Slack, Twin, EPS32, TWIN_BVH_MIN_SPHERES};
+
+/// Tolerance of the "graze" and "facing" explanations, in ε32 of the magnitudes involved (tests/stress.rs's).
+pub const K_GRAZE: f64 = 16.0;
+/// Tolerance of the "tie" explanation, in ε32 of `|o| + t` (tests/stress.rs's).
+pub const K_TIE: f64 = 64.0;
+/// Tolerance of the "start" and "light" explanations, in ε32 of the magnitudes involved.
+pub const K_START: f64 = 16.0;
+/// Distance from the origin within which a secondary ray's hit counts as a self-hit, in ε32 of `|o|` (the
+/// origin's distance from the eye).
+pub const K_SELF: f64 = 16.0;
+
+/// What to measure.
+#[derive(Clone, Debug)]
+pub struct Options {
+    /// Packet width of the f32 primary pass: 1, 4, 8 or 16.
+    pub lanes: usize,
+    /// Also compare shadow and mirror rays.
+    pub secondary: bool,
+    /// Worker threads (default: all cores).
+    pub threads: Option<usize>,
+    /// Unexplained disagreements and self-hits to keep as examples, per kind.
+    pub max_examples: usize,
+}
+
+impl Default for Options {
+    fn default() -> Self {
+        Self { lanes: 16, secondary: false, threads: None, max_examples: 8 }
+    }
+}
+
+/// Nearest-rank percentiles of a list of values.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Percentiles {
+    /// How many values.
+    pub count: u64,
+    /// Median (NaN when there are no values).
+    pub p50: f64,
+    /// 99th percentile.
+    pub p99: f64,
+    /// 99.9th percentile.
+    pub p999: f64,
+    /// Largest value.
+    pub max: f64,
+}
+
+impl Percentiles {
+    /// Sorts `values` and takes the nearest-rank percentiles: the p-th is the ⌈p·n⌉-th smallest.
+    pub fn of(mut values: Vec<f64>) -> Self {
+        values.sort_by(f64::total_cmp);
+        let n = values.len();
+        let rank =
+            |p: f64| if n == 0 { f64::NAN } else { values[((p * n as f64).ceil() as usize).clamp(1, n) - 1] };
+        Self { count: n as u64, p50: rank(0.5), p99: rank(0.99), p999: rank(0.999), max: rank(1.0) }
+    }
+}
+
+/// How many disagreements each explanation accounted for (each counted once, under the first that holds,
+/// in this order).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Explained {
+    /// Tangency with either primitive.
+    pub graze: u64,
+    /// Both primitives hit at nearly the same t.
+    pub tie: u64,
+    /// The ray starts on either primitive's surface.
+    pub start: u64,
+    /// The light lies on the blocker's surface (shadow rays).
+    pub light: u64,
+    /// The light is within rounding of the surface's tangent plane (shadow rays).
+    pub facing: u64,
+    /// Explained only with the tolerances widened by the f32 ray's measured divergence.
+    pub diverge: u64,
+}
+
+impl Explained {
+    /// All explained disagreements.
+    pub fn total(&self) -> u64 {
+        self.graze + self.tie + self.start + self.light + self.facing + self.diverge
+    }
+    fn add(&mut self, o: &Explained) {
+        self.graze += o.graze;
+        self.tie += o.tie;
+        self.start += o.start;
+        self.light += o.light;
+        self.facing += o.facing;
+        self.diverge += o.diverge;
+    }
+    fn count(&mut self, r: Reason) {
+        match r {
+            Reason::Graze => self.graze += 1,
+            Reason::Tie => self.tie += 1,
+            Reason::Start => self.start += 1,
+            Reason::Light => self.light += 1,
+            Reason::Facing => self.facing += 1,
+            Reason::Diverge => self.diverge += 1,
+        }
+    }
+}
+
+/// Why a disagreement is explained.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Reason {
+    Graze,
+    Tie,
+    Start,
+    Light,
+    Facing,
+    Diverge,
+}
+
+/// Closest-hit rays of one kind (primary or mirror) compared.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct HitStats {
+    /// Rays traced in both precisions.
+    pub rays: u64,
+    /// Both hit the same primitive.
+    pub hits_agree: u64,
+    /// Both missed.
+    pub misses_agree: u64,
+    /// One hit, the other missed.
+    pub hit_miss_disagree: u64,
+    /// Both hit, different primitives.
+    pub id_disagree: u64,
+    /// Disagreements explained, by reason.
+    pub explained: Explained,
+    /// Disagreements not explained.
+    pub unexplained: u64,
+    /// Self-hits (secondary rays only).
+    pub self_hits: u64,
+    /// Relative t error over the rays whose hits agree.
+    pub t_rel_err: Percentiles,
+}
+
+impl HitStats {
+    /// All disagreements.
+    pub fn disagree(&self) -> u64 {
+        self.hit_miss_disagree + self.id_disagree
+    }
+}
+
+/// Shadow rays compared.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct ShadowStats {
+    /// Shadow rays traced in both precisions (lights in front of the surface in both).
+    pub rays: u64,
+    /// Lights in front of the surface in one precision only (a shadow ray in one only).
+    pub lit_disagree: u64,
+    /// Occluded in one precision only.
+    pub occluded_disagree: u64,
+    /// Disagreements explained, by reason.
+    pub explained: Explained,
+    /// Disagreements not explained.
+    pub unexplained: u64,
+    /// Shadow rays blocked by their own departure primitive, or at their origin, in one precision only.
+    pub self_hits: u64,
+}
+
+impl ShadowStats {
+    /// All disagreements.
+    pub fn disagree(&self) -> u64 {
+        self.lit_disagree + self.occluded_disagree
+    }
+    fn add(&mut self, o: &ShadowStats) {
+        self.rays += o.rays;
+        self.lit_disagree += o.lit_disagree;
+        self.occluded_disagree += o.occluded_disagree;
+        self.explained.add(&o.explained);
+        self.unexplained += o.unexplained;
+        self.self_hits += o.self_hits;
+    }
+}
+
+/// One unexplained disagreement or self-hit, for the report.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Example {
+    /// `primary`, `reflection` or `shadow`, with ` self-hit` for self-hits.
+    pub kind: String,
+    /// Pixel column.
+    pub x: u32,
+    /// Pixel row.
+    pub y: u32,
+    /// The light's index for shadow rays.
+    pub light: Option<usize>,
+    /// The f32 hit (or shadow blocker): scene-file id, −1 for none, and t.
+    pub f32_hit: (i64, f64),
+    /// The f64 twin's.
+    pub f64_hit: (i64, f64),
+}
+
+/// The comparison of one scene.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Report {
+    /// The scene's name (as given to [`run`]).
+    pub scene: String,
+    /// Image columns.
+    pub width: u32,
+    /// Image rows.
+    pub height: u32,
+    /// Packet width of the f32 primary pass.
+    pub lanes: usize,
+    /// Primitives in the scene.
+    pub primitives: usize,
+    /// Whether the twin searched spheres through its BVH.
+    pub twin_bvh: bool,
+    /// Camera rays.
+    pub primary: HitStats,
+    /// Shadow rays (with secondary rays).
+    pub shadow: Option<ShadowStats>,
+    /// Mirror rays (with secondary rays).
+    pub reflection: Option<HitStats>,
+    /// Some unexplained disagreements and self-hits.
+    pub examples: Vec<Example>,
+    /// Wall-clock seconds of the whole comparison (compile and twin build included).
+    pub seconds: f64,
+}
+
+impl Report {
+    /// Unexplained disagreements of every kind.
+    pub fn unexplained(&self) -> u64 {
+        self.primary.unexplained
+            + self.shadow.map_or(0, |s| s.unexplained)
+            + self.reflection.map_or(0, |r| r.unexplained)
+    }
+
+    /// Self-hits of every kind.
+    pub fn self_hits(&self) -> u64 {
+        self.shadow.map_or(0, |s| s.self_hits) + self.reflection.map_or(0, |r| r.self_hits)
+    }
+
+    /// One JSON object (one line): the keys are listed in README.md's `accuracy` section.
+    pub fn to_json(&self) -> String {
+        let mut o = String::from("{");
+        let mut put = |k: &str, v: String| {
+            if o.len() > 1 {
+                o.push(',');
+            }
+            let _ = write!(o, "\"{k}\":{v}");
+        };
+        put("scene", json_str(&self.scene));
+        put("width", self.width.to_string());
+        put("height", self.height.to_string());
+        put("lanes", self.lanes.to_string());
+        put("primitives", self.primitives.to_string());
+        put("twin_bvh", self.twin_bvh.to_string());
+        put("secondary", self.shadow.is_some().to_string());
+        put("k_graze", num(K_GRAZE));
+        put("k_tie", num(K_TIE));
+        put("k_start", num(K_START));
+        put("k_self", num(K_SELF));
+        put("eps32", num(EPS32));
+        let p = &self.primary;
+        put("rays", p.rays.to_string());
+        put("hits_agree", p.hits_agree.to_string());
+        put("misses_agree", p.misses_agree.to_string());
+        put("hit_miss_disagree", p.hit_miss_disagree.to_string());
+        put("id_disagree", p.id_disagree.to_string());
+        put("explained_disagree", p.explained.total().to_string());
+        put("explained_graze", p.explained.graze.to_string());
+        put("explained_tie", p.explained.tie.to_string());
+        put("unexplained_disagree", p.unexplained.to_string());
+        put("t_rel_err_count", p.t_rel_err.count.to_string());
+        put("t_rel_err_p50", num(p.t_rel_err.p50));
+        put("t_rel_err_p99", num(p.t_rel_err.p99));
+        put("t_rel_err_p999", num(p.t_rel_err.p999));
+        put("t_rel_err_max", num(p.t_rel_err.max));
+        put("self_hits", self.self_hits().to_string());
+        put("unexplained_total", self.unexplained().to_string());
+        if let Some(s) = &self.shadow {
+            put("shadow_rays", s.rays.to_string());
+            put("shadow_disagree", s.disagree().to_string());
+            put("shadow_lit_disagree", s.lit_disagree.to_string());
+            put("shadow_occluded_disagree", s.occluded_disagree.to_string());
+            put("shadow_explained", s.explained.total().to_string());
+            put("shadow_explained_graze", s.explained.graze.to_string());
+            put("shadow_explained_start", s.explained.start.to_string());
+            put("shadow_explained_light", s.explained.light.to_string());
+            put("shadow_explained_facing", s.explained.facing.to_string());
+            put("shadow_explained_diverge", s.explained.diverge.to_string());
+            put("shadow_unexplained", s.unexplained.to_string());
+            put("shadow_self_hits", s.self_hits.to_string());
+        }
+        if let Some(r) = &self.reflection {
+            put("reflection_rays", r.rays.to_string());
+            put("reflection_hits_agree", r.hits_agree.to_string());
+            put("reflection_disagree", r.disagree().to_string());
+            put("reflection_hit_miss_disagree", r.hit_miss_disagree.to_string());
+            put("reflection_id_disagree", r.id_disagree.to_string());
+            put("reflection_explained", r.explained.total().to_string());
+            put("reflection_explained_graze", r.explained.graze.to_string());
+            put("reflection_explained_tie", r.explained.tie.to_string());
+            put("reflection_explained_start", r.explained.start.to_string());
+            put("reflection_explained_diverge", r.explained.diverge.to_string());
+            put("reflection_unexplained", r.unexplained.to_string());
+            put("reflection_self_hits", r.self_hits.to_string());
+            put("reflection_t_rel_err_p50", num(r.t_rel_err.p50));
+            put("reflection_t_rel_err_p99", num(r.t_rel_err.p99));
+            put("reflection_t_rel_err_p999", num(r.t_rel_err.p999));
+            put("reflection_t_rel_err_max", num(r.t_rel_err.max));
+        }
+        let examples: Vec<String> = self
+            .examples
+            .iter()
+            .map(|e| {
+                format!(
+                    "{{\"kind\":{},\"x\":{},\"y\":{},\"light\":{},\"f32_prim\":{},\"f32_t\":{},\"f64_prim\":{},\"f64_t\":{}}}",
+                    json_str(&e.kind),
+                    e.x,
+                    e.y,
+                    e.light.map_or("null".to_owned(), |l| l.to_string()),
+                    e.f32_hit.0,
+                    num(e.f32_hit.1),
+                    e.f64_hit.0,
+                    num(e.f64_hit.1)
+                )
+            })
+            .collect();
+        put("examples", format!("[{}]", examples.join(",")));
+        put("seconds", format!("{:.3}", self.seconds));
+        o.push('}');
+        o
+    }
+
+    /// The human-readable table.
+    pub fn table(&self) -> String {
+        let mut o = String::new();
+        let _ = writeln!(
+            o,
+            "{}: {}x{}, {} primitives, f32 packets of {} against the f64 twin ({}), {:.2} s",
+            self.scene,
+            self.width,
+            self.height,
+            self.primitives,
+            self.lanes,
+            if self.twin_bvh { "BVH" } else { "brute force" },
+            self.seconds
+        );
+        let _ = writeln!(
+            o,
+            "tolerances in eps32 = 2^-24 of the magnitudes involved: graze/facing k = {K_GRAZE}, tie k = {K_TIE}, \
+             start/light k = {K_START}, self-hit k = {K_SELF}"
+        );
+        let _ = writeln!(
+            o,
+            "{:<10} {:>10} {:>10} {:>9} {:>8} {:>9} {:>11} {:>9}   {:>9} {:>9} {:>9}",
+            "rays",
+            "count",
+            "agree",
+            "hit/miss",
+            "id",
+            "explained",
+            "unexplained",
+            "self-hits",
+            "t err p50",
+            "p99",
+            "max"
+        );
+        let hit_row = |o: &mut String, name: &str, s: &HitStats| {
+            let _ = writeln!(
+                o,
+                "{:<10} {:>10} {:>10} {:>9} {:>8} {:>9} {:>11} {:>9}   {:>9} {:>9} {:>9}",
+                name,
+                s.rays,
+                s.hits_agree + s.misses_agree,
+                s.hit_miss_disagree,
+                s.id_disagree,
+                s.explained.total(),
+                s.unexplained,
+                if name == "primary" { "-".to_owned() } else { s.self_hits.to_string() },
+                sci(s.t_rel_err.p50),
+                sci(s.t_rel_err.p99),
+                sci(s.t_rel_err.max)
+            );
+        };
+        hit_row(&mut o, "primary", &self.primary);
+        if let Some(s) = &self.shadow {
+            let _ = writeln!(
+                o,
+                "{:<10} {:>10} {:>10} {:>9} {:>8} {:>9} {:>11} {:>9}",
+                "shadow",
+                s.rays,
+                s.rays - s.occluded_disagree,
+                s.occluded_disagree,
+                format!("lit {}", s.lit_disagree),
+                s.explained.total(),
+                s.unexplained,
+                s.self_hits
+            );
+        }
+        if let Some(r) = &self.reflection {
+            hit_row(&mut o, "reflection", r);
+        }
+        let why = |e: &Explained| {
+            format!(
+                "graze {}, tie {}, start {}, light {}, facing {}, diverge {}",
+                e.graze, e.tie, e.start, e.light, e.facing, e.diverge
+            )
+        };
+        let _ = writeln!(o, "explained primary: {}", why(&self.primary.explained));
+        if let Some(s) = &self.shadow {
+            let _ = writeln!(o, "explained shadow: {}", why(&s.explained));
+        }
+        if let Some(r) = &self.reflection {
+            let _ = writeln!(o, "explained reflection: {}", why(&r.explained));
+        }
+        let _ = writeln!(
+            o,
+            "primary t rel err: {} agreeing hits, p99.9 {}; unexplained {}, self-hits {}",
+            self.primary.t_rel_err.count,
+            sci(self.primary.t_rel_err.p999),
+            self.unexplained(),
+            self.self_hits()
+        );
+        for e in &self.examples {
+            let light = e.light.map_or(String::new(), |l| format!(" light {l}"));
+            let _ = writeln!(
+                o,
+                "  {} at ({}, {}){light}: f32 {} t={} / f64 {} t={}",
+                e.kind, e.x, e.y, e.f32_hit.0, e.f32_hit.1, e.f64_hit.0, e.f64_hit.1
+            );
+        }
+        o
+    }
+}
+
+fn sci(v: f64) -> String {
+    if v.is_nan() {
+        "-".to_owned()
+    } else {
+        format!("{v:.2e}")
+    }
+}
+
+/// A JSON number, `null` when not finite.
+fn num(v: f64) -> String {
+    if v.is_finite() {
+        format!("{v:e}")
+    } else {
+        "null".to_owned()
+    }
+}
+
+/// A JSON string.
+fn json_str(s: &str) -> String {
+    let mut o = String::from("\"");
+    for c in s.chars() {
+        match c {
+            '"' => o.push_str("\\\""),
+            '\\' => o.push_str("\\\\"),
+            c if (c as u32) < 0x20 => {
+                let _ = write!(o, "\\u{:04x}", c as u32);
+            }
+            c => o.push(c),
+        }
+    }
+    o.push('"');
+    o
+}
+
+/// Compiles `desc` for the f32 renderer and builds its f64 [`Twin`], then compares them ([`compare`]).
+/// `name` labels the report. Fails only on a camera that cannot form an image (or a thread pool that cannot
+/// start).
+pub fn run(name: &str, desc: &SceneDesc, opts: &Options) -> Result<Report> {
+    let start = Instant::now();
+    let pool = thread_pool(opts.threads)?;
+    let (scene, twin) = pool.install(|| rayon::join(|| Scene::compile(desc), || Twin::new(desc)));
+    let mut report = compare(name, &scene?, &twin?, opts, &pool);
+    report.seconds = start.elapsed().as_secs_f64();
+    Ok(report)
+}
+
+/// Compares the compiled f32 `scene` with its `twin` (both from one [`SceneDesc`]) on `pool`: every pixel
+/// centre's primary ray, and with `opts.secondary` the shadow and mirror rays of every pixel whose two
+/// primary hits agree on the primitive.
+pub fn compare(name: &str, scene: &Scene, twin: &Twin, opts: &Options, pool: &rayon::ThreadPool) -> Report {
+    let start = Instant::now();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let mut hits = PrimaryHits::new(width, height);
+    trace_primary_lanes(scene, opts.lanes, pool, &mut hits);
+    let cmp = Comparer { scene, twin, hits: &hits, opts };
+    let acc = pool.install(|| {
+        (0..height)
+            .into_par_iter()
+            .map(|y| {
+                let mut acc = Acc::default();
+                for x in 0..width {
+                    cmp.pixel(x, y, &mut acc);
+                }
+                acc
+            })
+            .reduce(Acc::default, |a, b| a.merge(b, opts.max_examples))
+    });
+    let mut examples = acc.examples;
+    examples.sort_by(|a, b| (&a.kind, a.y, a.x).cmp(&(&b.kind, b.y, b.x)));
+    Report {
+        scene: name.to_owned(),
+        width,
+        height,
+        lanes: opts.lanes,
+        primitives: twin.len(),
+        twin_bvh: twin.has_bvh(),
+        primary: acc.primary.finish(),
+        shadow: opts.secondary.then_some(acc.shadow),
+        reflection: opts.secondary.then(|| acc.reflection.finish()),
+        examples,
+        seconds: start.elapsed().as_secs_f64(),
+    }
+}
+
+/// [`HitStats`] being gathered: the t errors as a list.
+#[derive(Default)]
+struct HitAcc {
+    rays: u64,
+    hits_agree: u64,
+    misses_agree: u64,
+    hit_miss_disagree: u64,
+    id_disagree: u64,
+    explained: Explained,
+    unexplained: u64,
+    self_hits: u64,
+    t_rel_err: Vec<f64>,
+}
+
+impl HitAcc {
+    fn merge(&mut self, mut o: HitAcc) {
+        self.rays += o.rays;
+        self.hits_agree += o.hits_agree;
+        self.misses_agree += o.misses_agree;
+        self.hit_miss_disagree += o.hit_miss_disagree;
+        self.id_disagree += o.id_disagree;
+        self.explained.add(&o.explained);
+        self.unexplained += o.unexplained;
+        self.self_hits += o.self_hits;
+        self.t_rel_err.append(&mut o.t_rel_err);
+    }
+    fn finish(self) -> HitStats {
+        HitStats {
+            rays: self.rays,
+            hits_agree: self.hits_agree,
+            misses_agree: self.misses_agree,
+            hit_miss_disagree: self.hit_miss_disagree,
+            id_disagree: self.id_disagree,
+            explained: self.explained,
+            unexplained: self.unexplained,
+            self_hits: self.self_hits,
+            t_rel_err: Percentiles::of(self.t_rel_err),
+        }
+    }
+}
+
+/// Everything gathered over some rows.
+#[derive(Default)]
+struct Acc {
+    primary: HitAcc,
+    shadow: ShadowStats,
+    reflection: HitAcc,
+    examples: Vec<Example>,
+}
+
+impl Acc {
+    fn merge(mut self, o: Acc, max_examples: usize) -> Acc {
+        self.primary.merge(o.primary);
+        self.shadow.add(&o.shadow);
+        self.reflection.merge(o.reflection);
+        self.examples.extend(o.examples);
+        // Keep the first examples of each kind in image order.
+        self.examples.sort_by(|a, b| (&a.kind, a.y, a.x).cmp(&(&b.kind, b.y, b.x)));
+        let mut seen: Vec<(String, usize)> = Vec::new();
+        self.examples.retain(|e| {
+            let n = match seen.iter_mut().find(|(k, _)| *k == e.kind) {
+                Some((_, n)) => n,
+                None => {
+                    seen.push((e.kind.clone(), 0));
+                    &mut seen.last_mut().expect("pushed").1
+                }
+            };
+            *n += 1;
+            *n <= max_examples
+        });
+        self
+    }
+
+    fn example(&mut self, kind: &str, pixel: (u32, u32), light: Option<usize>, a: Hit64, b: Hit64) {
+        push_example(&mut self.examples, kind, pixel, light, a, b);
+    }
+}
+
+fn push_example(
+    examples: &mut Vec<Example>,
+    kind: &str,
+    (x, y): (u32, u32),
+    light: Option<usize>,
+    a: Hit64,
+    b: Hit64,
+) {
+    let id = |h: Hit64| if h.is_hit() { i64::from(h.prim) } else { -1 };
+    examples.push(Example {
+        kind: kind.to_owned(),
+        x,
+        y,
+        light,
+        f32_hit: (id(a), a.t),
+        f64_hit: (id(b), b.t),
+    });
+}
+
+fn len(v: V3<f64>) -> f64 {
+    v.dot(v).sqrt()
+}
+
+/// `normal` turned toward rays along `dir`, and whether it was flipped (hit from inside): shade.rs's
+/// `facing`, which is private, replicated with the same operations (`n·d > 0` flips).
+fn facing<F: crate::math::Real>(normal: V3<F>, dir: V3<F>) -> (V3<F>, bool)
+where
+    F::Mask: Into<bool>,
+{
+    let inside: bool = normal.dot(dir).gt(F::splat(0.0)).into();
+    (if inside { -normal } else { normal }, inside)
+}
+
+/// One shadow ray toward `light` from `point` with the facing `normal`: shade.rs's `Tracer::direct`
+/// construction (private there), replicated with the same operations in the same order: `to_light = light −
+/// point`, `dist = sqrt(to_light·to_light)`, unit `l = to_light · (1 / dist)`, `cos = normal·l`; a ray is
+/// traced only where `cos > 0`, over `[0, dist)`.
+fn shadow_ray<F: crate::math::Real>(point: V3<F>, normal: V3<F>, light: V3<F>) -> (Ray<F>, F, F) {
+    let to_light = light - point;
+    let dist2 = to_light.dot(to_light);
+    let dist = dist2.sqrt();
+    let l = to_light * (F::splat(1.0) / dist);
+    (Ray::new(point, l), dist, normal.dot(l))
+}
+
+/// The mirror ray's direction: shade.rs's `Tracer::secondary` construction (private there), replicated:
+/// `normalize(d − n·(2·(d·n)))` with the facing normal.
+fn mirror<F: crate::math::Real>(d: V3<F>, n: V3<F>) -> V3<F> {
+    (d - n * (F::splat(2.0) * d.dot(n))).normalize()
+}
+
+/// Whether a secondary ray leaving primitive `departed` self-hits in one precision only: its hit (`a` in
+/// f32, `b` in f64) is the departure primitive itself, or lies within `tol` of the origin, in one and not in
+/// the other. Both hitting the same other primitive is agreement, however close to the origin (a neighbour
+/// closer than the f32 rounding of the origin's position).
+fn is_self_hit(a: Hit64, b: Hit64, departed: u32, tol: f64) -> bool {
+    if a.is_hit() && a.prim == b.prim && a.prim != departed {
+        return false;
+    }
+    let selfish = |h: Hit64| h.is_hit() && (h.prim == departed || h.t <= tol);
+    selfish(a) != selfish(b)
+}
+
+/// The per-pixel comparison.
+struct Comparer<'a> {
+    scene: &'a Scene,
+    twin: &'a Twin,
+    hits: &'a PrimaryHits,
+    opts: &'a Options,
+}
+
+impl Comparer<'_> {
+    /// The f32 primitive's scene-file id ([`NO_PRIM`] stays).
+    fn file_id(&self, storage: u32) -> u32 {
+        if storage == NO_PRIM {
+            NO_PRIM
+        } else {
+            self.scene.geometry.file_id(storage)
+        }
+    }
+
+    fn pixel(&self, x: u32, y: u32, acc: &mut Acc) {
+        let at = y as usize * self.hits.width as usize + x as usize;
+        let (storage, t32) = (self.hits.prim[at], self.hits.t[at]);
+        let h32 = Hit64 { t: f64::from(t32), prim: self.file_id(storage) };
+        let ray64 = self.twin.camera_ray(f64::from(x) + 0.5, f64::from(y) + 0.5);
+        let h64 = self.twin.intersect(&ray64, Departure::CAMERA, f64::INFINITY);
+        self.compare_hits(
+            &mut acc.primary,
+            &mut acc.examples,
+            "primary",
+            (x, y),
+            &ray64,
+            Departure::CAMERA,
+            h32,
+            h64,
+            Slack::default(),
+        );
+        if !self.opts.secondary || !h64.is_hit() || h32.prim != h64.prim {
+            return;
+        }
+        // Each precision's own hit point and facing normal: the f32 ray is the one the primary pass traced
+        // (the same f64 direction rounded once, as `render::for_each_packet` makes it).
+        let g = &self.scene.geometry;
+        let ray32 = self.scene.camera_f64.ray_f32(x as f32 + 0.5, y as f32 + 0.5);
+        let sp = g.surface(&ray32, t32, storage);
+        let (n32, inside32) = facing(sp.normal, ray32.dir);
+        let from32 = Departure { prim: storage, inward: inside32 };
+        let (p64, outward64) = self.twin.surface(&ray64, h64.t, h64.prim);
+        let (n64, inside64) = facing(outward64, ray64.dir);
+        let from64 = Departure { prim: h64.prim, inward: inside64 };
+        // The f32 point in the twin's camera-relative frame: relative to the f32 ray's own origin (the eye in
+        // whatever frame the f32 scene lives in), so this holds before and after compile moves to camera space.
+        let eye32 = ray32.origin.to_f64();
+        let o32 = sp.point.to_f64() - eye32;
+        let origin_slack = len(o32 - p64);
+        // A hit this close to the origin is a re-hit of the surface the ray starts on: the f32 origin is off
+        // by a few ε32 of its distance from the eye.
+        let self_tol = K_SELF * EPS32 * len(p64);
+
+        for (k, light32) in self.scene.lights.iter().enumerate() {
+            let (s32, dist32, cos32) = shadow_ray(sp.point, n32, light32.position);
+            let (s64, dist64, cos64) = shadow_ray(p64, n64, self.twin.lights[k]);
+            let (lit32, lit64) = (cos32 > 0.0, cos64 > 0.0);
+            if !lit32 && !lit64 {
+                continue;
+            }
+            let dir_slack = len(s32.dir.to_f64() - s64.dir) + len(n32.to_f64() - n64);
+            if lit32 != lit64 {
+                acc.shadow.lit_disagree += 1;
+                if cos64.abs() <= K_GRAZE * EPS32 {
+                    acc.shadow.explained.count(Reason::Facing);
+                } else if cos64.abs() <= K_GRAZE * EPS32 + dir_slack {
+                    acc.shadow.explained.count(Reason::Diverge);
+                } else {
+                    acc.shadow.unexplained += 1;
+                    let (a, b) =
+                        (Hit64 { t: f64::from(cos32), prim: NO_PRIM }, Hit64 { t: cos64, prim: NO_PRIM });
+                    acc.example("shadow facing", (x, y), Some(k), a, b);
+                }
+                continue;
+            }
+            acc.shadow.rays += 1;
+            let blocked32 = g.occluded(&s32, from32, dist32);
+            let b32 = g.intersect(&s32, from32, dist32);
+            let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
+            let b64 = self.twin.intersect(&s64, from64, dist64);
+            if is_self_hit(b32, b64, h64.prim, self_tol) {
+                acc.shadow.self_hits += 1;
+                acc.example("shadow self-hit", (x, y), Some(k), b32, b64);
+            }
+            if blocked32 == b64.is_hit() {
+                continue;
+            }
+            acc.shadow.occluded_disagree += 1;
+            let slack = Slack { origin: origin_slack, dir: len(s32.dir.to_f64() - s64.dir) };
+            let light64 = self.twin.lights[k];
+            let why = |s: Slack| {
+                let prims = [b32.prim, b64.prim];
+                if prims.iter().any(|&p| self.twin.grazing(p, &s64, K_GRAZE, s)) {
+                    Some(Reason::Graze)
+                } else if prims.iter().any(|&p| self.twin.near_surface(p, s64.origin, K_START, s.origin)) {
+                    Some(Reason::Start)
+                } else if prims.iter().any(|&p| self.twin.near_surface(p, light64, K_START, s.at(dist64))) {
+                    Some(Reason::Light)
+                } else {
+                    None
+                }
+            };
+            match why(Slack::default()).or_else(|| why(slack).map(|_| Reason::Diverge)) {
+                Some(r) => acc.shadow.explained.count(r),
+                None => {
+                    acc.shadow.unexplained += 1;
+                    acc.example("shadow", (x, y), Some(k), b32, b64);
+                }
+            }
+        }
+
+        let r32 = Ray::new(sp.point, mirror(ray32.dir, n32));
+        let m32 = g.intersect(&r32, from32, f32::INFINITY);
+        let m32 = Hit64 { t: f64::from(m32.t), prim: self.file_id(m32.prim) };
+        let r64 = Ray::new(p64, mirror(ray64.dir, n64));
+        let m64 = self.twin.intersect(&r64, from64, f64::INFINITY);
+        let slack = Slack { origin: origin_slack, dir: len(r32.dir.to_f64() - r64.dir) };
+        self.compare_hits(
+            &mut acc.reflection,
+            &mut acc.examples,
+            "reflection",
+            (x, y),
+            &r64,
+            from64,
+            m32,
+            m64,
+            slack,
+        );
+        if is_self_hit(m32, m64, h64.prim, self_tol) {
+            acc.reflection.self_hits += 1;
+            acc.example("reflection self-hit", (x, y), None, m32, m64);
+        }
+    }
+
+    /// Compares a closest-hit ray's two answers: `a` from f32, `b` from the twin along `ray` (leaving
+    /// `from`), counting it into `st` and explaining a disagreement.
+    #[allow(clippy::too_many_arguments)]
+    fn compare_hits(
+        &self,
+        st: &mut HitAcc,
+        examples: &mut Vec<Example>,
+        kind: &str,
+        pixel: (u32, u32),
+        ray: &Ray<f64>,
+        from: Departure,
+        a: Hit64,
+        b: Hit64,
+        slack: Slack,
+    ) {
+        st.rays += 1;
+        if a.prim == b.prim {
+            if b.is_hit() {
+                st.hits_agree += 1;
+                st.t_rel_err.push(if a.t == b.t { 0.0 } else { (a.t - b.t).abs() / b.t });
+            } else {
+                st.misses_agree += 1;
+            }
+            return;
+        }
+        if a.is_hit() && b.is_hit() {
+            st.id_disagree += 1;
+        } else {
+            st.hit_miss_disagree += 1;
+        }
+        let twin = self.twin;
+        let o = len(ray.origin);
+        let secondary = from.prim != NO_PRIM;
+        let why = |s: Slack| {
+            let prims = [a.prim, b.prim];
+            if prims.iter().any(|&p| twin.grazing(p, ray, K_GRAZE, s)) {
+                return Some(Reason::Graze);
+            }
+            if let (Some(ta), Some(tb)) = (twin.hit_of(a.prim, ray, from), twin.hit_of(b.prim, ray, from)) {
+                let t = ta.max(tb);
+                if (ta - tb).abs() <= K_TIE * EPS32 * (o + t) + s.at(t) {
+                    return Some(Reason::Tie);
+                }
+            }
+            if secondary && prims.iter().any(|&p| twin.near_surface(p, ray.origin, K_START, s.origin)) {
+                return Some(Reason::Start);
+            }
+            None
+        };
+        let diverged = || (slack != Slack::default()).then(|| why(slack)).flatten().map(|_| Reason::Diverge);
+        match why(Slack::default()).or_else(diverged) {
+            Some(r) => st.explained.count(r),
+            None => {
+                st.unexplained += 1;
+                push_example(examples, kind, pixel, None, a, b);
+            }
+        }
+    }
+}

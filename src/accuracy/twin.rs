@@ -1,0 +1,493 @@
+//! The f64 twin: an independent f64 tracer over the exact scene description, the reference the f32
+//! renderer is measured against.
+//!
+//! It reads the [`SceneDesc`] (already f64) and never the compiled f32 scene, and works in the renderer's
+//! camera-relative space: every position `p` is stored as `p − eye`, computed in f64 (sphere centres, shape
+//! translations, polygon vertices, lights), and camera rays start at exactly 0 with f64 unit directions from
+//! [`Camera<f64>::ray`], not rounded to f32. Intersections run the generic kernels of [`crate::geometry`]
+//! instantiated at f64 ([`intersect_sphere`], [`Shape::intersect`], [`intersect_triangle`]), with the
+//! renderer's rules: closest hit by the total order (smaller t, then lower id), and a ray that leaves a
+//! primitive ([`Departure`]) never hits it again except, for a solid left toward its inside, at its exit root.
+//!
+//! Ids are scene-file ids: spheres `0..` in file order, then shapes, then polygons (one id per polygon).
+//! Spheres are searched through the twin's own BVH ([`super::bvh64`]) from [`TWIN_BVH_MIN_SPHERES`] on;
+//! shapes and polygons brute force (planes are unbounded).
+
+use std::ops::Range;
+
+use glam::{DAffine3, DVec3};
+
+use crate::camera::{Camera, CameraError};
+use crate::geometry::polygon::{newell_normal, triangulate};
+use crate::geometry::{
+    far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, Shape,
+    ShapeKind, NO_PRIM,
+};
+use crate::math::affine::normal_to_world;
+use crate::math::{Affine, V3};
+use crate::scene::desc::SceneDesc;
+
+use super::bvh64::Bvh64;
+
+/// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
+pub const EPS32: f64 = f32::EPSILON as f64 / 2.0;
+
+/// From this many spheres on the twin searches them through its own BVH; below, brute force.
+pub const TWIN_BVH_MIN_SPHERES: usize = 16;
+
+/// A closest hit in f64: its parameter (`inf` on a miss) and scene-file id ([`NO_PRIM`] on a miss).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Hit64 {
+    /// Ray parameter (the direction's units).
+    pub t: f64,
+    /// Scene-file id.
+    pub prim: u32,
+}
+
+impl Hit64 {
+    /// No hit.
+    pub const MISS: Hit64 = Hit64 { t: f64::INFINITY, prim: NO_PRIM };
+
+    /// True when something was hit.
+    pub fn is_hit(&self) -> bool {
+        self.prim != NO_PRIM
+    }
+
+    /// Takes `(prim, t)` when it is closer by the renderer's total order: smaller t, or equal t and a lower id.
+    #[inline]
+    pub fn update(&mut self, prim: u32, t: f64) {
+        if t < self.t || (t == self.t && prim < self.prim) {
+            *self = Hit64 { t, prim };
+        }
+    }
+}
+
+/// How far the f32 ray under test may stray from the twin's f64 ray, measured per ray: the explanations
+/// widen their tolerances by it (a secondary ray starts from each precision's own hit point, along its own
+/// normal). Zero for camera rays.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Slack {
+    /// Distance between the two origins.
+    pub origin: f64,
+    /// Distance between the two unit directions.
+    pub dir: f64,
+}
+
+impl Slack {
+    /// How far apart the two rays can be at distance `s` along them.
+    pub fn at(&self, s: f64) -> f64 {
+        self.origin + self.dir * s.abs()
+    }
+}
+
+/// One triangle of a polygon, camera-relative.
+#[derive(Clone, Copy, Debug)]
+struct Tri64 {
+    v0: V3<f64>,
+    e1: V3<f64>,
+    e2: V3<f64>,
+    /// The polygon's scene-file id.
+    id: u32,
+    /// Unit vertex normals (NFF `pp`), to interpolate.
+    normals: Option<[V3<f64>; 3]>,
+}
+
+/// A polygon's outline and plane, camera-relative.
+#[derive(Clone, Debug)]
+struct Polygon64 {
+    /// Its triangles in [`Twin::tris`].
+    tris: Range<usize>,
+    /// Unit geometric normal (Newell, right-hand rule).
+    normal: V3<f64>,
+    /// The vertices in order.
+    outline: Vec<V3<f64>>,
+}
+
+/// The f64 reference scene: see the module documentation.
+#[derive(Clone, Debug)]
+pub struct Twin {
+    /// The camera in f64 (world space; [`Twin::camera_ray`] makes its rays camera-relative).
+    pub camera: Camera<f64>,
+    /// The eye in world space: the origin of the twin's space.
+    pub eye: DVec3,
+    /// Light positions, camera-relative.
+    pub lights: Vec<V3<f64>>,
+    spheres: Vec<(V3<f64>, f64)>,
+    shapes: Vec<Shape<f64>>,
+    tris: Vec<Tri64>,
+    polygons: Vec<Polygon64>,
+    bvh: Option<Bvh64>,
+}
+
+fn v(p: DVec3) -> V3<f64> {
+    V3::from(p)
+}
+
+fn len(p: V3<f64>) -> f64 {
+    p.dot(p).sqrt()
+}
+
+/// Sum of the column lengths of a linear map: a bound on how much it stretches any vector (‖L·x‖ ≤ this ·
+/// ‖x‖).
+fn norm_bound(a: &Affine<f64>) -> f64 {
+    a.cols.iter().map(|c| len(*c)).sum()
+}
+
+impl Twin {
+    /// The twin of `desc`, with a sphere BVH from [`TWIN_BVH_MIN_SPHERES`] spheres on.
+    pub fn new(desc: &SceneDesc) -> Result<Self, CameraError> {
+        Self::with_bvh(desc, desc.spheres.len() >= TWIN_BVH_MIN_SPHERES)
+    }
+
+    /// The twin of `desc`, searching spheres through its BVH when `bvh` is true (and every sphere is finite),
+    /// else brute force: the two give the same hits bit for bit (tests/accuracy.rs).
+    pub fn with_bvh(desc: &SceneDesc, bvh: bool) -> Result<Self, CameraError> {
+        let camera = Camera::new(&desc.camera)?;
+        let eye = desc.camera.eye;
+        let spheres: Vec<(V3<f64>, f64)> =
+            desc.spheres.iter().map(|s| (v(s.center - eye), s.radius)).collect();
+        let shapes = desc
+            .shapes
+            .iter()
+            .map(|s| {
+                // The placement moved by −eye: the translation is the only part that changes.
+                let m = DAffine3 {
+                    matrix3: s.world_from_object.matrix3,
+                    translation: s.world_from_object.translation - eye,
+                };
+                Shape {
+                    kind: s.kind,
+                    center: v(m.translation),
+                    object_from_world: Affine::from_glam(&m.inverse()),
+                    normal_to_world: normal_to_world(&m),
+                    material: s.material,
+                }
+            })
+            .collect::<Vec<_>>();
+        let base = (spheres.len() + shapes.len()) as u32;
+        let (mut tris, mut polygons) = (Vec::new(), Vec::new());
+        for (k, p) in desc.polygons.iter().enumerate() {
+            let vertices: Vec<DVec3> = p.vertices.iter().map(|&x| x - eye).collect();
+            let n = vertices.len() as u32;
+            // compile's rule: a polygon the readers would have rejected still gets its id, as a plain fan.
+            let triangles =
+                triangulate(&vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect());
+            let normals: Option<Vec<V3<f64>>> = p
+                .normals
+                .as_ref()
+                .filter(|ns| ns.len() == vertices.len())
+                .map(|ns| ns.iter().map(|x| v(x.normalize_or_zero())).collect());
+            let first = tris.len();
+            for &[a, b, c] in &triangles {
+                let [a, b, c] = [a, b, c].map(|i| i as usize);
+                let at = |i: usize| v(vertices[i]);
+                tris.push(Tri64 {
+                    v0: at(a),
+                    e1: at(b) - at(a),
+                    e2: at(c) - at(a),
+                    id: base + k as u32,
+                    normals: normals.as_ref().map(|ns| [ns[a], ns[b], ns[c]]),
+                });
+            }
+            polygons.push(Polygon64 {
+                tris: first..tris.len(),
+                normal: v(newell_normal(&vertices).normalize_or_zero()),
+                outline: vertices.iter().map(|&x| v(x)).collect(),
+            });
+        }
+        let finite = spheres
+            .iter()
+            .all(|(c, r)| c.x.is_finite() && c.y.is_finite() && c.z.is_finite() && r.is_finite());
+        let bvh = (bvh && finite && !spheres.is_empty()).then(|| Bvh64::build(&spheres));
+        Ok(Self {
+            camera,
+            eye,
+            lights: desc.lights.iter().map(|l| v(l.position - eye)).collect(),
+            spheres,
+            shapes,
+            tris,
+            polygons,
+            bvh,
+        })
+    }
+
+    /// Number of primitives.
+    pub fn len(&self) -> usize {
+        self.spheres.len() + self.shapes.len() + self.polygons.len()
+    }
+
+    /// True when the scene has no primitives.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+
+    /// Whether spheres are searched through the twin's BVH.
+    pub fn has_bvh(&self) -> bool {
+        self.bvh.is_some()
+    }
+
+    /// The camera ray through pixel-space point (sx, sy) (column j's centre is j + ½): origin 0 (the eye),
+    /// the f64 unit direction of [`Camera<f64>::ray`], not rounded.
+    pub fn camera_ray(&self, sx: f64, sy: f64) -> Ray<f64> {
+        Ray::new(V3::all(0.0), self.camera.ray(sx, sy).dir)
+    }
+
+    /// Closest hit of `ray` in `[0, t_max)`, never on the near side of its departure surface.
+    pub fn intersect(&self, ray: &Ray<f64>, from: Departure, t_max: f64) -> Hit64 {
+        let mut best = Hit64::MISS;
+        match &self.bvh {
+            Some(bvh) => bvh.closest(ray, from.prim, t_max, &mut best),
+            None => {
+                for (i, &(c, r)) in self.spheres.iter().enumerate() {
+                    if i as u32 != from.prim {
+                        let (hit, t) = intersect_sphere(c, r, ray, t_max);
+                        if hit {
+                            best.update(i as u32, t);
+                        }
+                    }
+                }
+            }
+        }
+        let ns = self.spheres.len() as u32;
+        for (k, s) in self.shapes.iter().enumerate() {
+            let id = ns + k as u32;
+            if id != from.prim {
+                let (hit, t) = s.intersect(ray, t_max);
+                if hit {
+                    best.update(id, t);
+                }
+            }
+        }
+        for tri in &self.tris {
+            if tri.id != from.prim {
+                let (hit, t) = intersect_triangle(tri.v0, tri.e1, tri.e2, ray, t_max);
+                if hit {
+                    best.update(tri.id, t);
+                }
+            }
+        }
+        if from.inward {
+            if let Some(t) = self.exit(from.prim, ray, t_max) {
+                best.update(from.prim, t);
+            }
+        }
+        best
+    }
+
+    /// Whether `ray` meets anything in `[0, t_max)` (its departure surface's near side excluded).
+    pub fn occluded(&self, ray: &Ray<f64>, from: Departure, t_max: f64) -> bool {
+        self.intersect(ray, from, t_max).is_hit()
+    }
+
+    /// The exit root in `[0, t_max)` of a ray leaving solid `prim` toward its inside.
+    fn exit(&self, prim: u32, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let roots = if i < ns {
+            sphere_roots(self.spheres[i].0, self.spheres[i].1, ray)
+        } else if i < ns + self.shapes.len() && self.shapes[i - ns].kind.is_solid() {
+            let s = &self.shapes[i - ns];
+            s.unit_sphere_roots(&s.to_object(ray))
+        } else {
+            return None;
+        };
+        let (hit, t) = far_root(&roots, t_max);
+        hit.then_some(t)
+    }
+
+    /// Where `ray` (leaving `from`) hits primitive `prim` alone, in `[0, inf)`.
+    pub fn hit_of(&self, prim: u32, ray: &Ray<f64>, from: Departure) -> Option<f64> {
+        let i = prim as usize;
+        if prim == NO_PRIM || i >= self.len() {
+            return None;
+        }
+        if prim == from.prim {
+            return if from.inward { self.exit(prim, ray, f64::INFINITY) } else { None };
+        }
+        let ns = self.spheres.len();
+        let (hit, t) = if i < ns {
+            first_root(&sphere_roots(self.spheres[i].0, self.spheres[i].1, ray), f64::INFINITY)
+        } else if i < ns + self.shapes.len() {
+            self.shapes[i - ns].intersect(ray, f64::INFINITY)
+        } else {
+            let mut best = Hit64::MISS;
+            for tri in &self.tris[self.polygons[i - ns - self.shapes.len()].tris.clone()] {
+                let (hit, t) = intersect_triangle(tri.v0, tri.e1, tri.e2, ray, f64::INFINITY);
+                if hit {
+                    best.update(tri.id, t);
+                }
+            }
+            (best.is_hit(), best.t)
+        };
+        hit.then_some(t)
+    }
+
+    /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated
+    /// vertex normal when it has them), computed as [`crate::accel::Geometry::surface`] computes them in f32.
+    pub fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
+        let point = ray.at(t);
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let normal = if i < ns {
+            (point - self.spheres[i].0).normalize()
+        } else if i < ns + self.shapes.len() {
+            let s = &self.shapes[i - ns];
+            let n = match s.kind {
+                ShapeKind::Sphere => s.to_object(ray).at(t),
+                ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
+            };
+            s.normal_to_world.vector(n).normalize()
+        } else {
+            self.polygon_normal(i - ns - self.shapes.len(), point)
+        };
+        (point, normal)
+    }
+
+    /// Polygon `k`'s shading normal at `point`: the vertex normals interpolated over the triangle that
+    /// contains the point best (largest smallest barycentric), else the geometric normal (the f32 rule).
+    fn polygon_normal(&self, k: usize, point: V3<f64>) -> V3<f64> {
+        let poly = &self.polygons[k];
+        let mut best: Option<(f64, V3<f64>)> = None;
+        for tri in &self.tris[poly.tris.clone()] {
+            let Some([n0, n1, n2]) = tri.normals else { continue };
+            let w = point - tri.v0;
+            let (d00, d01, d11) = (tri.e1.dot(tri.e1), tri.e1.dot(tri.e2), tri.e2.dot(tri.e2));
+            let (d20, d21) = (w.dot(tri.e1), w.dot(tri.e2));
+            let denom = d00 * d11 - d01 * d01;
+            let b1 = (d11 * d20 - d01 * d21) / denom;
+            let b2 = (d00 * d21 - d01 * d20) / denom;
+            let b0 = 1.0 - b1 - b2;
+            let score = b0.min(b1).min(b2);
+            if best.is_none_or(|(s, _)| score > s) {
+                best = Some((score, (n0 * b0 + n1 * b1 + n2 * b2).normalize()));
+            }
+        }
+        match best {
+            Some((_, n)) if n.x.is_finite() && n.y.is_finite() && n.z.is_finite() => n,
+            _ => poly.normal,
+        }
+    }
+
+    /// How big the f32 rounding of a ray near `prim` can be, per ε32, for a ray from `origin`: |origin|
+    /// plus the primitive's centre distance and radius (the magnitudes the kernel's f32 operations round).
+    fn magnitude(&self, prim: u32, origin: V3<f64>) -> f64 {
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let o = len(origin);
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            o + len(c - origin) + r
+        } else if i < ns + self.shapes.len() {
+            o + len(self.shapes[i - ns].center - origin)
+        } else {
+            o
+        }
+    }
+
+    /// True when `ray` passes within tolerance of tangency with `prim` — where an f32 and an f64 kernel may
+    /// legitimately disagree on hit or miss (explanation "graze"):
+    ///
+    /// - spheres: the line's closest approach l to the centre satisfies `|l − r| ≤ k·ε32·(|c − o| + r)` plus
+    ///   `slack` at that distance;
+    /// - ellipsoids: the same test in object space, with the scale `Σ|L_i|·(|o_i| + |c_i|) + 1` (L the
+    ///   object-from-world map, whose f32 rounding the object-space ray carries), as tests/stress.rs does;
+    /// - planes: the object-space direction is within `k·ε32` (plus the direction slack) of parallel;
+    /// - polygons: the direction is within that of parallel to the plane, or the line meets the plane within
+    ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline.
+    pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64, slack: Slack) -> bool {
+        if prim == NO_PRIM || prim as usize >= self.len() {
+            return false;
+        }
+        let tol = k * EPS32;
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let near_tangent = |c: V3<f64>, r: f64, ray: &Ray<f64>, scale: f64, slack: f64| {
+            let cc = c - ray.origin;
+            let d = ray.dir;
+            let proj = cc.dot(d) / d.dot(d);
+            let l = len(cc - d * proj);
+            (l - r).abs() <= tol * scale + slack
+        };
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            let dist = len(c - ray.origin);
+            return near_tangent(c, r, ray, dist + r, slack.at(dist));
+        }
+        if i < ns + self.shapes.len() {
+            let s = &self.shapes[i - ns];
+            let local = s.to_object(ray);
+            let m = &s.object_from_world;
+            let stretch = norm_bound(m);
+            let (o, c) = (ray.origin, s.center);
+            let spread = len(m.cols[0]) * (o.x.abs() + c.x.abs())
+                + len(m.cols[1]) * (o.y.abs() + c.y.abs())
+                + len(m.cols[2]) * (o.z.abs() + c.z.abs());
+            let d = local.dir;
+            return match s.kind {
+                ShapeKind::Sphere => {
+                    let dist = len(c - o);
+                    near_tangent(V3::all(0.0), 1.0, &local, spread + 1.0, stretch * slack.at(dist))
+                }
+                ShapeKind::Plane => d.z.abs() <= (tol + stretch * slack.dir) * len(d),
+            };
+        }
+        let poly = &self.polygons[i - ns - self.shapes.len()];
+        let (n, d) = (poly.normal, ray.dir);
+        let cos = n.dot(d).abs() / len(d);
+        if cos <= tol + slack.dir {
+            return true;
+        }
+        let Some(&anchor) = poly.outline.first() else { return false };
+        let t = n.dot(anchor - ray.origin) / n.dot(d);
+        let p = ray.at(t);
+        let m = poly.outline.len();
+        let edge = (0..m)
+            .map(|j| segment_distance(p, poly.outline[j], poly.outline[(j + 1) % m]))
+            .fold(f64::INFINITY, f64::min);
+        edge * cos <= tol * (len(ray.origin) + len(p)) + slack.at(t)
+    }
+
+    /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
+    /// `slack` for spheres, the object-space equivalent for shapes (unit sphere or plane z = 0), the distance
+    /// to the plane for polygons. This is where a ray that starts at `p` (a secondary ray's origin on another
+    /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
+    /// find or miss `prim` by rounding.
+    pub fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
+        if prim == NO_PRIM || prim as usize >= self.len() {
+            return false;
+        }
+        let tol = k * EPS32;
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            return (len(p - c) - r).abs() <= tol * self.magnitude(prim, p) + slack;
+        }
+        if i < ns + self.shapes.len() {
+            let s = &self.shapes[i - ns];
+            let m = &s.object_from_world;
+            let q = m.vector(p - s.center);
+            let c = s.center;
+            let spread = len(m.cols[0]) * (p.x.abs() + c.x.abs())
+                + len(m.cols[1]) * (p.y.abs() + c.y.abs())
+                + len(m.cols[2]) * (p.z.abs() + c.z.abs());
+            let off = match s.kind {
+                ShapeKind::Sphere => (len(q) - 1.0).abs(),
+                ShapeKind::Plane => q.z.abs(),
+            };
+            return off <= tol * (spread + 1.0) + norm_bound(m) * slack;
+        }
+        let poly = &self.polygons[i - ns - self.shapes.len()];
+        let Some(&anchor) = poly.outline.first() else { return false };
+        let extent = poly.outline.iter().map(|&x| len(x - anchor)).fold(0.0, f64::max);
+        poly.normal.dot(p - anchor).abs() <= tol * (len(p) + len(anchor) + extent) + slack
+    }
+}
+
+/// Distance from `p` to the segment `a..b`.
+fn segment_distance(p: V3<f64>, a: V3<f64>, b: V3<f64>) -> f64 {
+    let ab = b - a;
+    let dd = ab.dot(ab);
+    let s = if dd > 0.0 { ((p - a).dot(ab) / dd).clamp(0.0, 1.0) } else { 0.0 };
+    len(p - (a + ab * s))
+}
