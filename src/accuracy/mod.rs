@@ -55,8 +55,9 @@ pub const K_TIE: f64 = 64.0;
 /// Tolerance of the "start" and "light" explanations, in ε32 of the magnitudes involved.
 pub const K_START: f64 = 16.0;
 /// Distance from the origin within which a secondary ray's hit counts as a self-hit, in ε32 of `|o|` (the
-/// origin's distance from the eye).
-pub const K_SELF: f64 = 16.0;
+/// origin's distance from the eye): the f32 origin's own rounding (at most half an ulp per coordinate,
+/// about `1.7·ε32·|o|`) with room. A hit farther away is a hit on something else, compared as such.
+pub const K_SELF: f64 = 4.0;
 
 /// What to measure.
 #[derive(Clone, Debug)]
