@@ -4,7 +4,7 @@
 
 use crate::geometry::{
     far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, stays_off_plane,
-    DeparturePacket, EyeLanes, HitPacket, Pyramid, Ray, RayPacket, SphereRay,
+    DeparturePacket, HitPacket, Pyramid, Ray, RayPacket, SphereRay,
 };
 use crate::math::Mask;
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -27,8 +27,8 @@ pub struct SphereQuery<'a, F: Lanes> {
     pub pyramid: Option<Pyramid>,
     /// The rays' per-ray terms, shared by every sphere test.
     terms: SphereRay<F>,
-    /// The lanes that start at the eye and use the spheres' exact eye terms.
-    eye: EyeLanes<F::Mask>,
+    /// Every live lane starts at the eye: the roots take the eye terms' short form (same bits).
+    from_eye: bool,
 }
 
 impl<'a, F: Lanes> SphereQuery<'a, F> {
@@ -43,8 +43,8 @@ impl<'a, F: Lanes> SphereQuery<'a, F> {
         live: F::Mask,
     ) -> Self {
         let terms = SphereRay::new(ray);
-        let eye = EyeLanes::of(terms.from_eye(), live);
-        Self { spheres, ray, t_max, skip, pyramid, terms, eye }
+        let from_eye = (terms.from_eye() | !live).all();
+        Self { spheres, ray, t_max, skip, pyramid, terms, from_eye }
     }
 
     /// Lane `i` as a one-ray query.
@@ -55,12 +55,14 @@ impl<'a, F: Lanes> SphereQuery<'a, F> {
         SphereQuery::new(self.spheres, ray, self.t_max.lane(i), self.skip.lane(i), None, true)
     }
 
-    /// The roots of sphere `i` (splatted) for these rays, with its exact eye term in the eye lanes.
+    /// The roots of sphere `i` (splatted) for these rays, from its exact eye term.
     #[inline(always)]
     fn roots_of(&self, line: &crate::geometry::Approach<F>, i: usize) -> crate::geometry::Roots<F> {
-        match self.eye {
-            EyeLanes::None => line.roots(),
-            eye => line.roots_for(F::splat_f32(self.spheres.c_eye[i]), eye),
+        let c_eye = F::splat_f32(self.spheres.c_eye[i]);
+        if self.from_eye {
+            line.roots_from_eye(c_eye)
+        } else {
+            line.roots_with_eye_term(F::splat_v3(self.spheres.center(i)), c_eye, &self.terms)
         }
     }
 
@@ -127,9 +129,11 @@ impl SphereQuery<'_, f32> {
         if !(line.meets() & valid).any() {
             return None;
         }
-        let roots = match self.eye {
-            EyeLanes::None => line.roots(),
-            _ => line.roots_from_eye(L::load_partial(&s.c_eye, at, 0.0)),
+        let c_eye = L::load_partial(&s.c_eye, at, 0.0);
+        let roots = if self.from_eye {
+            line.roots_from_eye(c_eye)
+        } else {
+            line.roots_with_eye_term(centre, c_eye, &ray)
         };
         let (hit, t) = first_root(&roots, L::splat_f32(self.t_max));
         let ids = L::Ids::splat(at as u32) + L::lane_ids();

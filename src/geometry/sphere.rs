@@ -7,33 +7,39 @@
 //! origin inside (case 4) the far one (an exit hit, whose normal the shader flips), both behind (case 5) a
 //! miss.
 //!
-//! Three choices keep the f32 results accurate at every scale (ARCHITECTURE.md, "Numerics"):
+//! Four choices keep the f32 results accurate at every scale (ARCHITECTURE.md, "Numerics"):
 //!
 //! - **Perpendicular discriminant.** `r² − l²` instead of the textbook `b² − 4ac`, which subtracts two
 //!   nearly equal large numbers for small distant spheres (Haines et al., Ray Tracing Gems ch. 7).
 //! - **Vieta's near root.** Only the root of larger magnitude, `proj + sign(proj)·td`, is computed directly;
-//!   the other is `c/(d·d)` divided by it, with `c = |oc|² − r²`, the product of the roots times `d·d`.
+//!   the other is `c/(d·d)` divided by it, with `c = |oc|² − r²` (the product of the roots is `c/(d·d)`).
 //!   `proj − td` would cancel for a large sphere seen from close by.
-//! - **Exact eye terms.** Camera rays start at the rendering space's origin (the eye), so `c` does not
-//!   depend on the ray: compile computes it per sphere in f64 from the scene file's values and rounds it
-//!   once ([`roots_from_eye`](Approach::roots_from_eye)). With an exact `c` the discriminant
-//!   `proj² − c/(d·d)` is also available; it is chosen per lane where its rounding bound is the smaller one
-//!   (the eye close to a large sphere, where `l²` carries the f32 rounding of a far-away centre).
+//! - **Exact eye terms.** Compile computes each sphere's `c_eye = |centre|² − r²` (the eye is the rendering
+//!   space's origin) in f64 from the scene file's values and rounds it once. For a camera ray it is `c`
+//!   itself; for a ray from `o` it gives `c = c_eye − (2·centre·o − |o|²)`, whose rounding is about
+//!   `ε·(|c_eye| + |centre|·|o|)` against `ε·(|oc|² + r²)` for `|oc|² − r²` in f32: far smaller near a large
+//!   sphere close to the eye (a ground sphere), where `|oc|²` is huge. Each lane takes the `c` with the
+//!   smaller bound ([`Approach::roots_with_eye_term`]).
+//! - **Discriminant by bound.** With an accurate `c`, `proj² − c/(d·d)` is also available; each lane takes it
+//!   where its rounding bound `ε·(proj²·(d·d) + bound(c))` is below the perpendicular form's `ε·|oc|·r`
+//!   (compared squared). That is a ray from near a large sphere, whose `l²` carries the f32 rounding of a
+//!   far-away centre.
 //!
-//! For rays from anywhere else (secondary rays) `c` is computed in f32, and a sphere whose surface passes
-//! within `c`'s rounding bound of the ray's origin is treated as touching it there (the **contact rule**):
-//! a ray heading into it enters at `t = 0`, a ray heading away misses it. At the contact point of touching
-//! spheres the origin is then on the neighbour's surface, never a few ulps inside it.
+//! A sphere whose surface passes within `c`'s rounding bound of the ray's origin is treated as touching it
+//! there (the **contact rule**): a ray heading into it enters at `t = 0`, a ray heading away misses it. At
+//! the contact point of touching spheres the origin is then on the neighbour's surface, never a few ulps
+//! inside it.
 
-use crate::math::{Mask, Real, V3};
+use crate::math::{Real, V3};
 
 use super::Ray;
 
 /// The contact rule's tolerance on `c = |oc|² − r²`, in units of the float format's rounding (2⁻²⁴ in f32) of
-/// `|oc|² + r² + 2·r·|origin|∞`. The f32 evaluation of `c` (rounding `oc`, its dot product, `r²` and the
-/// difference) is off by about 5 roundings of `|oc|² + r²`; a hit point used as the origin (`o + t·d` in
-/// f32) is off by a few roundings of its own size, which moves `c` by up to `2·r` per unit near the
-/// surface. 8 covers both with room to spare and keeps the band at a contact point a few ulps wide.
+/// `bound(c) + 2·r·|origin|∞`, where `bound(c)` is the magnitude whose rounding `c` carries (`|oc|² + r²`
+/// computed directly; `|c_eye| + 8·|centre|·|o| + 2·|o|²` from the eye term). The evaluation of `c` is off by
+/// about 5 roundings of its bound; a hit point used as the origin (`o + t·d` in f32) is off by a few
+/// roundings of its own size, which moves `c` by up to `2·r` per unit near the surface. 8 covers both with
+/// room to spare and keeps the band at a contact point a few ulps wide.
 pub const CONTACT_ROUNDINGS: f64 = 8.0;
 
 /// A ray with the per-ray terms every sphere test shares, computed once per query.
@@ -43,6 +49,9 @@ pub struct SphereRay<F: Real> {
     pub ray: Ray<F>,
     dd: F,
     inv_dd: F,
+    /// `|origin|²` and the origin's absolute coordinates, for `c` from the eye term.
+    oo: F,
+    abs_origin: V3<F>,
     /// `CONTACT_ROUNDINGS` units of roundoff, splatted once.
     contact: F,
     /// `2·|origin|∞`, the origin's share of the contact tolerance.
@@ -56,11 +65,14 @@ impl<F: Real> SphereRay<F> {
         let d = ray.dir;
         let dd = d.dot(d);
         let o = ray.origin;
-        let reach = o.x.abs().max_of(o.y.abs()).max_of(o.z.abs());
+        let abs_origin = V3::new(o.x.abs(), o.y.abs(), o.z.abs());
+        let reach = abs_origin.x.max_of(abs_origin.y).max_of(abs_origin.z);
         Self {
             ray,
             dd,
             inv_dd: F::splat(1.0) / dd,
+            oo: o.dot(o),
+            abs_origin,
             contact: F::splat(CONTACT_ROUNDINGS * F::UNIT_ROUNDOFF),
             reach2: reach + reach,
         }
@@ -73,31 +85,6 @@ impl<F: Real> SphereRay<F> {
         let at_zero = |v: F| v.le(zero) & v.ge(zero);
         let o = self.ray.origin;
         at_zero(o.x) & at_zero(o.y) & at_zero(o.z)
-    }
-}
-
-/// Which lanes of a query start at the eye and may use the spheres' exact eye terms.
-#[derive(Clone, Copy, Debug)]
-pub enum EyeLanes<M> {
-    /// No lane: every `c` is computed.
-    None,
-    /// Every live lane (camera rays).
-    All,
-    /// Some lanes: both forms are evaluated and chosen per lane.
-    Some(M),
-}
-
-impl<M: Mask> EyeLanes<M> {
-    /// Classifies the lanes `eye` of the `live` ones.
-    #[inline(always)]
-    pub fn of(eye: M, live: M) -> Self {
-        if (eye | !live).all() {
-            EyeLanes::All
-        } else if (eye & live).any() {
-            EyeLanes::Some(eye)
-        } else {
-            EyeLanes::None
-        }
     }
 }
 
@@ -134,49 +121,57 @@ impl<F: Real> Approach<F> {
         self.l2.le(self.r2)
     }
 
-    /// The two roots for a ray from anywhere: `c` computed in f32, the perpendicular discriminant, the
-    /// contact rule.
+    /// The two roots for a sphere with no eye term (ellipsoids in object space): `c = |oc|² − r²` in f32.
     #[inline(always)]
     pub fn roots(&self) -> Roots<F> {
         let oo = self.oc.dot(self.oc);
-        let c = oo - self.r2;
-        let tol = self.contact * (oo + self.r2 + self.r * self.reach2);
-        let on_surface = c.abs().le(tol);
-        let ahead = self.proj.ge(F::splat(0.0));
-        let c = F::select(on_surface, F::splat(0.0), c);
-        let roots = self.roots_with(c, (self.r2 - self.l2) * self.inv_dd, ahead);
-        Roots { hit: roots.hit & !(on_surface & !ahead), ..roots }
+        self.roots_from(oo - self.r2, oo + self.r2, oo)
     }
 
-    /// The two roots for a ray that starts exactly at the eye, given the sphere's exact `c_eye =
-    /// |centre − eye|² − r²`: of the two discriminants, `(r² − l²)/(d·d)` and `proj² − c/(d·d)`, the one whose
-    /// rounding bound is smaller — `ε·|oc|·r` against `ε·(proj²·(d·d) + |c|)`, compared squared (`|oc|² = c +
-    /// r²`).
+    /// The two roots for a ray from anywhere, given the sphere's centre and exact eye term `c_eye =
+    /// |centre|² − r²`: `c` from the eye term or computed directly, whichever has the smaller rounding
+    /// bound.
+    #[inline(always)]
+    pub fn roots_with_eye_term(&self, centre: V3<F>, c_eye: F, ray: &SphereRay<F>) -> Roots<F> {
+        let co = centre.dot(ray.ray.origin);
+        let abs_co = V3::new(centre.x.abs(), centre.y.abs(), centre.z.abs()).dot(ray.abs_origin);
+        let c = c_eye - ((co + co) - ray.oo);
+        let bound = c_eye.abs() + F::splat(8.0) * abs_co + F::splat(2.0) * ray.oo;
+        self.roots_choosing(c, bound)
+    }
+
+    /// [`Approach::roots_with_eye_term`] for a ray that starts exactly at the eye, bit for bit: there
+    /// `c = c_eye` and its bound is `|c_eye|` (the origin's terms are exact zeros).
     #[inline(always)]
     pub fn roots_from_eye(&self, c_eye: F) -> Roots<F> {
-        let ahead = self.proj.ge(F::splat(0.0));
-        let pp = self.proj * self.proj;
-        let textbook_err = pp * self.dd + c_eye.abs();
-        let textbook = (textbook_err * textbook_err).lt((c_eye + self.r2) * self.r2);
-        let disc = F::select(textbook, pp - c_eye * self.inv_dd, (self.r2 - self.l2) * self.inv_dd);
-        self.roots_with(c_eye, disc, ahead)
+        self.roots_choosing(c_eye, c_eye.abs())
     }
 
-    /// [`Approach::roots_from_eye`] in the lanes of `eye`, [`Approach::roots`] in the others.
+    /// The roots with `c` from the eye term (`c_eye_based`, rounding bound `bound`) where that bound is not
+    /// above the direct form's.
     #[inline(always)]
-    pub fn roots_for(&self, c_eye: F, eye: EyeLanes<F::Mask>) -> Roots<F> {
-        match eye {
-            EyeLanes::None => self.roots(),
-            EyeLanes::All => self.roots_from_eye(c_eye),
-            EyeLanes::Some(m) => {
-                let (a, b) = (self.roots_from_eye(c_eye), self.roots());
-                Roots {
-                    hit: (m & a.hit) | (!m & b.hit),
-                    near: F::select(m, a.near, b.near),
-                    far: F::select(m, a.far, b.far),
-                }
-            }
-        }
+    fn roots_choosing(&self, c_eye_based: F, bound: F) -> Roots<F> {
+        let oo = self.oc.dot(self.oc);
+        let direct_bound = oo + self.r2;
+        let from_eye_term = bound.le(direct_bound);
+        let c = F::select(from_eye_term, c_eye_based, oo - self.r2);
+        self.roots_from(c, F::select(from_eye_term, bound, direct_bound), oo)
+    }
+
+    /// The roots from `c` (rounding bound `bound`; `oo = |oc|²`): the discriminant with the smaller bound,
+    /// the contact rule, then [`Approach::roots_with`].
+    #[inline(always)]
+    fn roots_from(&self, c: F, bound: F, oo: F) -> Roots<F> {
+        let tol = self.contact * (bound + self.r * self.reach2);
+        let on_surface = c.abs().le(tol);
+        let ahead = self.proj.ge(F::splat(0.0));
+        let pp = self.proj * self.proj;
+        let textbook_err = pp * self.dd + bound;
+        let textbook = (textbook_err * textbook_err).lt(oo * self.r2);
+        let disc = F::select(textbook, pp - c * self.inv_dd, (self.r2 - self.l2) * self.inv_dd);
+        let c = F::select(on_surface, F::splat(0.0), c);
+        let roots = self.roots_with(c, disc, ahead);
+        Roots { hit: roots.hit & !(on_surface & !ahead), ..roots }
     }
 
     /// The roots from `c` and the discriminant `td² = disc`: the root of larger magnitude directly, the
@@ -212,7 +207,8 @@ pub fn sphere_approach<F: Real>(centre: V3<F>, radius: F, ray: &SphereRay<F>) ->
     }
 }
 
-/// The roots of `|origin + t·dir − centre|² = radius²` for a ray from anywhere ([`Approach::roots`]).
+/// The roots of `|origin + t·dir − centre|² = radius²` for a ray from anywhere, with no eye term
+/// ([`Approach::roots`]).
 #[inline(always)]
 pub fn sphere_roots<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Roots<F> {
     sphere_approach(centre, radius, &SphereRay::new(*ray)).roots()
