@@ -4,7 +4,7 @@
 
 use crate::geometry::{
     far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, stays_off_plane,
-    DeparturePacket, HitPacket, Pyramid, Ray, RayPacket, SphereRay,
+    DeparturePacket, EyeLanes, HitPacket, Pyramid, Ray, RayPacket, SphereRay,
 };
 use crate::math::Mask;
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -27,8 +27,8 @@ pub struct SphereQuery<'a, F: Lanes> {
     pub pyramid: Option<Pyramid>,
     /// The rays' per-ray terms, shared by every sphere test.
     terms: SphereRay<F>,
-    /// Every live lane starts at the eye: the roots take the eye terms' short form (same bits).
-    from_eye: bool,
+    /// The lanes that start at the eye.
+    eye: EyeLanes<F::Mask>,
 }
 
 impl<'a, F: Lanes> SphereQuery<'a, F> {
@@ -43,27 +43,43 @@ impl<'a, F: Lanes> SphereQuery<'a, F> {
         live: F::Mask,
     ) -> Self {
         let terms = SphereRay::new(ray);
-        let from_eye = (terms.from_eye() | !live).all();
-        Self { spheres, ray, t_max, skip, pyramid, terms, from_eye }
+        let eye = EyeLanes::of(terms.from_eye(), live);
+        Self { spheres, ray, t_max, skip, pyramid, terms, eye }
     }
 
-    /// Lane `i` as a one-ray query.
+    /// Lane `i` as a one-ray query (its terms taken from the packet's, not recomputed: same bits).
     #[inline(always)]
     pub fn lane(&self, i: usize) -> SphereQuery<'a, f32> {
-        let v = |p: crate::math::V3<F>| crate::math::V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
-        let ray = Ray::new(v(self.ray.origin), v(self.ray.dir));
-        SphereQuery::new(self.spheres, ray, self.t_max.lane(i), self.skip.lane(i), None, true)
+        let terms = self.terms.map(|v| v.lane(i));
+        let eye = match self.eye {
+            EyeLanes::All => EyeLanes::All,
+            EyeLanes::None => EyeLanes::None,
+            EyeLanes::Some(m) if F::mask_lane(m, i) => EyeLanes::All,
+            EyeLanes::Some(_) => EyeLanes::None,
+        };
+        SphereQuery {
+            spheres: self.spheres,
+            ray: terms.ray,
+            t_max: self.t_max.lane(i),
+            skip: self.skip.lane(i),
+            pyramid: None,
+            terms,
+            eye,
+        }
     }
 
-    /// The roots of sphere `i` (splatted) for these rays, from its exact eye term.
+    /// The roots of sphere `i` (splatted) for these rays ([`crate::geometry::sphere_roots_of`]).
     #[inline(always)]
     fn roots_of(&self, line: &crate::geometry::Approach<F>, i: usize) -> crate::geometry::Roots<F> {
-        let c_eye = F::splat_f32(self.spheres.c_eye[i]);
-        if self.from_eye {
-            line.roots_from_eye(c_eye)
-        } else {
-            line.roots_with_eye_term(F::splat_v3(self.spheres.center(i)), c_eye, &self.terms)
-        }
+        let s = self.spheres;
+        crate::geometry::sphere_roots_of(
+            s.eye_terms_help,
+            line,
+            || F::splat_v3(s.center(i)),
+            F::splat_f32(s.c_eye[i]),
+            &self.terms,
+            self.eye,
+        )
     }
 
     /// Sphere `i`'s hits for the lanes of `live`: the lanes it is hit in (the departure sphere excluded) and
@@ -121,7 +137,7 @@ impl SphereQuery<'_, f32> {
     #[inline(always)]
     fn leaf_chunk<L: Lanes>(&self, at: usize, count: usize) -> Option<(u32, L)> {
         let s = self.spheres;
-        let ray = SphereRay::new(Ray::new(L::splat_v3(self.ray.origin), L::splat_v3(self.ray.dir)));
+        let ray = self.terms.map(L::splat_f32);
         // Lanes past the array's end read a zero sphere at the origin; `valid` drops them.
         let centre = L::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
         let line = sphere_approach(centre, L::load_partial(&s.r, at, 0.0), &ray);
@@ -129,12 +145,12 @@ impl SphereQuery<'_, f32> {
         if !(line.meets() & valid).any() {
             return None;
         }
-        let c_eye = L::load_partial(&s.c_eye, at, 0.0);
-        let roots = if self.from_eye {
-            line.roots_from_eye(c_eye)
-        } else {
-            line.roots_with_eye_term(centre, c_eye, &ray)
+        let eye = match self.eye {
+            EyeLanes::None => EyeLanes::None,
+            _ => EyeLanes::All,
         };
+        let c_eye = L::load_partial(&s.c_eye, at, 0.0);
+        let roots = crate::geometry::sphere_roots_of(s.eye_terms_help, &line, || centre, c_eye, &ray, eye);
         let (hit, t) = first_root(&roots, L::splat_f32(self.t_max));
         let ids = L::Ids::splat(at as u32) + L::lane_ids();
         let hit = hit & valid & !L::ids_eq(ids, L::Ids::splat(self.skip));

@@ -85,6 +85,11 @@ pub struct Spheres {
     /// Scene-file index (the identity until [`Spheres::permuted`]): breaks ties in t and names the sphere
     /// in reports.
     pub key: Vec<u32>,
+    /// Some sphere has the eye within about its radius of its surface (`|c_eye| < 4·r²`): only then can `c`
+    /// from the eye term be the more accurate one for rays that do not start at the eye (a large ground
+    /// sphere near the eye), so only then do those rays pay for computing both
+    /// ([`crate::geometry::Approach::roots_with_eye_term`]); elsewhere they take `|oc|² − r²` directly.
+    pub eye_terms_help: bool,
 }
 
 impl Spheres {
@@ -120,6 +125,7 @@ impl Spheres {
             c_eye: pick(&self.c_eye, order),
             material: pick(&self.material, order),
             key: pick(&self.key, order),
+            eye_terms_help: self.eye_terms_help,
         }
     }
 
@@ -149,7 +155,9 @@ impl Spheres {
         self.cz.push(c.z);
         self.key.push(self.r.len() as u32);
         self.r.push(radius as f32);
-        self.c_eye.push(eye_term(center, radius) as f32);
+        let c_eye = eye_term(center, radius);
+        self.eye_terms_help |= c_eye.abs() < 4.0 * radius * radius;
+        self.c_eye.push(c_eye as f32);
         self.material.push(material);
     }
 }

@@ -15,7 +15,7 @@ use crate::accel::Spheres;
 use crate::math::{Mask, V3};
 use crate::simd::{IdLanes, Lanes};
 
-use super::{first_root, sphere_approach, Hit, Ray, Roots, SphereRay, NO_PRIM};
+use super::{first_root, sphere_approach, sphere_roots_of, EyeLanes, Hit, Ray, SphereRay, NO_PRIM};
 
 /// K rays in structure-of-arrays layout: lane `i` of every field belongs to ray `i`.
 ///
@@ -161,11 +161,18 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
     }
     let mut found = F::mask_from_bits(0);
     let terms = SphereRay::new(ray);
-    let from_eye = (terms.from_eye() | !packet.active).all();
+    let eye = EyeLanes::of(terms.from_eye(), packet.active);
     for i in 0..spheres.len() {
         let centre = F::splat_v3(spheres.center(i));
         let line = sphere_approach(centre, F::splat_f32(spheres.r[i]), &terms);
-        let roots = roots_of(&line, centre, F::splat_f32(spheres.c_eye[i]), &terms, from_eye);
+        let roots = sphere_roots_of(
+            spheres.eye_terms_help,
+            &line,
+            || centre,
+            F::splat_f32(spheres.c_eye[i]),
+            &terms,
+            eye,
+        );
         let (hit, t) = first_root(&roots, best.t);
         // `t < best.t` inside the kernel is the strict comparison that lets the lower id keep a tie.
         let hit = hit & packet.active;
@@ -210,30 +217,14 @@ fn sphere_chunk<F: Lanes>(
     let centre = F::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
     let line = sphere_approach(centre, F::load_partial(&s.r, at, 0.0), ray);
     // One ray: it starts at the eye in every lane or in none.
-    let from_eye = ray.from_eye().all();
-    let roots = roots_of(&line, centre, F::load_partial(&s.c_eye, at, 0.0), ray, from_eye);
+    let eye = if ray.from_eye().all() { EyeLanes::All } else { EyeLanes::None };
+    let roots =
+        sphere_roots_of(s.eye_terms_help, &line, || centre, F::load_partial(&s.c_eye, at, 0.0), ray, eye);
     let (hit, t) = first_root(&roots, best.t);
     let hit = valid.map_or(hit, |v| hit & v);
     best.t = F::select(hit, t, best.t);
     let id = F::Ids::splat(at as u32) + F::lane_ids();
     (best.prim, best.key) = (F::select_ids(hit, id, best.prim), F::select_ids(hit, id, best.key));
-}
-
-/// A sphere's roots from its exact eye term, by the short form when every ray starts at the eye (the same
-/// bits as the general one there).
-#[inline(always)]
-fn roots_of<F: Lanes>(
-    line: &super::Approach<F>,
-    centre: crate::math::V3<F>,
-    c_eye: F,
-    ray: &SphereRay<F>,
-    from_eye: bool,
-) -> Roots<F> {
-    if from_eye {
-        line.roots_from_eye(c_eye)
-    } else {
-        line.roots_with_eye_term(centre, c_eye, ray)
-    }
 }
 
 /// The smallest t over the lanes, of equal t the lowest id: lane `l` saw spheres `l, l + K, …` in order, so

@@ -78,6 +78,21 @@ impl<F: Real> SphereRay<F> {
         }
     }
 
+    /// The same terms with every value mapped by `f` (a lane of a packet's, or a single ray's splatted):
+    /// no arithmetic, so the mapped terms are the bits the mapped ray's own would be.
+    #[inline(always)]
+    pub fn map<G: Real>(&self, f: impl Fn(F) -> G + Copy) -> SphereRay<G> {
+        SphereRay {
+            ray: Ray::new(self.ray.origin.map(f), self.ray.dir.map(f)),
+            dd: f(self.dd),
+            inv_dd: f(self.inv_dd),
+            oo: f(self.oo),
+            abs_origin: self.abs_origin.map(f),
+            contact: f(self.contact),
+            reach2: f(self.reach2),
+        }
+    }
+
     /// The lanes whose ray starts exactly at the origin of the rendering space (the eye).
     #[inline(always)]
     pub fn from_eye(&self) -> F::Mask {
@@ -85,6 +100,32 @@ impl<F: Real> SphereRay<F> {
         let at_zero = |v: F| v.le(zero) & v.ge(zero);
         let o = self.ray.origin;
         at_zero(o.x) & at_zero(o.y) & at_zero(o.z)
+    }
+}
+
+/// Which lanes of a query start at the eye and take [`Approach::roots_from_eye`].
+#[derive(Clone, Copy, Debug)]
+pub enum EyeLanes<M> {
+    /// No lane.
+    None,
+    /// Every live lane (camera rays).
+    All,
+    /// Some lanes (a secondary ray starting exactly at the eye): both forms are evaluated and chosen per
+    /// lane, so each lane gets what it gets alone.
+    Some(M),
+}
+
+impl<M: crate::math::Mask> EyeLanes<M> {
+    /// Classifies the lanes `eye` of the `live` ones.
+    #[inline(always)]
+    pub fn of(eye: M, live: M) -> Self {
+        if (eye | !live).all() {
+            EyeLanes::All
+        } else if (eye & live).any() {
+            EyeLanes::Some(eye)
+        } else {
+            EyeLanes::None
+        }
     }
 }
 
@@ -121,11 +162,16 @@ impl<F: Real> Approach<F> {
         self.l2.le(self.r2)
     }
 
-    /// The two roots for a sphere with no eye term (ellipsoids in object space): `c = |oc|² − r²` in f32.
+    /// The two roots with `c = |oc|² − r²` computed directly (ellipsoids in object space, and spheres in
+    /// scenes where the eye term cannot help: [`crate::accel::Spheres::eye_terms_help`]). The perpendicular
+    /// discriminant: with this `c` its bound is always the smaller one, so this is
+    /// [`Approach::roots_with_eye_term`]'s result whenever that one takes the direct `c`.
     #[inline(always)]
     pub fn roots(&self) -> Roots<F> {
         let oo = self.oc.dot(self.oc);
-        self.roots_from(oo - self.r2, oo + self.r2, oo)
+        let (c, bound) = (oo - self.r2, oo + self.r2);
+        let (on_surface, ahead) = self.contact(c, bound);
+        self.roots_with(c, (self.r2 - self.l2) * self.inv_dd, on_surface, ahead)
     }
 
     /// The two roots for a ray from anywhere, given the sphere's centre and exact eye term `c_eye =
@@ -137,53 +183,81 @@ impl<F: Real> Approach<F> {
         let abs_co = V3::new(centre.x.abs(), centre.y.abs(), centre.z.abs()).dot(ray.abs_origin);
         let c = c_eye - ((co + co) - ray.oo);
         let bound = c_eye.abs() + F::splat(8.0) * abs_co + F::splat(2.0) * ray.oo;
-        self.roots_choosing(c, bound)
-    }
-
-    /// [`Approach::roots_with_eye_term`] for a ray that starts exactly at the eye, bit for bit: there
-    /// `c = c_eye` and its bound is `|c_eye|` (the origin's terms are exact zeros).
-    #[inline(always)]
-    pub fn roots_from_eye(&self, c_eye: F) -> Roots<F> {
-        self.roots_choosing(c_eye, c_eye.abs())
-    }
-
-    /// The roots with `c` from the eye term (`c_eye_based`, rounding bound `bound`) where that bound is not
-    /// above the direct form's.
-    #[inline(always)]
-    fn roots_choosing(&self, c_eye_based: F, bound: F) -> Roots<F> {
         let oo = self.oc.dot(self.oc);
         let direct_bound = oo + self.r2;
         let from_eye_term = bound.le(direct_bound);
-        let c = F::select(from_eye_term, c_eye_based, oo - self.r2);
+        let c = F::select(from_eye_term, c, oo - self.r2);
         self.roots_from(c, F::select(from_eye_term, bound, direct_bound), oo)
+    }
+
+    /// The two roots for a ray that starts exactly at the eye: `c = c_eye`. `choose` (the scene's
+    /// [`crate::accel::Spheres::eye_terms_help`]) lets each lane take `proj² − c/(d·d)` where its bound is
+    /// the smaller; without a sphere that near the eye the perpendicular form always is (the textbook bound
+    /// `ε·|c_eye|` alone exceeds `ε·|C|·r` once the eye is 1.6 radii from the centre). No contact rule: the
+    /// eye is a point the scene places, not a rounded hit point.
+    #[inline(always)]
+    pub fn roots_from_eye(&self, c_eye: F, choose: bool) -> Roots<F> {
+        let zero = F::splat(0.0);
+        let perp = (self.r2 - self.l2) * self.inv_dd;
+        let disc = if choose {
+            let pp = self.proj * self.proj;
+            let textbook_err = pp * self.dd + c_eye.abs();
+            // `|C|² = c_eye + r²`: the eye is the origin.
+            let textbook = (textbook_err * textbook_err).lt((c_eye + self.r2) * self.r2);
+            F::select(textbook, pp - c_eye * self.inv_dd, perp)
+        } else {
+            perp
+        };
+        self.roots_with(c_eye, disc, zero.lt(zero), self.proj.ge(zero))
+    }
+
+    /// [`Approach::roots_from_eye`] in the lanes of `eye`, `other` (the roots of the other lanes' rays) in
+    /// the rest.
+    #[inline(always)]
+    pub fn select_eye_lanes(eye: F::Mask, from_eye: Roots<F>, other: Roots<F>) -> Roots<F> {
+        Roots {
+            hit: (eye & from_eye.hit) | (!eye & other.hit),
+            near: F::select(eye, from_eye.near, other.near),
+            far: F::select(eye, from_eye.far, other.far),
+        }
     }
 
     /// The roots from `c` (rounding bound `bound`; `oo = |oc|²`): the discriminant with the smaller bound,
     /// the contact rule, then [`Approach::roots_with`].
     #[inline(always)]
     fn roots_from(&self, c: F, bound: F, oo: F) -> Roots<F> {
-        let tol = self.contact * (bound + self.r * self.reach2);
-        let on_surface = c.abs().le(tol);
-        let ahead = self.proj.ge(F::splat(0.0));
+        let (on_surface, ahead) = self.contact(c, bound);
         let pp = self.proj * self.proj;
         let textbook_err = pp * self.dd + bound;
         let textbook = (textbook_err * textbook_err).lt(oo * self.r2);
         let disc = F::select(textbook, pp - c * self.inv_dd, (self.r2 - self.l2) * self.inv_dd);
-        let c = F::select(on_surface, F::splat(0.0), c);
-        let roots = self.roots_with(c, disc, ahead);
-        Roots { hit: roots.hit & !(on_surface & !ahead), ..roots }
+        self.roots_with(c, disc, on_surface, ahead)
+    }
+
+    /// The contact rule's two facts: the origin is on the surface within `c`'s rounding (`bound`), and the
+    /// ray heads toward the centre's side (`proj ≥ 0`).
+    #[inline(always)]
+    fn contact(&self, c: F, bound: F) -> (F::Mask, F::Mask) {
+        let tol = self.contact * (bound + self.r * self.reach2);
+        (c.abs().le(tol), self.proj.ge(F::splat(0.0)))
     }
 
     /// The roots from `c` and the discriminant `td² = disc`: the root of larger magnitude directly, the
-    /// other by Vieta (`near·far = c/(d·d)`).
+    /// other by Vieta (`near·far = c/(d·d)`); a ray starting on the surface (`on_surface`) enters at 0 when
+    /// heading in and misses when heading away.
     #[inline(always)]
-    fn roots_with(&self, c: F, disc: F, ahead: F::Mask) -> Roots<F> {
+    fn roots_with(&self, c: F, disc: F, on_surface: F::Mask, ahead: F::Mask) -> Roots<F> {
+        let c = F::select(on_surface, F::splat(0.0), c);
         let td = disc.sqrt();
         let big = F::select(ahead, self.proj + td, self.proj - td);
         // A tangent line has the double root `proj` (Vieta's quotient would round it differently, or be
         // 0/0 for a ray tangent at its own origin).
         let small = F::select(td.gt(F::splat(0.0)), (c * self.inv_dd) / big, big);
-        Roots { hit: self.meets(), near: F::select(ahead, small, big), far: F::select(ahead, big, small) }
+        Roots {
+            hit: self.meets() & !(on_surface & !ahead),
+            near: F::select(ahead, small, big),
+            far: F::select(ahead, big, small),
+        }
     }
 }
 
@@ -204,6 +278,27 @@ pub fn sphere_approach<F: Real>(centre: V3<F>, radius: F, ray: &SphereRay<F>) ->
         inv_dd: ray.inv_dd,
         contact: ray.contact,
         reach2: ray.reach2,
+    }
+}
+
+/// A stored sphere's roots for the rays of a query, the one rule every sphere query follows: lanes from the
+/// eye take [`Approach::roots_from_eye`] (choosing the discriminant when `help`, the scene's
+/// `Spheres::eye_terms_help`, says a sphere is near the eye), the others [`Approach::roots_with_eye_term`]
+/// in such scenes and [`Approach::roots`] elsewhere. `centre` is only evaluated where it is needed.
+#[inline(always)]
+pub fn sphere_roots_of<F: Real>(
+    help: bool,
+    line: &Approach<F>,
+    centre: impl Fn() -> V3<F>,
+    c_eye: F,
+    ray: &SphereRay<F>,
+    eye: EyeLanes<F::Mask>,
+) -> Roots<F> {
+    let other = || if help { line.roots_with_eye_term(centre(), c_eye, ray) } else { line.roots() };
+    match eye {
+        EyeLanes::All => line.roots_from_eye(c_eye, help),
+        EyeLanes::None => other(),
+        EyeLanes::Some(m) => Approach::select_eye_lanes(m, line.roots_from_eye(c_eye, help), other()),
     }
 }
 
