@@ -18,15 +18,16 @@
 //!   space's origin) in f64 from the scene file's values and rounds it once. For a camera ray it is `c`
 //!   itself; for a ray from `o` it gives `c = c_eye − (2·centre·o − |o|²)`, whose rounding is about
 //!   `ε·(|c_eye| + |centre|·|o|)` against `ε·(|oc|² + r²)` for `|oc|² − r²` in f32: far smaller near a large
-//!   sphere close to the eye (a ground sphere), where `|oc|²` is huge. Each lane takes the `c` with the
-//!   smaller bound ([`Approach::roots_with_eye_term`]).
-//! - **Discriminant by bound.** With an accurate `c`, `proj² − c/(d·d)` is also available; each lane takes it
-//!   where its rounding bound `ε·(proj²·(d·d) + bound(c))` is below the perpendicular form's `ε·|oc|·r`
-//!   (compared squared). That is a ray from near a large sphere, whose `l²` carries the f32 rounding of a
-//!   far-away centre.
+//!   sphere close to the eye (a ground sphere), where `|oc|²` is huge. In scenes with such a sphere each
+//!   lane takes the `c` with the smaller bound ([`Approach::roots_with_eye_term`]); elsewhere the direct
+//!   one always is, within a small factor ([`sphere_roots_of`] applies the rule).
+//! - **Discriminant by bound.** With an accurate `c`, `proj² − c/(d·d)` is also available; in scenes with a
+//!   sphere near the eye each lane takes it where its rounding bound `ε·(proj²·(d·d) + bound(c))` is below
+//!   the perpendicular form's `ε·|oc|·r` (compared squared). That is a ray from near a large sphere, whose
+//!   `l²` carries the f32 rounding of a far-away centre.
 //!
-//! A sphere whose surface passes within `c`'s rounding bound of the ray's origin is treated as touching it
-//! there (the **contact rule**): a ray heading into it enters at `t = 0`, a ray heading away misses it. At
+//! For rays that do not start at the eye, a sphere whose surface passes within `c`'s rounding bound of the
+//! ray's origin is treated as touching it there (the **contact rule**): a ray heading into it enters at `t = 0`, a ray heading away misses it. At
 //! the contact point of touching spheres the origin is then on the neighbour's surface, never a few ulps
 //! inside it.
 
