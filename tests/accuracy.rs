@@ -166,7 +166,7 @@ fn json_output_has_every_key() {
 }
 
 /// The stress scenes of scenes/stress/ (each must be there); any other scene file there is checked too.
-const STRESS_SCENES: [&str; 11] = [
+const STRESS_SCENES: [&str; 12] = [
     "distant-100.toml",
     "distant-4100.toml",
     "distant-1e5.toml",
@@ -176,6 +176,7 @@ const STRESS_SCENES: [&str; 11] = [
     "grazing.toml",
     "ground-1e6-below.toml",
     "huge-ground.toml",
+    "huge-ground-ellipsoid.toml",
     "radii-1e-6-to-1e6.toml",
     "touching-nested.toml",
 ];

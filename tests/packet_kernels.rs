@@ -11,8 +11,7 @@ use bareray::geometry::{
     intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k, sphere_roots, Departure,
     Hit, Ray, RayPacket, Shape, ShapeKind,
 };
-use bareray::math::affine::normal_to_world;
-use bareray::math::{Affine, Vec3f, V3};
+use bareray::math::{Vec3f, V3};
 use bareray::scene::desc::CameraDesc;
 use bareray::simd::{IdLanes, Lanes};
 use glam::{DAffine3, DQuat, DVec3};
@@ -330,13 +329,7 @@ fn shape() -> impl Strategy<Value = Shape<f32>> {
                 DQuat::from_axis_angle(axis, angle),
                 DVec3::new(tx, ty, tz),
             );
-            Shape {
-                kind: if sphere { ShapeKind::Sphere } else { ShapeKind::Plane },
-                center: V3::new(m.translation.x as f32, m.translation.y as f32, m.translation.z as f32),
-                object_from_world: Affine::from_glam(&m.inverse()).to_f32(),
-                normal_to_world: normal_to_world(&m).to_f32(),
-                material: 0,
-            }
+            Shape::placed(if sphere { ShapeKind::Sphere } else { ShapeKind::Plane }, &m, 0).to_f32()
         })
 }
 

@@ -101,6 +101,7 @@ fn wide_shape(s: &Shape<f32>) -> Shape<f64> {
         object_from_world: wide_affine(&s.object_from_world),
         normal_to_world: wide_affine(&s.normal_to_world),
         material: s.material,
+        c_eye: f64::from(s.c_eye),
     }
 }
 

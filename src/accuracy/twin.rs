@@ -23,7 +23,6 @@ use crate::geometry::{
     far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, Shape,
     ShapeKind, NO_PRIM,
 };
-use crate::math::affine::normal_to_world;
 use crate::math::{Affine, V3};
 use crate::scene::desc::SceneDesc;
 
@@ -155,13 +154,7 @@ impl Twin {
                     matrix3: s.world_from_object.matrix3,
                     translation: s.world_from_object.translation - eye,
                 };
-                Shape {
-                    kind: s.kind,
-                    center: v(m.translation),
-                    object_from_world: Affine::from_glam(&m.inverse()),
-                    normal_to_world: normal_to_world(&m),
-                    material: s.material,
-                }
+                Shape::placed(s.kind, &m, s.material)
             })
             .collect::<Vec<_>>();
         let base = (spheres.len() + shapes.len()) as u32;

@@ -2,9 +2,9 @@
 //! affine map. The ray is carried into object space, where the generic test runs; t is unchanged by the map
 //! because the direction is mapped without renormalising. Normals go back by the inverse transpose.
 
-use crate::math::{Affine, Real, Vec3f, V3};
+use crate::math::{Affine, Mask, Real, Vec3f, V3};
 
-use super::{intersect_plane, sphere_roots, Ray, Roots};
+use super::{intersect_plane, sphere_approach, sphere_roots, Approach, Ray, Roots, SphereRay};
 
 /// Which generic shape an instance places.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -35,6 +35,38 @@ pub struct Shape<F> {
     pub normal_to_world: Affine<F>,
     /// Index into the scene's materials.
     pub material: u32,
+    /// The eye term in object space, `|o_eye|² − 1` with `o_eye` the eye (the rendering space's origin)
+    /// carried into object space, computed in f64 and rounded once: camera rays use it for the unit
+    /// sphere's `c`, as spheres use theirs ([`super::Approach::roots_from_eye`]). Unused for planes.
+    pub c_eye: F,
+}
+
+impl Shape<f64> {
+    /// A generic shape placed by `world_from_object` (in rendering space), in f64.
+    pub fn placed(kind: ShapeKind, world_from_object: &glam::DAffine3, material: u32) -> Self {
+        let object_from_world = world_from_object.inverse();
+        let d = object_from_world.translation.length();
+        Shape {
+            kind,
+            center: world_from_object.translation.into(),
+            object_from_world: Affine::from_glam(&object_from_world),
+            normal_to_world: crate::math::affine::normal_to_world(world_from_object),
+            material,
+            c_eye: (d - 1.0) * (d + 1.0),
+        }
+    }
+
+    /// Every value rounded to f32 once.
+    pub fn to_f32(&self) -> Shape<f32> {
+        Shape {
+            kind: self.kind,
+            center: self.center.to_f32(),
+            object_from_world: self.object_from_world.to_f32(),
+            normal_to_world: self.normal_to_world.to_f32(),
+            material: self.material,
+            c_eye: self.c_eye as f32,
+        }
+    }
 }
 
 impl<F: Real> Shape<F> {
@@ -49,12 +81,29 @@ impl<F: Real> Shape<F> {
         )
     }
 
-    /// Closest hit in `[0, t_max)`.
+    /// Closest hit in `[0, t_max)`. The unit sphere's `c = |o'|² − 1` cancels for a large ellipsoid seen
+    /// from close by, so it comes from the exact eye term as for spheres: lanes whose ray starts at the eye
+    /// take it as it is, the others as `c_eye + 2·o_eye·v + |v|²` (`v = L⁻¹·o`, the origin seen from the eye
+    /// in object space) where that has the smaller rounding bound ([`Approach::roots_with_eye_term`] with
+    /// the centre seen from the eye, `L⁻¹·centre`). Shapes are few; every lane computes both forms.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
         let local = self.to_object(ray);
         match self.kind {
-            ShapeKind::Sphere => super::first_root(&self.unit_sphere_roots(&local), t_max),
+            ShapeKind::Sphere => {
+                let line = sphere_approach(V3::all(F::splat(0.0)), F::splat(1.0), &SphereRay::new(local));
+                let seen_from_eye =
+                    SphereRay::new(Ray::new(self.object_from_world.vector(ray.origin), local.dir));
+                let centre = self.object_from_world.vector(self.center);
+                let others = line.roots_with_eye_term(centre, self.c_eye, &seen_from_eye);
+                let eye = SphereRay::new(*ray).from_eye();
+                let roots = if eye.any() {
+                    Approach::select_eye_lanes(eye, line.roots_from_eye(self.c_eye, true), others)
+                } else {
+                    others
+                };
+                super::first_root(&roots, t_max)
+            }
             ShapeKind::Plane => intersect_plane(&local, t_max),
         }
     }
@@ -80,17 +129,10 @@ impl Shape<f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::math::affine::normal_to_world;
     use glam::{DAffine3, DVec3};
 
     fn shape(kind: ShapeKind, world_from_object: DAffine3) -> Shape<f64> {
-        Shape {
-            kind,
-            center: world_from_object.translation.into(),
-            object_from_world: Affine::from_glam(&world_from_object.inverse()),
-            normal_to_world: normal_to_world(&world_from_object),
-            material: 0,
-        }
+        Shape::placed(kind, &world_from_object, 0)
     }
 
     #[test]

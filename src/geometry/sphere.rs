@@ -171,7 +171,7 @@ impl<F: Real> Approach<F> {
     pub fn roots(&self) -> Roots<F> {
         let oo = self.oc.dot(self.oc);
         let (c, bound) = (oo - self.r2, oo + self.r2);
-        let (on_surface, ahead) = self.contact(c, bound);
+        let (on_surface, ahead) = self.contact(c, bound, self.reach2);
         self.roots_with(c, (self.r2 - self.l2) * self.inv_dd, on_surface, ahead)
     }
 
@@ -188,7 +188,9 @@ impl<F: Real> Approach<F> {
         let direct_bound = oo + self.r2;
         let from_eye_term = bound.le(direct_bound);
         let c = F::select(from_eye_term, c, oo - self.r2);
-        self.roots_from(c, F::select(from_eye_term, bound, direct_bound), oo)
+        // The origin whose rounding the contact rule allows for: the one `c` was computed from.
+        let reach2 = F::select(from_eye_term, ray.reach2, self.reach2);
+        self.roots_from(c, F::select(from_eye_term, bound, direct_bound), oo, reach2)
     }
 
     /// The two roots for a ray that starts exactly at the eye: `c = c_eye`. `choose` (the scene's
@@ -223,11 +225,11 @@ impl<F: Real> Approach<F> {
         }
     }
 
-    /// The roots from `c` (rounding bound `bound`; `oo = |oc|²`): the discriminant with the smaller bound,
-    /// the contact rule, then [`Approach::roots_with`].
+    /// The roots from `c` (rounding bound `bound`; `oo = |oc|²`; `reach2` as [`Approach::contact`] takes it):
+    /// the discriminant with the smaller bound, the contact rule, then [`Approach::roots_with`].
     #[inline(always)]
-    fn roots_from(&self, c: F, bound: F, oo: F) -> Roots<F> {
-        let (on_surface, ahead) = self.contact(c, bound);
+    fn roots_from(&self, c: F, bound: F, oo: F, reach2: F) -> Roots<F> {
+        let (on_surface, ahead) = self.contact(c, bound, reach2);
         let pp = self.proj * self.proj;
         let textbook_err = pp * self.dd + bound;
         let textbook = (textbook_err * textbook_err).lt(oo * self.r2);
@@ -235,11 +237,12 @@ impl<F: Real> Approach<F> {
         self.roots_with(c, disc, on_surface, ahead)
     }
 
-    /// The contact rule's two facts: the origin is on the surface within `c`'s rounding (`bound`), and the
-    /// ray heads toward the centre's side (`proj ≥ 0`).
+    /// The contact rule's two facts: the origin is on the surface within `c`'s rounding (`bound`, and
+    /// `reach2` = 2·|origin|∞ of the origin `c` was computed from), and the ray heads toward the centre's side
+    /// (`proj ≥ 0`).
     #[inline(always)]
-    fn contact(&self, c: F, bound: F) -> (F::Mask, F::Mask) {
-        let tol = self.contact * (bound + self.r * self.reach2);
+    fn contact(&self, c: F, bound: F, reach2: F) -> (F::Mask, F::Mask) {
+        let tol = self.contact * (bound + self.r * reach2);
         (c.abs().le(tol), self.proj.ge(F::splat(0.0)))
     }
 

@@ -14,8 +14,7 @@ use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
-use crate::math::affine::normal_to_world;
-use crate::math::{Affine, Rgb, Vec3f, V3};
+use crate::math::{Rgb, Vec3f, V3};
 use glam::DAffine3;
 use obvhs::BvhBuildParams;
 
@@ -174,16 +173,7 @@ impl Scene {
         geometry.shapes = desc
             .shapes
             .iter()
-            .map(|s| {
-                let world_from_object = to_rendering * s.world_from_object;
-                Shape {
-                    kind: s.kind,
-                    center: V3::from(world_from_object.translation).to_f32(),
-                    object_from_world: Affine::from_glam(&world_from_object.inverse()).to_f32(),
-                    normal_to_world: normal_to_world(&world_from_object).to_f32(),
-                    material: s.material,
-                }
-            })
+            .map(|s| Shape::placed(s.kind, &(to_rendering * s.world_from_object), s.material).to_f32())
             .collect();
         for p in &desc.polygons {
             push_polygon(&mut geometry.polygons, p, origin);

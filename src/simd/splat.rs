@@ -24,6 +24,7 @@ impl Shape<f32> {
             object_from_world: self.object_from_world.to_lanes(),
             normal_to_world: self.normal_to_world.to_lanes(),
             material: self.material,
+            c_eye: F::splat_f32(self.c_eye),
         }
     }
 }
