@@ -14,6 +14,6 @@ pub use polygon::{intersect_triangle, stays_off_plane};
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};
 pub use sphere::{
-    far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,
+    at_eye, far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,
     EyeLanes, Roots, SphereRay, CONTACT_ROUNDINGS,
 };

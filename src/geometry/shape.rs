@@ -4,7 +4,7 @@
 
 use crate::math::{Affine, Mask, Real, Vec3f, V3};
 
-use super::{intersect_plane, sphere_approach, sphere_roots, Approach, Ray, Roots, SphereRay};
+use super::{at_eye, intersect_plane, sphere_approach, sphere_roots, Approach, Ray, Roots, SphereRay};
 
 /// Which generic shape an instance places.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,18 +91,27 @@ impl<F: Real> Shape<F> {
         let local = self.to_object(ray);
         match self.kind {
             ShapeKind::Sphere => {
-                let line = sphere_approach(V3::all(F::splat(0.0)), F::splat(1.0), &SphereRay::new(local));
-                let seen_from_eye =
-                    SphereRay::new(Ray::new(self.object_from_world.vector(ray.origin), local.dir));
-                let centre = self.object_from_world.vector(self.center);
-                let others = line.roots_with_eye_term(centre, self.c_eye, &seen_from_eye);
-                let eye = SphereRay::new(*ray).from_eye();
-                let roots = if eye.any() {
-                    Approach::select_eye_lanes(eye, line.roots_from_eye(self.c_eye, true), others)
-                } else {
-                    others
+                let terms = SphereRay::new(local);
+                let line = sphere_approach(V3::all(F::splat(0.0)), F::splat(1.0), &terms);
+                if !line.meets().any() {
+                    return (line.meets(), t_max);
+                }
+                let others = || {
+                    let seen_from_eye = terms.with_origin(self.object_from_world.vector(ray.origin));
+                    let centre = self.object_from_world.vector(self.center);
+                    line.roots_with_eye_term(centre, self.c_eye, &seen_from_eye)
                 };
-                super::first_root(&roots, t_max)
+                let eye = at_eye(ray.origin);
+                let roots = if eye.all() {
+                    line.roots_from_eye(self.c_eye, true)
+                } else if eye.any() {
+                    Approach::select_eye_lanes(eye, line.roots_from_eye(self.c_eye, true), others())
+                } else {
+                    others()
+                };
+                // Misses report `t_max` whichever way they were found (the early return above).
+                let (hit, t) = super::first_root(&roots, t_max);
+                (hit, F::select(hit, t, t_max))
             }
             ShapeKind::Plane => intersect_plane(&local, t_max),
         }

@@ -97,11 +97,30 @@ impl<F: Real> SphereRay<F> {
     /// The lanes whose ray starts exactly at the origin of the rendering space (the eye).
     #[inline(always)]
     pub fn from_eye(&self) -> F::Mask {
-        let zero = F::splat(0.0);
-        let at_zero = |v: F| v.le(zero) & v.ge(zero);
-        let o = self.ray.origin;
-        at_zero(o.x) & at_zero(o.y) & at_zero(o.z)
+        at_eye(self.ray.origin)
     }
+
+    /// The same direction terms for a ray from `origin` (only the origin's terms are recomputed).
+    #[inline(always)]
+    pub fn with_origin(&self, origin: V3<F>) -> Self {
+        let abs_origin = V3::new(origin.x.abs(), origin.y.abs(), origin.z.abs());
+        let reach = abs_origin.x.max_of(abs_origin.y).max_of(abs_origin.z);
+        Self {
+            ray: Ray::new(origin, self.ray.dir),
+            oo: origin.dot(origin),
+            abs_origin,
+            reach2: reach + reach,
+            ..*self
+        }
+    }
+}
+
+/// The lanes where `origin` is exactly the origin of the rendering space (the eye).
+#[inline(always)]
+pub fn at_eye<F: Real>(origin: V3<F>) -> F::Mask {
+    let zero = F::splat(0.0);
+    let at_zero = |v: F| v.le(zero) & v.ge(zero);
+    at_zero(origin.x) & at_zero(origin.y) & at_zero(origin.z)
 }
 
 /// Which lanes of a query start at the eye and take [`Approach::roots_from_eye`].
