@@ -298,3 +298,26 @@ fn stats_report_scene_rays_and_times() {
         assert!(text.contains(needle), "--stats lacks {needle:?}: {text}");
     }
 }
+
+/// An output in a directory that cannot be written to is refused before rendering (skipped where the test
+/// can write there anyway, as root can).
+#[cfg(unix)]
+#[test]
+fn unwritable_output_directory_is_refused_before_rendering() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let locked = dir.path().join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if std::fs::write(locked.join("probe"), b"").is_ok() {
+        eprintln!("skipped: this user can write into a read-only directory");
+        return;
+    }
+    let out = locked.join("out.png");
+    let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "16"]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write in") && err.matches("error:").count() == 1, "{err}");
+    assert!(run.stdout.is_empty(), "refused before rendering");
+    assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
+}
