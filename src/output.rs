@@ -84,7 +84,8 @@ pub fn check_writable(path: &Path) -> Result<(), OutputError> {
         return fail(format!("cannot write: directory {} {what}", dir.display()));
     }
     let probe = temp_path(path);
-    match fs::OpenOptions::new().write(true).create_new(true).open(&probe) {
+    // The name the write will use; a stale file of that name (an earlier process with this id) is reused.
+    match fs::OpenOptions::new().write(true).create(true).truncate(true).open(&probe) {
         Ok(_) => {
             let _ = fs::remove_file(&probe);
             Ok(())
