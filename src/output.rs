@@ -19,7 +19,7 @@ pub enum Format {
     Png,
     /// Linear 32-bit float OpenEXR.
     Exr,
-    /// 8-bit sRGB binary PPM (P6).
+    /// 8-bit sRGB binary PPM (`P6`); `.pnm` names it too.
     Ppm,
 }
 
@@ -32,41 +32,81 @@ pub enum OutputError {
         /// The output path.
         path: PathBuf,
     },
-    /// Parent directory missing.
-    #[error("{path}: directory {dir} does not exist")]
-    NoDirectory {
+    /// The target cannot be written: it is a directory, its directory is missing, or not writable.
+    #[error("{path}: {reason}")]
+    Unwritable {
         /// The output path.
         path: PathBuf,
-        /// Its parent.
-        dir: PathBuf,
+        /// Why, in a few words.
+        reason: String,
     },
     /// Encoding or I/O failure.
-    #[error("{path}: {source}")]
+    #[error("{path}: {cause}")]
     Write {
         /// The output path.
         path: PathBuf,
-        /// What went wrong.
-        source: BoxError,
+        /// What went wrong (not a `source`: the message already says it, and error chains would repeat it).
+        cause: BoxError,
     },
 }
 
 impl Format {
-    /// The format named by `path`'s extension (case-insensitive), checked before rendering so that a bad
-    /// name fails at once rather than after the render.
-    pub fn from_path(path: &Path) -> Result<Format, OutputError> {
+    /// The format named by `path`'s extension (case-insensitive): `.png`, `.exr`, `.ppm` or `.pnm`.
+    pub fn from_extension(path: &Path) -> Result<Format, OutputError> {
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-        let format = match ext.as_deref() {
-            Some("png") => Format::Png,
-            Some("exr") => Format::Exr,
-            Some("ppm") | Some("pnm") => Format::Ppm,
-            _ => return Err(OutputError::UnknownFormat { path: path.to_owned() }),
-        };
-        let dir = parent_dir(path);
-        if !dir.is_dir() {
-            return Err(OutputError::NoDirectory { path: path.to_owned(), dir });
+        match ext.as_deref() {
+            Some("png") => Ok(Format::Png),
+            Some("exr") => Ok(Format::Exr),
+            Some("ppm") | Some("pnm") => Ok(Format::Ppm),
+            _ => Err(OutputError::UnknownFormat { path: path.to_owned() }),
         }
+    }
+
+    /// [`Format::from_extension`], and [`check_writable`]: checked before rendering so that a bad name
+    /// fails at once rather than after the render.
+    pub fn from_path(path: &Path) -> Result<Format, OutputError> {
+        let format = Format::from_extension(path)?;
+        check_writable(path)?;
         Ok(format)
     }
+}
+
+/// Whether a file can be written at `path` the way [`write_atomic`] writes it: `path` is not a directory,
+/// and a temporary file can be created (and is removed again) in its directory.
+pub fn check_writable(path: &Path) -> Result<(), OutputError> {
+    let fail = |reason: String| Err(OutputError::Unwritable { path: path.to_owned(), reason });
+    if path.is_dir() {
+        return fail("is a directory".to_owned());
+    }
+    let dir = parent_dir(path);
+    if !dir.is_dir() {
+        let what = if dir.exists() { "is not a directory" } else { "does not exist" };
+        return fail(format!("cannot write: directory {} {what}", dir.display()));
+    }
+    let probe = temp_path(path);
+    // The name the write will use; a stale file of that name (an earlier process with this id) is reused.
+    match fs::OpenOptions::new().write(true).create(true).truncate(true).open(&probe) {
+        Ok(_) => {
+            let _ = fs::remove_file(&probe);
+            Ok(())
+        }
+        Err(e) => fail(format!("cannot write in {}: {}", dir.display(), io_reason(&e))),
+    }
+}
+
+/// An I/O error's description without Rust's "(os error N)" suffix.
+fn io_reason(e: &std::io::Error) -> String {
+    let text = e.to_string();
+    match text.find(" (os error") {
+        Some(i) => text[..i].to_owned(),
+        None => text,
+    }
+}
+
+/// The temporary file beside `path` that [`write_atomic`] writes first.
+fn temp_path(path: &Path) -> PathBuf {
+    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
+    parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()))
 }
 
 fn parent_dir(path: &Path) -> PathBuf {
@@ -196,14 +236,13 @@ pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
 pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
     write_atomic(path, |tmp| encode(img, format, tmp))
-        .map_err(|source| OutputError::Write { path: path.to_owned(), source })
+        .map_err(|cause| OutputError::Write { path: path.to_owned(), cause })
 }
 
 /// Runs `write` on a temporary file beside `path`, then renames it to `path`; on failure the temporary
 /// file is removed and `path` is left as it was.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), BoxError>) -> Result<(), BoxError> {
-    let name = path.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
-    let tmp = parent_dir(path).join(format!(".{name}.{}.tmp", std::process::id()));
+    let tmp = temp_path(path);
     let result = write(&tmp).and_then(|()| fs::rename(&tmp, path).map_err(Into::into));
     if result.is_err() {
         let _ = fs::remove_file(&tmp);
@@ -220,7 +259,7 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
             let png = PngEncoder::new_with_quality(&mut file, CompressionType::Fast, FilterType::Paeth);
             to_srgb8(img).write_with_encoder(png)?
         }
-        Format::Ppm => to_srgb8(img).write_to(&mut file, ImageFormat::Pnm)?,
+        Format::Ppm => write_ppm(&to_srgb8(img), &mut file)?,
         Format::Exr => {
             let raw = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
             let buf =
@@ -230,6 +269,13 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
     }
     file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
     Ok(())
+}
+
+/// Binary 8-bit PPM: the header `P6\n<width> <height>\n255\n`, then the RGB bytes row by row, top row
+/// first (netpbm's `P6`, which every PPM reader takes; the `image` crate's PNM encoder writes PAM `P7`).
+pub fn write_ppm(img: &RgbImage, out: &mut impl Write) -> std::io::Result<()> {
+    write!(out, "P6\n{} {}\n255\n", img.width(), img.height())?;
+    out.write_all(img.as_raw())
 }
 
 /// Writes raw bytes atomically (for text outputs such as generated scenes).
@@ -255,6 +301,14 @@ pub fn write_atomic_with(
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn ppm_is_p6_with_a_minimal_header() {
+        let img = RgbImage::from_raw(2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap();
+        let mut out = Vec::new();
+        write_ppm(&img, &mut out).unwrap();
+        assert_eq!(out, b"P6\n2 1\n255\n\x01\x02\x03\x04\x05\x06");
+    }
 
     #[test]
     fn srgb_curve_endpoints_and_midpoint() {

@@ -1,5 +1,6 @@
 //! The `bareray` binary end to end: every scene in scenes/ renders to every format; bad input gives a clear
-//! error, exit code 1 and no panic, and never touches an existing output file.
+//! error, no panic, and never touches an existing output file; argument errors exit with 2, scene, render
+//! and file errors with 1.
 
 use std::path::{Path, PathBuf};
 use std::process::{Command, Output};
@@ -100,32 +101,131 @@ fn bad_scene_fails_cleanly_and_keeps_the_old_output() {
 #[test]
 fn bad_arguments_fail_before_rendering() {
     let dir = tempfile::tempdir().unwrap();
-    let cases: [(&[&str], &str); 5] = [
-        (&["render", "nope.toml"], "nope.toml: cannot read scene"),
-        (&["render", "scene.obj"], "unknown scene format"),
-        (&["render", "-o", "out.jpg"], "unknown image format"),
-        (&["render", "-o", "no/such/dir/out.png"], "does not exist"),
-        (&["render", "--spp", "5"], "square number"),
+    std::fs::create_dir(dir.path().join("out.png")).unwrap();
+    std::fs::create_dir(dir.path().join("sub.toml")).unwrap();
+    let whitted = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let whitted = whitted.to_str().unwrap();
+    // (arguments, exit code, the message)
+    let cases: [(&[&str], i32, &str); 16] = [
+        (&["render", "nope.toml"], 1, "nope.toml: cannot read scene"),
+        (&["render", "scene.obj"], 1, "unknown scene format"),
+        (&["render", "sub.toml"], 1, "sub.toml: is a directory"),
+        (&["render", "."], 1, ".: is a directory"),
+        (&["render", "-o", "no/such/dir/out.png"], 1, "directory no/such/dir does not exist"),
+        (&["render", "-o", "out.png"], 1, "out.png: is a directory"),
+        (&["render", "-o", "out.jpg"], 2, "unknown image format"),
+        (&["render", "--spp", "5"], 2, "square number"),
+        (&["render", "--hfov", "180"], 2, "(0, 180)"),
+        (&["render", "--threads", "0"], 2, "--threads"),
+        (&["bench", whitted, "--threads", "0"], 2, "--threads"),
+        (&["bench", whitted, "--threads", "1,2000"], 2, "--threads"),
+        (&["accuracy", whitted, "--threads", "0"], 2, "--threads"),
+        (&["gen", "field", "--count", "10", "-o", "f.nff"], 2, "f.nff: this command writes .xyzr"),
+        (&["gen", "flake", "--level", "2", "-o", "f.toml"], 2, "f.toml: this command writes .nff"),
+        (&["gen", "field", "--count", "0", "-o", "f.xyzr"], 2, "--count"),
     ];
-    for (args, needle) in cases {
+    for (args, code, needle) in cases {
         let run =
             Command::new(env!("CARGO_BIN_EXE_bareray")).args(args).current_dir(dir.path()).output().unwrap();
-        assert_eq!(run.status.code(), Some(1), "{args:?}");
         let err = stderr(&run);
+        assert_eq!(run.status.code(), Some(code), "{args:?}: {err}");
         assert!(err.contains(needle) && !err.contains("panicked"), "{args:?}: {err}");
+        // One message, said once: no error chain repeating the OS's words.
+        assert_eq!(err.matches("error:").count(), 1, "{args:?}: {err}");
+        assert!(err.matches("os error").count() <= 1, "{args:?}: {err}");
+        assert!(run.stdout.is_empty(), "nothing rendered or measured: {args:?}");
     }
-    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no output written");
+    let mut left: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    left.sort();
+    assert_eq!(left, ["out.png", "sub.toml"], "no output written, no temporary file left");
+}
+
+/// `.ppm` (and `.pnm`) is binary 8-bit PPM: `P6`, width and height, 255, then 3 bytes per pixel.
+#[test]
+fn ppm_is_binary_p6() {
+    let dir = tempfile::tempdir().unwrap();
+    for name in ["a.ppm", "a.pnm"] {
+        let out = dir.path().join(name);
+        let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "20", "--height", "15", "-q"]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let bytes = std::fs::read(&out).unwrap();
+        let header = b"P6\n20 15\n255\n";
+        assert_eq!(&bytes[..header.len()], header, "{name}");
+        assert_eq!(bytes.len(), header.len() + 3 * 20 * 15, "{name}");
+    }
+}
+
+/// A scene with no objects, or without lights for materials that need them, renders but says so.
+#[test]
+fn empty_and_unlit_scenes_warn() {
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        ("empty.toml", "[camera]\nwidth = 16\nheight = 12\n", &["no objects", "no lights"][..]),
+        (
+            "dark.toml",
+            "[camera]\nwidth = 16\nheight = 12\n[[spheres]]\ncenter = [0, 0, 0]\nradius = 1\n",
+            &["no lights"],
+        ),
+        (
+            "glow.toml",
+            "[camera]\nwidth = 16\nheight = 12\n[materials.default]\ndiffuse = 0\nambient = 1\n\
+             [[spheres]]\ncenter = [0, 0, 0]\nradius = 1\n",
+            &[],
+        ),
+    ];
+    for (name, text, warnings) in cases {
+        let scene = dir.path().join(name);
+        std::fs::write(&scene, text).unwrap();
+        let out = dir.path().join("out.png");
+        let run = bareray(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"]);
+        assert_eq!(run.status.code(), Some(0), "{name}: {}", stderr(&run));
+        let err = stderr(&run);
+        for w in warnings {
+            assert!(err.contains(&format!("warning: {}: {w}", scene.display())), "{name}: {err}");
+        }
+        assert_eq!(err.lines().count(), warnings.len(), "{name}: {err}");
+        assert!(out.exists());
+    }
+    // The demo scene has both.
+    let run = bareray(&["render", "-o", dir.path().join("d.png").to_str().unwrap(), "--width", "16", "-q"]);
+    assert!(run.status.success() && run.stderr.is_empty(), "{}", stderr(&run));
 }
 
 #[test]
 fn help_explains_the_commands() {
     let run = bareray(&["--help"]);
     assert!(run.status.success());
-    assert!(String::from_utf8_lossy(&run.stdout).contains("render"));
+    let text = String::from_utf8_lossy(&run.stdout);
+    for needle in ["render", ".toml", ".nff", ".xyzr", "Exit codes", "2 argument", "1 errors"] {
+        assert!(text.contains(needle), "--help lacks {needle:?}: {text}");
+    }
     let run = bareray(&["render", "--help"]);
     let text = String::from_utf8_lossy(&run.stdout);
-    for flag in ["--output", "--width", "--height", "--spp", "--threads", ".exr"] {
-        assert!(text.contains(flag), "render --help lacks {flag}");
+    for needle in [
+        "--output",
+        "--width",
+        "--height",
+        "--spp",
+        "--threads",
+        ".exr",
+        ".ppm",
+        ".toml",
+        ".nff",
+        ".xyzr",
+        "pixel_size",
+        "Exit codes",
+    ] {
+        assert!(text.contains(needle), "render --help lacks {needle}");
+    }
+    // Every scene the examples name exists.
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let named: Vec<&str> = text
+        .split_whitespace()
+        .filter(|w| w.starts_with("scenes/") && [".toml", ".nff", ".xyzr"].iter().any(|e| w.ends_with(e)))
+        .collect();
+    assert!(named.len() >= 3, "{named:?}");
+    for scene in named {
+        assert!(root.join(scene).is_file(), "render --help names {scene}, which does not exist");
     }
 }
 
@@ -177,11 +277,16 @@ fn aov_channels_hold_depth_normal_and_id() {
 fn stats_report_scene_rays_and_times() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("s.png");
-    let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "40", "--stats"]);
+    let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "40", "--stats", "--spp", "1"]);
     assert!(run.status.success(), "{}", stderr(&run));
     let text = String::from_utf8_lossy(&run.stdout);
+    // Human names and counts: no Debug names, singular for one.
+    assert!(!text.contains("Grid(") && !text.contains("1 planes"), "{text}");
+    // One build time.
+    assert_eq!(text.matches("build").count(), 1, "{text}");
     for needle in [
-        "3 primitives (2 spheres, 0 ellipsoids, 1 planes, 0 polygons), 2 lights",
+        "3 primitives (2 spheres, 0 ellipsoids, 1 plane, 0 polygons), 2 lights",
+        "1 sample per pixel (1×1 grid)",
         "skips: bvh, ellipsoids, polygons",
         "brute force",
         "primary",
@@ -192,4 +297,27 @@ fn stats_report_scene_rays_and_times() {
     ] {
         assert!(text.contains(needle), "--stats lacks {needle:?}: {text}");
     }
+}
+
+/// An output in a directory that cannot be written to is refused before rendering (skipped where the test
+/// can write there anyway, as root can).
+#[cfg(unix)]
+#[test]
+fn unwritable_output_directory_is_refused_before_rendering() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = tempfile::tempdir().unwrap();
+    let locked = dir.path().join("locked");
+    std::fs::create_dir(&locked).unwrap();
+    std::fs::set_permissions(&locked, std::fs::Permissions::from_mode(0o555)).unwrap();
+    if std::fs::write(locked.join("probe"), b"").is_ok() {
+        eprintln!("skipped: this user can write into a read-only directory");
+        return;
+    }
+    let out = locked.join("out.png");
+    let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "16"]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("cannot write in") && err.matches("error:").count() == 1, "{err}");
+    assert!(run.stdout.is_empty(), "refused before rendering");
+    assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
 }

@@ -3,11 +3,11 @@
 use std::io::Write;
 use std::path::PathBuf;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::Args;
 
 use super::camera_args::CameraArgs;
-use super::render::{load_scene, parse_lanes};
+use super::render::{load_scene, parse_lanes, parse_threads};
 use crate::accuracy::{run as compare_scene, Options};
 
 /// Arguments of `bareray accuracy`.
@@ -28,7 +28,7 @@ pub struct AccuracyArgs {
     #[arg(long)]
     pub json: bool,
     /// Worker threads (default: all cores).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
     #[command(flatten)]
     pub camera: CameraArgs,
@@ -36,11 +36,8 @@ pub struct AccuracyArgs {
 
 /// Runs `bareray accuracy`.
 pub fn run(args: AccuracyArgs) -> Result<()> {
-    if args.threads.is_some_and(|t| t == 0 || t > 1024) {
-        bail!("--threads takes a count from 1 to 1024, got {:?}", args.threads);
-    }
     let mut desc = load_scene(&args.scene)?;
-    args.camera.apply(&mut desc)?;
+    args.camera.apply(&mut desc);
     let opts =
         Options { lanes: args.lanes, secondary: args.secondary, threads: args.threads, ..Options::default() };
     let report = compare_scene(&args.scene.display().to_string(), &desc, &opts)?;

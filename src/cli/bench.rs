@@ -4,12 +4,12 @@ use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
-use anyhow::{bail, Result};
+use anyhow::Result;
 use clap::Args;
 use indicatif::ProgressBar;
 
 use super::camera_args::CameraArgs;
-use super::render::{load_scene, parse_lanes};
+use super::render::{load_scene, parse_lanes, parse_threads};
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::{Accel, BvhPreset, Scene};
 
@@ -24,8 +24,8 @@ pub struct BenchArgs {
     /// Packet widths to measure, a comma list of 1, 4, 8, 16 (1 is the scalar reference path).
     #[arg(long, value_delimiter = ',', default_values_t = vec![1, 4, 8, 16], value_parser = parse_lanes)]
     pub lanes: Vec<usize>,
-    /// Thread counts to measure, a comma list.
-    #[arg(long, value_delimiter = ',', default_values_t = vec![1, 2])]
+    /// Thread counts to measure, a comma list (each from 1 to 1024).
+    #[arg(long, value_delimiter = ',', default_values_t = vec![1, 2], value_parser = parse_threads)]
     pub threads: Vec<usize>,
     /// Trace camera rays to the closest hit only (one per pixel centre): no shading, no secondary rays.
     #[arg(long)]
@@ -77,12 +77,9 @@ struct Row {
 
 /// Runs `bareray bench`.
 pub fn run(args: BenchArgs) -> Result<()> {
-    if args.threads.iter().any(|&t| t == 0 || t > 1024) {
-        bail!("--threads takes counts from 1 to 1024, got {:?}", args.threads);
-    }
     let clock = Instant::now();
     let mut desc = load_scene(&args.scene)?;
-    args.camera.apply(&mut desc)?;
+    args.camera.apply(&mut desc);
     if args.primary_only {
         // Primary hits need no lights and no bounces; without them the build skips the single-ray tree.
         desc.lights.clear();

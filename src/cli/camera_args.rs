@@ -1,6 +1,5 @@
 //! Camera and resolution overrides shared by every command that renders.
 
-use anyhow::{bail, Result};
 use clap::Args;
 use glam::DVec3;
 
@@ -19,12 +18,15 @@ pub struct CameraArgs {
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
     pub up: Option<DVec3>,
     /// Horizontal field of view in degrees, across the outer pixel edges (pixel-centre sampling).
-    #[arg(long)]
+    #[arg(long, value_parser = parse_hfov)]
     pub hfov: Option<f64>,
-    /// Image width in pixels. Given alone, the height follows the scene's aspect ratio.
+    /// Image width in pixels. Given alone, the height follows the scene's aspect ratio. On a scene that sets
+    /// the camera's `pixel_size` the pixels keep their size, so the view widens or narrows with the
+    /// resolution (the framing changes); add --hfov to keep a fixed view.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub width: Option<u32>,
-    /// Image height in pixels. Given alone, the width follows the scene's aspect ratio.
+    /// Image height in pixels. Given alone, the width follows the scene's aspect ratio. On a scene that sets
+    /// `pixel_size` the framing changes with the resolution, as for --width.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
     pub height: Option<u32>,
 }
@@ -39,9 +41,17 @@ pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
     }
 }
 
+/// Parses a horizontal field of view in degrees, in (0, 180).
+pub fn parse_hfov(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(h) if h > 0.0 && h < 180.0 => Ok(h),
+        _ => Err("the field of view must be a number of degrees in (0, 180)".to_owned()),
+    }
+}
+
 impl CameraArgs {
     /// Applies the overrides to a scene.
-    pub fn apply(&self, desc: &mut SceneDesc) -> Result<()> {
+    pub fn apply(&self, desc: &mut SceneDesc) {
         let cam = &mut desc.camera;
         if let Some(eye) = self.eye {
             cam.eye = eye;
@@ -53,9 +63,6 @@ impl CameraArgs {
             cam.up = up;
         }
         if let Some(hfov) = self.hfov {
-            if !(hfov > 0.0 && hfov < 180.0) {
-                bail!("--hfov must be in (0, 180) degrees, got {hfov}");
-            }
             cam.field = Field::HorizontalAngle(hfov);
             cam.sweep = Sweep::PixelCentre;
         }
@@ -66,7 +73,6 @@ impl CameraArgs {
             (None, Some(h)) => (cam.width, cam.height) = (((f64::from(h) * aspect).round() as u32).max(1), h),
             (None, None) => {}
         }
-        Ok(())
     }
 }
 
@@ -80,5 +86,13 @@ mod tests {
         assert!(parse_vec3("1,2").is_err());
         assert!(parse_vec3("1,2,x").is_err());
         assert!(parse_vec3("1,2,inf").is_err());
+    }
+
+    #[test]
+    fn field_of_view_lies_strictly_between_0_and_180() {
+        assert_eq!(parse_hfov("45"), Ok(45.0));
+        for bad in ["0", "180", "-10", "nan", "x"] {
+            assert!(parse_hfov(bad).is_err(), "{bad}");
+        }
     }
 }

@@ -3,9 +3,10 @@
 use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::{bail, Context, Result};
+use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
+use super::usage;
 use crate::output::write_atomic_with;
 use crate::scene::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
 
@@ -36,15 +37,15 @@ pub struct FieldArgs {
     #[arg(long, default_value_t = 1)]
     pub seed: u64,
     /// The box the centres fill: x0,y0,z0,x1,y1,z1.
-    #[arg(long = "box", value_name = "x0,y0,z0,x1,y1,z1", allow_hyphen_values = true)]
-    pub bounds: Option<String>,
+    #[arg(long = "box", value_name = "x0,y0,z0,x1,y1,z1", allow_hyphen_values = true, value_parser = parse_box)]
+    pub bounds: Option<([f64; 3], [f64; 3])>,
     /// Smallest radius [default: 0.1·s, s = (x1 − x0)/cbrt(count)].
     #[arg(long, allow_negative_numbers = true)]
     pub rmin: Option<f64>,
     /// Largest radius [default: 0.25·s].
     #[arg(long, allow_negative_numbers = true)]
     pub rmax: Option<f64>,
-    /// Output file (.xyzr), written atomically.
+    /// Output file; must end in .xyzr (the format written). Written atomically.
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -53,9 +54,9 @@ pub struct FieldArgs {
 #[derive(Args, Debug)]
 pub struct FlakeArgs {
     /// Size factor: (9^(L+1) − 1)/8 spheres (2: 91, 3: 820, 4: 7381, 5: 66430, 6: 597871).
-    #[arg(long)]
+    #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_FLAKE_LEVEL as i64))]
     pub level: u32,
-    /// Output file (.nff), written atomically.
+    /// Output file; must end in .nff (the format written). Written atomically.
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -72,11 +73,12 @@ fn field(a: FieldArgs) -> Result<()> {
     let start = Instant::now();
     let mut params =
         FieldParams { count: a.count, seed: a.seed, rmin: a.rmin, rmax: a.rmax, ..Default::default() };
-    if let Some(b) = &a.bounds {
-        (params.lo, params.hi) = parse_box(b)?;
+    if let Some((lo, hi)) = a.bounds {
+        (params.lo, params.hi) = (lo, hi);
     }
     // Check first so that bad arguments say so instead of failing a half-written file.
-    params.radii()?;
+    check_extension(&a.output, "xyzr")?;
+    params.radii().map_err(|e| usage(e.to_string()))?;
     write_atomic_with(&a.output, |w| params.write_xyzr(w))
         .with_context(|| format!("{}: cannot write", a.output.display()))?;
     report(a.count, &a.output, start);
@@ -85,12 +87,23 @@ fn field(a: FieldArgs) -> Result<()> {
 
 fn flake(a: FlakeArgs) -> Result<()> {
     let start = Instant::now();
-    if a.level > MAX_FLAKE_LEVEL {
-        bail!("--level must be at most {MAX_FLAKE_LEVEL}, got {}", a.level);
-    }
+    check_extension(&a.output, "nff")?;
     write_atomic_with(&a.output, |w| write_flake_nff(a.level, w))
         .with_context(|| format!("{}: cannot write", a.output.display()))?;
     report(flake_count(a.level), &a.output, start);
+    Ok(())
+}
+
+/// The output must carry the extension of the format written: a scene named `.toml` but holding NFF
+/// would fail to load, or load as the wrong format, later. Case-insensitive, as the readers choose.
+fn check_extension(path: &Path, expected: &str) -> Result<()> {
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    if ext.as_deref() != Some(expected) {
+        return Err(usage(format!(
+            "{}: this command writes .{expected}; name the output with the .{expected} extension",
+            path.display()
+        )));
+    }
     Ok(())
 }
 
@@ -114,20 +127,32 @@ fn report(count: u64, path: &Path, start: Instant) {
 }
 
 /// `x0,y0,z0,x1,y1,z1` as two corners.
-fn parse_box(text: &str) -> Result<([f64; 3], [f64; 3])> {
+fn parse_box(text: &str) -> Result<([f64; 3], [f64; 3]), String> {
     let v: Vec<f64> = text
         .split(',')
-        .map(|w| w.trim().parse::<f64>().with_context(|| format!("--box: `{w}` is not a number")))
-        .collect::<Result<_>>()?;
+        .map(|w| w.trim().parse::<f64>().map_err(|_| format!("`{w}` is not a number")))
+        .collect::<Result<_, _>>()?;
     if v.len() != 6 {
-        bail!("--box takes six numbers x0,y0,z0,x1,y1,z1, got {}", v.len());
+        return Err(format!("six numbers x0,y0,z0,x1,y1,z1 expected, got {}", v.len()));
     }
     Ok(([v[0], v[1], v[2]], [v[3], v[4], v[5]]))
 }
 
 #[cfg(test)]
 mod tests {
-    use super::parse_count;
+    use super::{check_extension, parse_count};
+    use std::path::Path;
+
+    #[test]
+    fn output_extension_must_be_the_format_written() {
+        assert!(check_extension(Path::new("a/f.xyzr"), "xyzr").is_ok());
+        assert!(check_extension(Path::new("F.NFF"), "nff").is_ok());
+        for bad in ["f.nff", "f.toml", "f", "f.xyzr.tmp"] {
+            let e = check_extension(Path::new(bad), "xyzr").unwrap_err();
+            assert!(e.downcast_ref::<super::super::UsageError>().is_some(), "{bad}");
+            assert!(e.to_string().contains(".xyzr"), "{e}");
+        }
+    }
 
     #[test]
     fn counts_in_digits_and_powers_of_ten() {

@@ -12,10 +12,19 @@ use clap::{Parser, Subcommand};
 
 /// bareray — a data-oriented SIMD packet ray tracer with a scalar reference path.
 ///
-/// Renders Whitted-shaded scenes (spheres, planes, transformed shapes; shadows, mirrors, glass) from
-/// bareray's TOML scene format to PNG, EXR or PPM.
+/// Renders Whitted-shaded scenes (spheres, planes, transformed shapes, polygons; shadows, mirrors, glass)
+/// to PNG, EXR or PPM. Scenes are read by extension: `.toml` (bareray's format), `.nff` (SPD's Neutral
+/// File Format) or `.xyzr` (one sphere `x y z r` per line).
 #[derive(Parser, Debug)]
-#[command(name = "bareray", version, about, long_about, propagate_version = true)]
+#[command(
+    name = "bareray",
+    version,
+    about,
+    long_about,
+    propagate_version = true,
+    after_help = "Exit codes: 0 success; 2 argument or usage errors (a bad flag or value, a wrong \
+                  extension), nothing done; 1 errors reading the scene, rendering or writing files."
+)]
 pub struct Cli {
     #[command(subcommand)]
     command: Command,
@@ -34,7 +43,26 @@ enum Command {
     Gen(gen::GenArgs),
 }
 
-/// Parses the command line, runs the subcommand, and turns errors into a message and exit code 1.
+/// An argument error found after clap parsed the command line (a value clap cannot check alone, such as
+/// an output extension that does not match what the command writes): exit code 2, as clap's own.
+#[derive(Debug)]
+pub struct UsageError(pub String);
+
+impl std::fmt::Display for UsageError {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&self.0)
+    }
+}
+
+impl std::error::Error for UsageError {}
+
+/// A [`UsageError`] as an `anyhow` error.
+fn usage(message: impl Into<String>) -> anyhow::Error {
+    UsageError(message.into()).into()
+}
+
+/// Parses the command line, runs the subcommand, and turns errors into a message and an exit code: 2 for
+/// argument errors (clap's and [`UsageError`]), 1 for the rest.
 pub fn main() -> ExitCode {
     let cli = Cli::parse();
     let result = match cli.command {
@@ -51,6 +79,10 @@ pub fn main() -> ExitCode {
                 .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) =>
         {
             ExitCode::SUCCESS
+        }
+        Err(e) if e.downcast_ref::<UsageError>().is_some() => {
+            eprintln!("error: {e:#}\n\nFor more information, try '--help'.");
+            ExitCode::from(2)
         }
         Err(e) => {
             eprintln!("error: {e:#}");

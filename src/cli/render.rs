@@ -23,20 +23,23 @@ pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
 #[derive(Args, Debug)]
 #[command(
     after_help = "Examples:\n  bareray render                       # the built-in demo scene -> demo.png\n  \
-bareray render scenes/ellipsoids.toml -o out.exr --spp 16\n  \
-bareray render scenes/field.toml --width 1920 --threads 2"
+bareray render scenes/transforms.toml -o out.exr --spp 16\n  \
+bareray render scenes/balls3.nff -o balls3.ppm --width 1024\n  \
+bareray render scenes/field.toml --width 1920 --threads 2\n\n\
+Exit codes: 0 success; 2 argument errors (nothing rendered); 1 scene, render or write errors."
 )]
 pub struct RenderArgs {
-    /// Scene file (.toml). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
+    /// Scene file: .toml (bareray's format), .nff (SPD's Neutral File Format) or .xyzr (`x y z r` per
+    /// line). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
     pub scene: Option<PathBuf>,
-    /// Output image; the extension picks the format: .png (8-bit sRGB), .exr (linear float), .ppm.
-    /// Default: the scene's name with .png, in the current directory.
-    #[arg(short, long)]
+    /// Output image; the extension picks the format: .png (8-bit sRGB), .exr (linear float RGB), .ppm or
+    /// .pnm (binary 8-bit sRGB PPM, P6). Default: the scene's name with .png, in the current directory.
+    #[arg(short, long, value_parser = parse_output)]
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
     /// Samples per pixel on a regular n×n grid (1, 4, 9, 16, ...); overrides the scene.
-    #[arg(long)]
+    #[arg(long, value_parser = parse_spp)]
     pub spp: Option<u32>,
     /// Reflection/refraction depth limit; overrides the scene.
     #[arg(long)]
@@ -48,7 +51,7 @@ pub struct RenderArgs {
     /// to OUT's name with `.aov.exr`: a comma list of depth (channel Z), normal (N.X, N.Y, N.Z), id.
     #[arg(long, value_parser = aov::parse_list)]
     pub aov: Option<AovList>,
-    /// Print a scene summary, rays by kind and the time split.
+    /// Print a scene summary, rays by kind and the time split (parse, build, render, aov, write).
     #[arg(long)]
     pub stats: bool,
     /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16 (the default: fastest on every scene in
@@ -82,15 +85,20 @@ pub fn run(args: RenderArgs) -> Result<()> {
         None => (toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?, "demo".to_owned()),
     };
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
-    // Fail on a bad output name now, not after the render.
+    // Fail on an output that cannot be written now, not after the render.
     Format::from_path(&output)?;
-    apply_overrides(&mut desc, &args)?;
+    apply_overrides(&mut desc, &args);
+    let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
+    for warning in scene_warnings(&desc) {
+        eprintln!("warning: {}: {warning}", scene_name.display());
+    }
     time.parse = clock.elapsed().as_secs_f64();
 
     let threads = args.threads.map(|t| t as usize);
-    let clock = Instant::now();
     // The build runs on the render's threads too: `--threads 1` means one core throughout.
     let pool = crate::render::thread_pool(threads)?;
+    // Build: the scene compiled for rendering, the BVH included (`scene.build.seconds` is the BVH's part).
+    let clock = Instant::now();
     let scene =
         pool.install(|| Scene::compile_owned(desc, Accel::Auto, args.bvh_preset)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
@@ -163,21 +171,20 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
     let g = &scene.geometry;
     let count = |kind| g.shapes.iter().filter(|s| s.kind == kind).count();
     println!(
-        "scene: {} primitives ({} spheres, {} ellipsoids, {} planes, {} polygons), {} lights, {} materials",
-        g.len(),
-        g.spheres.len(),
-        count(ShapeKind::Sphere),
-        count(ShapeKind::Plane),
-        g.polygons.len(),
-        scene.lights.len(),
-        scene.materials.len()
+        "scene: {} ({}, {}, {}, {}), {}, {}",
+        plural(g.len(), "primitive"),
+        plural(g.spheres.len(), "sphere"),
+        plural(count(ShapeKind::Sphere), "ellipsoid"),
+        plural(count(ShapeKind::Plane), "plane"),
+        plural(g.polygons.len(), "polygon"),
+        plural(scene.lights.len(), "light"),
+        plural(scene.materials.len(), "material")
     );
-    println!("image: {}x{}, {:?}", scene.camera.width, scene.camera.height, scene.render.pattern);
+    println!("image: {}x{}, {}", scene.camera.width, scene.camera.height, pattern_name(scene.render.pattern));
     println!("features: {}", crate::scene::features::Features::of(scene));
     println!(
-        "accel: {}, build {:.3} s, {:.1} bytes/sphere (spheres + BVH nodes)",
+        "accel: {}, {:.1} bytes/sphere (spheres + BVH nodes)",
         if g.bvh.is_some() { "BVH" } else { "brute force" },
-        scene.build.seconds,
         scene.bytes_per_sphere()
     );
     let c = r.counts;
@@ -194,10 +201,71 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         r.work.prim_tests, r.work.box_tests, r.lanes
     );
     println!(
-        "time: parse {:.3} s, build {:.3} s, render {:.3} s, aov {:.3} s, write {:.3} s",
+        "time: parse {:.3} s, build {:.3} s (scene and BVH), render {:.3} s, aov {:.3} s, write {:.3} s",
         time.parse, time.build, time.render, time.aov, time.write
     );
     println!("throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
+}
+
+/// `n thing` or `n things`.
+fn plural(n: usize, thing: &str) -> String {
+    if n == 1 {
+        format!("1 {thing}")
+    } else {
+        format!("{n} {thing}s")
+    }
+}
+
+/// The sampling pattern as the summary prints it.
+fn pattern_name(pattern: Pattern) -> String {
+    match pattern {
+        Pattern::Grid(n) => {
+            let spp = n * n;
+            format!("{spp} sample{} per pixel ({n}×{n} grid)", if spp == 1 { "" } else { "s" })
+        }
+        Pattern::HalfPixel => {
+            "half-pixel pattern (9 samples per pixel shared with the neighbours)".to_owned()
+        }
+    }
+}
+
+/// What a scene lacks that makes its image surely not what was meant: no primitives at all, or no lights
+/// while some material has a diffuse or specular term (which only lights light).
+pub fn scene_warnings(desc: &SceneDesc) -> Vec<&'static str> {
+    let mut warnings = Vec::new();
+    if desc.spheres.is_empty() && desc.shapes.is_empty() && desc.polygons.is_empty() {
+        warnings.push("no objects");
+    }
+    if desc.lights.is_empty() && desc.materials.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0) {
+        warnings.push("no lights");
+    }
+    warnings
+}
+
+/// Parses `--output`: the extension must name an image format.
+fn parse_output(s: &str) -> Result<PathBuf, String> {
+    let path = PathBuf::from(s);
+    Format::from_extension(&path)
+        .map_err(|_| "unknown image format (use .png, .exr, .ppm or .pnm)".to_owned())?;
+    Ok(path)
+}
+
+/// Parses `--spp`: a square number.
+fn parse_spp(s: &str) -> Result<u32, String> {
+    let spp = s
+        .trim()
+        .parse::<u32>()
+        .map_err(|_| format!("expected a square number (1, 4, 9, 16, ...), got `{s}`"))?;
+    toml::grid_side(spp)?;
+    Ok(spp)
+}
+
+/// Parses a thread count, 1 to 1024.
+pub fn parse_threads(s: &str) -> Result<usize, String> {
+    match s.trim().parse::<usize>() {
+        Ok(t) if (1..=1024).contains(&t) => Ok(t),
+        _ => Err("thread counts run from 1 to 1024".to_owned()),
+    }
 }
 
 /// Parses a packet width.
@@ -217,14 +285,12 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc> {
     Ok(crate::scene::load(path)?)
 }
 
-fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {
-    args.camera.apply(desc)?;
+fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
+    args.camera.apply(desc);
     if let Some(spp) = args.spp {
-        let n = toml::grid_side(spp).map_err(|m| anyhow::anyhow!("--spp: {m}"))?;
-        desc.render.pattern = Pattern::Grid(n);
+        desc.render.pattern = Pattern::Grid(toml::grid_side(spp).expect("--spp was checked"));
     }
     if let Some(d) = args.depth {
         desc.render.max_depth = d;
     }
-    Ok(())
 }

@@ -13,8 +13,12 @@ pub use compile::{Accel, BvhPreset, Light, Scene, BVH_MIN_SPHERES};
 pub use desc::SceneDesc;
 pub use error::SceneError;
 
-/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr`.
+/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr` (a directory is an
+/// error saying so, whatever its name).
 pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
+    if path.is_dir() {
+        return Err(SceneError::whole_file(path, "is a directory"));
+    }
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     match ext.as_deref() {
         Some("toml") => toml::load(path),
