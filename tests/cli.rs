@@ -284,3 +284,59 @@ fn bench_threads_default_to_one_and_all_cores() {
     let threads: Vec<u64> = rows.iter().map(|r| r["threads"].as_u64().unwrap()).collect();
     assert_eq!(threads, if cores == 1 { vec![1] } else { vec![1, cores] });
 }
+
+/// `diff`: PNG, PPM and EXR of the same values are identical (exit 0); one changed pixel is one differing
+/// pixel (exit 1) and the heatmap's only non-black pixel; different sizes and unreadable files exit 2.
+#[test]
+fn diff_reports_identical_different_and_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let a = image::RgbImage::from_fn(8, 6, |x, y| image::Rgb([x as u8 * 30, y as u8 * 40, 200]));
+    a.save(p("a.png")).unwrap();
+    a.save(p("a.ppm")).unwrap();
+    image::DynamicImage::ImageRgb8(a.clone()).into_rgb32f().save(p("a.exr")).unwrap();
+    for other in ["a.ppm", "a.exr"] {
+        let run = bareray(&["diff", &p("a.png"), &p(other)]);
+        let text = String::from_utf8_lossy(&run.stdout);
+        assert_eq!(run.status.code(), Some(0), "{other}: {text}{}", stderr(&run));
+        assert!(
+            text.contains("size: 8x6") && text.contains("psnr: inf") && text.contains("identical"),
+            "{text}"
+        );
+    }
+
+    let mut b = a.clone();
+    b.put_pixel(3, 2, image::Rgb([90, 80, 201]));
+    b.save(p("b.png")).unwrap();
+    let run = bareray(&["diff", &p("a.ppm"), &p("b.png"), "--heatmap", &p("heat.png")]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert_eq!(run.status.code(), Some(1), "{text}{}", stderr(&run));
+    assert!(text.contains("differing pixels: 1 of 48") && text.contains("dB"), "{text}");
+    // 201/255 − 200/255 in f32.
+    assert!(text.contains("max abs difference: 0.00392"), "{text}");
+    let heat = image::open(p("heat.png")).unwrap().into_luma8();
+    let lit: Vec<_> =
+        heat.enumerate_pixels().filter(|(_, _, v)| v[0] > 0).map(|(x, y, v)| (x, y, v[0])).collect();
+    assert_eq!(lit, vec![(3, 2, 255)]);
+
+    image::RgbImage::new(4, 4).save(p("small.png")).unwrap();
+    let run = bareray(&["diff", &p("a.png"), &p("small.png")]);
+    assert_eq!(run.status.code(), Some(2));
+    let err = stderr(&run);
+    assert!(
+        err.contains("different sizes") && err.contains("a.png is 8x6") && err.contains("small.png is 4x4"),
+        "{err}"
+    );
+    std::fs::write(p("junk.png"), b"not an image").unwrap();
+    for bad in ["missing.png", "junk.png"] {
+        let run = bareray(&["diff", &p(bad), &p("a.png")]);
+        assert_eq!(run.status.code(), Some(2), "{bad}");
+        let err = stderr(&run);
+        assert!(
+            err.contains(&format!("{}: cannot read image", p(bad))) && !err.contains("panicked"),
+            "{err}"
+        );
+    }
+    // Only the inputs and the heatmap: no temporary file left beside it.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 7);
+}

@@ -3,6 +3,7 @@
 mod accuracy;
 mod bench;
 mod camera_args;
+mod diff;
 mod gen;
 mod render;
 
@@ -32,6 +33,9 @@ enum Command {
     Accuracy(accuracy::AccuracyArgs),
     /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
     Gen(gen::GenArgs),
+    /// Compare two images (PNG, EXR, PPM): size, RMSE, PSNR, max difference, differing pixels; exit 0 when
+    /// identical, 1 when different, 2 on error.
+    Diff(diff::DiffArgs),
 }
 
 /// Parses the command line, runs the subcommand, and turns errors into a message and exit code 1.
@@ -42,6 +46,7 @@ pub fn main() -> ExitCode {
         Command::Gen(args) => gen::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Accuracy(args) => accuracy::run(args),
+        Command::Diff(args) => return diff::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
