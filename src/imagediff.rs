@@ -14,12 +14,12 @@ use image::{DynamicImage, GrayImage, ImageReader};
 #[derive(Debug, thiserror::Error)]
 pub enum DiffError {
     /// A file could not be opened or decoded.
-    #[error("{path}: cannot read image: {source}", path = path.display())]
+    #[error("{path}: cannot read image: {error}", path = path.display())]
     Read {
         /// The file.
         path: PathBuf,
-        /// The decoder's or file system's error.
-        source: image::ImageError,
+        /// The decoder's or file system's error (in the message, so not also a `source`).
+        error: image::ImageError,
     },
     /// The images have different sizes.
     #[error("different sizes: {a} is {}x{}, {b} is {}x{}", a_size.0, a_size.1, b_size.0, b_size.1,
@@ -144,7 +144,7 @@ pub fn load(path: &Path) -> Result<DynamicImage, DiffError> {
     let read = |path: &Path| -> Result<DynamicImage, image::ImageError> {
         ImageReader::open(path)?.with_guessed_format()?.decode()
     };
-    read(path).map_err(|source| DiffError::Read { path: path.to_owned(), source })
+    read(path).map_err(|error| DiffError::Read { path: path.to_owned(), error })
 }
 
 /// Reads and compares two image files.
