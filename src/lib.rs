@@ -15,6 +15,7 @@ pub mod cli;
 pub mod film;
 pub mod geometry;
 pub mod huge_pages;
+pub mod imagediff;
 pub mod math;
 pub mod output;
 pub mod render;

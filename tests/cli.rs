@@ -321,3 +321,150 @@ fn unwritable_output_directory_is_refused_before_rendering() {
     assert!(run.stdout.is_empty(), "refused before rendering");
     assert_eq!(std::fs::read_dir(&locked).unwrap().count(), 0);
 }
+
+/// Runs `bareray bench ... --json` and parses every stdout line as JSON.
+fn bench_json(args: &[&str]) -> Vec<serde_json::Value> {
+    let run = bareray(&[&["bench"], args, &["--json"]].concat());
+    assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+    String::from_utf8(run.stdout)
+        .unwrap()
+        .lines()
+        .map(|l| serde_json::from_str(l).unwrap_or_else(|e| panic!("not JSON ({e}): {l}")))
+        .collect()
+}
+
+/// `bench --json`: one valid JSON object per line even when the scene's name holds a quote and a backslash;
+/// min ≤ median ≤ max seconds; the host fields; `--spp` and `--depth` reach the scene; `--compare` matches
+/// rows by (lanes, threads) and marks the rest.
+#[test]
+fn bench_json_is_valid_and_compare_matches_rows() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("wh\"it\\ed.toml");
+    std::fs::copy(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml"), &scene).unwrap();
+    let name = scene.to_str().unwrap();
+    let small = ["--width", "16", "--height", "12", "--reps", "3", "--threads", "1"];
+    let rows = bench_json(&[&[name, "--lanes", "1,16", "--spp", "4", "--depth", "1"], &small[..]].concat());
+    assert_eq!(rows.len(), 2);
+    for (row, lanes) in rows.iter().zip([1, 16]) {
+        assert_eq!(row["scene"], name);
+        assert_eq!((row["lanes"].as_u64(), row["threads"].as_u64()), (Some(lanes), Some(1)));
+        let (min, med, max) = (
+            row["min_s"].as_f64().unwrap(),
+            row["seconds"].as_f64().unwrap(),
+            row["max_s"].as_f64().unwrap(),
+        );
+        assert!(0.0 < min && min <= med && med <= max, "{row}");
+        assert!(row["mrays_per_s"].as_f64().unwrap() > 0.0);
+        assert_eq!(row["checksum"].as_str().unwrap().len(), 16);
+        assert_eq!((row["spp"].as_u64(), row["max_depth"].as_u64()), (Some(4), Some(1)));
+        assert!(!row["cpu"].as_str().unwrap().is_empty() && !row["isa"].as_str().unwrap().is_empty());
+        assert!(row["lanes16"].as_str().unwrap().contains("register") || row["isa"] == "none");
+        assert!(row["cores"].as_u64().unwrap() >= 1);
+        assert!(["release", "debug"].contains(&row["profile"].as_str().unwrap()));
+        assert_eq!(row["version"], env!("CARGO_PKG_VERSION"));
+    }
+    // Fewer bounces, fewer rays; the same image size and samples.
+    let deeper = bench_json(&[&[name, "--lanes", "1", "--spp", "4", "--depth", "5"], &small[..]].concat());
+    assert!(deeper[0]["rays"].as_u64() > rows[0]["rays"].as_u64(), "{} {}", deeper[0], rows[0]);
+
+    let old = dir.path().join("old.json");
+    let text: String = rows.iter().map(|r| format!("{r}\n")).collect();
+    std::fs::write(&old, text).unwrap();
+    let args = [&[name, "--lanes", "1,4", "--spp", "4", "--depth", "1"], &small[..]].concat();
+    let run = bareray(&[&["bench"], &args[..], &["--compare", old.to_str().unwrap()]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let table = String::from_utf8_lossy(&run.stdout);
+    let line = |lanes: &str| {
+        table
+            .lines()
+            .skip_while(|l| !l.starts_with("compared with"))
+            .find(|l| l.trim_start().starts_with(lanes))
+    };
+    assert!(line("1 ").unwrap().ends_with('x'), "{table}");
+    assert!(line("4 ").unwrap().ends_with("no old row"), "{table}");
+    assert!(table.contains("old rows not measured now: lanes 16 threads 1"), "{table}");
+    let compared = bench_json(&[&args[..], &["--compare", old.to_str().unwrap()]].concat());
+    assert!(compared[0]["compare"]["ratio"].as_f64().unwrap() > 0.0);
+    assert!(compared[1]["compare"]["old_mrays_per_s"].is_null());
+}
+
+#[test]
+fn bench_compare_errors_name_the_file_and_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let old = dir.path().join("old.json");
+    std::fs::write(&old, "{\"lanes\":1,\"threads\":1,\"mrays_per_s\":2.5}\nnot json\n").unwrap();
+    let missing = dir.path().join("missing.json");
+    for (file, needle) in
+        [(&old, format!("{}:2:", old.display())), (&missing, format!("{}: cannot read", missing.display()))]
+    {
+        let run = bareray(&["bench", "scenes/whitted.toml", "--compare", file.to_str().unwrap()]);
+        assert_eq!(run.status.code(), Some(1));
+        let err = stderr(&run);
+        assert!(err.contains(&needle) && !err.contains("panicked"), "{err}");
+    }
+}
+
+#[test]
+fn bench_threads_default_to_one_and_all_cores() {
+    let cores = std::thread::available_parallelism().unwrap().get() as u64;
+    let rows =
+        bench_json(&["scenes/whitted.toml", "--lanes", "1", "--reps", "1", "--width", "8", "--height", "6"]);
+    let threads: Vec<u64> = rows.iter().map(|r| r["threads"].as_u64().unwrap()).collect();
+    assert_eq!(threads, if cores == 1 { vec![1] } else { vec![1, cores] });
+}
+
+/// `diff`: PNG, PPM and EXR of the same values are identical (exit 0); one changed pixel is one differing
+/// pixel (exit 1) and the heatmap's only non-black pixel; different sizes and unreadable files exit 2.
+#[test]
+fn diff_reports_identical_different_and_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let a = image::RgbImage::from_fn(8, 6, |x, y| image::Rgb([x as u8 * 30, y as u8 * 40, 200]));
+    a.save(p("a.png")).unwrap();
+    a.save(p("a.ppm")).unwrap();
+    image::DynamicImage::ImageRgb8(a.clone()).into_rgb32f().save(p("a.exr")).unwrap();
+    for other in ["a.ppm", "a.exr"] {
+        let run = bareray(&["diff", &p("a.png"), &p(other)]);
+        let text = String::from_utf8_lossy(&run.stdout);
+        assert_eq!(run.status.code(), Some(0), "{other}: {text}{}", stderr(&run));
+        assert!(
+            text.contains("size: 8x6") && text.contains("psnr: inf") && text.contains("identical"),
+            "{text}"
+        );
+    }
+
+    let mut b = a.clone();
+    b.put_pixel(3, 2, image::Rgb([90, 80, 201]));
+    b.save(p("b.png")).unwrap();
+    let run = bareray(&["diff", &p("a.ppm"), &p("b.png"), "--heatmap", &p("heat.png")]);
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert_eq!(run.status.code(), Some(1), "{text}{}", stderr(&run));
+    assert!(text.contains("differing pixels: 1 of 48") && text.contains("dB"), "{text}");
+    // 201/255 − 200/255 in f32.
+    assert!(text.contains("max abs difference: 0.00392"), "{text}");
+    let heat = image::open(p("heat.png")).unwrap().into_luma8();
+    let lit: Vec<_> =
+        heat.enumerate_pixels().filter(|(_, _, v)| v[0] > 0).map(|(x, y, v)| (x, y, v[0])).collect();
+    assert_eq!(lit, vec![(3, 2, 255)]);
+
+    image::RgbImage::new(4, 4).save(p("small.png")).unwrap();
+    let run = bareray(&["diff", &p("a.png"), &p("small.png")]);
+    assert_eq!(run.status.code(), Some(2));
+    let err = stderr(&run);
+    assert!(
+        err.contains("different sizes") && err.contains("a.png is 8x6") && err.contains("small.png is 4x4"),
+        "{err}"
+    );
+    std::fs::write(p("junk.png"), b"not an image").unwrap();
+    for bad in ["missing.png", "junk.png"] {
+        let run = bareray(&["diff", &p(bad), &p("a.png")]);
+        assert_eq!(run.status.code(), Some(2), "{bad}");
+        let err = stderr(&run);
+        assert!(
+            err.contains(&format!("{}: cannot read image", p(bad))) && !err.contains("panicked"),
+            "{err}"
+        );
+    }
+    // Only the inputs and the heatmap: no temporary file left beside it.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 7);
+}

@@ -1,35 +1,50 @@
 //! `bareray bench`: the same scene traced repeatedly at each packet width and thread count.
 
+use std::collections::BTreeMap;
 use std::io::Write;
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Instant;
 
-use anyhow::Result;
+use anyhow::{anyhow, Context, Result};
 use clap::Args;
 use indicatif::ProgressBar;
+use serde::{Deserialize, Serialize};
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
-use crate::scene::{Accel, BvhPreset, Scene};
+use crate::scene::desc::Pattern;
+use crate::scene::{toml, Accel, BvhPreset, Scene};
 
 /// Arguments of `bareray bench`.
 #[derive(Args, Debug)]
-#[command(after_help = "Examples:\n  bareray gen field --count 1000000 -o f.xyzr\n  \
+#[command(after_help = "Every row reports the minimum, median and maximum seconds of its timed runs, and \
+Mrays/s from the median. The table's header and every JSON object name the CPU model, the instruction set \
+the kernels were compiled for (and what 16 lanes are in it), the core count, the build profile and the \
+version.\n\n\
+Examples:\n  bareray gen field --count 1000000 -o f.xyzr\n  \
 bareray bench f.xyzr --primary-only --eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080\n  \
-bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --json")]
+bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --json > old.json\n  \
+bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --compare old.json")]
 pub struct BenchArgs {
     /// Scene file (.toml, .nff or .xyzr).
     pub scene: PathBuf,
     /// Packet widths to measure, a comma list of 1, 4, 8, 16 (1 is the scalar reference path).
     #[arg(long, value_delimiter = ',', default_values_t = vec![1, 4, 8, 16], value_parser = parse_lanes)]
     pub lanes: Vec<usize>,
-    /// Thread counts to measure, a comma list (each from 1 to 1024).
-    #[arg(long, value_delimiter = ',', default_values_t = vec![1, 2], value_parser = parse_threads)]
-    pub threads: Vec<usize>,
+    /// Thread counts to measure, a comma list, each from 1 to 1024 [default: 1 and all cores (1 alone on a
+    /// 1-core machine)].
+    #[arg(long, value_delimiter = ',', value_parser = parse_threads)]
+    pub threads: Option<Vec<usize>>,
     /// Trace camera rays to the closest hit only (one per pixel centre): no shading, no secondary rays.
     #[arg(long)]
     pub primary_only: bool,
+    /// Samples per pixel (a square number: an n×n grid); overrides the scene, as `render --spp` does.
+    #[arg(long, value_parser = super::render::parse_spp, conflicts_with = "primary_only")]
+    pub spp: Option<u32>,
+    /// Reflection/refraction depth limit; overrides the scene, as `render --depth` does.
+    #[arg(long, conflicts_with = "primary_only")]
+    pub depth: Option<u32>,
     /// How spheres are searched: `auto` (a BVH from 4 spheres on), `bvh`, or `brute` (every ray tests every
     /// sphere: the setting for comparing kernels).
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
@@ -45,12 +60,16 @@ pub struct BenchArgs {
     /// (default: the measured switch, 2; 0 never switches). Here to measure the switch again.
     #[arg(long, value_name = "LANES", value_parser = clap::value_parser!(u32).range(0..=16))]
     pub single_ray_lanes: Option<u32>,
-    /// Timed repetitions per setting (the median is reported), after one untimed warm-up.
+    /// Timed repetitions per setting (min, median and max are reported), after one untimed warm-up.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub reps: u32,
     /// One JSON object per line instead of a table.
     #[arg(long)]
     pub json: bool,
+    /// A previous `--json` output (one object per line): print each row's old and new Mrays/s and their
+    /// ratio, rows matched by (lanes, threads). With --json the objects get a `compare` field instead.
+    #[arg(long, value_name = "OLD.json")]
+    pub compare: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -71,20 +90,229 @@ struct Row {
     lanes: usize,
     threads: usize,
     rays: u64,
+    /// Median, minimum and maximum of the timed runs.
     seconds: f64,
+    min_s: f64,
+    max_s: f64,
     checksum: u64,
+}
+
+/// What the numbers were measured on and built with: in the table's header and in every JSON object.
+#[derive(Serialize, Debug, Clone)]
+struct Host {
+    /// `model name` of /proc/cpuinfo, or "unknown".
+    cpu: String,
+    /// The SIMD instruction set the kernels were compiled for (`target_feature`s of this build).
+    isa: &'static str,
+    /// What one 16-lane packet is in that instruction set.
+    lanes16: &'static str,
+    /// `std::thread::available_parallelism`: the cores this process may run on.
+    cores: usize,
+    /// "release" or "debug" (debug assertions on).
+    profile: &'static str,
+    /// bareray's version.
+    version: &'static str,
+}
+
+impl Host {
+    fn detect() -> Self {
+        let cpu = std::fs::read_to_string("/proc/cpuinfo")
+            .ok()
+            .and_then(|text| {
+                text.lines()
+                    .find(|l| l.starts_with("model name"))
+                    .and_then(|l| l.split_once(':'))
+                    .map(|(_, v)| v.trim().to_owned())
+            })
+            .filter(|v| !v.is_empty())
+            .unwrap_or_else(|| "unknown".to_owned());
+        let (isa, lanes16) = isa();
+        Host {
+            cpu,
+            isa,
+            lanes16,
+            cores: cores(),
+            profile: if cfg!(debug_assertions) { "debug" } else { "release" },
+            version: env!("CARGO_PKG_VERSION"),
+        }
+    }
+}
+
+/// The widest SIMD instruction set this build's kernels use (wide's f32x16 follows the target features),
+/// and what 16 lanes are in it.
+fn isa() -> (&'static str, &'static str) {
+    let fma = cfg!(target_feature = "fma");
+    if cfg!(target_feature = "avx512f") {
+        (if fma { "avx512f+fma" } else { "avx512f" }, "one 512-bit AVX-512 register")
+    } else if cfg!(target_feature = "avx2") {
+        (if fma { "avx2+fma" } else { "avx2" }, "two 256-bit AVX2 registers")
+    } else if cfg!(target_feature = "avx") {
+        ("avx", "two 256-bit AVX registers")
+    } else if cfg!(target_feature = "sse2") {
+        ("sse2", "four 128-bit SSE registers")
+    } else if cfg!(target_feature = "neon") {
+        ("neon", "four 128-bit NEON registers")
+    } else {
+        ("none", "16 scalar values (no SIMD)")
+    }
+}
+
+/// The cores this process may run on (1 when unknown).
+fn cores() -> usize {
+    std::thread::available_parallelism().map_or(1, |n| n.get())
+}
+
+/// One line of `--json`. Keys read by bench-peers/run_ab.sh: lanes, threads, seconds, mrays_per_s, checksum.
+#[derive(Serialize)]
+struct Record<'a> {
+    tracer: &'static str,
+    scene: String,
+    primary_only: bool,
+    lanes: usize,
+    threads: usize,
+    rays: u64,
+    /// Median seconds.
+    seconds: f64,
+    min_s: f64,
+    max_s: f64,
+    /// From the median.
+    mrays_per_s: f64,
+    checksum: String,
+    reps: u32,
+    /// Samples per pixel (null for the half-pixel pattern, about 4 rays per pixel).
+    spp: Option<u32>,
+    pattern: String,
+    max_depth: u32,
+    spheres: usize,
+    build_s: f64,
+    width: u32,
+    height: u32,
+    frustum_culling: bool,
+    bvh_preset: String,
+    #[serde(flatten)]
+    host: &'a Host,
+    #[serde(skip_serializing_if = "Option::is_none")]
+    compare: Option<CompareField>,
+}
+
+/// `compare` of a `--json` line under `--compare`.
+#[derive(Serialize)]
+struct CompareField {
+    file: String,
+    /// Null when OLD.json has no row with these lanes and threads.
+    old_mrays_per_s: Option<f64>,
+    /// New over old Mrays/s.
+    ratio: Option<f64>,
+}
+
+/// The fields of an old `--json` line that `--compare` reads (the others are ignored).
+#[derive(Deserialize)]
+struct OldRow {
+    lanes: usize,
+    threads: usize,
+    mrays_per_s: f64,
+    scene: Option<String>,
+    primary_only: Option<bool>,
+    width: Option<u32>,
+    height: Option<u32>,
+    pattern: Option<String>,
+    max_depth: Option<u32>,
+}
+
+/// The rows of an old `--json` output by (lanes, threads): Mrays/s of each (several when runs were
+/// appended to one file), and the first row, for its settings.
+struct Old {
+    path: PathBuf,
+    rows: BTreeMap<(usize, usize), Vec<f64>>,
+    first: OldRow,
+}
+
+impl Old {
+    fn read(path: &Path) -> Result<Old> {
+        let text = std::fs::read_to_string(path)
+            .with_context(|| format!("{}: cannot read the --compare file", path.display()))?;
+        let mut rows: BTreeMap<(usize, usize), Vec<f64>> = BTreeMap::new();
+        let mut first = None;
+        for (i, line) in text.lines().enumerate() {
+            if line.trim().is_empty() {
+                continue;
+            }
+            let row: OldRow = serde_json::from_str(line)
+                .map_err(|e| anyhow!("{}:{}: not a bench --json line: {e}", path.display(), i + 1))?;
+            rows.entry((row.lanes, row.threads)).or_default().push(row.mrays_per_s);
+            first.get_or_insert(row);
+        }
+        let first = first.ok_or_else(|| anyhow!("{}: holds no bench --json lines", path.display()))?;
+        Ok(Old { path: path.to_owned(), rows, first })
+    }
+
+    /// The old Mrays/s of a setting (the median when the file holds several) and how many rows it had.
+    fn mrays(&self, lanes: usize, threads: usize) -> Option<(f64, usize)> {
+        let mut v = self.rows.get(&(lanes, threads))?.clone();
+        v.sort_by(f64::total_cmp);
+        Some((v[v.len() / 2], v.len()))
+    }
+
+    /// Settings in which the old run differs from this one, for a note (keys missing in the old file
+    /// are not compared).
+    fn differences(&self, now: &Setting) -> Vec<String> {
+        fn differs<T: PartialEq + std::fmt::Debug>(d: &mut Vec<String>, key: &str, old: &Option<T>, now: &T) {
+            if let Some(old) = old.as_ref().filter(|&o| o != now) {
+                d.push(format!("{key} {old:?} (now {now:?})"));
+            }
+        }
+        let f = &self.first;
+        let mut d = Vec::new();
+        differs(&mut d, "scene", &f.scene, &now.scene);
+        differs(&mut d, "primary_only", &f.primary_only, &now.primary_only);
+        differs(&mut d, "width", &f.width, &now.width);
+        differs(&mut d, "height", &f.height, &now.height);
+        differs(&mut d, "pattern", &f.pattern, &now.pattern);
+        differs(&mut d, "max_depth", &f.max_depth, &now.max_depth);
+        d
+    }
+}
+
+/// What a bench run measures, besides lanes and threads: compared with `--compare`'s file.
+struct Setting {
+    scene: String,
+    primary_only: bool,
+    width: u32,
+    height: u32,
+    pattern: String,
+    max_depth: u32,
 }
 
 /// Runs `bareray bench`.
 pub fn run(args: BenchArgs) -> Result<()> {
+    let threads = match &args.threads {
+        Some(t) => t.clone(),
+        None => default_threads(cores()),
+    };
+    // Read the old results first: a bad file fails before minutes of measuring.
+    let old = args.compare.as_deref().map(Old::read).transpose()?;
+    let host = Host::detect();
     let clock = Instant::now();
     let mut desc = load_scene(&args.scene)?;
     args.camera.apply(&mut desc);
+    if let Some(spp) = args.spp {
+        let n = toml::grid_side(spp).map_err(|m| anyhow!("--spp: {m}"))?;
+        desc.render.pattern = Pattern::Grid(n);
+    }
+    if let Some(d) = args.depth {
+        desc.render.max_depth = d;
+    }
     if args.primary_only {
         // Primary hits need no lights and no bounces; without them the build skips the single-ray tree.
         desc.lights.clear();
         desc.render.max_depth = 0;
     }
+    let (spp, pattern) = match (args.primary_only, desc.render.pattern) {
+        (true, _) => (Some(1), "pixel centre".to_owned()),
+        (false, Pattern::Grid(n)) => (Some(n * n), format!("grid {n}x{n}")),
+        (false, Pattern::HalfPixel) => (None, "half-pixel".to_owned()),
+    };
+    let max_depth = desc.render.max_depth;
     let parse_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     let accel = match args.accel {
@@ -94,7 +322,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     };
     // The build runs on as many threads as the largest setting measured, not on every core: a 1-thread
     // bench builds on one thread, as a 1-thread peer run does.
-    let build_threads = args.threads.iter().copied().max();
+    let build_threads = threads.iter().copied().max();
     let mut scene = crate::render::thread_pool(build_threads)?
         .install(|| Scene::compile_owned(desc, accel, args.bvh_preset))?;
     if let Some(bvh) = &mut scene.geometry.bvh {
@@ -105,67 +333,156 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;
+    let scene_name = args.scene.display().to_string();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    if let Some(old) = &old {
+        let now = Setting {
+            scene: scene_name.clone(),
+            primary_only: args.primary_only,
+            width,
+            height,
+            pattern: pattern.clone(),
+            max_depth,
+        };
+        let d = old.differences(&now);
+        if !d.is_empty() {
+            eprintln!("note: {} was measured with other settings: {}", old.path.display(), d.join(", "));
+        }
+    }
     let mut out = std::io::stdout().lock();
     if !args.json {
         writeln!(
             out,
-            "{}: {} primitives ({} spheres), {}x{}; parse {parse_s:.3} s, compile {compile_s:.3} s (BVH build {:.3} s, \
-             {:.1} bytes/sphere); {}",
-            args.scene.display(),
+            "{scene_name}: {} primitives ({} spheres), {width}x{height}; parse {parse_s:.3} s, compile \
+             {compile_s:.3} s (BVH build {:.3} s, {:.1} bytes/sphere); {}",
             g.len(),
             g.spheres.len(),
-            scene.camera.width,
-            scene.camera.height,
             scene.build.seconds,
             scene.bytes_per_sphere(),
-            if args.primary_only { "primary rays only" } else { "full Whitted render" }
+            if args.primary_only {
+                "primary rays only".to_owned()
+            } else {
+                format!("full Whitted render, {pattern}, depth {max_depth}")
+            }
         )?;
-        writeln!(out, "lanes threads        rays   median s    Mrays/s  vs 1 lane  checksum")?;
+        writeln!(
+            out,
+            "host: {}, {} cores; kernels for {} (16 lanes = {}); {} build; bareray {}",
+            host.cpu, host.cores, host.isa, host.lanes16, host.profile, host.version
+        )?;
+        writeln!(out, "{} timed runs per row after one warm-up; Mrays/s from the median", args.reps)?;
+        writeln!(
+            out,
+            "lanes threads        rays      min s   median s      max s    Mrays/s  vs 1 lane  checksum"
+        )?;
     }
     let mut scalar: Option<f64> = None;
-    for &threads in &args.threads {
+    let mut compared = Vec::new();
+    for &t in &threads {
         for &lanes in &args.lanes {
-            let row = measure(&scene, &args, lanes, threads)?;
+            let row = measure(&scene, &args, lanes, t)?;
             let mrays = row.rays as f64 / row.seconds / 1e6;
-            if lanes == 1 && threads == args.threads[0] {
+            if lanes == 1 && t == threads[0] {
                 scalar = Some(mrays);
             }
+            let old_mrays = old.as_ref().and_then(|o| o.mrays(lanes, t));
+            compared.push((lanes, t, mrays, old_mrays));
             if args.json {
-                writeln!(
-                    out,
-                    "{{\"tracer\":\"bareray\",\"scene\":{:?},\"primary_only\":{},\"lanes\":{},\"threads\":{},\"rays\":{},\
-                     \"seconds\":{:.6},\"mrays_per_s\":{:.3},\"checksum\":\"{:016x}\",\"reps\":{},\"spheres\":{},\
-                     \"build_s\":{:.6},\"width\":{},\"height\":{},\"frustum_culling\":{},\"bvh_preset\":\"{:?}\"}}",
-                    args.scene.display().to_string(),
-                    args.primary_only,
-                    row.lanes,
-                    row.threads,
-                    row.rays,
-                    row.seconds,
-                    mrays,
-                    row.checksum,
-                    args.reps,
-                    g.spheres.len(),
-                    scene.build.seconds,
-                    scene.camera.width,
-                    scene.camera.height,
-                    args.frustum_culling,
-                    args.bvh_preset
-                )?;
+                let record = Record {
+                    tracer: "bareray",
+                    scene: scene_name.clone(),
+                    primary_only: args.primary_only,
+                    lanes: row.lanes,
+                    threads: row.threads,
+                    rays: row.rays,
+                    seconds: row.seconds,
+                    min_s: row.min_s,
+                    max_s: row.max_s,
+                    mrays_per_s: mrays,
+                    checksum: format!("{:016x}", row.checksum),
+                    reps: args.reps,
+                    spp,
+                    pattern: pattern.clone(),
+                    max_depth,
+                    spheres: g.spheres.len(),
+                    build_s: scene.build.seconds,
+                    width,
+                    height,
+                    frustum_culling: args.frustum_culling,
+                    bvh_preset: format!("{:?}", args.bvh_preset),
+                    host: &host,
+                    compare: old.as_ref().map(|o| CompareField {
+                        file: o.path.display().to_string(),
+                        old_mrays_per_s: old_mrays.map(|(m, _)| m),
+                        ratio: old_mrays.map(|(m, _)| mrays / m),
+                    }),
+                };
+                writeln!(out, "{}", serde_json::to_string(&record)?)?;
             } else {
                 let ratio = scalar.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
                 writeln!(
                     out,
-                    "{:5} {:7} {:11} {:10.4} {:10.2} {:>10}  {:016x}",
-                    row.lanes, row.threads, row.rays, row.seconds, mrays, ratio, row.checksum
+                    "{:5} {:7} {:11} {:10.4} {:10.4} {:10.4} {:10.2} {:>10}  {:016x}",
+                    row.lanes,
+                    row.threads,
+                    row.rays,
+                    row.min_s,
+                    row.seconds,
+                    row.max_s,
+                    mrays,
+                    ratio,
+                    row.checksum
                 )?;
+            }
+        }
+    }
+    if let Some(old) = &old {
+        let unmatched: Vec<String> = old
+            .rows
+            .keys()
+            .filter(|&&(l, t)| !compared.iter().any(|&(cl, ct, ..)| (cl, ct) == (l, t)))
+            .map(|(l, t)| format!("lanes {l} threads {t}"))
+            .collect();
+        if args.json {
+            if !unmatched.is_empty() {
+                eprintln!("note: rows of {} not measured now: {}", old.path.display(), unmatched.join(", "));
+            }
+        } else {
+            writeln!(
+                out,
+                "\ncompared with {} (Mrays/s; old: the median when it holds several runs):",
+                old.path.display()
+            )?;
+            writeln!(out, "lanes threads        old        new   new/old")?;
+            for (lanes, t, new, old_mrays) in compared {
+                match old_mrays {
+                    Some((m, n)) => writeln!(
+                        out,
+                        "{lanes:5} {t:7} {m:10.2} {new:10.2} {:>8.3}x{}",
+                        new / m,
+                        if n > 1 { format!("  (old: median of {n})") } else { String::new() }
+                    )?,
+                    None => writeln!(out, "{lanes:5} {t:7} {:>10} {new:10.2} {:>9}  no old row", "-", "-")?,
+                }
+            }
+            if !unmatched.is_empty() {
+                writeln!(out, "old rows not measured now: {}", unmatched.join(", "))?;
             }
         }
     }
     Ok(())
 }
 
-/// The median of `reps` timed runs after one warm-up.
+/// The default `--threads`: 1 and every core, or 1 alone on a 1-core machine.
+fn default_threads(cores: usize) -> Vec<usize> {
+    if cores > 1 {
+        vec![1, cores]
+    } else {
+        vec![1]
+    }
+}
+
+/// Minimum, median and maximum of `reps` timed runs after one warm-up.
 fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
     let mut times = Vec::with_capacity(args.reps as usize);
     let (mut rays, mut checksum) = (0, 0);
@@ -189,10 +506,39 @@ fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Res
         }
     }
     times.sort_by(f64::total_cmp);
-    Ok(Row { lanes, threads, rays, seconds: times[times.len() / 2], checksum })
+    Ok(Row {
+        lanes,
+        threads,
+        rays,
+        seconds: times[times.len() / 2],
+        min_s: times[0],
+        max_s: times[times.len() - 1],
+        checksum,
+    })
 }
 
 /// FNV-1a 64 over the image's f32 bits, row-major.
 fn image_checksum(img: &crate::film::Image) -> u64 {
     fnv1a(img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(|v| v.to_bits().to_le_bytes()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn default_threads_are_one_and_all_cores() {
+        assert_eq!(default_threads(1), vec![1]);
+        assert_eq!(default_threads(2), vec![1, 2]);
+        assert_eq!(default_threads(64), vec![1, 64]);
+    }
+
+    #[test]
+    fn isa_names_what_sixteen_lanes_are() {
+        let (isa, lanes16) = isa();
+        assert!(!isa.is_empty() && !lanes16.is_empty());
+        if cfg!(target_feature = "avx512f") {
+            assert!(lanes16.starts_with("one"));
+        }
+    }
 }

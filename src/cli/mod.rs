@@ -3,6 +3,7 @@
 mod accuracy;
 mod bench;
 mod camera_args;
+mod diff;
 mod gen;
 mod render;
 
@@ -41,6 +42,9 @@ enum Command {
     Accuracy(accuracy::AccuracyArgs),
     /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
     Gen(gen::GenArgs),
+    /// Compare two images (PNG, EXR, PPM): size, RMSE, PSNR, max difference, differing pixels; exit 0 when
+    /// identical, 1 when different, 2 on error.
+    Diff(diff::DiffArgs),
 }
 
 /// An argument error found after clap parsed the command line (a value clap cannot check alone, such as
@@ -70,6 +74,7 @@ pub fn main() -> ExitCode {
         Command::Gen(args) => gen::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Accuracy(args) => accuracy::run(args),
+        Command::Diff(args) => return diff::run(args),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,

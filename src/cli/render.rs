@@ -251,7 +251,7 @@ fn parse_output(s: &str) -> Result<PathBuf, String> {
 }
 
 /// Parses `--spp`: a square number.
-fn parse_spp(s: &str) -> Result<u32, String> {
+pub(super) fn parse_spp(s: &str) -> Result<u32, String> {
     let spp = s
         .trim()
         .parse::<u32>()
