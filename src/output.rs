@@ -1,4 +1,7 @@
-//! Images out: the format follows the file extension (PNG 8-bit sRGB, EXR linear float, PPM 8-bit sRGB).
+//! Images out: the format follows the file extension (PNG and PPM 8-bit, EXR linear float). 8-bit values
+//! follow the scene's [`Transfer`]: the sRGB curve, or the values as they are (clamped, ×255, rounded);
+//! EXR holds the values as they are, whatever the transfer. PNG records the transfer in a `tEXt` chunk,
+//! keyword `Transfer`, text `srgb` or `linear`; PPM's header stays minimal and says nothing.
 //! The file is written under a temporary name in the same directory and renamed into place, so a failed
 //! run never leaves half a file and never destroys an existing one.
 
@@ -6,20 +9,20 @@ use std::fs;
 use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
-use image::codecs::png::{CompressionType, FilterType, PngEncoder};
 use image::{ImageFormat, Rgb32FImage, RgbImage};
 use thiserror::Error;
 
 use crate::film::Image;
+use crate::scene::desc::Transfer;
 
 /// An image file format bareray writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Format {
-    /// 8-bit sRGB PNG.
+    /// 8-bit PNG (sRGB or linear transfer, recorded in a `tEXt` chunk).
     Png,
     /// Linear 32-bit float OpenEXR.
     Exr,
-    /// 8-bit sRGB binary PPM (`P6`); `.pnm` names it too.
+    /// 8-bit binary PPM (`P6`; sRGB or linear transfer, not recorded); `.pnm` names it too.
     Ppm,
 }
 
@@ -229,13 +232,38 @@ pub fn to_srgb8(img: &Image) -> RgbImage {
     RgbImage::from_raw(img.width, img.height, raw).expect("buffer size matches the image")
 }
 
+/// Linear transfer to 8-bit: clamped to [0, 1] (NaN to 0), times 255, rounded to nearest, as classic
+/// tracers write their values.
+pub fn linear8(value: f32) -> u8 {
+    let c = if value.is_nan() { 0.0 } else { value.clamp(0.0, 1.0) };
+    (c * 255.0 + 0.5) as u8
+}
+
+/// 8-bit copy of the image under `transfer`: [`to_srgb8`], or [`linear8`] per value.
+pub fn to_rgb8(img: &Image, transfer: Transfer) -> RgbImage {
+    use rayon::prelude::*;
+    match transfer {
+        Transfer::Srgb => to_srgb8(img),
+        Transfer::Linear => {
+            let width = (img.width as usize).max(1);
+            let mut raw = vec![0u8; img.pixels.len() * 3];
+            raw.par_chunks_mut(3 * width).zip(img.pixels.par_chunks(width)).for_each(|(out, row)| {
+                for (o, p) in out.chunks_exact_mut(3).zip(row) {
+                    o.copy_from_slice(&[linear8(p.x), linear8(p.y), linear8(p.z)]);
+                }
+            });
+            RgbImage::from_raw(img.width, img.height, raw).expect("buffer size matches the image")
+        }
+    }
+}
+
 /// A boxed error from an encoder or the file system.
 pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
 
-/// Writes `img` to `path` in the format its extension names, atomically.
-pub fn write_image(img: &Image, path: &Path) -> Result<(), OutputError> {
+/// Writes `img` to `path` in the format its extension names, atomically; 8-bit formats under `transfer`.
+pub fn write_image(img: &Image, path: &Path, transfer: Transfer) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |tmp| encode(img, format, tmp))
+    write_atomic(path, |tmp| encode(img, format, transfer, tmp))
         .map_err(|cause| OutputError::Write { path: path.to_owned(), cause })
 }
 
@@ -250,16 +278,11 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), BoxErro
     result
 }
 
-fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
+fn encode(img: &Image, format: Format, transfer: Transfer, tmp: &Path) -> Result<(), BoxError> {
     let mut file = BufWriter::new(fs::File::create(tmp)?);
     match format {
-        Format::Png => {
-            // Paeth on every row rather than the adaptive choice per row: on balls4 at 1024², 3.4 against
-            // 4.2 ms to encode and a smaller file (PERF.md, session 12).
-            let png = PngEncoder::new_with_quality(&mut file, CompressionType::Fast, FilterType::Paeth);
-            to_srgb8(img).write_with_encoder(png)?
-        }
-        Format::Ppm => write_ppm(&to_srgb8(img), &mut file)?,
+        Format::Png => write_png(&to_rgb8(img, transfer), transfer, &mut file)?,
+        Format::Ppm => write_ppm(&to_rgb8(img, transfer), &mut file)?,
         Format::Exr => {
             let raw = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
             let buf =
@@ -268,6 +291,23 @@ fn encode(img: &Image, format: Format, tmp: &Path) -> Result<(), BoxError> {
         }
     }
     file.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+    Ok(())
+}
+
+/// 8-bit RGB PNG with a `tEXt` chunk `Transfer` = `srgb` or `linear`. The `png` crate directly (the
+/// `image` crate's encoder writes no text chunks), with that encoder's settings here: fast deflate and Paeth
+/// on every row rather than the adaptive choice per row (on balls4 at 1024², 3.4 against 4.2 ms to encode
+/// and a smaller file; PERF.md, session 12).
+pub fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
+    let mut encoder = png::Encoder::new(out, img.width(), img.height());
+    encoder.set_color(png::ColorType::Rgb);
+    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_compression(png::Compression::Fast);
+    encoder.set_filter(png::Filter::Paeth);
+    encoder.add_text_chunk("Transfer".to_owned(), transfer.name().to_owned())?;
+    let mut writer = encoder.write_header()?;
+    writer.write_image_data(img.as_raw())?;
+    writer.finish()?;
     Ok(())
 }
 
@@ -308,6 +348,39 @@ mod tests {
         let mut out = Vec::new();
         write_ppm(&img, &mut out).unwrap();
         assert_eq!(out, b"P6\n2 1\n255\n\x01\x02\x03\x04\x05\x06");
+    }
+
+    #[test]
+    fn linear_transfer_clamps_scales_and_rounds() {
+        assert_eq!(
+            [linear8(0.0), linear8(1.0), linear8(2.0), linear8(-1.0), linear8(f32::NAN)],
+            [0, 255, 255, 0, 0]
+        );
+        assert_eq!([linear8(0.5), linear8(0.498), linear8(0.753)], [128, 127, 192]);
+        let mut img = Image::new(11, 2);
+        for (k, p) in img.pixels.iter_mut().enumerate() {
+            *p = crate::math::V3::new(k as f32 / 21.0, 0.25, 1.5);
+        }
+        let out = to_rgb8(&img, Transfer::Linear);
+        for (k, p) in img.pixels.iter().enumerate() {
+            assert_eq!(&out.as_raw()[3 * k..3 * k + 3], &[linear8(p.x), 64, 255], "pixel {k}");
+        }
+        assert_eq!(to_rgb8(&img, Transfer::Srgb), to_srgb8(&img));
+    }
+
+    #[test]
+    fn png_records_the_transfer_in_a_text_chunk() {
+        let img = RgbImage::from_raw(2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap();
+        for transfer in [Transfer::Srgb, Transfer::Linear] {
+            let mut out = Vec::new();
+            write_png(&img, transfer, &mut out).unwrap();
+            let reader = png::Decoder::new(std::io::Cursor::new(&out)).read_info().unwrap();
+            let text = &reader.info().uncompressed_latin1_text;
+            assert_eq!(text.len(), 1);
+            assert_eq!((text[0].keyword.as_str(), text[0].text.as_str()), ("Transfer", transfer.name()));
+            let decoded = image::load_from_memory(&out).unwrap().into_rgb8();
+            assert_eq!(decoded, img);
+        }
     }
 
     #[test]

@@ -69,6 +69,76 @@ fn exr_holds_linear_values_and_png_their_srgb_encoding() {
     assert!(compared > 1000);
 }
 
+/// The PNG's `Transfer` text chunk.
+fn png_transfer(path: &Path) -> String {
+    let file = std::io::BufReader::new(std::fs::File::open(path).unwrap());
+    let reader = png::Decoder::new(file).read_info().unwrap();
+    let text = &reader.info().uncompressed_latin1_text;
+    let chunk = text.iter().find(|t| t.keyword == "Transfer").expect("a Transfer tEXt chunk");
+    chunk.text.clone()
+}
+
+/// NFF and xyzr scenes write their values as they are (classic tracers' way with NFF colours), TOML scenes
+/// encode them with the sRGB curve; `[render] transfer` and `--transfer` choose; PNG records the choice.
+#[test]
+fn nff_and_xyzr_write_values_as_they_are_toml_encodes_srgb_and_transfer_overrides() {
+    use bareray::output::{linear8, srgb8};
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    // A flat background colour, and a lit sphere that leaves the corners to it.
+    let (r, g, b) = (0.2f32, 0.4f32, 0.6f32);
+    let nff = "b 0.2 0.4 0.6\nv\nfrom 0 -5 0\nat 0 0 0\nup 0 0 1\nangle 30\nhither 0.01\nresolution 24 24\n\
+               l 2 -4 3\nf 0.9 0.5 0.3 0.8 0 1 0 1\ns 0 0 0 0.5\n";
+    std::fs::write(p("s.nff"), nff).unwrap();
+    std::fs::write(p("lin.toml"), "[render]\nbackground = [0.2, 0.4, 0.6]\ntransfer = \"linear\"\n").unwrap();
+    std::fs::write(p("s.toml"), "[render]\nbackground = [0.2, 0.4, 0.6]\n").unwrap();
+    std::fs::write(p("s.xyzr"), "0 0 0 1\n2 0 0 0.5\n").unwrap();
+    let linear = [linear8(r), linear8(g), linear8(b)];
+    let srgb = [srgb8(r), srgb8(g), srgb8(b)];
+    assert_eq!(linear, [51, 102, 153], "round(255·c)");
+    assert_ne!(linear, srgb);
+    let cases: [(&str, &[&str], &str, [u8; 3]); 7] = [
+        ("s.nff", &[], "linear", linear),
+        ("s.nff", &["--transfer", "srgb"], "srgb", srgb),
+        ("s.nff", &["--transfer", "linear"], "linear", linear),
+        ("s.toml", &[], "srgb", srgb),
+        ("s.toml", &["--transfer", "linear"], "linear", linear),
+        ("lin.toml", &[], "linear", linear),
+        ("lin.toml", &["--transfer", "srgb"], "srgb", srgb),
+    ];
+    for (scene, extra, name, corner) in cases {
+        for ext in ["png", "ppm"] {
+            let out = p(&format!("out.{ext}"));
+            let mut args = vec!["render", scene, "-o", &out, "--width", "24", "-q"];
+            args.extend_from_slice(extra);
+            let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+                .args(&args)
+                .current_dir(dir.path())
+                .output()
+                .unwrap();
+            assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+            let img = image::open(&out).unwrap().into_rgb8();
+            assert_eq!(img.get_pixel(0, 0).0, corner, "{args:?}");
+            if ext == "png" {
+                assert_eq!(png_transfer(Path::new(&out)), name, "{args:?}");
+            }
+        }
+    }
+    // Every pixel, shaded ones included, is the linear encoding of the EXR's value, on NFF and xyzr.
+    for scene in ["s.nff", "s.xyzr"] {
+        for out in [p("v.exr"), p("v.png")] {
+            let run = bareray(&["render", &p(scene), "-o", &out, "--width", "24", "-q"]);
+            assert!(run.status.success(), "{scene}: {}", stderr(&run));
+        }
+        assert_eq!(png_transfer(Path::new(&p("v.png"))), "linear", "{scene}");
+        let lin = image::open(p("v.exr")).unwrap().into_rgb32f();
+        let png = image::open(p("v.png")).unwrap().into_rgb8();
+        let expected: Vec<u8> = lin.as_raw().iter().map(|&v| linear8(v)).collect();
+        assert_eq!(png.as_raw(), &expected, "{scene}");
+        assert!(png.as_raw().iter().collect::<std::collections::BTreeSet<_>>().len() > 8, "{scene}: shaded");
+    }
+}
+
 #[test]
 fn demo_scene_renders_without_arguments() {
     let dir = tempfile::tempdir().unwrap();
@@ -286,7 +356,7 @@ fn stats_report_scene_rays_and_times() {
     assert_eq!(text.matches("build").count(), 1, "{text}");
     for needle in [
         "3 primitives (2 spheres, 0 ellipsoids, 1 plane, 0 polygons), 2 lights",
-        "1 sample per pixel (1×1 grid)",
+        "1 sample per pixel (1×1 grid), srgb transfer",
         "skips: bvh, ellipsoids, polygons",
         "brute force",
         "primary",

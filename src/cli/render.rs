@@ -13,7 +13,7 @@ use crate::aov::{self, AovList};
 use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
-use crate::scene::desc::Pattern;
+use crate::scene::desc::{Pattern, Transfer};
 use crate::scene::{toml, Accel, BvhPreset, Scene, SceneDesc};
 
 /// The demo scene rendered when no scene file is given.
@@ -32,8 +32,8 @@ pub struct RenderArgs {
     /// Scene file: .toml (bareray's format), .nff (SPD's Neutral File Format) or .xyzr (`x y z r` per
     /// line). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
     pub scene: Option<PathBuf>,
-    /// Output image; the extension picks the format: .png (8-bit sRGB), .exr (linear float RGB), .ppm or
-    /// .pnm (binary 8-bit sRGB PPM, P6). Default: the scene's name with .png, in the current directory.
+    /// Output image; the extension picks the format: .png (8-bit), .exr (linear float RGB), .ppm or .pnm
+    /// (binary 8-bit PPM, P6). Default: the scene's name with .png, in the current directory.
     #[arg(short, long, value_parser = parse_output)]
     pub output: Option<PathBuf>,
     #[command(flatten)]
@@ -44,6 +44,12 @@ pub struct RenderArgs {
     /// Reflection/refraction depth limit; overrides the scene.
     #[arg(long)]
     pub depth: Option<u32>,
+    /// How values become 8-bit PNG/PPM pixels: `srgb` encodes them as linear light with the sRGB curve
+    /// (TOML scenes' default), `linear` writes them as they are, clamped, ×255 (NFF's and xyzr's default,
+    /// as SPD, POV-Ray and Tachyon write NFF colours). Overrides the scene; PNG records it. EXR holds
+    /// linear floats either way.
+    #[arg(long, value_enum)]
+    pub transfer: Option<Transfer>,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -119,7 +125,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     };
     let clock = Instant::now();
-    pool.install(|| write_image(&rendered.image, &output))?;
+    pool.install(|| write_image(&rendered.image, &output, scene.render.transfer))?;
     if let Some((img, which)) = aovs {
         let path = aov::aov_path(&output);
         aov::write_exr(&img, &which.0, scene.geometry.len(), &path)
@@ -180,7 +186,13 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material")
     );
-    println!("image: {}x{}, {}", scene.camera.width, scene.camera.height, pattern_name(scene.render.pattern));
+    println!(
+        "image: {}x{}, {}, {} transfer",
+        scene.camera.width,
+        scene.camera.height,
+        pattern_name(scene.render.pattern),
+        scene.render.transfer.name()
+    );
     println!("features: {}", crate::scene::features::Features::of(scene));
     println!(
         "accel: {}, {:.1} bytes/sphere (spheres + BVH nodes)",
@@ -292,5 +304,8 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
     }
     if let Some(d) = args.depth {
         desc.render.max_depth = d;
+    }
+    if let Some(t) = args.transfer {
+        desc.render.transfer = t;
     }
 }

@@ -90,6 +90,28 @@ pub enum PostFilter {
     Lecture3x3,
 }
 
+/// How the rendered values become 8-bit pixels (PNG, PPM); EXR output holds the values as they are,
+/// linear floats, whatever the transfer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+pub enum Transfer {
+    /// The values are linear radiance, encoded with the sRGB curve (clamped to [0, 1]): TOML scenes.
+    #[default]
+    Srgb,
+    /// The values are written as they are: clamped to [0, 1], times 255, rounded. What SPD's, POV-Ray's
+    /// and Tachyon's renders of NFF scenes do, whose colours are display values: NFF and xyzr scenes.
+    Linear,
+}
+
+impl Transfer {
+    /// The name the command line, the TOML key and the PNG metadata use.
+    pub fn name(self) -> &'static str {
+        match self {
+            Transfer::Srgb => "srgb",
+            Transfer::Linear => "linear",
+        }
+    }
+}
+
 /// Everything about a render that is not geometry.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderDesc {
@@ -103,6 +125,8 @@ pub struct RenderDesc {
     pub background: Rgb,
     /// Ambient light, scaled by each material's `ambient`.
     pub ambient: Rgb,
+    /// How the values become 8-bit pixels.
+    pub transfer: Transfer,
 }
 
 impl Default for RenderDesc {
@@ -113,6 +137,7 @@ impl Default for RenderDesc {
             max_depth: 5,
             background: Rgb::new(0.0, 0.0, 0.0),
             ambient: Rgb::all(1.0),
+            transfer: Transfer::Srgb,
         }
     }
 }

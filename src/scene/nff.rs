@@ -26,6 +26,17 @@
 //! no ambient term; SPD's POV-Ray conversion gives the balls floor 0.2 and the spheres 0, so NFF materials get
 //! [`NFF_AMBIENT`], between the two, which keeps fully shadowed floor from going black. Lights without colour
 //! each get intensity `1/sqrt(number of lights)`, as SPD's converters do for every renderer but NFF's own.
+//!
+//! # Colours
+//!
+//! NFF colours are display values: SPD's own renderer, POV-Ray (SPD's POV-Ray output, rendered as SPD's
+//! reference images were) and Tachyon write the shaded values out as they come, clamped and times 255, with
+//! no transfer curve. NFF scenes therefore get [`Transfer::Linear`]; encoding them with the sRGB curve, as
+//! TOML scenes are, washes them out: SPD `balls` (size 4) at 512² differs from POV-Ray's render of SPD's
+//! own POV-Ray output by 49 of 255 per channel on average with the curve, 20 without. The rest is the
+//! ambient term: that output gives the floor 0.2 and the spheres 0 where NFF materials get
+//! [`NFF_AMBIENT`]; with SPD's values the difference is 0.5. `render --transfer srgb` still chooses the
+//! curve.
 
 use std::path::Path;
 
@@ -53,7 +64,10 @@ pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
     let mut reader = Reader {
         path,
         tokens: Tokens::new(source),
-        desc: SceneDesc::default(),
+        desc: SceneDesc {
+            render: RenderDesc { transfer: Transfer::Linear, ..RenderDesc::default() },
+            ..SceneDesc::default()
+        },
         material: None,
         colourless: Vec::new(),
         view_seen: false,

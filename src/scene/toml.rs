@@ -64,6 +64,14 @@ struct RenderToml {
     max_depth: Option<u32>,
     background: Option<Spanned<Vec3>>,
     ambient: Option<Spanned<Vec3>>,
+    transfer: Option<TransferToml>,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum TransferToml {
+    Srgb,
+    Linear,
 }
 
 #[derive(Deserialize, Clone, Copy, PartialEq)]
@@ -347,6 +355,11 @@ impl Reader<'_> {
             max_depth: r.max_depth.unwrap_or(d.max_depth),
             background: r.background.as_ref().map_or(Ok(d.background), |c| self.color(c, "background"))?,
             ambient: r.ambient.as_ref().map_or(Ok(d.ambient), |c| self.color(c, "ambient"))?,
+            transfer: match r.transfer {
+                None => d.transfer,
+                Some(TransferToml::Srgb) => Transfer::Srgb,
+                Some(TransferToml::Linear) => Transfer::Linear,
+            },
         })
     }
 

@@ -6,7 +6,8 @@
 //! pixel centres), centred on the field's bounding box and backed off until the box's front face fills the
 //! image in its tighter direction ([`frame_box`]); for the contract's [−1, 1]³ field that puts the eye near
 //! z = −5.6 (the contract's fixed z = −4 crops the field, on purpose). One white light sits above and to the
-//! left of the eye so that shading shows the spheres' shape. The CLI overrides the camera.
+//! left of the eye so that shading shows the spheres' shape. The CLI overrides the camera. Values go to 8-bit
+//! images with [`Transfer::Linear`], as NFF's do (the benchmark's peers read sphere lists as NFF spheres).
 
 use std::path::Path;
 
@@ -115,6 +116,8 @@ pub fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
             falloff: Falloff::None,
         }],
         spheres,
+        // Colours as in NFF: written as they are (see the NFF reader's module documentation).
+        render: RenderDesc { transfer: Transfer::Linear, ..RenderDesc::default() },
         ..SceneDesc::default()
     }
 }
