@@ -215,14 +215,15 @@ pub fn check_or_exit() {
         return;
     }
     let required = FEATURES.iter().filter(|f| f.compiled).map(|f| f.name);
-    emit_message(required, names(missing), |mut s: &str| {
-        while !s.is_empty() {
-            // SAFETY: writes the bytes of a live `str` to stderr.
-            let n = unsafe { libc::write(2, s.as_ptr().cast(), s.len()) };
+    emit_message(required, names(missing), |s: &str| {
+        let mut bytes = s.as_bytes();
+        while !bytes.is_empty() {
+            // SAFETY: writes live bytes to stderr.
+            let n = unsafe { libc::write(2, bytes.as_ptr().cast(), bytes.len()) };
             if n <= 0 {
                 return;
             }
-            s = &s[n as usize..];
+            bytes = &bytes[n as usize..];
         }
     });
     // SAFETY: ends the process at once; nothing of Rust's runtime has started.
