@@ -12,6 +12,7 @@ pub mod accuracy;
 pub mod aov;
 pub mod camera;
 pub mod cli;
+pub mod cpu;
 pub mod film;
 pub mod geometry;
 pub mod huge_pages;

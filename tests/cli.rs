@@ -538,3 +538,61 @@ fn diff_reports_identical_different_and_errors() {
     // Only the inputs and the heatmap: no temporary file left beside it.
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 7);
 }
+
+/// A CPU that lacks an instruction set the binary was compiled for (forced with BARERAY_ASSUME_CPU_LACKS):
+/// exit 1 and one message naming the missing features and the fix, before anything else happens (no
+/// argument parsing, no output file). On builds with no x86 features to check the variable changes nothing.
+#[test]
+fn a_cpu_lacking_a_compiled_for_feature_stops_with_a_message() {
+    let required = bareray::cpu::required_features();
+    // avx512f and fma where the build uses them (the kernels' instruction sets), else its first feature.
+    let mut lacks: Vec<&str> = required.iter().copied().filter(|f| ["avx512f", "fma"].contains(f)).collect();
+    if lacks.is_empty() {
+        lacks.extend(required.first());
+    }
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+        .args(["render", "-o", out.to_str().unwrap(), "--width", "16", "--no-such-flag"])
+        .env(
+            bareray::cpu::ASSUME_LACKS_VAR,
+            if lacks.is_empty() { "avx512f,fma".into() } else { lacks.join(",") },
+        )
+        .output()
+        .unwrap();
+    if lacks.is_empty() {
+        // Nothing compiled for beyond the baseline: the check has nothing to find (and clap rejects the flag).
+        assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+        return;
+    }
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(run.stdout.is_empty());
+    assert!(!out.exists(), "nothing rendered");
+    assert_eq!(err.matches("error:").count(), 1, "one message, before clap sees the bad flag: {err}");
+    let missing = err.lines().find_map(|l| l.trim().strip_prefix("missing:")).expect(&err);
+    assert_eq!(missing.split_whitespace().collect::<Vec<_>>(), lacks, "{err}");
+    let listed = err.lines().find_map(|l| l.trim().strip_prefix("required:")).expect(&err);
+    assert_eq!(listed.split_whitespace().collect::<Vec<_>>(), required, "{err}");
+    assert!(err.contains("cargo build --release") && err.contains("-C target-cpu=x86-64-v3"), "{err}");
+}
+
+/// Without the variable the check passes on the machine that built the binary: it renders as usual.
+#[test]
+fn the_cpu_that_built_the_binary_passes_the_check() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.png");
+    let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+        .args(["render", "-o", out.to_str().unwrap(), "--width", "16", "-q"])
+        .env_remove(bareray::cpu::ASSUME_LACKS_VAR)
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(run.stderr.is_empty(), "{}", stderr(&run));
+    assert!(out.exists());
+    let version = bareray(&["--version"]);
+    let version = String::from_utf8_lossy(&version.stdout);
+    let required = bareray::cpu::required_features();
+    assert!(version.contains("compiled for: "), "{version}");
+    assert!(required.iter().all(|f| version.contains(f)), "{version}");
+}

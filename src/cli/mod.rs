@@ -9,7 +9,7 @@ mod render;
 
 use std::process::ExitCode;
 
-use clap::{Parser, Subcommand};
+use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
 /// bareray — a data-oriented SIMD packet ray tracer with a scalar reference path.
 ///
@@ -66,9 +66,16 @@ fn usage(message: impl Into<String>) -> anyhow::Error {
 }
 
 /// Parses the command line, runs the subcommand, and turns errors into a message and an exit code: 2 for
-/// argument errors (clap's and [`UsageError`]), 1 for the rest.
+/// argument errors (clap's and [`UsageError`]), 1 for the rest. The CPU check ([`crate::cpu`]: exit code 1
+/// and nothing done when the CPU lacks an instruction set the binary was compiled for) has run before, as
+/// an ELF constructor, on Linux; elsewhere it runs here first, before clap.
 pub fn main() -> ExitCode {
-    let cli = Cli::parse();
+    #[cfg(not(all(target_os = "linux", any(target_arch = "x86", target_arch = "x86_64"))))]
+    if let Err(message) = crate::cpu::check() {
+        eprintln!("{message}");
+        return ExitCode::FAILURE;
+    }
+    let cli = parse_args();
     let result = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Gen(args) => gen::run(args),
@@ -96,10 +103,21 @@ pub fn main() -> ExitCode {
     }
 }
 
+/// [`Cli::parse`], with the instruction sets the build was compiled for in `--version` (`-V` stays short).
+fn parse_args() -> Cli {
+    let required = crate::cpu::required_features();
+    let isa = match required.is_empty() {
+        true => "the target's baseline".to_string(),
+        false => required.join(" "),
+    };
+    let version = format!("{}\ncompiled for: {isa}", env!("CARGO_PKG_VERSION"));
+    let matches = Cli::command().long_version(&*Box::leak(version.into_boxed_str())).get_matches();
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use clap::CommandFactory;
 
     #[test]
     fn command_line_definition_is_consistent() {
