@@ -297,7 +297,7 @@ fn encode(img: &Image, format: Format, transfer: Transfer, tmp: &Path) -> Result
 /// 8-bit RGB PNG with a `tEXt` chunk `Transfer` = `srgb` or `linear`. The `png` crate directly (the
 /// `image` crate's encoder writes no text chunks), with that encoder's settings here: fast deflate and Paeth
 /// on every row rather than the adaptive choice per row (on balls4 at 1024², 3.4 against 4.2 ms to encode
-/// and a smaller file; PERF.md, session 12).
+/// and a smaller file; docs/perf-log/2026-11.md).
 pub fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
     let mut encoder = png::Encoder::new(out, img.width(), img.height());
     encoder.set_color(png::ColorType::Rgb);

@@ -102,7 +102,7 @@ pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &Prog
     let rows = tile_rows(&mut image.pixels, width, &tiles);
     let traced: Vec<(RayCounts, Work)> = pool.install(|| {
         // One job per tile (with_max_len): rayon otherwise runs whole quarters of the image as single
-        // jobs, which a thread slowed by the host cannot hand over (PERF.md, session 6).
+        // jobs, which a thread slowed by the host cannot hand over (docs/perf-log/2026-11.md).
         tiles
             .par_iter()
             .zip(rows)
@@ -211,7 +211,7 @@ pub fn for_each_packet<F: Lanes>(
 /// [`tiles`]`(width, height)` (row-major bands of TILE rows), so each tile's job writes its own pixels in
 /// place. Before, every tile returned its pixels and they were merged after the trace: the merge (first
 /// serial, then parallel) and the first touch of 4096 live tile buffers cost 1–5% of a 1024² sphereflake
-/// (PERF.md, session 9).
+/// (docs/perf-log/2026-11.md).
 fn tile_rows<'a>(pixels: &'a mut [Rgb], width: u32, tiles: &[Tile]) -> Vec<Vec<&'a mut [Rgb]>> {
     let mut out: Vec<Vec<&mut [Rgb]>> = tiles.iter().map(|t| Vec::with_capacity(t.h as usize)).collect();
     let per_band = width.div_ceil(TILE) as usize;

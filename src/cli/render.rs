@@ -61,10 +61,10 @@ pub struct RenderArgs {
     #[arg(long)]
     pub stats: bool,
     /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16 (the default: fastest on every scene in
-    /// scenes/ but the refraction-heavy whitted.toml, PERF.md). The image is identical at every width.
+    /// scenes/ but the refraction-heavy whitted.toml, docs/perf-log/2026-11.md). The image is identical at every width.
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
-    /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; PERF.md compares them).
+    /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; docs/perf-log/2026-11.md compares them).
     #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
     pub bvh_preset: BvhPreset,
     /// No progress bar and no summary line.

@@ -35,7 +35,7 @@ use crate::math::V3;
 use crate::simd::Lanes;
 
 /// Subtrees that a packet enters with at most this many live lanes are walked one ray at a time (measured:
-/// PERF.md, "Single-ray switch").
+/// docs/perf-log/2026-11.md, "Single-ray switch").
 pub const SINGLE_RAY_MAX_LANES: u32 = 2;
 
 /// Children per node (Embree's N).
@@ -102,7 +102,7 @@ fn shift_inner(child: &mut [u32], count: &[u8], slots: u8, base: u32) {
 
 /// Bit c set where `count[c]` is not 0: the leaf slots (empty slots have count 0 and are never entered).
 /// Kept in each node: the single-ray occlusion walk asks for it at every visit, and computing it there was
-/// 1.5% of balls4's instructions (session 13).
+/// 1.5% of balls4's instructions (docs/perf-log/2026-11.md).
 fn leaf_bits(count: &[u8]) -> u8 {
     count.iter().enumerate().fold(0, |bits, (c, &n)| bits | u8::from(n != 0) << c)
 }
@@ -210,7 +210,7 @@ pub struct Bvh {
     /// ([`SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
     pub single_ray_lanes: u32,
     /// Test each node's children and each leaf's spheres against a shared-origin packet as a whole (its
-    /// frustum, [`packet`]) before their lanes. On by default (PERF.md, "Frustum culling").
+    /// frustum, [`packet`]) before their lanes. On by default (docs/perf-log/2026-11.md, "Frustum culling").
     pub frustum_culling: bool,
     /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
     pub extent: f32,
@@ -414,7 +414,7 @@ fn tree_for(n: usize) -> (Vec<Bvh2Node>, Vec<u32>) {
 }
 
 /// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on
-/// one thread, the collapse was ~70 ms of a 1e6 build that takes ~0.5 s on 2 threads (PERF.md, session 9).
+/// one thread, the collapse was ~70 ms of a 1e6 build that takes ~0.5 s on 2 threads (docs/perf-log/2026-11.md).
 const PARALLEL_LEVELS: u32 = 3;
 
 /// [`flatten`] of obvhs inner node `i` into a vector of its own (the subtree's root first, indices local to

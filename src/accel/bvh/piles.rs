@@ -1,6 +1,6 @@
 //! Piles of coincident spheres. obvhs's PLOC merges equal boxes about one pair per pass, so a pile of p
 //! copies of one sphere costs about p passes over the whole scene: 20 000 copies took 3.3 s to build and
-//! 100 000 took 77 s (PERF.md, session 12). A scene with a large pile is built over one box per distinct
+//! 100 000 took 77 s (docs/perf-log/2026-11.md). A scene with a large pile is built over one box per distinct
 //! sphere, and the copies then hang under their box's leaf as a balanced subtree.
 
 use obvhs::aabb::Aabb;
