@@ -118,7 +118,7 @@ fn bvh_equals_brute_force_at_every_width() {
         let desc = field(n, seed);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.bvh.is_some() && brute.geometry.bvh.is_none());
+        assert!(bvh.geometry.sphere_bvh.is_some() && brute.geometry.sphere_bvh.is_none());
         let rays = rays(&desc, 2000, seed + 100);
         check_width::<f32>(&bvh, &brute, &rays);
         check_width::<f32x4>(&bvh, &brute, &rays);
@@ -139,7 +139,7 @@ fn single_ray_tree_equals_brute_force() {
         desc.lights.push(light);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        let tree = bvh.geometry.bvh.as_ref().unwrap();
+        let tree = bvh.geometry.sphere_bvh.as_ref().unwrap();
         assert!(tree.wide.is_some(), "a lit scene builds the single-ray tree");
         let rays = rays(&desc, 3000, seed + 100);
         check_width::<f32>(&bvh, &brute, &rays);
@@ -147,7 +147,7 @@ fn single_ray_tree_equals_brute_force() {
     }
     // Without lights or mirrors nothing walks one ray from the root: no single-ray tree.
     let plain = Scene::compile_with(&field(300, 4), Accel::Bvh).unwrap();
-    assert!(plain.geometry.bvh.as_ref().unwrap().wide.is_none());
+    assert!(plain.geometry.sphere_bvh.as_ref().unwrap().wide.is_none());
 }
 
 #[test]
@@ -165,7 +165,7 @@ fn coincident_spheres_get_a_tree_the_walks_can_hold() {
         desc.lights.push(LightDesc { position, color: Rgb::all(1.0), falloff: Falloff::None });
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.bvh.as_ref().unwrap().wide.is_some());
+        assert!(bvh.geometry.sphere_bvh.as_ref().unwrap().wide.is_some());
         // A third of the rays start at sphere centres, most of them inside the pile.
         let rays = rays(&desc, 3000, seed + 100);
         check_width::<f32>(&bvh, &brute, &rays);
@@ -176,7 +176,7 @@ fn coincident_spheres_get_a_tree_the_walks_can_hold() {
 
 /// Box tests of `packets` (K = 16, closest hit) after `setting` the BVH's switches.
 fn packet_box_tests(bvh: &mut Scene, packets: &[Ray<f32>], setting: impl Fn(&mut Bvh)) -> u64 {
-    setting(bvh.geometry.bvh.as_mut().unwrap());
+    setting(bvh.geometry.sphere_bvh.as_mut().unwrap());
     bareray::accel::set_counting(true);
     bareray::accel::take_work();
     for chunk in packets.chunks(16) {
@@ -256,7 +256,7 @@ fn single_ray_switch_keeps_the_brute_force_answer() {
         let some = packet_box_tests(&mut bvh, &packets, |b| b.single_ray_lanes = 3);
         assert_ne!(never, some, "{n} spheres: no subtree was walked by single rays");
         for lanes in [0, 1, 3, 8, 16] {
-            bvh.geometry.bvh.as_mut().unwrap().single_ray_lanes = lanes;
+            bvh.geometry.sphere_bvh.as_mut().unwrap().single_ray_lanes = lanes;
             let random = rays(&desc, 2000, seed + 200);
             check_width::<f32x4>(&bvh, &brute, &random);
             check_width::<f32x8>(&bvh, &brute, &random);
@@ -294,5 +294,104 @@ fn camera_pyramids_keep_the_brute_force_answer() {
         // Ids: brute force stores spheres in file order, the BVH in leaf order.
         let file_ids: Vec<u32> = got.prim.iter().map(|&p| bvh.geometry.file_id(p)).collect();
         assert_eq!(file_ids, want.prim, "ids differ, eye {eye}, θ {theta}");
+    }
+}
+
+/// Random planar polygons (triangles and quads, some with vertex normals) among the spheres of a field.
+fn polygon_field(n: usize, seed: u64) -> SceneDesc {
+    let mut desc = field(n / 4 + 1, seed);
+    let mut rng = Rng(SplitMix64::new(seed ^ 0xa5a5));
+    for k in 0..n {
+        let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        let size = rng.range(0.02, 0.3);
+        let (u, v) = (DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)), DVec3::Z);
+        let (u, w) = (u.normalize() * size, u.cross(v).normalize() * size);
+        let vertices = match k % 2 {
+            0 => vec![c, c + u, c + w],
+            _ => vec![c, c + u, c + u + w, c + w],
+        };
+        let normals = (k % 3 == 0).then(|| vec![u.cross(w).normalize(); vertices.len()]);
+        desc.polygons.push(bareray::scene::desc::PolygonDesc { vertices, normals, material: 0 });
+    }
+    // A large floor, entered by most rays that reach the bottom, and an exact copy: ties between polygon ids.
+    let floor = [[-3.0, -1.2, -3.0], [3.0, -1.2, -3.0], [3.0, -1.2, 3.0], [-3.0, -1.2, 3.0]].map(DVec3::from);
+    for _ in 0..2 {
+        desc.polygons.push(bareray::scene::desc::PolygonDesc {
+            vertices: floor.to_vec(),
+            normals: None,
+            material: 0,
+        });
+    }
+    desc
+}
+
+/// Polygons' triangles live in their own BVH: closest hits (t bits and file id) and occlusion equal brute
+/// force at every width, for rays from outside, from inside the field and from polygon surfaces.
+#[test]
+fn polygon_bvh_equals_brute_force_at_every_width() {
+    for (n, seed) in [(3, 11), (40, 12), (1500, 13)] {
+        let desc = polygon_field(n, seed);
+        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        assert!(bvh.geometry.polygon_bvh.is_some() && brute.geometry.polygon_bvh.is_none());
+        let rays = rays(&desc, 3000, seed + 100);
+        let hits = rays.iter().filter(|r| {
+            let h = brute.geometry.intersect(r, Departure::CAMERA, f32::INFINITY);
+            h.prim as usize >= brute.geometry.polygon_base()
+        });
+        assert!(hits.count() > rays.len() / 5, "{n} polygons: too few rays hit a polygon");
+        check_polygons::<f32>(&bvh, &brute, &rays);
+        check_polygons::<f32x4>(&bvh, &brute, &rays);
+        check_polygons::<f32x8>(&bvh, &brute, &rays);
+        check_polygons::<f32x16>(&bvh, &brute, &rays);
+    }
+}
+
+fn check_polygons<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
+    for chunk in rays.chunks(F::K) {
+        let packet = RayPacket::<F>::from_rays(chunk, f32::INFINITY);
+        let hits = bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
+        let shadow = RayPacket::<F>::from_rays(chunk, 1.5);
+        let blocked = bvh.geometry.occluded_k(&shadow, &DeparturePacket::camera());
+        for (i, ray) in chunk.iter().enumerate() {
+            let want = brute.geometry.intersect(ray, Departure::CAMERA, f32::INFINITY);
+            let got = hits.lane(i);
+            assert_eq!(got.t.to_bits(), want.t.to_bits(), "K={} {ray:?}: {got:?} vs {want:?}", F::K);
+            assert_eq!(
+                bvh.geometry.file_id(got.prim),
+                brute.geometry.file_id(want.prim),
+                "K={} {ray:?}",
+                F::K
+            );
+            let occluded = brute.geometry.occluded(ray, Departure::CAMERA, 1.5);
+            assert_eq!(F::mask_lane(blocked, i), occluded, "K={} occlusion {ray:?}", F::K);
+        }
+        // Secondary rays leave the polygon they hit: that polygon is skipped, the others are found.
+        let from = DeparturePacket::<F> { prim: hits.prim, inward: F::mask_from_bits(0) };
+        let next = RayPacket::<F>::from_fn(|i| {
+            let (r, hit) = (chunk.get(i).copied().unwrap_or(chunk[0]), hits.lane(i.min(chunk.len() - 1)));
+            let live = i < chunk.len() && hit.t.is_finite();
+            let at = if live { r.at(hit.t) } else { r.origin };
+            (Ray::new(at, V3::new(r.dir.y, r.dir.z, -r.dir.x)), f32::INFINITY, live)
+        });
+        let again = bvh.geometry.intersect_k(&next, &from);
+        for (i, camera_ray) in chunk.iter().enumerate() {
+            let (ray, _, live) = next.lane(i);
+            if !live {
+                continue;
+            }
+            // The brute-force scene stores spheres in file order: its own first hit names the same primitive.
+            let first = brute.geometry.intersect(camera_ray, Departure::CAMERA, f32::INFINITY);
+            let want =
+                brute.geometry.intersect(&ray, Departure { prim: first.prim, inward: false }, f32::INFINITY);
+            let got = again.lane(i);
+            assert_eq!(got.t.to_bits(), want.t.to_bits(), "K={} secondary {ray:?}", F::K);
+            assert_eq!(
+                bvh.geometry.file_id(got.prim),
+                brute.geometry.file_id(want.prim),
+                "K={} secondary",
+                F::K
+            );
+        }
     }
 }

@@ -1,13 +1,21 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
-//! Spheres go through the BVH when the scene has one, else brute force; shapes and polygons (few, and
-//! planes are unbounded) are always tested brute force.
+//!
+//! Each bounded kind has its own BVH ([`bvh`], one tree type monomorphised over the kind's [`bvh::LeafQuery`]):
+//! spheres ([`SphereQuery`]) and polygons' triangles ([`TriangleQuery`]); a kind with few items is tested
+//! brute force by the same query. Transformed shapes (planes are unbounded) are tested brute force
+//! ([`others`]).
 
-mod brute;
-pub use brute::SphereQuery;
 pub mod bvh;
+mod others;
 mod polygons;
+mod sphere_query;
+mod triangle_query;
 pub use polygons::Polygons;
+pub use sphere_query::SphereQuery;
+pub use triangle_query::TriangleQuery;
+
+use bvh::{Bvh, LeafQuery};
 
 use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, NO_PRIM};
 use crate::math::{Mask, Vec3f, V3};
@@ -175,14 +183,54 @@ pub struct Geometry {
     /// Plain spheres, in BVH leaf order when there is a BVH.
     pub spheres: Spheres,
     /// The BVH over the spheres, or `None` for brute force.
-    pub bvh: Option<bvh::Bvh>,
+    pub sphere_bvh: Option<Bvh>,
     /// Transformed generic shapes.
     pub shapes: Vec<Shape<f32>>,
-    /// Planar polygons.
+    /// Planar polygons; their triangles in BVH leaf order when there is a BVH.
     pub polygons: Polygons,
+    /// The BVH over the polygons' triangles, or `None` for brute force.
+    pub polygon_bvh: Option<Bvh>,
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
     pub origin: Vec3f,
+}
+
+/// Closest hits of the `n` items of one kind for the lanes of `live`, merged into `best`: through the kind's
+/// BVH when it has one, else brute force over all of them.
+#[inline(always)]
+fn intersect_items<F: Lanes, Q: LeafQuery<F>>(
+    bvh: Option<&Bvh>,
+    q: &Q,
+    n: usize,
+    live: F::Mask,
+    best: &mut HitPacket<F>,
+) {
+    match bvh {
+        Some(bvh) => bvh.intersect_k(q, live, best),
+        None => {
+            count_work(n, 0);
+            q.intersect(0..n, live, best);
+        }
+    }
+}
+
+/// Lanes of `live` blocked by one of the `n` items of one kind, like [`intersect_items`]; `blocker` is set to
+/// an item that blocked a lane.
+#[inline(always)]
+fn occluded_items<F: Lanes, Q: LeafQuery<F>>(
+    bvh: Option<&Bvh>,
+    q: &Q,
+    n: usize,
+    live: F::Mask,
+    blocker: &mut u32,
+) -> F::Mask {
+    if !live.any() {
+        return live;
+    }
+    match bvh {
+        Some(bvh) => bvh.occluded_k(q, live, blocker),
+        None => q.occluded(0..n, live, blocker),
+    }
 }
 
 /// What a primitive id refers to.
@@ -218,15 +266,15 @@ impl Geometry {
         if !rays.active.any() {
             return best;
         }
-        let q = self.sphere_query(rays, from);
-        match &self.bvh {
-            Some(bvh) => bvh.intersect_k(&q, rays.active, &mut best),
-            None => {
-                count_work(self.spheres.len(), 0);
-                q.intersect(0..self.spheres.len(), rays.active, &mut best);
-            }
+        if !self.spheres.is_empty() {
+            let q = self.sphere_query(rays, from);
+            intersect_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), rays.active, &mut best);
         }
-        self.others_intersect_k(rays, from.prim, &mut best);
+        if !self.polygons.is_empty() {
+            let q = self.triangle_query(rays, from);
+            intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, &mut best);
+        }
+        self.shapes_intersect_k(rays, from.prim, &mut best);
         let (exits, t) = self.departure_exits_k(rays, from);
         best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
         best
@@ -253,26 +301,34 @@ impl Geometry {
         if !live.any() {
             return live;
         }
-        let q = self.sphere_query(rays, from);
         let mut blocked = F::mask_from_bits(0);
-        if (*hint as usize) < self.spheres.len() {
-            let h = *hint as usize;
-            count_work(1, 0);
-            blocked = q.occluded(h..h + 1, live, hint);
+        if !self.spheres.is_empty() {
+            let q = self.sphere_query(rays, from);
+            if (*hint as usize) < self.spheres.len() {
+                let h = *hint as usize;
+                count_work(1, 0);
+                blocked = q.occluded(h..h + 1, live, hint);
+                if (blocked | !live).all() {
+                    return blocked;
+                }
+            }
+            blocked = blocked
+                | occluded_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), live & !blocked, hint);
             if (blocked | !live).all() {
                 return blocked;
             }
         }
-        let rest = live & !blocked;
-        blocked = blocked
-            | match &self.bvh {
-                Some(bvh) => bvh.occluded_k(&q, rest, hint),
-                None => q.occluded(0..self.spheres.len(), rest, hint),
-            };
-        if (blocked | !live).all() {
-            return blocked;
+        if !self.polygons.is_empty() {
+            let q = self.triangle_query(rays, from);
+            let mut triangle = 0;
+            let n = self.polygons.triangles();
+            blocked =
+                blocked | occluded_items(self.polygon_bvh.as_ref(), &q, n, live & !blocked, &mut triangle);
+            if (blocked | !live).all() {
+                return blocked;
+            }
         }
-        blocked = blocked | self.others_occluded_k(rays, live & !blocked, from.prim);
+        blocked = blocked | self.shapes_occluded_k(rays, live & !blocked, from.prim);
         blocked | self.departure_exits_k(rays, from).0
     }
 
@@ -285,10 +341,36 @@ impl Geometry {
         SphereQuery::new(&self.spheres, rays.ray(), rays.t_max, from.prim, rays.pyramid, rays.active)
     }
 
+    /// The triangle part of a packet query.
+    fn triangle_query<'a, F: Lanes>(
+        &'a self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> TriangleQuery<'a, F> {
+        TriangleQuery {
+            polygons: &self.polygons,
+            base: self.polygon_base() as u32,
+            ray: rays.ray(),
+            t_max: rays.t_max,
+            skip: from.prim,
+            pyramid: rays.pyramid,
+        }
+    }
+
+    /// The BVHs the scene has.
+    pub fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
+        [&self.sphere_bvh, &self.polygon_bvh].into_iter().flatten()
+    }
+
+    /// The BVHs the scene has, to change their walk settings.
+    pub fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
+        [&mut self.sphere_bvh, &mut self.polygon_bvh].into_iter().flatten()
+    }
+
     /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's
     /// while to compute one.
     pub fn culls_by_pyramid(&self) -> bool {
-        self.bvh.as_ref().is_some_and(|bvh| bvh.frustum_culling)
+        self.bvhs().any(|bvh| bvh.frustum_culling)
     }
 
     /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].

@@ -1,6 +1,7 @@
-//! Planar polygons (NFF `p` and `pp`), stored as triangles that carry their polygon's id.
+//! Planar polygons (NFF `p` and `pp`), stored as triangles that carry their polygon's id: the triangles are the
+//! items of the polygons' BVH, in its leaf order, and each polygon keeps the list of its triangles for shading.
 
-use crate::math::Vec3f;
+use crate::math::{Vec3f, V3};
 
 /// Planar polygons, stored as triangles that carry their polygon's index: one primitive id per polygon.
 #[derive(Clone, Debug, Default)]
@@ -15,15 +16,12 @@ pub struct Polygons {
     pub polygon: Vec<u32>,
     /// Per triangle: unit vertex normals to interpolate (NFF `pp`), or `None` for flat polygons.
     pub vertex_normals: Vec<Option<[Vec3f; 3]>>,
-    /// Per polygon: its triangles are `first[k]..first[k + 1]` (one more entry than polygons).
+    /// The triangles of every polygon, grouped by polygon: polygon k's are `members[first[k]..first[k + 1]]`.
+    pub members: Vec<u32>,
+    /// Per polygon: where its triangles start in `members` (one more entry than polygons).
     pub first: Vec<u32>,
     /// Per polygon: unit geometric normal (right-hand rule over the vertex order).
     pub normal: Vec<Vec3f>,
-    /// Per polygon: a vertex, on the plane through which `normal` is taken.
-    pub anchor: Vec<Vec3f>,
-    /// Per polygon: how far (at most) its vertices lie off that plane, rounded up: polygons need only be
-    /// planar to a tolerance.
-    pub thickness: Vec<f32>,
     /// Per polygon: material index.
     pub material: Vec<u32>,
 }
@@ -41,6 +39,14 @@ impl Polygons {
     pub fn triangles(&self) -> usize {
         self.v0.len()
     }
+    /// Bytes of the arrays' contents.
+    pub fn bytes(&self) -> usize {
+        let vectors =
+            (self.v0.len() + self.e1.len() + self.e2.len() + self.normal.len()) * size_of::<Vec3f>();
+        let ids = (self.polygon.len() + self.members.len() + self.first.len() + self.material.len()) * 4;
+        vectors + ids + self.vertex_normals.len() * size_of::<Option<[Vec3f; 3]>>()
+    }
+
     /// Appends a polygon given as triangles `[a, b, c]` over `vertices`, with optional per-vertex normals.
     pub fn push(
         &mut self,
@@ -56,37 +62,57 @@ impl Polygons {
         let k = self.len() as u32;
         for t in triangles {
             let [a, b, c] = t.map(|i| i as usize);
+            self.members.push(self.v0.len() as u32);
             self.v0.push(vertices[a]);
             self.e1.push(vertices[b] - vertices[a]);
             self.e2.push(vertices[c] - vertices[a]);
             self.polygon.push(k);
             self.vertex_normals.push(normals.map(|n| [n[a], n[b], n[c]]));
         }
-        self.first.push(self.v0.len() as u32);
-        let anchor = vertices[0];
-        // Each vertex's offset from the anchor, in f64 from the stored f32 values.
-        let offsets = vertices.iter().map(|v| {
-            [(v.x, anchor.x), (v.y, anchor.y), (v.z, anchor.z)].map(|(a, b)| f64::from(a) - f64::from(b))
-        });
-        let n = [normal.x, normal.y, normal.z].map(f64::from);
-        let (height, far) = offsets.fold((0.0f64, 0.0f64), |(height, far), d| {
-            let h = (0..3).map(|i| n[i] * d[i]).sum::<f64>().abs();
-            (height.max(h), far.max(d.iter().map(|x| x.abs()).sum()))
-        });
-        // The triangles' edges are stored rounded (ε/2 of their 1-norm, at most twice the farthest vertex's
-        // `far`); the factor rounds the f64 heights up.
-        let thickness = (height + f64::from(f32::EPSILON) * 2.0 * far) * (1.0 + 1e-6);
-        self.anchor.push(anchor);
-        self.thickness.push((thickness as f32).max(f32::MIN_POSITIVE));
+        self.first.push(self.members.len() as u32);
         self.normal.push(normal);
         self.material.push(material);
+    }
+
+    /// The triangles in a new order (`order[j]` is the old index of new triangle `j`), each polygon's list of
+    /// triangles following them; polygon ids do not change.
+    pub fn permuted(&self, order: &[u32]) -> Polygons {
+        fn pick<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
+            order.iter().map(|&i| v[i as usize]).collect()
+        }
+        let mut moved_to = vec![0u32; order.len()];
+        for (new, &old) in order.iter().enumerate() {
+            moved_to[old as usize] = new as u32;
+        }
+        Polygons {
+            v0: pick(&self.v0, order),
+            e1: pick(&self.e1, order),
+            e2: pick(&self.e2, order),
+            polygon: pick(&self.polygon, order),
+            vertex_normals: pick(&self.vertex_normals, order),
+            members: self.members.iter().map(|&j| moved_to[j as usize]).collect(),
+            first: self.first.clone(),
+            normal: self.normal.clone(),
+            material: self.material.clone(),
+        }
+    }
+
+    /// The box of triangle `j` over its vertices `v0`, `v0 + e1`, `v0 + e2` (the sums rounded: the BVH's
+    /// padding covers that ulp).
+    pub fn triangle_box(&self, j: usize) -> (Vec3f, Vec3f) {
+        let (a, b, c) = (self.v0[j], self.v0[j] + self.e1[j], self.v0[j] + self.e2[j]);
+        let pick =
+            |f: fn(f32, f32) -> f32| V3::new(f(f(a.x, b.x), c.x), f(f(a.y, b.y), c.y), f(f(a.z, b.z), c.z));
+        (pick(f32::min), pick(f32::max))
     }
 
     /// The shading normal of polygon `k` at `point`: interpolated over the triangle that contains the point
     /// (the one whose smallest barycentric is largest, robust to rounding at shared edges), else geometric.
     pub(super) fn shading_normal(&self, k: usize, point: Vec3f) -> Vec3f {
-        let (lo, hi) = (self.first[k] as usize, self.first[k + 1] as usize);
-        let best = (lo..hi)
+        let members = &self.members[self.first[k] as usize..self.first[k + 1] as usize];
+        let best = members
+            .iter()
+            .map(|&j| j as usize)
             .filter_map(|j| {
                 self.vertex_normals[j].map(|n| (barycentric(self.v0[j], self.e1[j], self.e2[j], point), n))
             })
@@ -114,33 +140,4 @@ fn barycentric(v0: Vec3f, e1: Vec3f, e2: Vec3f, p: Vec3f) -> [f32; 3] {
     let b1 = (d11 * d20 - d01 * d21) / denom;
     let b2 = (d00 * d21 - d01 * d20) / denom;
     [1.0 - b1 - b2, b1, b2]
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-    use crate::geometry::{intersect_triangle, stays_off_plane, Ray};
-    use crate::math::V3;
-
-    /// A polygon that is planar only to a tolerance gets a thickness that covers its vertices, so the plane
-    /// cull keeps a ray that hits it near its lifted corner.
-    #[test]
-    fn thickness_covers_a_lifted_vertex() {
-        let lift = 5e-5;
-        let vertices =
-            [V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(1.0, 1.0, lift), V3::new(0.0, 1.0, 0.0)];
-        let mut p = Polygons::default();
-        p.push(&vertices, None, &[[0, 1, 2], [0, 2, 3]], V3::new(0.0, 0.0, 1.0), 0);
-        assert!(p.thickness[0] >= lift, "thickness {}", p.thickness[0]);
-        // Just above the plane z = 0, ending just below the lifted corner's triangle.
-        let ray = Ray::new(V3::new(0.9, 0.8, 1e-3), V3::new(0.0, 0.0, -1.0));
-        let reach = 1e-3 - 0.5 * lift;
-        let (hit, _) = intersect_triangle(p.v0[0], p.e1[0], p.e2[0], &ray, reach);
-        assert!(hit, "the lifted triangle is hit within reach");
-        assert!(!stays_off_plane(p.anchor[0], p.normal[0], p.thickness[0], &ray, reach));
-        assert!(
-            stays_off_plane(p.anchor[0], p.normal[0], 0.0, &ray, reach),
-            "without thickness it would be culled"
-        );
-    }
 }

@@ -325,7 +325,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let build_threads = threads.iter().copied().max();
     let mut scene = crate::render::thread_pool(build_threads)?
         .install(|| Scene::compile_owned(desc, accel, args.bvh_preset))?;
-    if let Some(bvh) = &mut scene.geometry.bvh {
+    for bvh in scene.geometry.bvhs_mut() {
         bvh.frustum_culling = args.frustum_culling;
         if let Some(lanes) = args.single_ray_lanes {
             bvh.single_ray_lanes = lanes;

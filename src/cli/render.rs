@@ -194,10 +194,12 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         scene.render.transfer.name()
     );
     println!("features: {}", crate::scene::features::Features::of(scene));
+    let search = |bvh: bool| if bvh { "BVH" } else { "brute force" };
     println!(
-        "accel: {}, {:.1} bytes/sphere (spheres + BVH nodes)",
-        if g.bvh.is_some() { "BVH" } else { "brute force" },
-        scene.bytes_per_sphere()
+        "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}",
+        search(g.sphere_bvh.is_some()),
+        scene.bytes_per_sphere(),
+        search(g.polygon_bvh.is_some()),
     );
     let c = r.counts;
     println!(

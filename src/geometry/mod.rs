@@ -10,7 +10,7 @@ mod sphere;
 
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
-pub use polygon::{intersect_triangle, stays_off_plane};
+pub use polygon::intersect_triangle;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};
 pub use sphere::{

@@ -9,13 +9,14 @@
 //! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
 //! mean what they meant in world space; [`Scene::origin`] maps points back.
 
-use crate::accel::bvh::{self, BuildStats};
+use crate::accel::bvh::{self, BuildOptions, BuildStats, Bvh};
 use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
 use crate::math::{Rgb, Vec3f, V3};
-use glam::DAffine3;
+use glam::{DAffine3, Vec3A};
+use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 
 use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
@@ -107,7 +108,8 @@ fn reach(desc: &SceneDesc) -> f32 {
     let eye = desc.camera.eye;
     let spheres = desc.spheres.iter().map(|s| (s.center - eye).abs().max_element() + s.radius);
     let lights = desc.lights.iter().map(|l| (l.position - eye).abs().max_element());
-    spheres.chain(lights).fold(0.0, f64::max) as f32
+    let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| (*v - eye).abs().max_element());
+    spheres.chain(lights).chain(vertices).fold(0.0, f64::max) as f32
 }
 
 impl Scene {
@@ -117,10 +119,11 @@ impl Scene {
         V3::from(world - self.origin).to_f32()
     }
 
-    /// Memory per sphere of the spheres' arrays and the BVH nodes (what `--stats` and `bench` report).
+    /// Memory per sphere of the spheres' arrays and their BVH's nodes (what `--stats` and `bench` report).
     pub fn bytes_per_sphere(&self) -> f64 {
         let s = &self.geometry.spheres;
-        (s.bytes() + self.build.node_bytes) as f64 / s.len().max(1) as f64
+        let nodes = self.geometry.sphere_bvh.as_ref().map_or(0, Bvh::bytes);
+        (s.bytes() + nodes) as f64 / s.len().max(1) as f64
     }
 
     /// Compiles a description. Fails only on a camera that cannot form an image; everything else was
@@ -156,11 +159,7 @@ impl Scene {
     }
 
     /// Everything but the BVH: the scene without one, and the build it needs, if any.
-    fn assemble(
-        desc: &SceneDesc,
-        accel: Accel,
-        preset: BvhPreset,
-    ) -> Result<(Scene, Option<BvhJob>), CameraError> {
+    fn assemble(desc: &SceneDesc, accel: Accel, preset: BvhPreset) -> Result<(Scene, BvhJob), CameraError> {
         let origin = desc.camera.eye;
         let mut camera_f64 = Camera::new(&desc.camera)?;
         camera_f64.eye = V3::all(0.0);
@@ -178,28 +177,35 @@ impl Scene {
         for p in &desc.polygons {
             push_polygon(&mut geometry.polygons, p, origin);
         }
-        // obvhs cannot order boxes with infinite or NaN corners; readers reject such spheres, and a scene
-        // built by hand with them falls back to brute force rather than failing.
+        // obvhs cannot order boxes with infinite or NaN corners; readers reject such input, and a scene built
+        // by hand with them falls back to brute force rather than failing.
         let sp = &geometry.spheres;
         let finite = [&sp.cx, &sp.cy, &sp.cz, &sp.r].iter().all(|v| v.iter().all(|x| x.is_finite()));
-        let use_bvh = finite
-            && match accel {
-                Accel::Auto => geometry.spheres.len() >= BVH_MIN_SPHERES,
-                Accel::Bvh => !geometry.spheres.is_empty(),
-                Accel::Brute => false,
-            };
+        let pg = &geometry.polygons;
+        let finite_polygons = [&pg.v0, &pg.e1, &pg.e2]
+            .iter()
+            .all(|v| v.iter().all(|p| [p.x, p.y, p.z].iter().all(|x| x.is_finite())));
+        let wants = |items: usize| match accel {
+            Accel::Auto => items >= BVH_MIN_SPHERES,
+            Accel::Bvh => items > 0,
+            Accel::Brute => false,
+        };
         let mut materials = desc.materials.clone();
         if materials.is_empty() {
             materials.push(Material::default());
         }
-        let job = use_bvh.then(|| BvhJob {
-            pad: bvh::padding(reach(desc)),
-            params: preset.params(),
-            // The 8-wide single-ray tree serves the scalar tracer's secondary rays: only scenes that
-            // trace them pay for its build.
-            single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
-                || features::bounces(desc.render.max_depth, &materials),
-        });
+        let job = BvhJob {
+            spheres: finite && wants(geometry.spheres.len()),
+            polygons: finite_polygons && wants(geometry.polygons.triangles()),
+            options: BuildOptions {
+                pad: bvh::padding(reach(desc)),
+                params: preset.params(),
+                // The 8-wide single-ray trees serve the scalar tracer's secondary rays: only scenes that
+                // trace them pay for their build.
+                single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
+                    || features::bounces(desc.render.max_depth, &materials),
+            },
+        };
         let lights = desc
             .lights
             .iter()
@@ -222,25 +228,45 @@ impl Scene {
         Ok((scene, job))
     }
 
-    /// Builds the BVH over the spheres (reordering them) when `job` asks for one.
-    fn build_bvh(&mut self, job: Option<BvhJob>) {
-        if let Some(job) = job {
-            let (tree, stats) =
-                bvh::build(&mut self.geometry.spheres, job.pad, job.params, job.single_ray_tree);
-            self.geometry.bvh = Some(tree);
-            self.build = stats;
+    /// Builds the BVHs `job` asks for, reordering each kind's items into its leaf order.
+    fn build_bvh(&mut self, job: BvhJob) {
+        let g = &mut self.geometry;
+        if job.spheres {
+            let pad = job.options.pad;
+            let s = &g.spheres;
+            let item_box = |i: usize| {
+                let c = Vec3A::new(s.cx[i], s.cy[i], s.cz[i]);
+                let r = Vec3A::splat(s.r[i] + pad);
+                Aabb { min: c - r, max: c + r }
+            };
+            let (tree, spheres, stats) =
+                bvh::build(s.len(), item_box, job.options, |order| s.permuted(order));
+            (g.spheres, g.sphere_bvh) = (spheres, Some(tree));
+            self.build += stats;
+        }
+        if job.polygons {
+            let pad = Vec3A::splat(job.options.pad);
+            let p = &g.polygons;
+            let item_box = |j: usize| {
+                let (lo, hi) = p.triangle_box(j);
+                Aabb { min: Vec3A::new(lo.x, lo.y, lo.z) - pad, max: Vec3A::new(hi.x, hi.y, hi.z) + pad }
+            };
+            let (tree, polygons, stats) =
+                bvh::build(p.triangles(), item_box, job.options, |order| p.permuted(order));
+            (g.polygons, g.polygon_bvh) = (polygons, Some(tree));
+            self.build += stats;
         }
     }
 }
 
-/// A BVH build that [`Scene::assemble`] found the scene needs.
+/// The BVH builds that [`Scene::assemble`] found the scene needs.
 struct BvhJob {
-    /// Box padding for the scene's extent ([`bvh::padding`]).
-    pad: f32,
-    /// obvhs's settings for the chosen preset.
-    params: obvhs::BvhBuildParams,
-    /// Whether to build the 8-wide single-ray tree too.
-    single_ray_tree: bool,
+    /// Whether to build the spheres' BVH.
+    spheres: bool,
+    /// Whether to build the polygons' triangle BVH.
+    polygons: bool,
+    /// Padding, obvhs preset and single-ray tree, alike for both.
+    options: BuildOptions,
 }
 
 /// Triangulates one polygon into `out` (in f64, moved to rendering space by `−origin`, then rounded). A polygon
@@ -279,7 +305,7 @@ mod tests {
         };
         assert!(a.spheres.len() > 90, "a level-2 flake has 91 spheres");
         assert_eq!(arrays(&a.spheres), arrays(&b.spheres));
-        let (ta, tb) = (a.bvh.as_ref().expect("bvh"), b.bvh.as_ref().expect("bvh"));
+        let (ta, tb) = (a.sphere_bvh.as_ref().expect("bvh"), b.sphere_bvh.as_ref().expect("bvh"));
         assert_eq!(ta.nodes, tb.nodes);
         assert!(ta.wide.is_some(), "a shaded flake gets the single-ray tree");
         assert_eq!(ta.wide, tb.wide);

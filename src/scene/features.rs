@@ -38,7 +38,7 @@ impl Features {
         let deep = scene.render.max_depth > 0;
         Features {
             spheres: !g.spheres.is_empty(),
-            bvh: g.bvh.is_some(),
+            bvh: g.bvhs().next().is_some(),
             ellipsoids: kind(ShapeKind::Sphere),
             planes: kind(ShapeKind::Plane),
             polygons: !g.polygons.is_empty(),

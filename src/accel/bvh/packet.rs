@@ -12,9 +12,10 @@
 
 use wide::f32x4;
 
-use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{slab_entry, slab_entry_ordered, Bvh, Node, SlabRay, Stack, N};
+use super::node::{Node, N};
+use super::slab::{slab_entry, slab_entry_ordered, SlabRay, Stack};
+use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
@@ -24,7 +25,7 @@ struct SlabRays<F: Lanes> {
     slab: SlabRay<F>,
     /// The octant of the first live lane's direction, which orders the children.
     octant: usize,
-    /// Per axis, the side of the near plane ([`super::near_side`]), when every live lane's is the same.
+    /// Per axis, the side of the near plane ([`near_side`]), when every live lane's is the same.
     near: Option<[usize; 3]>,
     /// The whole-packet pyramid, when asked for and the live lanes share an origin.
     frustum: Option<Frustum>,
@@ -34,15 +35,15 @@ impl<F: Lanes> SlabRays<F> {
     /// `extent` bounds the boxes' coordinates when frustum culling is wanted; the query's own pyramid is
     /// used when it carries one, else one is fitted to the live lanes.
     #[inline(always)]
-    fn new(q: &SphereQuery<F>, live: F::Mask, extent: Option<f32>) -> Self {
-        let ray = &q.ray;
+    fn new<Q: LeafQuery<F>>(q: &Q, live: F::Mask, extent: Option<f32>) -> Self {
+        let ray = q.ray();
         let slab = SlabRay::new(ray);
         let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
         let octant = negative(ray.dir.x) | negative(ray.dir.y) << 1 | negative(ray.dir.z) << 2;
         let near = Self::shared_near_side(&slab.inv_dir, live);
         let frustum = extent.and_then(|extent| {
-            let pyramid = q.pyramid.or_else(|| fit_pyramid(&ray.origin, &ray.dir, live))?;
+            let pyramid = q.pyramid().or_else(|| fit_pyramid(&ray.origin, &ray.dir, live))?;
             debug_assert!(encloses(&pyramid, ray, live), "{pyramid:?} misses a live ray");
             Some(Frustum::new(&pyramid, extent))
         });
@@ -256,18 +257,18 @@ impl Bvh {
         }
     }
 
-    /// Closest hits of the spheres for the live lanes, merged into `best`, by packet traversal; subtrees
+    /// Closest hits of the leaf items for the live lanes, merged into `best`, by packet traversal; subtrees
     /// entered by at most [`Bvh::single_ray_lanes`] live lanes are walked one ray at a time.
-    pub(super) fn intersect_packet<F: Lanes>(
+    pub(super) fn intersect_packet<F: Lanes, Q: LeafQuery<F>>(
         &self,
-        q: &SphereQuery<F>,
+        q: &Q,
         live: F::Mask,
         best: &mut HitPacket<F>,
     ) {
         let rays = SlabRays::new(q, live, self.frustum_culling.then_some(self.extent));
         let mut stack = Stack::<Entry<F>>::new();
         let limit = |lanes: F::Mask, best: &HitPacket<F>| {
-            F::select(lanes, best.t.min_of(q.t_max), F::splat_f32(f32::NEG_INFINITY))
+            F::select(lanes, best.t.min_of(q.t_max()), F::splat_f32(f32::NEG_INFINITY))
         };
         // Counted locally and reported once per packet: a shared counter per node costs measurably.
         let (mut boxes, mut prims) = (0, 0);
@@ -280,15 +281,15 @@ impl Bvh {
             }
             if e.count > 0 {
                 let first = e.child as usize;
-                let spheres = first..first + usize::from(e.count);
+                let items = first..first + usize::from(e.count);
                 prims += usize::from(e.count);
                 match &rays.frustum {
                     Some(f) => q.intersect(
-                        spheres.filter(|&i| f.may_meet(q.spheres.center(i), q.spheres.r[i] + self.pad)),
+                        items.filter(|&i| q.ball(i).is_none_or(|(c, r)| f.may_meet(c, r + self.pad))),
                         lanes,
                         best,
                     ),
-                    None => q.intersect(spheres, lanes, best),
+                    None => q.intersect(items, lanes, best),
                 }
             } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
                 self.intersect_lanes(&self.nodes, e.child, q, &rays.slab, lanes, best);
@@ -300,18 +301,18 @@ impl Bvh {
         count_work(prims, boxes);
     }
 
-    /// Lanes of `live` blocked by a sphere within their `t_max`, by packet traversal (subtrees entered by at
+    /// Lanes of `live` blocked by a leaf item within their `t_max`, by packet traversal (subtrees entered by at
     /// most [`Bvh::single_ray_lanes`] unblocked lanes one ray at a time); stops as soon as every live lane is.
-    pub(super) fn occluded_packet<F: Lanes>(
+    pub(super) fn occluded_packet<F: Lanes, Q: LeafQuery<F>>(
         &self,
-        q: &SphereQuery<F>,
+        q: &Q,
         live: F::Mask,
         blocker: &mut u32,
     ) -> F::Mask {
         let rays = SlabRays::new(q, live, self.frustum_culling.then_some(self.extent));
         let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
-        let limit = |lanes: F::Mask| F::select(lanes, q.t_max, F::splat_f32(f32::NEG_INFINITY));
+        let limit = |lanes: F::Mask| F::select(lanes, q.t_max(), F::splat_f32(f32::NEG_INFINITY));
         let (mut boxes, mut prims) = (0, 0);
         stack.push(Entry::root());
         while let Some(e) = stack.pop() {

@@ -6,9 +6,11 @@
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
 //! merged back into its lane (Embree's "hybrid" traversal).
 
-use super::super::brute::SphereQuery;
 use super::super::count_work;
-use super::{far_to_near, near_side, slab_entry_ordered, Bvh, RayNode, SlabRay, Stack, MAX_WIDTH};
+use super::collapse::MAX_WIDTH;
+use super::node::{far_to_near, RayNode};
+use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
+use super::{Bvh, LeafQuery, SingleLeafQuery};
 use crate::geometry::HitPacket;
 use crate::math::{Real, V3};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -92,16 +94,16 @@ impl Bvh {
     }
 
     /// The closest hit of one ray in the subtree of node `root` (which the ray enters), merged into `best`.
-    fn intersect_1<T: RayNode>(
+    fn intersect_1<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
         root: u32,
-        q: &SphereQuery<f32>,
+        q: &Q,
         slab: &SlabRayN<T::Lanes>,
         best: &mut HitPacket<f32>,
     ) {
         let mut stack = Stack::<Entry>::new();
-        let mut next = self.push_but_nearest(&nodes[root as usize], slab, best.t.min(q.t_max), &mut stack);
+        let mut next = self.push_but_nearest(&nodes[root as usize], slab, best.t.min(q.t_max()), &mut stack);
         let (mut visits, mut prims) = (1, 0);
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.near > best.t {
@@ -114,7 +116,7 @@ impl Bvh {
             } else {
                 visits += 1;
                 let n = &nodes[e.child as usize];
-                next = self.push_but_nearest(n, slab, best.t.min(q.t_max), &mut stack);
+                next = self.push_but_nearest(n, slab, best.t.min(q.t_max()), &mut stack);
             }
         }
         count_work(prims, T::WIDTH * visits);
@@ -123,11 +125,11 @@ impl Bvh {
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
     /// found, left in `blocker`. Any hit will do, so a node's entered leaves are tested on the spot, before
     /// its entered inner children are pushed, and nothing is ordered by distance.
-    fn occluded_1<T: RayNode>(
+    fn occluded_1<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
         root: u32,
-        q: &SphereQuery<f32>,
+        q: &Q,
         slab: &SlabRayN<T::Lanes>,
         blocker: &mut u32,
     ) -> bool {
@@ -137,7 +139,7 @@ impl Bvh {
         'walk: while let Some(node) = stack.pop() {
             visits += 1;
             let n = &nodes[node as usize];
-            let near = slab.enter(n, q.t_max);
+            let near = slab.enter(n, q.t_max());
             // Bit c for each child entered; empty slots (boxes at +inf) never are.
             let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY)));
             let leaves = n.leaves();
@@ -159,11 +161,11 @@ impl Bvh {
 
     /// The lanes of `lanes` walk the subtree of `nodes[root]` one ray at a time; their hits are merged into
     /// `best`. `slab` is the packet prepared for slab tests.
-    pub(super) fn intersect_lanes<F: Lanes, T: RayNode>(
+    pub(super) fn intersect_lanes<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
         root: u32,
-        q: &SphereQuery<F>,
+        q: &Q,
         slab: &SlabRay<F>,
         lanes: F::Mask,
         best: &mut HitPacket<F>,
@@ -180,11 +182,11 @@ impl Bvh {
     }
 
     /// The lanes of `lanes` blocked within their `t_max` in the subtree of `nodes[root]`, one ray at a time.
-    pub(super) fn occluded_lanes<F: Lanes, T: RayNode>(
+    pub(super) fn occluded_lanes<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
         root: u32,
-        q: &SphereQuery<F>,
+        q: &Q,
         slab: &SlabRay<F>,
         lanes: F::Mask,
         blocker: &mut u32,

@@ -1,0 +1,137 @@
+//! Building a tree: obvhs's binary tree over the item boxes (or the fallbacks for piles of equal boxes and for
+//! trees too deep to walk), collapsed into the 4-wide packet nodes and, when asked, the 8-wide single-ray nodes.
+
+use std::time::Instant;
+
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::node::Bvh2Node;
+use obvhs::BvhBuildParams;
+use rayon::prelude::*;
+
+use super::collapse::collapse;
+use super::node::Node;
+use super::slab::STACK;
+use super::wide_node::WideNode;
+use super::{binary, piles, BuildStats, Bvh, SINGLE_RAY_MAX_LANES};
+
+/// How to build a tree.
+#[derive(Clone, Copy, Debug)]
+pub struct BuildOptions {
+    /// The padding the item boxes carry ([`padding`]), kept for the packet walk's frustum test of single items.
+    pub pad: f32,
+    /// obvhs's settings.
+    pub params: BvhBuildParams,
+    /// Whether to build the 8-wide single-ray tree too (scenes that trace secondary rays).
+    pub single_ray_tree: bool,
+}
+
+/// Builds the tree over `n` items whose padded boxes `item_box` gives, and returns it with `permute(order)`
+/// (run in parallel with the collapse): `order[j]` is the item stored at position `j` of the leaf order, in
+/// which the owner must store its items, since leaves index them by position. Also the build statistics.
+pub fn build<T: Send>(
+    n: usize,
+    item_box: impl Fn(usize) -> Aabb + Sync + Send,
+    options: BuildOptions,
+    permute: impl Fn(&[u32]) -> T + Sync,
+) -> (Bvh, T, BuildStats) {
+    let BuildOptions { pad, params, single_ray_tree } = options;
+    let start = Instant::now();
+    let boxes: Vec<Aabb> = (0..n).into_par_iter().map(item_box).collect();
+    let over_piles = piles::has_piles(&boxes);
+    let binary = match over_piles {
+        true => piles::build_over_piles(&boxes, params),
+        false => {
+            let bvh2 = binary::build_binary(&boxes, params);
+            (bvh2.nodes, bvh2.primitive_indices)
+        }
+    };
+    let trees = |(tree, order): &(Vec<Bvh2Node>, Vec<u32>)| {
+        rayon::join(
+            || permute(order),
+            || rayon::join(|| collapse::<Node>(tree), || single_ray_tree.then(|| collapse::<WideNode>(tree))),
+        )
+    };
+    let fits = |(_, need): &(Vec<Node>, usize), wide: &Option<(Vec<WideNode>, usize)>| {
+        *need <= STACK && wide.as_ref().is_none_or(|(_, need)| *need <= STACK)
+    };
+    let (mut permuted, (mut packet_tree, mut wide)) = trees(&binary);
+    // Coincident items can make obvhs's tree a chain as long as their number: too deep for the traversal
+    // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). A pile the sample
+    // missed is then built over one box per distinct item (unless that was the first build); anything still
+    // too deep gets the balanced tree.
+    let fallbacks: [&dyn Fn() -> _; 2] = [&|| piles::build_over_piles(&boxes, params), &|| balanced(&boxes)];
+    for fallback in fallbacks.into_iter().skip(usize::from(over_piles)) {
+        if fits(&packet_tree, &wide) {
+            break;
+        }
+        (permuted, (packet_tree, wide)) = trees(&fallback());
+    }
+    assert!(fits(&packet_tree, &wide), "a balanced tree of {} items fits the traversal stacks", boxes.len());
+    let (nodes, wide) = (packet_tree.0, wide.map(|(w, _)| w));
+    let wide_bytes = wide.as_ref().map_or(0, |w: &Vec<WideNode>| w.len() * size_of::<WideNode>());
+    let node_bytes = nodes.len() * size_of::<Node>() + wide_bytes;
+    let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes };
+    let extent = extent(&nodes[0]);
+    let single_ray_lanes = SINGLE_RAY_MAX_LANES;
+    (Bvh { nodes, single_ray_lanes, frustum_culling: true, extent, pad, wide }, permuted, stats)
+}
+
+/// The largest coordinate magnitude of the root's occupied child boxes.
+pub(super) fn extent(root: &Node) -> f32 {
+    let slots = usize::from(root.slots);
+    root.bounds.iter().flatten().flat_map(|axis| axis[..slots].iter()).fold(0.0f32, |m, v| m.max(v.abs()))
+}
+
+/// Items per leaf of [`balanced`].
+pub(super) const BALANCED_LEAF: usize = 4;
+
+/// A binary tree over `boxes` in obvhs's layout (nodes, and the primitive order its leaves index), split at
+/// the median centre along the widest spread of centres: about log2(n / 4) levels whatever the boxes, for
+/// scenes whose obvhs tree is too deep.
+pub(super) fn balanced(boxes: &[Aabb]) -> (Vec<Bvh2Node>, Vec<u32>) {
+    let (mut nodes, mut order) = tree_for(boxes.len());
+    balanced_into(boxes, 0..boxes.len() as u32, &mut nodes, &mut order, 0);
+    (nodes, order)
+}
+
+/// [`balanced`] over the boxes `items`, written as the subtree at `nodes[at]`: its nodes appended to
+/// `nodes`, its leaves' primitives to `order`. Built without recursion.
+pub(super) fn balanced_into(
+    boxes: &[Aabb],
+    items: impl IntoIterator<Item = u32>,
+    nodes: &mut Vec<Bvh2Node>,
+    order: &mut Vec<u32>,
+    at: usize,
+) {
+    let base = order.len();
+    order.extend(items);
+    let mut pending = vec![(at, base, order.len())];
+    while let Some((at, lo, hi)) = pending.pop() {
+        let part = &mut order[lo..hi];
+        let bounds = part.iter().fold(Aabb::empty(), |b, &i| b.union(&boxes[i as usize]));
+        if part.len() <= BALANCED_LEAF {
+            nodes[at] = Bvh2Node::new(bounds, part.len() as u32, lo as u32);
+            continue;
+        }
+        let mut centres = Aabb::empty();
+        part.iter().for_each(|&i| _ = centres.extend(boxes[i as usize].center()));
+        let axis = centres.largest_axis();
+        let key = |i: &u32| boxes[*i as usize].center_axis(axis);
+        let mid = part.len() / 2;
+        part.select_nth_unstable_by(mid, |a, b| key(a).total_cmp(&key(b)));
+        let first = nodes.len();
+        nodes.extend([unset(); 2]);
+        nodes[at] = Bvh2Node::new(bounds, 0, first as u32);
+        pending.extend([(first, lo, lo + mid), (first + 1, lo + mid, hi)]);
+    }
+}
+
+/// A node slot reserved for a node written later (the root, or an inner node's two children).
+pub(super) fn unset() -> Bvh2Node {
+    Bvh2Node::new(Aabb::empty(), 0, 0)
+}
+
+/// An obvhs-layout tree to be built over `n` boxes: the root's slot, and room for the leaves' order.
+pub(super) fn tree_for(n: usize) -> (Vec<Bvh2Node>, Vec<u32>) {
+    (vec![unset()], Vec::with_capacity(n))
+}

@@ -1,0 +1,198 @@
+//! obvhs's binary tree collapsed into `WIDTH`-wide nodes: each node takes its two children, then opens the
+//! inner child of largest surface area until it has `WIDTH`; the top levels are flattened in parallel.
+
+use obvhs::bvh2::node::Bvh2Node;
+use rayon::prelude::*;
+
+use super::node::{ChildRef, RayNode, EMPTY};
+use super::slab::STACK;
+use super::wide_node::WIDE_N;
+
+/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from obvhs's binary tree, in depth-first order,
+/// and the stack entries a walk of them may need ([`stack_need`]; `usize::MAX` for a tree deeper than
+/// [`MAX_COLLAPSE_LEVELS`], whose nodes are then incomplete). The top [`PARALLEL_LEVELS`] levels flatten their
+/// subtrees in parallel; the layout is the serial one ([`flatten`]) node for node.
+pub(super) fn collapse<T: RayNode>(src: &[Bvh2Node]) -> (Vec<T>, usize) {
+    if src[0].prim_count > 0 {
+        let mut nodes = Vec::with_capacity(1);
+        let (leaf, _) = child_ref::<T>(src, 0, &mut nodes, 0);
+        nodes.push(T::new(&[leaf]));
+        return (nodes, 1);
+    }
+    flatten_parallel(src, 0, PARALLEL_LEVELS)
+}
+
+/// Levels of the collapsed tree past which the collapse gives up (its recursion would risk the thread's
+/// stack): far more than any tree whose walks fit [`STACK`] entries, each level holding at least one.
+pub(super) const MAX_COLLAPSE_LEVELS: usize = STACK;
+
+/// The most entries a walk holds on its stack at once in the subtree of a node with `slots` children whose
+/// inner children's subtrees need `below` at most: the walk pushes up to `slots` entries, then goes on into
+/// one of them with the others still pending.
+pub(super) fn stack_need(slots: usize, below: usize) -> usize {
+    slots.saturating_sub(1).saturating_add(below.max(1))
+}
+
+/// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on
+/// one thread, the collapse was ~70 ms of a 1e6 build that takes ~0.5 s on 2 threads (docs/perf-log/2026-11.md).
+pub(super) const PARALLEL_LEVELS: u32 = 3;
+
+/// [`flatten`] of obvhs inner node `i` into a vector of its own (the subtree's root first, indices local to
+/// it), its inner children's subtrees flattened in parallel for `levels` more levels; with the subtree's
+/// stack need.
+pub(super) fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> (Vec<T>, usize) {
+    let mut out = Vec::new();
+    if levels == 0 {
+        // This node is at level PARALLEL_LEVELS: the root, at 0, was called with PARALLEL_LEVELS levels left.
+        let (_, need) = flatten(src, i, &mut out, PARALLEL_LEVELS as usize);
+        return (out, need);
+    }
+    let (open, len) = open_children(src, i, T::WIDTH);
+    let subtrees: Vec<Option<(Vec<T>, usize)>> = open[..len]
+        .par_iter()
+        .map(|&j| (src[j].prim_count == 0).then(|| flatten_parallel(src, j, levels - 1)))
+        .collect();
+    out.reserve_exact(1 + subtrees.iter().flatten().map(|(nodes, _)| nodes.len()).sum::<usize>());
+    out.push(T::new(&[]));
+    let (mut children, mut below) = ([EMPTY; MAX_WIDTH], 0);
+    for (k, subtree) in subtrees.into_iter().enumerate() {
+        children[k] = match subtree {
+            None => child_ref(src, open[k], &mut out, 0).0,
+            Some((nodes, need)) => {
+                below = below.max(need);
+                let base = out.len() as u32;
+                out.extend(nodes.into_iter().map(|node| node.shifted(base)));
+                let aabb = &src[open[k]].aabb;
+                ChildRef { lo: aabb.min.to_array(), hi: aabb.max.to_array(), child: base, count: 0 }
+            }
+        };
+    }
+    out[0] = T::new(&children[..len]);
+    (out, stack_need(len, below))
+}
+
+/// The reference to obvhs node `i` from its parent, whose node is at `level` of the collapsed tree: a leaf as
+/// it is, an inner node flattened first; with the stack need of what it refers to (0 for a leaf).
+pub(super) fn child_ref<T: RayNode>(
+    src: &[Bvh2Node],
+    i: usize,
+    out: &mut Vec<T>,
+    level: usize,
+) -> (ChildRef, usize) {
+    let n = &src[i];
+    let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
+    if n.prim_count > 0 {
+        let count = u8::try_from(n.prim_count).expect("obvhs leaf of more than 255 spheres");
+        return (ChildRef { lo, hi, child: n.first_index, count }, 0);
+    }
+    let (child, need) = flatten(src, i, out, level + 1);
+    (ChildRef { lo, hi, child, count: 0 }, need)
+}
+
+/// The widest node: the bound of [`RayNode::WIDTH`].
+pub(super) const MAX_WIDTH: usize = WIDE_N;
+
+/// The obvhs nodes that become the children of the `width`-wide node for obvhs inner node `i` (the first
+/// `len` of the array): its two children, then repeatedly the inner one of largest surface area (the
+/// likeliest to be entered) replaced by its two children, until there are `width`.
+pub(super) fn open_children(src: &[Bvh2Node], i: usize, width: usize) -> ([usize; MAX_WIDTH], usize) {
+    let first = src[i].first_index as usize;
+    let (mut open, mut len) = ([0; MAX_WIDTH], 2);
+    (open[0], open[1]) = (first, first + 1);
+    while len < width {
+        let area = |j: usize| src[j].aabb.half_area();
+        let inner = (0..len).filter(|&k| src[open[k]].prim_count == 0);
+        let Some(at) = inner.max_by(|&a, &b| area(open[a]).total_cmp(&area(open[b]))) else { break };
+        let grand = src[open[at]].first_index as usize;
+        (open[at], open[len]) = (grand, grand + 1);
+        len += 1;
+    }
+    (open, len)
+}
+
+/// Appends the subtree of obvhs inner node `i` at `level` of the collapsed tree and returns its node index
+/// and stack need ([`open_children`] gives the node's children). Past [`MAX_COLLAPSE_LEVELS`] it appends
+/// nothing and returns a need of `usize::MAX`.
+pub(super) fn flatten<T: RayNode>(
+    src: &[Bvh2Node],
+    i: usize,
+    out: &mut Vec<T>,
+    level: usize,
+) -> (u32, usize) {
+    if level > MAX_COLLAPSE_LEVELS {
+        return (0, usize::MAX);
+    }
+    let (open, len) = open_children(src, i, T::WIDTH);
+    let me = out.len();
+    out.push(T::new(&[]));
+    let (mut children, mut below) = ([EMPTY; MAX_WIDTH], 0);
+    for k in 0..len {
+        let need;
+        (children[k], need) = child_ref(src, open[k], out, level);
+        below = below.max(need);
+    }
+    out[me] = T::new(&children[..len]);
+    (me as u32, stack_need(len, below))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::super::binary;
+    use super::super::node::Node;
+    use super::super::wide_node::WideNode;
+    use super::*;
+    use glam::Vec3A;
+    use obvhs::aabb::Aabb;
+    use obvhs::BvhBuildParams;
+
+    /// obvhs's binary tree over `n` small cubes spread by a fixed LCG, with leaves of at most `leaf`
+    /// boxes: many levels for large `n`, inner nodes with leaf and inner children mixed for small ones.
+    fn tree(n: usize, leaf: u32) -> Vec<Bvh2Node> {
+        let mut state = 0x2545_f491_4f6c_dd1du64;
+        let mut next = || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 40) as f32 / (1u64 << 24) as f32
+        };
+        let boxes: Vec<Aabb> = (0..n)
+            .map(|_| {
+                let c = Vec3A::new(next(), next(), next()) * 10.0;
+                Aabb { min: c - 0.01, max: c + 0.01 }
+            })
+            .collect();
+        let params = BvhBuildParams { max_prims_per_leaf: leaf, ..BvhBuildParams::fast_build() };
+        binary::build_binary(&boxes, params).nodes
+    }
+
+    /// Levels of 4-wide nodes from `nodes[i]` down.
+    fn depth(nodes: &[Node], i: usize) -> u32 {
+        let n = &nodes[i];
+        let inner = (0..usize::from(n.slots)).filter(|&c| n.count[c] == 0);
+        1 + inner.map(|c| depth(nodes, n.child[c] as usize)).max().unwrap_or(0)
+    }
+
+    /// The parallel collapse of `src` into `T` nodes, checked against the serial one.
+    fn collapse_both_ways<T: RayNode + PartialEq>(src: &[Bvh2Node]) -> Vec<T> {
+        let (parallel, _) = collapse::<T>(src);
+        if src[0].prim_count > 0 {
+            assert_eq!(parallel.len(), 1, "boxes in one leaf make one node");
+            return parallel;
+        }
+        let mut serial = Vec::new();
+        flatten(src, 0, &mut serial, 0);
+        assert!(parallel == serial, "{} boxes: the parallel collapse differs from the serial one", src.len());
+        serial
+    }
+
+    #[test]
+    fn parallel_collapse_is_the_serial_layout() {
+        for (n, leaf) in [(1, 8), (5, 8), (2, 1), (3, 1), (5, 1), (9, 1), (40, 1), (1000, 2), (30_000, 8)] {
+            let src = tree(n, leaf);
+            let serial = collapse_both_ways::<Node>(&src);
+            collapse_both_ways::<WideNode>(&src);
+            if n >= 1000 {
+                // Deeper than the parallel levels, so every level of jobs ran.
+                assert!(depth(&serial, 0) > PARALLEL_LEVELS + 1, "{n} boxes: depth {}", depth(&serial, 0));
+            }
+        }
+    }
+}
