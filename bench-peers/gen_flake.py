@@ -4,7 +4,7 @@
 usage: gen_flake.py LEVEL [-o OUT.nff]
 
 Writes the view, background, lights, fills and ground polygon of SPD balls (as in
-/work/shared/scenes/balls2.nff) and (9^(LEVEL+1) - 1)/8 spheres: a root of radius 0.5 at the origin; each
+SPD's balls2.nff) and (9^(LEVEL+1) - 1)/8 spheres: a root of radius 0.5 at the origin; each
 sphere of radius r at centre c, reached from its parent along unit direction d, has 9 children of radius r/3
 at c + (r + r/3) * R(d) b_k, where R(d) is the smallest rotation taking +z to d (+z itself for the root) and
 b_k are, for k = 0, 1, 2: one direction at elevation asin(sqrt(2/3)) and azimuth 45 + 120k degrees, then two
