@@ -340,14 +340,14 @@ fn polygon_bvh_equals_brute_force_at_every_width() {
             h.prim as usize >= brute.geometry.polygon_base()
         });
         assert!(hits.count() > rays.len() / 5, "{n} polygons: too few rays hit a polygon");
-        check_polygons::<f32>(&bvh, &brute, &rays);
-        check_polygons::<f32x4>(&bvh, &brute, &rays);
-        check_polygons::<f32x8>(&bvh, &brute, &rays);
-        check_polygons::<f32x16>(&bvh, &brute, &rays);
+        check_kind::<f32>(&bvh, &brute, &rays);
+        check_kind::<f32x4>(&bvh, &brute, &rays);
+        check_kind::<f32x8>(&bvh, &brute, &rays);
+        check_kind::<f32x16>(&bvh, &brute, &rays);
     }
 }
 
-fn check_polygons<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
+fn check_kind<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
     for chunk in rays.chunks(F::K) {
         let packet = RayPacket::<F>::from_rays(chunk, f32::INFINITY);
         let hits = bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
@@ -393,5 +393,45 @@ fn check_polygons<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
                 F::K
             );
         }
+    }
+}
+
+/// Bounded shapes (ellipsoids) live in a BVH, planes beside it: closest hits and occlusion equal brute force
+/// at every width.
+#[test]
+fn shape_bvh_equals_brute_force_at_every_width() {
+    use bareray::geometry::ShapeKind;
+    use bareray::scene::desc::ShapeDesc;
+    use glam::{DAffine3, DQuat};
+    for (n, seed) in [(5, 21), (200, 22)] {
+        let mut desc = field(3, seed);
+        let mut rng = Rng(SplitMix64::new(seed));
+        for _ in 0..n {
+            let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            let size = if n < 10 { 0.6 } else { 0.2 };
+            let scale = DVec3::new(rng.range(0.01, size), rng.range(0.01, size), rng.range(0.01, size));
+            let turn = DQuat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 3.0), rng.range(0.0, 3.0), 0.0);
+            let world_from_object = DAffine3::from_scale_rotation_translation(scale, turn, c);
+            desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
+        }
+        let floor = DAffine3::from_translation(DVec3::new(0.0, -1.3, 0.0))
+            * DAffine3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
+        desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: floor, material: 0 });
+        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        assert!(bvh.geometry.shape_bvh.is_some() && brute.geometry.shape_bvh.is_none());
+        assert_eq!((bvh.geometry.shape_order.len(), bvh.geometry.loose_shapes.len()), (n, 1));
+        let rays = rays(&desc, 3000, seed + 100);
+        let base = brute.geometry.spheres.len() as u32;
+        let ellipsoid_hits = rays.iter().filter(|r| {
+            let h = brute.geometry.intersect(r, Departure::CAMERA, f32::INFINITY);
+            h.prim >= base && h.prim < base + n as u32
+        });
+        let hits = ellipsoid_hits.count();
+        assert!(hits > rays.len() / 40, "{n} ellipsoids: only {hits} rays hit one");
+        check_kind::<f32>(&bvh, &brute, &rays);
+        check_kind::<f32x4>(&bvh, &brute, &rays);
+        check_kind::<f32x8>(&bvh, &brute, &rays);
+        check_kind::<f32x16>(&bvh, &brute, &rays);
     }
 }

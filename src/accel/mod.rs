@@ -2,16 +2,19 @@
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
 //! Each bounded kind has its own BVH ([`bvh`], one tree type monomorphised over the kind's [`bvh::LeafQuery`]):
-//! spheres ([`SphereQuery`]) and polygons' triangles ([`TriangleQuery`]); a kind with few items is tested
-//! brute force by the same query. Transformed shapes (planes are unbounded) are tested brute force
-//! ([`others`]).
+//! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]) and bounded transformed shapes
+//! ([`ShapeQuery`]); a kind with few items is tested brute force by the same query, and so are unbounded
+//! shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
+//! walk exactly as it is without other kinds.
 
 pub mod bvh;
-mod others;
+mod departure;
 mod polygons;
+mod shape_query;
 mod sphere_query;
 mod triangle_query;
 pub use polygons::Polygons;
+pub use shape_query::ShapeQuery;
 pub use sphere_query::SphereQuery;
 pub use triangle_query::TriangleQuery;
 
@@ -184,8 +187,14 @@ pub struct Geometry {
     pub spheres: Spheres,
     /// The BVH over the spheres, or `None` for brute force.
     pub sphere_bvh: Option<Bvh>,
-    /// Transformed generic shapes.
+    /// Transformed generic shapes, in file order.
     pub shapes: Vec<Shape<f32>>,
+    /// The BVH over the bounded shapes, or `None` when every shape is tested brute force.
+    pub shape_bvh: Option<Bvh>,
+    /// With a shape BVH: its items, the bounded shapes' indices in its leaf order.
+    pub shape_order: Vec<u32>,
+    /// With a shape BVH: the unbounded shapes (planes), tested brute force beside it.
+    pub loose_shapes: Vec<u32>,
     /// Planar polygons; their triangles in BVH leaf order when there is a BVH.
     pub polygons: Polygons,
     /// The BVH over the polygons' triangles, or `None` for brute force.
@@ -274,7 +283,19 @@ impl Geometry {
             let q = self.triangle_query(rays, from);
             intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, &mut best);
         }
-        self.shapes_intersect_k(rays, from.prim, &mut best);
+        if !self.shapes.is_empty() {
+            let (tree, loose) = self.shape_queries(rays, from);
+            if let Some(bvh) = &self.shape_bvh {
+                bvh.intersect_k(&tree, rays.active, &mut best);
+            }
+            intersect_items(
+                None,
+                &loose,
+                loose.order.map_or(self.shapes.len(), <[u32]>::len),
+                rays.active,
+                &mut best,
+            );
+        }
         let (exits, t) = self.departure_exits_k(rays, from);
         best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
         best
@@ -328,7 +349,14 @@ impl Geometry {
                 return blocked;
             }
         }
-        blocked = blocked | self.shapes_occluded_k(rays, live & !blocked, from.prim);
+        if !self.shapes.is_empty() {
+            let (tree, loose) = self.shape_queries(rays, from);
+            let mut shape = 0;
+            let n = loose.order.map_or(self.shapes.len(), <[u32]>::len);
+            blocked = blocked | occluded_items(None, &loose, n, live & !blocked, &mut shape);
+            blocked =
+                blocked | occluded_items(self.shape_bvh.as_ref(), &tree, 0, live & !blocked, &mut shape);
+        }
         blocked | self.departure_exits_k(rays, from).0
     }
 
@@ -357,14 +385,36 @@ impl Geometry {
         }
     }
 
+    /// The shape part of a packet query: the shapes of the BVH (if any), and those tested brute force (all
+    /// of them without a BVH).
+    fn shape_queries<'a, F: Lanes>(
+        &'a self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> (ShapeQuery<'a, F>, ShapeQuery<'a, F>) {
+        let query = |order| ShapeQuery {
+            shapes: &self.shapes,
+            order,
+            base: self.spheres.len() as u32,
+            ray: rays.ray(),
+            t_max: rays.t_max,
+            skip: from.prim,
+            pyramid: rays.pyramid,
+        };
+        match self.shape_bvh {
+            Some(_) => (query(Some(&self.shape_order)), query(Some(&self.loose_shapes))),
+            None => (query(Some(&[])), query(None)),
+        }
+    }
+
     /// The BVHs the scene has.
     pub fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
-        [&self.sphere_bvh, &self.polygon_bvh].into_iter().flatten()
+        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh].into_iter().flatten()
     }
 
     /// The BVHs the scene has, to change their walk settings.
     pub fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
-        [&mut self.sphere_bvh, &mut self.polygon_bvh].into_iter().flatten()
+        [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh].into_iter().flatten()
     }
 
     /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's

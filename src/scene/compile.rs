@@ -109,7 +109,9 @@ fn reach(desc: &SceneDesc) -> f32 {
     let spheres = desc.spheres.iter().map(|s| (s.center - eye).abs().max_element() + s.radius);
     let lights = desc.lights.iter().map(|l| (l.position - eye).abs().max_element());
     let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| (*v - eye).abs().max_element());
-    spheres.chain(lights).chain(vertices).fold(0.0, f64::max) as f32
+    let shapes =
+        shape_boxes(desc).into_iter().map(|(_, b)| b.min.abs().max(b.max.abs()).max_element() as f64);
+    spheres.chain(lights).chain(vertices).chain(shapes).fold(0.0, f64::max) as f32
 }
 
 impl Scene {
@@ -194,7 +196,9 @@ impl Scene {
         if materials.is_empty() {
             materials.push(Material::default());
         }
+        let bounded = shape_boxes(desc);
         let job = BvhJob {
+            shapes: wants(bounded.len()).then_some(bounded),
             spheres: finite && wants(geometry.spheres.len()),
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
             options: BuildOptions {
@@ -256,11 +260,42 @@ impl Scene {
             (g.polygons, g.polygon_bvh) = (polygons, Some(tree));
             self.build += stats;
         }
+        if let Some(bounded) = job.shapes {
+            let pad = Vec3A::splat(job.options.pad);
+            let item_box = |j: usize| Aabb { min: bounded[j].1.min - pad, max: bounded[j].1.max + pad };
+            let permute = |order: &[u32]| order.iter().map(|&j| bounded[j as usize].0).collect::<Vec<u32>>();
+            let (tree, order, stats) = bvh::build(bounded.len(), item_box, job.options, permute);
+            g.loose_shapes = (0..g.shapes.len() as u32).filter(|k| !order.contains(k)).collect();
+            (g.shape_order, g.shape_bvh) = (order, Some(tree));
+            self.build += stats;
+        }
     }
+}
+
+/// The bounded shapes (ellipsoids) and their boxes in rendering space: the unit sphere's box under the shape's
+/// map, `centre ± Σ|column entries|` per axis, in f64 and rounded to f32 (the BVH's padding covers the
+/// rounding). Planes are unbounded and have none.
+fn shape_boxes(desc: &SceneDesc) -> Vec<(u32, Aabb)> {
+    let eye = desc.camera.eye;
+    let bounded = desc.shapes.iter().enumerate().filter(|(_, s)| s.kind.is_solid());
+    bounded
+        .map(|(k, s)| {
+            let m = s.world_from_object.matrix3;
+            let half = glam::DVec3::new(
+                m.x_axis.x.abs() + m.y_axis.x.abs() + m.z_axis.x.abs(),
+                m.x_axis.y.abs() + m.y_axis.y.abs() + m.z_axis.y.abs(),
+                m.x_axis.z.abs() + m.y_axis.z.abs() + m.z_axis.z.abs(),
+            );
+            let c = s.world_from_object.translation - eye;
+            (k as u32, Aabb { min: (c - half).as_vec3a(), max: (c + half).as_vec3a() })
+        })
+        .collect()
 }
 
 /// The BVH builds that [`Scene::assemble`] found the scene needs.
 struct BvhJob {
+    /// The bounded shapes' indices and boxes, when they get a BVH.
+    shapes: Option<Vec<(u32, Aabb)>>,
     /// Whether to build the spheres' BVH.
     spheres: bool,
     /// Whether to build the polygons' triangle BVH.
