@@ -14,7 +14,7 @@ use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::desc::Pattern;
-use crate::scene::{toml, Accel, BvhPreset, Scene};
+use crate::scene::{toml, Accel, BvhPreset, CompileOptions, Scene};
 
 /// Arguments of `bareray bench`.
 #[derive(Args, Debug)]
@@ -323,14 +323,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
     // The build runs on as many threads as the largest setting measured, not on every core: a 1-thread
     // bench builds on one thread, as a 1-thread peer run does.
     let build_threads = threads.iter().copied().max();
-    let mut scene = crate::render::thread_pool(build_threads)?
-        .install(|| Scene::compile_owned(desc, accel, args.bvh_preset))?;
-    for bvh in scene.geometry.bvhs_mut() {
-        bvh.frustum_culling = args.frustum_culling;
-        if let Some(lanes) = args.single_ray_lanes {
-            bvh.single_ray_lanes = lanes;
-        }
-    }
+    let defaults = CompileOptions::default();
+    let options = CompileOptions {
+        accel,
+        preset: args.bvh_preset,
+        frustum_culling: args.frustum_culling,
+        single_ray_lanes: args.single_ray_lanes.unwrap_or(defaults.single_ray_lanes),
+    };
+    let scene = crate::render::thread_pool(build_threads)?.install(|| Scene::compile_owned(desc, options))?;
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;
     let scene_name = args.scene.display().to_string();

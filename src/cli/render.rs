@@ -14,7 +14,7 @@ use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
 use crate::scene::desc::{Pattern, Transfer};
-use crate::scene::{toml, Accel, BvhPreset, Scene, SceneDesc};
+use crate::scene::{toml, BvhPreset, CompileOptions, Scene, SceneDesc};
 
 /// The demo scene rendered when no scene file is given.
 pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
@@ -105,8 +105,8 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let pool = crate::render::thread_pool(threads)?;
     // Build: the scene compiled for rendering, the BVH included (`scene.build.seconds` is the BVH's part).
     let clock = Instant::now();
-    let scene =
-        pool.install(|| Scene::compile_owned(desc, Accel::Auto, args.bvh_preset)).context("camera")?;
+    let options = CompileOptions { preset: args.bvh_preset, ..CompileOptions::default() };
+    let scene = pool.install(|| Scene::compile_owned(desc, options)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     crate::accel::set_counting(args.stats);

@@ -9,7 +9,7 @@
 //! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
 //! mean what they meant in world space; [`Scene::origin`] maps points back.
 
-use crate::accel::bvh::{self, BuildOptions, BuildStats, Bvh};
+use crate::accel::bvh::{self, BuildOptions, BuildStats, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
@@ -56,13 +56,39 @@ pub struct Scene {
     pub build: BuildStats,
 }
 
-/// How spheres are searched.
+/// How a scene is compiled: the search structures and how their walks run.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct CompileOptions {
+    /// BVH or brute force.
+    pub accel: Accel,
+    /// obvhs's build preset.
+    pub preset: BvhPreset,
+    /// Packet walks first test nodes and leaf items against a shared-origin packet's frustum
+    /// ([`crate::accel::bvh::Bvh::frustum_culling`]).
+    pub frustum_culling: bool,
+    /// Subtrees entered by at most this many live lanes are walked one ray at a time
+    /// ([`crate::accel::bvh::SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
+    pub single_ray_lanes: u32,
+}
+
+impl Default for CompileOptions {
+    fn default() -> Self {
+        CompileOptions {
+            accel: Accel::Auto,
+            preset: BvhPreset::default(),
+            frustum_culling: true,
+            single_ray_lanes: SINGLE_RAY_MAX_LANES,
+        }
+    }
+}
+
+/// How primitives are searched.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Accel {
-    /// BVH from [`BVH_MIN_SPHERES`] spheres on, brute force below.
+    /// A BVH for each kind with [`BVH_MIN_SPHERES`] items or more, brute force below.
     #[default]
     Auto,
-    /// Always a BVH.
+    /// A BVH for every kind with items.
     Bvh,
     /// Always brute force.
     Brute,
@@ -134,34 +160,31 @@ impl Scene {
         Self::compile_with(desc, Accel::Auto)
     }
 
-    /// Compiles with a chosen acceleration structure for the spheres.
+    /// Compiles with a chosen acceleration structure (every other option at its default).
     pub fn compile_with(desc: &SceneDesc, accel: Accel) -> Result<Scene, CameraError> {
-        Self::compile_with_preset(desc, accel, BvhPreset::default())
+        Self::compile_with_options(desc, CompileOptions { accel, ..CompileOptions::default() })
     }
 
-    /// Compiles with a chosen acceleration structure and BVH build preset.
-    pub fn compile_with_preset(
-        desc: &SceneDesc,
-        accel: Accel,
-        preset: BvhPreset,
-    ) -> Result<Scene, CameraError> {
-        let (mut scene, job) = Self::assemble(desc, accel, preset)?;
+    /// Compiles with the given options.
+    pub fn compile_with_options(desc: &SceneDesc, options: CompileOptions) -> Result<Scene, CameraError> {
+        let (mut scene, job) = Self::assemble(desc, options)?;
         scene.build_bvh(job);
         Ok(scene)
     }
 
-    /// [`Scene::compile_with_preset`] taking the description, which is freed before the BVH build: the
+    /// [`Scene::compile_with_options`] taking the description, which is freed before the BVH build: the
     /// build is the peak of a large scene's memory, and the description's spheres (40 bytes each, in f64)
     /// are no longer needed then.
-    pub fn compile_owned(desc: SceneDesc, accel: Accel, preset: BvhPreset) -> Result<Scene, CameraError> {
-        let (mut scene, job) = Self::assemble(&desc, accel, preset)?;
+    pub fn compile_owned(desc: SceneDesc, options: CompileOptions) -> Result<Scene, CameraError> {
+        let (mut scene, job) = Self::assemble(&desc, options)?;
         drop(desc);
         scene.build_bvh(job);
         Ok(scene)
     }
 
     /// Everything but the BVH: the scene without one, and the build it needs, if any.
-    fn assemble(desc: &SceneDesc, accel: Accel, preset: BvhPreset) -> Result<(Scene, BvhJob), CameraError> {
+    fn assemble(desc: &SceneDesc, options: CompileOptions) -> Result<(Scene, BvhJob), CameraError> {
+        let CompileOptions { accel, preset, frustum_culling, single_ray_lanes } = options;
         let origin = desc.camera.eye;
         let mut camera_f64 = Camera::new(&desc.camera)?;
         camera_f64.eye = V3::all(0.0);
@@ -208,6 +231,8 @@ impl Scene {
                 // trace them pay for their build.
                 single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
                     || features::bounces(desc.render.max_depth, &materials),
+                frustum_culling,
+                single_ray_lanes,
             },
         };
         let lights = desc
@@ -332,8 +357,8 @@ mod tests {
     fn owned_and_borrowed_descriptions_compile_alike() {
         let text = crate::scene::generate::flake_nff(2).expect("flake");
         let desc = nff::parse(std::path::Path::new("flake.nff"), &text).expect("parse");
-        let borrowed = Scene::compile_with_preset(&desc, Accel::Auto, BvhPreset::default()).expect("compile");
-        let owned = Scene::compile_owned(desc, Accel::Auto, BvhPreset::default()).expect("compile");
+        let borrowed = Scene::compile_with_options(&desc, CompileOptions::default()).expect("compile");
+        let owned = Scene::compile_owned(desc, CompileOptions::default()).expect("compile");
         let (a, b) = (&borrowed.geometry, &owned.geometry);
         let arrays = |s: &crate::accel::Spheres| {
             (s.cx.clone(), s.cy.clone(), s.cz.clone(), s.r.clone(), s.material.clone(), s.key.clone())

@@ -9,7 +9,7 @@ pub mod nff;
 pub mod toml;
 pub mod xyzr;
 
-pub use compile::{Accel, BvhPreset, Light, Scene, BVH_MIN_SPHERES};
+pub use compile::{Accel, BvhPreset, CompileOptions, Light, Scene, BVH_MIN_SPHERES};
 pub use desc::SceneDesc;
 pub use error::SceneError;
 

@@ -12,7 +12,7 @@ use super::collapse::collapse;
 use super::node::Node;
 use super::slab::STACK;
 use super::wide_node::WideNode;
-use super::{binary, piles, BuildStats, Bvh, SINGLE_RAY_MAX_LANES};
+use super::{binary, piles, BuildStats, Bvh};
 
 /// How to build a tree.
 #[derive(Clone, Copy, Debug)]
@@ -23,6 +23,10 @@ pub struct BuildOptions {
     pub params: BvhBuildParams,
     /// Whether to build the 8-wide single-ray tree too (scenes that trace secondary rays).
     pub single_ray_tree: bool,
+    /// [`Bvh::frustum_culling`].
+    pub frustum_culling: bool,
+    /// [`Bvh::single_ray_lanes`].
+    pub single_ray_lanes: u32,
 }
 
 /// Builds the tree over `n` items whose padded boxes `item_box` gives, and returns it with `permute(order)`
@@ -34,7 +38,7 @@ pub fn build<T: Send>(
     options: BuildOptions,
     permute: impl Fn(&[u32]) -> T + Sync,
 ) -> (Bvh, T, BuildStats) {
-    let BuildOptions { pad, params, single_ray_tree } = options;
+    let BuildOptions { pad, params, single_ray_tree, frustum_culling, single_ray_lanes } = options;
     let start = Instant::now();
     let boxes: Vec<Aabb> = (0..n).into_par_iter().map(item_box).collect();
     let over_piles = piles::has_piles(&boxes);
@@ -72,8 +76,7 @@ pub fn build<T: Send>(
     let node_bytes = nodes.len() * size_of::<Node>() + wide_bytes;
     let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes };
     let extent = extent(&nodes[0]);
-    let single_ray_lanes = SINGLE_RAY_MAX_LANES;
-    (Bvh { nodes, single_ray_lanes, frustum_culling: true, extent, pad, wide }, permuted, stats)
+    (Bvh { nodes, single_ray_lanes, frustum_culling, extent, pad, wide }, permuted, stats)
 }
 
 /// The largest coordinate magnitude of the root's occupied child boxes.
