@@ -8,9 +8,8 @@
 
 use std::hint::black_box;
 
-use bareray::accel::Spheres;
 use bareray::camera::Camera;
-use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket};
+use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket, Spheres};
 use bareray::math::V3;
 use bareray::scene::desc::{Aim, CameraDesc};
 use bareray::scene::generate::FieldParams;

@@ -29,9 +29,10 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
-use bareray::accel::Spheres;
 use bareray::accuracy::Percentiles;
-use bareray::geometry::{first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, NO_PRIM};
+use bareray::geometry::{
+    first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, Spheres, NO_PRIM,
+};
 use bareray::math::V3;
 use bareray::scene::{self, Accel, Scene};
 

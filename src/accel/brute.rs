@@ -4,12 +4,12 @@
 
 use crate::geometry::{
     far_root, first_root, intersect_triangle, sphere_approach, sphere_roots, stays_off_plane,
-    DeparturePacket, EyeLanes, HitPacket, Pyramid, Ray, RayPacket, SphereRay,
+    DeparturePacket, EyeLanes, HitPacket, Pyramid, Ray, RayPacket, SphereRay, Spheres,
 };
 use crate::math::Mask;
 use crate::simd::{set_bits, IdLanes, Lanes};
 
-use super::{Geometry, PrimRef, Spheres};
+use super::{Geometry, PrimRef};
 
 /// A sphere query as every kernel and traversal takes it: the spheres, the rays, each ray's exclusive end
 /// `t_max`, and the sphere each ray leaves (`skip`, never reported).

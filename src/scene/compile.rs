@@ -5,7 +5,7 @@
 //! "camera-world" space, without its rotation): every position is `p − eye` computed in f64 from the scene
 //! file's values and rounded once to f32. Near the eye, where the image is made, f32 then resolves the
 //! scene as finely as it can anywhere, however far from the world origin the scene sits, and camera rays
-//! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::accel::eye_term`]).
+//! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::geometry::eye_term`]).
 //! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
 //! mean what they meant in world space; [`Scene::origin`] maps points back.
 
@@ -274,7 +274,7 @@ mod tests {
         let borrowed = Scene::compile_with_preset(&desc, Accel::Auto, BvhPreset::default()).expect("compile");
         let owned = Scene::compile_owned(desc, Accel::Auto, BvhPreset::default()).expect("compile");
         let (a, b) = (&borrowed.geometry, &owned.geometry);
-        let arrays = |s: &crate::accel::Spheres| {
+        let arrays = |s: &crate::geometry::Spheres| {
             (s.cx.clone(), s.cy.clone(), s.cz.clone(), s.r.clone(), s.material.clone(), s.key.clone())
         };
         assert!(a.spheres.len() > 90, "a level-2 flake has 91 spheres");

@@ -29,8 +29,7 @@ use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
 use super::brute::SphereQuery;
-use super::Spheres;
-use crate::geometry::{HitPacket, Ray};
+use crate::geometry::{HitPacket, Ray, Spheres};
 use crate::math::V3;
 use crate::simd::Lanes;
 
