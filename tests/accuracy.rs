@@ -14,9 +14,9 @@ use std::process::Command;
 
 use bareray::accuracy::{run, Options, Twin};
 use bareray::geometry::{Departure, Ray, NO_PRIM};
+use bareray::math::SplitMix64;
 use bareray::math::V3;
 use bareray::scene::desc::{Aim, CameraDesc, Field, LightDesc, SceneDesc, SphereDesc, Sweep};
-use bareray::scene::generate::SplitMix64;
 use glam::DVec3;
 
 fn camera(eye: DVec3, look: DVec3, hfov: f64, width: u32, height: u32) -> CameraDesc {

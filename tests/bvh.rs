@@ -4,9 +4,9 @@
 
 use bareray::accel::bvh::Bvh;
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
+use bareray::math::SplitMix64;
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{SceneDesc, SphereDesc};
-use bareray::scene::generate::SplitMix64;
 use bareray::scene::{Accel, Scene};
 use bareray::simd::Lanes;
 use glam::DVec3;

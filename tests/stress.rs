@@ -28,12 +28,13 @@ use bareray::geometry::{
     far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, Shape,
     ShapeKind, NO_PRIM,
 };
+use bareray::math::SplitMix64;
 use bareray::math::{Affine, Vec3f, V3};
 use bareray::render::{render_lanes, thread_pool};
 use bareray::scene::desc::{
     Aim, CameraDesc, Falloff, Field, PolygonDesc, SceneDesc, ShapeDesc, SphereDesc, Sweep,
 };
-use bareray::scene::generate::{flake, FieldParams, SplitMix64};
+use bareray::scene::generate::{flake, FieldParams};
 use bareray::scene::{toml, Scene};
 use glam::{DAffine3, DQuat, DVec3};
 use indicatif::ProgressBar;

@@ -294,8 +294,8 @@ impl Geometry {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::SplitMix64;
     use crate::math::V3;
-    use crate::scene::generate::SplitMix64;
 
     /// The leaf kernel (lanes = spheres) gives the scalar loop's closest hit and blocker, bit for bit: over
     /// leaves of every size from 1 to past one chunk, at the array's end (partial loads), with rays from
