@@ -9,12 +9,13 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::camera_args::CameraArgs;
+use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::geometry::ShapeKind;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
-use crate::scene::desc::{Pattern, Transfer};
-use crate::scene::{toml, Accel, BvhPreset, Scene, SceneDesc};
+use crate::scene::desc::Pattern;
+use crate::scene::{toml, Accel, Scene, SceneDesc};
 
 /// The demo scene rendered when no scene file is given.
 pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
@@ -49,7 +50,7 @@ pub struct RenderArgs {
     /// as SPD, POV-Ray and Tachyon write NFF colours). Overrides the scene; PNG records it. EXR holds
     /// linear floats either way.
     #[arg(long, value_enum)]
-    pub transfer: Option<Transfer>,
+    pub transfer: Option<TransferArg>,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -65,8 +66,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
     /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; docs/perf-log/2026-11.md compares them).
-    #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
-    pub bvh_preset: BvhPreset,
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Fast)]
+    pub bvh_preset: BvhPresetArg,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -106,7 +107,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     // Build: the scene compiled for rendering, the BVH included (`scene.build.seconds` is the BVH's part).
     let clock = Instant::now();
     let scene =
-        pool.install(|| Scene::compile_owned(desc, Accel::Auto, args.bvh_preset)).context("camera")?;
+        pool.install(|| Scene::compile_owned(desc, Accel::Auto, args.bvh_preset.into())).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     crate::accel::set_counting(args.stats);
@@ -306,6 +307,6 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
         desc.render.max_depth = d;
     }
     if let Some(t) = args.transfer {
-        desc.render.transfer = t;
+        desc.render.transfer = t.into();
     }
 }

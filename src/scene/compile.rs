@@ -68,7 +68,7 @@ pub enum Accel {
 }
 
 /// The obvhs build preset for the BVH over the spheres (its `BvhBuildParams` presets).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BvhPreset {
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,

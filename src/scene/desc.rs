@@ -92,7 +92,7 @@ pub enum PostFilter {
 
 /// How the rendered values become 8-bit pixels (PNG, PPM); EXR output holds the values as they are,
 /// linear floats, whatever the transfer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Transfer {
     /// The values are linear radiance, encoded with the sRGB curve (clamped to [0, 1]): TOML scenes.
     #[default]
