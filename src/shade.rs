@@ -9,10 +9,10 @@
 use std::marker::PhantomData;
 use std::ops::AddAssign;
 
+use crate::compile::Scene;
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
 use crate::scene::desc::{Falloff, Material};
-use crate::scene::Scene;
 use crate::simd::{set_bits, IdLanes, Lanes};
 
 /// Secondary rays whose contribution to the pixel would be below this weight are not traced.

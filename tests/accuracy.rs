@@ -203,7 +203,7 @@ fn stress_scenes_meet_the_accuracy_bounds() {
     for path in &scenes {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         assert!(path.exists(), "{name}: the stress scene is missing");
-        let desc = bareray::scene::load(path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let desc = bareray::io::load(path).unwrap_or_else(|e| panic!("{name}: {e}"));
         let r = run(&name, &desc, &opts(true)).expect("report");
         checked += 1;
         eprint!("{}", r.table());

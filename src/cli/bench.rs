@@ -13,9 +13,10 @@ use serde::{Deserialize, Serialize};
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
 use super::values::BvhPresetArg;
+use crate::compile::{Accel, BvhPreset, Scene};
+use crate::io::toml;
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::desc::Pattern;
-use crate::scene::{toml, Accel, BvhPreset, Scene};
 
 /// Arguments of `bareray bench`.
 #[derive(Args, Debug)]

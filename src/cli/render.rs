@@ -11,11 +11,13 @@ use indicatif::{ProgressBar, ProgressStyle};
 use super::camera_args::CameraArgs;
 use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
+use crate::compile::{Accel, Scene};
 use crate::geometry::ShapeKind;
+use crate::io::toml;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
 use crate::scene::desc::Pattern;
-use crate::scene::{toml, Accel, Scene, SceneDesc};
+use crate::scene::SceneDesc;
 
 /// The demo scene rendered when no scene file is given.
 pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
@@ -194,7 +196,7 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         pattern_name(scene.render.pattern),
         scene.render.transfer.name()
     );
-    println!("features: {}", crate::scene::features::Features::of(scene));
+    println!("features: {}", crate::compile::features::Features::of(scene));
     println!(
         "accel: {}, {:.1} bytes/sphere (spheres + BVH nodes)",
         if g.bvh.is_some() { "BVH" } else { "brute force" },
@@ -295,7 +297,7 @@ fn stem(path: &Path) -> String {
 
 /// Reads a scene file, choosing the reader by extension.
 pub fn load_scene(path: &Path) -> Result<SceneDesc> {
-    Ok(crate::scene::load(path)?)
+    Ok(crate::io::load(path)?)
 }
 
 fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {

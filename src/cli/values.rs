@@ -1,8 +1,8 @@
 //! The command line's value enums for choices the library names in its own types: clap stays in `cli`, and
 //! each enum converts to the library's type.
 
+use crate::compile::BvhPreset;
 use crate::scene::desc::Transfer;
-use crate::scene::BvhPreset;
 
 /// `--transfer`: [`Transfer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]

@@ -1,5 +1,5 @@
 //! `SceneDesc`: a scene as plain, validated data in f64, whatever file format it came from.
-//! Compile (`scene::compile`) turns it into the immutable [`crate::scene::Scene`] the renderer reads.
+//! Compile (`crate::compile`) turns it into the immutable [`crate::compile::Scene`] the renderer reads.
 
 use glam::{DAffine3, DVec3};
 

@@ -9,6 +9,8 @@
 //! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
 //! mean what they meant in world space; [`Scene::origin`] maps points back.
 
+pub mod features;
+
 use crate::accel::bvh::{self, BuildStats};
 use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
@@ -18,8 +20,7 @@ use crate::math::{Rgb, Vec3f, V3};
 use glam::DAffine3;
 use obvhs::BvhBuildParams;
 
-use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
-use super::features;
+use crate::scene::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -263,13 +264,13 @@ fn push_polygon(out: &mut Polygons, p: &PolygonDesc, origin: glam::DVec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::nff;
+    use crate::io::nff;
 
     /// Compiling from a moved description (freed before the build) gives the scene compiling from a borrowed
     /// one gives: the same spheres in the same order, the same trees, lights and materials.
     #[test]
     fn owned_and_borrowed_descriptions_compile_alike() {
-        let text = crate::scene::generate::flake_nff(2).expect("flake");
+        let text = crate::io::generate::flake_nff(2).expect("flake");
         let desc = nff::parse(std::path::Path::new("flake.nff"), &text).expect("parse");
         let borrowed = Scene::compile_with_preset(&desc, Accel::Auto, BvhPreset::default()).expect("compile");
         let owned = Scene::compile_owned(desc, Accel::Auto, BvhPreset::default()).expect("compile");
