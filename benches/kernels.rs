@@ -8,12 +8,11 @@
 
 use std::hint::black_box;
 
-use bareray::accel::Spheres;
 use bareray::camera::Camera;
-use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket};
+use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket, Spheres};
+use bareray::io::generate::FieldParams;
 use bareray::math::V3;
 use bareray::scene::desc::{Aim, CameraDesc};
-use bareray::scene::generate::FieldParams;
 use bareray::simd::{IdLanes, Lanes};
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};

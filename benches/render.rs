@@ -7,11 +7,12 @@
 
 use std::path::Path;
 
+use bareray::compile::Scene;
 use bareray::geometry::DeparturePacket;
+use bareray::io::generate::FieldParams;
+use bareray::io::toml;
 use bareray::render::{for_each_packet, render, thread_pool, tiles};
 use bareray::scene::desc::{Aim, CameraDesc, SceneDesc, SphereDesc};
-use bareray::scene::generate::FieldParams;
-use bareray::scene::{toml, Scene};
 use bareray::simd::Lanes;
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};

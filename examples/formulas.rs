@@ -29,11 +29,13 @@ use std::hint::black_box;
 use std::path::Path;
 use std::time::Instant;
 
-use bareray::accel::Spheres;
 use bareray::accuracy::Percentiles;
-use bareray::geometry::{first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, NO_PRIM};
+use bareray::compile::{Accel, Scene};
+use bareray::geometry::{
+    first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, Spheres, NO_PRIM,
+};
+use bareray::io;
 use bareray::math::V3;
-use bareray::scene::{self, Accel, Scene};
 
 /// Cap on pixel × sphere tests per pass before pixels are subsampled.
 const MAX_TESTS: f64 = 1e8;
@@ -172,7 +174,7 @@ fn main() -> anyhow::Result<()> {
         _ => format!("{x:.1e}"),
     };
     for path in &paths {
-        let desc = scene::load(Path::new(path))?;
+        let desc = io::load(Path::new(path))?;
         let scene = Scene::compile_with(&desc, Accel::Brute)?;
         let s = &scene.geometry.spheres;
         assert!(s.key.iter().enumerate().all(|(i, &k)| k as usize == i), "storage order is not file order");

@@ -11,10 +11,10 @@ use exr::prelude::{
 };
 use rayon::prelude::*;
 
+use crate::compile::Scene;
 use crate::geometry::NO_PRIM;
 use crate::output::{write_atomic, BoxError};
 use crate::render::primary_hits_lanes;
-use crate::scene::Scene;
 
 /// One kind of AOV.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -11,12 +11,12 @@ use wide::{f32x16, f32x4, f32x8};
 
 use crate::accel::{take_work, Work};
 use crate::camera::Camera;
+use crate::compile::Scene;
 use crate::film::Image;
 use crate::geometry::RayPacket;
 use crate::math::{Rgb, V3};
 use crate::sample::{grid_offsets, lecture_3x3, HALF_PIXEL_WEIGHTS};
 use crate::scene::desc::{Pattern, PostFilter};
-use crate::scene::Scene;
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
 

@@ -9,10 +9,10 @@
 use std::marker::PhantomData;
 use std::ops::AddAssign;
 
+use crate::compile::Scene;
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
 use crate::scene::desc::{Falloff, Material};
-use crate::scene::Scene;
 use crate::simd::{set_bits, IdLanes, Lanes};
 
 /// Secondary rays whose contribution to the pixel would be below this weight are not traced.
@@ -411,8 +411,8 @@ mod tests {
     #[test]
     fn sphere_lanes_give_the_scalar_surface() {
         use crate::geometry::Ray;
+        use crate::math::SplitMix64;
         use crate::scene::desc::{SceneDesc, SphereDesc};
-        use crate::scene::generate::SplitMix64;
         use wide::f32x8;
         let mut rng = SplitMix64::new(11);
         let mut unit = move || rng.unit() * 2.0 - 1.0;

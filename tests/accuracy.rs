@@ -14,9 +14,9 @@ use std::process::Command;
 
 use bareray::accuracy::{run, Options, Twin};
 use bareray::geometry::{Departure, Ray, NO_PRIM};
+use bareray::math::SplitMix64;
 use bareray::math::V3;
 use bareray::scene::desc::{Aim, CameraDesc, Field, LightDesc, SceneDesc, SphereDesc, Sweep};
-use bareray::scene::generate::SplitMix64;
 use glam::DVec3;
 
 fn camera(eye: DVec3, look: DVec3, hfov: f64, width: u32, height: u32) -> CameraDesc {
@@ -203,7 +203,7 @@ fn stress_scenes_meet_the_accuracy_bounds() {
     for path in &scenes {
         let name = path.file_name().unwrap().to_string_lossy().into_owned();
         assert!(path.exists(), "{name}: the stress scene is missing");
-        let desc = bareray::scene::load(path).unwrap_or_else(|e| panic!("{name}: {e}"));
+        let desc = bareray::io::load(path).unwrap_or_else(|e| panic!("{name}: {e}"));
         let r = run(&name, &desc, &opts(true)).expect("report");
         checked += 1;
         eprint!("{}", r.table());

@@ -3,11 +3,11 @@
 //! spheres, grazing rays and axis-parallel rays), and through whole renders.
 
 use bareray::accel::bvh::Bvh;
+use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
+use bareray::math::SplitMix64;
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{SceneDesc, SphereDesc};
-use bareray::scene::generate::SplitMix64;
-use bareray::scene::{Accel, Scene};
 use bareray::simd::Lanes;
 use glam::DVec3;
 use wide::{f32x16, f32x4, f32x8};

@@ -5,11 +5,11 @@
 //! operand's, and LLVM may commute `a + b`), so only NaN-ness is a property of the formula. Hit lanes never
 //! carry a NaN t.
 
-use bareray::accel::{Geometry, Spheres};
+use bareray::accel::Geometry;
 use bareray::camera::Camera;
 use bareray::geometry::{
     intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k, sphere_roots, Departure,
-    Hit, Ray, RayPacket, Shape, ShapeKind,
+    Hit, Ray, RayPacket, Shape, ShapeKind, Spheres,
 };
 use bareray::math::{Vec3f, V3};
 use bareray::scene::desc::CameraDesc;

@@ -4,12 +4,14 @@
 use std::path::Path;
 
 use bareray::accel::Geometry;
+use bareray::compile::Scene;
 use bareray::geometry::polygon::triangulate;
 use bareray::geometry::{intersect_triangle, Departure, Ray, NO_PRIM};
+use bareray::io::generate::{flake, flake_count, flake_nff, FieldParams};
+use bareray::io::{nff, xyzr, SceneError};
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{Aim, Field, PolygonDesc, SphereDesc, Sweep};
-use bareray::scene::generate::{flake, flake_count, flake_nff, FieldParams};
-use bareray::scene::{nff, xyzr, Scene, SceneDesc, SceneError};
+use bareray::scene::SceneDesc;
 use glam::DVec3;
 
 const BALLS2: &str = "../shared/scenes/balls2.nff";

@@ -2,9 +2,10 @@
 
 use std::path::Path;
 
+use bareray::compile::Scene;
 use bareray::film::Image;
+use bareray::io::toml;
 use bareray::render::{render_lanes, thread_pool};
-use bareray::scene::{toml, Scene};
 use indicatif::ProgressBar;
 
 fn render_toml(src: &str, threads: usize) -> Image {
@@ -164,7 +165,7 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
     scenes.sort();
     let mut checked = 0;
     for path in &scenes {
-        let mut desc = bareray::scene::load(path).unwrap();
+        let mut desc = bareray::io::load(path).unwrap();
         desc.camera.width = 96;
         desc.camera.height = 64;
         let scene = Scene::compile(&desc).unwrap();

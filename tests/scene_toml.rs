@@ -3,8 +3,9 @@
 use std::path::Path;
 
 use bareray::geometry::ShapeKind;
+use bareray::io::{toml, SceneError};
 use bareray::scene::desc::{Falloff, Pattern, PostFilter};
-use bareray::scene::{toml, SceneDesc, SceneError};
+use bareray::scene::SceneDesc;
 
 fn parse(src: &str) -> Result<SceneDesc, SceneError> {
     toml::parse(Path::new("dir/s.toml"), src)

@@ -20,8 +20,8 @@ pub use triangle_query::TriangleQuery;
 
 use bvh::{Bvh, LeafQuery};
 
-use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, NO_PRIM};
-use crate::math::{Mask, Vec3f, V3};
+use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, Spheres, NO_PRIM};
+use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
 thread_local! {
@@ -74,110 +74,6 @@ pub(crate) fn count_work(prim_tests: usize, box_tests: usize) {
         v.box_tests += box_tests as u64;
         w.set(v);
     });
-}
-
-/// Spheres in structure-of-arrays layout: one array per coordinate, so lanes load contiguous values.
-#[derive(Clone, Debug, Default)]
-pub struct Spheres {
-    /// Centre x.
-    pub cx: Vec<f32>,
-    /// Centre y.
-    pub cy: Vec<f32>,
-    /// Centre z.
-    pub cz: Vec<f32>,
-    /// Radius.
-    pub r: Vec<f32>,
-    /// The exact eye term `|centre − eye|² − r²` (the eye is the rendering space's origin), computed in f64
-    /// from the scene's own values and rounded once: camera rays use it instead of computing it in f32
-    /// ([`crate::geometry::Approach::roots_from_eye`]).
-    pub c_eye: Vec<f32>,
-    /// Material index.
-    pub material: Vec<u32>,
-    /// Scene-file index (the identity until [`Spheres::permuted`]): breaks ties in t and names the sphere
-    /// in reports.
-    pub key: Vec<u32>,
-    /// Some sphere has the eye within about its radius of its surface (`|c_eye| < 4·r²`): only then can `c`
-    /// from the eye term be the more accurate one for rays that do not start at the eye (a large ground
-    /// sphere near the eye), so only then do those rays pay for computing both
-    /// ([`crate::geometry::Approach::roots_with_eye_term`]); elsewhere they take `|oc|² − r²` directly.
-    pub eye_terms_help: bool,
-}
-
-impl Spheres {
-    /// Number of spheres.
-    pub fn len(&self) -> usize {
-        self.r.len()
-    }
-    /// True when there are none.
-    pub fn is_empty(&self) -> bool {
-        self.r.is_empty()
-    }
-    /// Bytes of the arrays' contents.
-    pub fn bytes(&self) -> usize {
-        let floats = [&self.cx, &self.cy, &self.cz, &self.r, &self.c_eye].map(Vec::len).iter().sum::<usize>();
-        floats * size_of::<f32>() + (self.material.len() + self.key.len()) * size_of::<u32>()
-    }
-    /// Centre of sphere `i`.
-    #[inline(always)]
-    pub fn center(&self, i: usize) -> Vec3f {
-        V3::new(self.cx[i], self.cy[i], self.cz[i])
-    }
-    /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.
-    pub fn permuted(&self, order: &[u32]) -> Spheres {
-        use rayon::prelude::*;
-        fn pick<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
-            order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
-        }
-        Spheres {
-            cx: pick(&self.cx, order),
-            cy: pick(&self.cy, order),
-            cz: pick(&self.cz, order),
-            r: pick(&self.r, order),
-            c_eye: pick(&self.c_eye, order),
-            material: pick(&self.material, order),
-            key: pick(&self.key, order),
-            eye_terms_help: self.eye_terms_help,
-        }
-    }
-
-    /// Room for `more` spheres in every array: compile knows the count, so each array is allocated once, at
-    /// its final size.
-    pub fn reserve_exact(&mut self, more: usize) {
-        for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.r, &mut self.c_eye] {
-            v.reserve_exact(more);
-        }
-        for v in [&mut self.material, &mut self.key] {
-            v.reserve_exact(more);
-        }
-    }
-
-    /// Appends a sphere whose f32 centre and radius are exact (hand-built geometry, tests); its file index is
-    /// its position. Its eye term is computed from these values.
-    pub fn push(&mut self, center: Vec3f, radius: f32, material: u32) {
-        self.push_exact(center.to_f64(), f64::from(radius), material);
-    }
-
-    /// Appends a sphere given in f64 (rendering space), rounding its centre and radius to f32 once and
-    /// computing its eye term from the f64 values.
-    pub fn push_exact(&mut self, center: V3<f64>, radius: f64, material: u32) {
-        let c = center.to_f32();
-        self.cx.push(c.x);
-        self.cy.push(c.y);
-        self.cz.push(c.z);
-        self.key.push(self.r.len() as u32);
-        self.r.push(radius as f32);
-        let c_eye = eye_term(center, radius);
-        self.eye_terms_help |= c_eye.abs() < 4.0 * radius * radius;
-        self.c_eye.push(c_eye as f32);
-        self.material.push(material);
-    }
-}
-
-/// `|centre|² − r²` for a sphere in rendering space (the eye at the origin), as `(|centre| − r)(|centre| + r)`
-/// in f64: no cancellation between two large squares when the eye is close to a large sphere.
-pub fn eye_term(center: V3<f64>, radius: f64) -> f64 {
-    let d = center.length();
-    (d - radius) * (d + radius)
 }
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons.

@@ -3,12 +3,11 @@
 //! the single-ray leaf test with the spheres across the lanes. Hits are combined by [`HitPacket::update`]'s
 //! (t, id) order, so the result does not depend on the order of the loops.
 
-use crate::geometry::{first_root, sphere_approach, EyeLanes, HitPacket, Pyramid, Ray, SphereRay};
+use crate::geometry::{first_root, sphere_approach, EyeLanes, HitPacket, Pyramid, Ray, SphereRay, Spheres};
 use crate::math::{Mask, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};
 
 use super::bvh::{LeafQuery, SingleLeafQuery};
-use super::Spheres;
 
 /// A sphere query as every kernel and traversal takes it: the spheres, the rays, each ray's exclusive end
 /// `t_max`, and the sphere each ray leaves (`skip`, never reported).
@@ -214,8 +213,8 @@ impl SphereQuery<'_, f32> {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::math::SplitMix64;
     use crate::math::V3;
-    use crate::scene::generate::SplitMix64;
 
     /// The leaf kernel (lanes = spheres) gives the scalar loop's closest hit and blocker, bit for bit: over
     /// leaves of every size from 1 to past one chunk, at the array's end (partial loads), with rays from

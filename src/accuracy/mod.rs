@@ -44,10 +44,11 @@ use std::time::Instant;
 use anyhow::Result;
 use rayon::prelude::*;
 
+use crate::compile::Scene;
 use crate::geometry::{Departure, Ray, NO_PRIM};
 use crate::math::V3;
 use crate::render::{thread_pool, trace_primary_lanes, PrimaryHits};
-use crate::scene::{Scene, SceneDesc};
+use crate::scene::SceneDesc;
 
 pub use twin::{Hit64, Slack, Twin, EPS32, TWIN_BVH_MIN_SPHERES};
 

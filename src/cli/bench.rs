@@ -12,9 +12,11 @@ use serde::{Deserialize, Serialize};
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
+use super::values::BvhPresetArg;
+use crate::compile::{Accel, BvhPreset, CompileOptions, Scene};
+use crate::io::toml;
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::desc::Pattern;
-use crate::scene::{toml, Accel, BvhPreset, CompileOptions, Scene};
 
 /// Arguments of `bareray bench`.
 #[derive(Args, Debug)]
@@ -50,8 +52,8 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
     pub accel: AccelArg,
     /// obvhs build preset for the BVH (`very-fast` builds quickest and traces uniform fields fastest).
-    #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
-    pub bvh_preset: BvhPreset,
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Fast)]
+    pub bvh_preset: BvhPresetArg,
     /// Test each BVH node's children, and each leaf's spheres, against a shared-origin packet's frustum
     /// before its lanes (default: on, measured faster on large fields; docs/perf-log/2026-11.md). `false` to measure without.
     #[arg(long, value_name = "BOOL", default_value_t = true, action = clap::ArgAction::Set)]
@@ -326,7 +328,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let defaults = CompileOptions::default();
     let options = CompileOptions {
         accel,
-        preset: args.bvh_preset,
+        preset: args.bvh_preset.into(),
         frustum_culling: args.frustum_culling,
         single_ray_lanes: args.single_ray_lanes.unwrap_or(defaults.single_ray_lanes),
     };
@@ -409,7 +411,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     width,
                     height,
                     frustum_culling: args.frustum_culling,
-                    bvh_preset: format!("{:?}", args.bvh_preset),
+                    bvh_preset: format!("{:?}", BvhPreset::from(args.bvh_preset)),
                     host: &host,
                     compare: old.as_ref().map(|o| CompareField {
                         file: o.path.display().to_string(),

@@ -7,8 +7,8 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use super::usage;
+use crate::io::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
 use crate::output::write_atomic_with;
-use crate::scene::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
 
 /// Arguments of `bareray gen`.
 #[derive(Args, Debug)]

@@ -6,6 +6,7 @@ mod camera_args;
 mod diff;
 mod gen;
 mod render;
+mod values;
 
 use std::process::ExitCode;
 

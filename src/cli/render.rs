@@ -9,12 +9,15 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::camera_args::CameraArgs;
+use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
+use crate::compile::{CompileOptions, Scene};
 use crate::geometry::ShapeKind;
+use crate::io::toml;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
-use crate::scene::desc::{Pattern, Transfer};
-use crate::scene::{toml, BvhPreset, CompileOptions, Scene, SceneDesc};
+use crate::scene::desc::Pattern;
+use crate::scene::SceneDesc;
 
 /// The demo scene rendered when no scene file is given.
 pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
@@ -49,7 +52,7 @@ pub struct RenderArgs {
     /// as SPD, POV-Ray and Tachyon write NFF colours). Overrides the scene; PNG records it. EXR holds
     /// linear floats either way.
     #[arg(long, value_enum)]
-    pub transfer: Option<Transfer>,
+    pub transfer: Option<TransferArg>,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -65,8 +68,8 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
     /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; docs/perf-log/2026-11.md compares them).
-    #[arg(long, value_enum, default_value_t = BvhPreset::Fast)]
-    pub bvh_preset: BvhPreset,
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Fast)]
+    pub bvh_preset: BvhPresetArg,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -105,7 +108,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let pool = crate::render::thread_pool(threads)?;
     // Build: the scene compiled for rendering, the BVH included (`scene.build.seconds` is the BVH's part).
     let clock = Instant::now();
-    let options = CompileOptions { preset: args.bvh_preset, ..CompileOptions::default() };
+    let options = CompileOptions { preset: args.bvh_preset.into(), ..CompileOptions::default() };
     let scene = pool.install(|| Scene::compile_owned(desc, options)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
@@ -193,7 +196,7 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         pattern_name(scene.render.pattern),
         scene.render.transfer.name()
     );
-    println!("features: {}", crate::scene::features::Features::of(scene));
+    println!("features: {}", crate::compile::features::Features::of(scene));
     let search = |bvh: bool| if bvh { "BVH" } else { "brute force" };
     println!(
         "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}",
@@ -296,7 +299,7 @@ fn stem(path: &Path) -> String {
 
 /// Reads a scene file, choosing the reader by extension.
 pub fn load_scene(path: &Path) -> Result<SceneDesc> {
-    Ok(crate::scene::load(path)?)
+    Ok(crate::io::load(path)?)
 }
 
 fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
@@ -308,6 +311,6 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
         desc.render.max_depth = d;
     }
     if let Some(t) = args.transfer {
-        desc.render.transfer = t;
+        desc.render.transfer = t.into();
     }
 }

@@ -7,6 +7,7 @@ pub mod polygon;
 mod ray;
 mod shape;
 mod sphere;
+mod spheres;
 
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
@@ -17,3 +18,4 @@ pub use sphere::{
     at_eye, far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,
     EyeLanes, Roots, SphereRay, CONTACT_ROUNDINGS,
 };
+pub use spheres::{eye_term, Spheres};

@@ -11,11 +11,10 @@
 //! Both keep the scalar tie rule: a sphere replaces the best hit only when its t is strictly smaller, so of
 //! equal t the lower id wins. They take storage order for file order (no BVH), so a hit's key is its id.
 
-use crate::accel::Spheres;
 use crate::math::{Mask, V3};
 use crate::simd::{IdLanes, Lanes};
 
-use super::{first_root, sphere_approach, sphere_roots_of, EyeLanes, Hit, Ray, SphereRay, NO_PRIM};
+use super::{first_root, sphere_approach, sphere_roots_of, EyeLanes, Hit, Ray, SphereRay, Spheres, NO_PRIM};
 
 /// K rays in structure-of-arrays layout: lane `i` of every field belongs to ray `i`.
 ///

@@ -3,6 +3,7 @@
 //! because the direction is mapped without renormalising. Normals go back by the inverse transpose.
 
 use crate::math::{Affine, Mask, Real, Vec3f, V3};
+use crate::simd::Lanes;
 
 use super::{at_eye, intersect_plane, sphere_approach, sphere_roots, Approach, Ray, Roots, SphereRay};
 
@@ -132,6 +133,18 @@ impl Shape<f32> {
             ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
         };
         self.normal_to_world.vector(n).normalize()
+    }
+
+    /// The same shape in every lane.
+    pub fn to_lanes<F: Lanes>(&self) -> Shape<F> {
+        Shape {
+            kind: self.kind,
+            center: F::splat_v3(self.center),
+            object_from_world: self.object_from_world.to_lanes(),
+            normal_to_world: self.normal_to_world.to_lanes(),
+            material: self.material,
+            c_eye: F::splat_f32(self.c_eye),
+        }
     }
 }
 

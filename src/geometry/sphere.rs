@@ -183,7 +183,7 @@ impl<F: Real> Approach<F> {
     }
 
     /// The two roots with `c = |oc|² − r²` computed directly (ellipsoids in object space, and spheres in
-    /// scenes where the eye term cannot help: [`crate::accel::Spheres::eye_terms_help`]). The perpendicular
+    /// scenes where the eye term cannot help: [`super::Spheres::eye_terms_help`]). The perpendicular
     /// discriminant: with this `c` its bound is always the smaller one, so this is
     /// [`Approach::roots_with_eye_term`]'s result whenever that one takes the direct `c`.
     #[inline(always)]
@@ -213,7 +213,7 @@ impl<F: Real> Approach<F> {
     }
 
     /// The two roots for a ray that starts exactly at the eye: `c = c_eye`. `choose` (the scene's
-    /// [`crate::accel::Spheres::eye_terms_help`]) lets each lane take `proj² − c/(d·d)` where its bound is
+    /// [`super::Spheres::eye_terms_help`]) lets each lane take `proj² − c/(d·d)` where its bound is
     /// the smaller; without a sphere that near the eye the perpendicular form always is (the textbook bound
     /// `ε·|c_eye|` alone exceeds `ε·|C|·r` once the eye is 1.6 radii from the centre). No contact rule: the
     /// eye is a point the scene places, not a rounded hit point.

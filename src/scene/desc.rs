@@ -1,5 +1,5 @@
 //! `SceneDesc`: a scene as plain, validated data in f64, whatever file format it came from.
-//! Compile (`scene::compile`) turns it into the immutable [`crate::scene::Scene`] the renderer reads.
+//! Compile (`crate::compile`) turns it into the immutable [`crate::compile::Scene`] the renderer reads.
 
 use glam::{DAffine3, DVec3};
 
@@ -92,7 +92,7 @@ pub enum PostFilter {
 
 /// How the rendered values become 8-bit pixels (PNG, PPM); EXR output holds the values as they are,
 /// linear floats, whatever the transfer.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Transfer {
     /// The values are linear radiance, encoded with the sRGB curve (clamped to [0, 1]): TOML scenes.
     #[default]

@@ -1,29 +1,6 @@
-//! Scenes: read (TOML, NFF, xyzr) or generated into a plain [`desc::SceneDesc`], then compiled into a [`Scene`].
+//! The scene description: a scene as plain, validated data ([`SceneDesc`]), whatever reader or generator
+//! ([`crate::io`]) made it; [`crate::compile`] turns it into the runtime scene.
 
-mod compile;
 pub mod desc;
-pub mod error;
-pub mod features;
-pub mod generate;
-pub mod nff;
-pub mod toml;
-pub mod xyzr;
 
-pub use compile::{Accel, BvhPreset, CompileOptions, Light, Scene, BVH_MIN_SPHERES};
 pub use desc::SceneDesc;
-pub use error::SceneError;
-
-/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr` (a directory is an
-/// error saying so, whatever its name).
-pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
-    if path.is_dir() {
-        return Err(SceneError::whole_file(path, "is a directory"));
-    }
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("toml") => toml::load(path),
-        Some("nff") => nff::load(path),
-        Some("xyzr") => xyzr::load(path),
-        _ => Err(SceneError::whole_file(path, "unknown scene format (expected a .toml, .nff or .xyzr file)")),
-    }
-}

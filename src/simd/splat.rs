@@ -1,9 +1,9 @@
-//! Scalar scene data copied into every lane, so packet code runs the generic kernels on it unchanged.
+//! Scalar math data copied into every lane, so packet code runs the generic kernels on it unchanged.
 //!
-//! These are inherent methods on the f32 types, kept here beside the lane types rather than in each type's
-//! module, because they exist only for packets.
+//! An inherent method of [`Affine`] kept here rather than in `math`, because `simd` sits above `math` (lane
+//! types are `Real`s over `V3`) and `math` imports nothing of the crate. Types of higher layers define their
+//! own `to_lanes` beside them (`geometry::Shape::to_lanes`).
 
-use crate::geometry::Shape;
 use crate::math::Affine;
 
 use super::Lanes;
@@ -12,19 +12,5 @@ impl Affine<f32> {
     /// The same map in every lane.
     pub fn to_lanes<F: Lanes>(&self) -> Affine<F> {
         Affine { cols: self.cols.map(F::splat_v3), translation: F::splat_v3(self.translation) }
-    }
-}
-
-impl Shape<f32> {
-    /// The same shape in every lane.
-    pub fn to_lanes<F: Lanes>(&self) -> Shape<F> {
-        Shape {
-            kind: self.kind,
-            center: F::splat_v3(self.center),
-            object_from_world: self.object_from_world.to_lanes(),
-            normal_to_world: self.normal_to_world.to_lanes(),
-            material: self.material,
-            c_eye: F::splat_f32(self.c_eye),
-        }
     }
 }

@@ -44,7 +44,7 @@ pub(super) fn build_binary(boxes: &[Aabb], params: BvhBuildParams) -> Bvh2 {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::generate::SplitMix64;
+    use crate::math::SplitMix64;
     use glam::Vec3A;
 
     /// The same tree as obvhs's own helper, for every preset bareray offers, on clustered boxes of several

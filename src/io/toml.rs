@@ -13,8 +13,8 @@ use crate::camera::Camera;
 use crate::geometry::ShapeKind;
 use crate::math::Rgb;
 
-use super::desc::*;
 use super::error::SceneError;
+use crate::scene::desc::*;
 
 type Vec3 = [f64; 3];
 

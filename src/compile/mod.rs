@@ -5,9 +5,11 @@
 //! "camera-world" space, without its rotation): every position is `p − eye` computed in f64 from the scene
 //! file's values and rounded once to f32. Near the eye, where the image is made, f32 then resolves the
 //! scene as finely as it can anywhere, however far from the world origin the scene sits, and camera rays
-//! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::accel::eye_term`]).
+//! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::geometry::eye_term`]).
 //! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
 //! mean what they meant in world space; [`Scene::origin`] maps points back.
+
+pub mod features;
 
 use crate::accel::bvh::{self, BuildOptions, BuildStats, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::accel::{Geometry, Polygons};
@@ -19,8 +21,7 @@ use glam::{DAffine3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 
-use super::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
-use super::features;
+use crate::scene::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -95,7 +96,7 @@ pub enum Accel {
 }
 
 /// The obvhs build preset for the BVH over the spheres (its `BvhBuildParams` presets).
-#[derive(Clone, Copy, Debug, PartialEq, Eq, Default, clap::ValueEnum)]
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BvhPreset {
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,
@@ -349,18 +350,18 @@ fn push_polygon(out: &mut Polygons, p: &PolygonDesc, origin: glam::DVec3) {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::scene::nff;
+    use crate::io::nff;
 
     /// Compiling from a moved description (freed before the build) gives the scene compiling from a borrowed
     /// one gives: the same spheres in the same order, the same trees, lights and materials.
     #[test]
     fn owned_and_borrowed_descriptions_compile_alike() {
-        let text = crate::scene::generate::flake_nff(2).expect("flake");
+        let text = crate::io::generate::flake_nff(2).expect("flake");
         let desc = nff::parse(std::path::Path::new("flake.nff"), &text).expect("parse");
         let borrowed = Scene::compile_with_options(&desc, CompileOptions::default()).expect("compile");
         let owned = Scene::compile_owned(desc, CompileOptions::default()).expect("compile");
         let (a, b) = (&borrowed.geometry, &owned.geometry);
-        let arrays = |s: &crate::accel::Spheres| {
+        let arrays = |s: &crate::geometry::Spheres| {
             (s.cx.clone(), s.cy.clone(), s.cz.clone(), s.r.clone(), s.material.clone(), s.key.clone())
         };
         assert!(a.spheres.len() > 90, "a level-2 flake has 91 spheres");

@@ -16,8 +16,8 @@ use rayon::prelude::*;
 
 use crate::math::Rgb;
 
-use super::desc::*;
 use super::error::SceneError;
+use crate::scene::desc::*;
 
 /// Reads an `.xyzr` file.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {

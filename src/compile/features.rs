@@ -2,9 +2,9 @@
 
 use std::fmt;
 
-use super::desc::{Material, Pattern, PostFilter};
 use super::Scene;
 use crate::geometry::ShapeKind;
+use crate::scene::desc::{Material, Pattern, PostFilter};
 
 /// The parts of the tracer a scene needs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]

@@ -46,8 +46,8 @@ use crate::camera::Camera;
 use crate::geometry::polygon::triangulate;
 use crate::math::Rgb;
 
-use super::desc::*;
 use super::error::SceneError;
+use crate::scene::desc::*;
 
 /// Ambient coefficient of NFF materials (see the module documentation).
 pub const NFF_AMBIENT: f32 = 0.1;

@@ -1,0 +1,27 @@
+//! Scene readers (TOML, NFF, xyzr) and generators: files and parameters become a plain [`SceneDesc`], which
+//! [`crate::compile`] turns into the runtime scene.
+
+pub mod error;
+pub mod generate;
+pub mod nff;
+pub mod toml;
+pub mod xyzr;
+
+pub use error::SceneError;
+
+use crate::scene::SceneDesc;
+
+/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr` (a directory is an
+/// error saying so, whatever its name).
+pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
+    if path.is_dir() {
+        return Err(SceneError::whole_file(path, "is a directory"));
+    }
+    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+    match ext.as_deref() {
+        Some("toml") => toml::load(path),
+        Some("nff") => nff::load(path),
+        Some("xyzr") => xyzr::load(path),
+        _ => Err(SceneError::whole_file(path, "unknown scene format (expected a .toml, .nff or .xyzr file)")),
+    }
+}

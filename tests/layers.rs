@@ -1,0 +1,327 @@
+//! The module layers (ARCHITECTURE.md, "Layers"): every file under `src/` belongs to the top-level module it
+//! sits in, and may name through `crate::` only its own module and modules of a lower rank. Modules of the
+//! same rank are independent of each other. The check reads the source text: `crate::` paths in code
+//! (`use` lines and inline paths, grouped `crate::{a, b}` too), not in comments or string literals.
+//! `super::` paths stay inside a module, and `src/main.rs` is a separate crate, so neither is checked.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+/// Every top-level module of the library and its rank, lowest first. A module may import modules of a lower
+/// rank; a top-level module missing from the table fails the test, so a new one gets a place here.
+const LAYERS: &[(&str, u32)] = &[
+    // Numbers: Real, V3, Affine, Rgb, SplitMix64.
+    ("math", 0),
+    // Lane types over math.
+    ("simd", 1),
+    // Primitives, rays, packets, Spheres and their intersection kernels.
+    ("geometry", 2),
+    // Geometry, BVH and the packet queries over them.
+    ("accel", 3),
+    // The plain scene description (SceneDesc).
+    ("scene", 3),
+    // The image buffer.
+    ("film", 3),
+    // The camera from its description: frames and rays.
+    ("camera", 4),
+    // Sample offsets and the postfilter on a film.
+    ("sample", 4),
+    // Readers and generators: files and parameters into a SceneDesc (they build a Camera to validate it).
+    ("io", 5),
+    // The compiled runtime Scene and what it uses.
+    ("compile", 6),
+    // Whitted shading over the queries.
+    ("shade", 7),
+    // Image files from a film.
+    ("output", 7),
+    // Tiles, packets, threads: the renderer.
+    ("render", 8),
+    // Tools over the renderer and images, and the platform pieces the binary starts with.
+    ("aov", 9),
+    ("accuracy", 9),
+    ("imagediff", 9),
+    ("cpu", 9),
+    ("huge_pages", 9),
+    // The command line.
+    ("cli", 10),
+];
+
+/// Files that belong to no layer: the crate root declares the modules.
+const ROOTS: &[&str] = &["lib.rs", "main.rs"];
+
+fn rank(module: &str) -> Option<u32> {
+    LAYERS.iter().find(|(m, _)| *m == module).map(|&(_, r)| r)
+}
+
+/// `source` with the contents of comments and string and character literals replaced by spaces (line breaks
+/// kept, so line numbers still hold).
+fn code_only(source: &str) -> String {
+    let c: Vec<char> = source.chars().collect();
+    let mut out = String::with_capacity(source.len());
+    let blank = |out: &mut String, ch: char| out.push(if ch == '\n' { '\n' } else { ' ' });
+    let mut i = 0;
+    while i < c.len() {
+        let next = c.get(i + 1).copied();
+        if c[i] == '/' && next == Some('/') {
+            while i < c.len() && c[i] != '\n' {
+                blank(&mut out, c[i]);
+                i += 1;
+            }
+        } else if c[i] == '/' && next == Some('*') {
+            let mut depth = 0;
+            while i < c.len() {
+                if c[i] == '/' && c.get(i + 1) == Some(&'*') {
+                    depth += 1;
+                    out.push_str("  ");
+                    i += 2;
+                } else if c[i] == '*' && c.get(i + 1) == Some(&'/') {
+                    depth -= 1;
+                    out.push_str("  ");
+                    i += 2;
+                    if depth == 0 {
+                        break;
+                    }
+                } else {
+                    blank(&mut out, c[i]);
+                    i += 1;
+                }
+            }
+        } else if c[i] == 'r' && (next == Some('"') || next == Some('#')) && !ident_before(&c, i) {
+            // A raw string r"…" or r#"…"#: ends at a quote followed by as many hashes.
+            let mut j = i + 1;
+            while c.get(j) == Some(&'#') {
+                j += 1;
+            }
+            if c.get(j) != Some(&'"') {
+                out.push(c[i]);
+                i += 1;
+                continue;
+            }
+            let hashes = j - i - 1;
+            out.extend(std::iter::repeat_n(' ', j + 1 - i));
+            i = j + 1;
+            while i < c.len() {
+                if c[i] == '"' && (1..=hashes).all(|k| c.get(i + k) == Some(&'#')) {
+                    out.extend(std::iter::repeat_n(' ', hashes + 1));
+                    i += hashes + 1;
+                    break;
+                }
+                blank(&mut out, c[i]);
+                i += 1;
+            }
+        } else if c[i] == '"' {
+            out.push(' ');
+            i += 1;
+            while i < c.len() && c[i] != '"' {
+                if c[i] == '\\' {
+                    blank(&mut out, c[i]);
+                    i += 1;
+                }
+                if i < c.len() {
+                    blank(&mut out, c[i]);
+                    i += 1;
+                }
+            }
+            out.push(' ');
+            i += 1;
+        } else if c[i] == '\'' && (c.get(i + 2) == Some(&'\'') || next == Some('\\')) {
+            // A character literal ('x' or an escape); a lifetime has no closing quote there.
+            out.push(' ');
+            i += 1;
+            while i < c.len() && c[i] != '\'' {
+                if c[i] == '\\' {
+                    out.push(' ');
+                    i += 1;
+                }
+                out.push(' ');
+                i += 1;
+            }
+            out.push(' ');
+            i += 1;
+        } else {
+            out.push(c[i]);
+            i += 1;
+        }
+    }
+    out
+}
+
+fn ident_before(c: &[char], i: usize) -> bool {
+    i > 0 && (c[i - 1].is_alphanumeric() || c[i - 1] == '_')
+}
+
+/// The first path segments named through `crate::` in `code` (comments and literals already blanked), with
+/// their 1-based line: `crate::a::b` gives `a`, `crate::{a::b, c}` gives `a` and `c`.
+fn crate_paths(code: &str) -> Vec<(usize, String)> {
+    let c: Vec<char> = code.chars().collect();
+    let line_of = |i: usize| c[..i].iter().filter(|&&ch| ch == '\n').count() + 1;
+    let ident_at = |mut j: usize| {
+        while c.get(j).is_some_and(|ch| ch.is_whitespace()) {
+            j += 1;
+        }
+        let start = j;
+        while c.get(j).is_some_and(|&ch| ch.is_alphanumeric() || ch == '_') {
+            j += 1;
+        }
+        (c[start..j].iter().collect::<String>(), j)
+    };
+    let mut found = Vec::new();
+    let mut i = 0;
+    while i + 7 <= c.len() {
+        let is_crate = c[i..i + 7].iter().collect::<String>() == "crate::"
+            && !(ident_before(&c, i) || (i > 0 && c[i - 1] == '$'));
+        if !is_crate {
+            i += 1;
+            continue;
+        }
+        let mut j = i + 7;
+        while c.get(j).is_some_and(|ch| ch.is_whitespace()) {
+            j += 1;
+        }
+        if c.get(j) == Some(&'{') {
+            // A group: the first segment of each item at depth 1.
+            let mut depth = 0;
+            let mut item_start = true;
+            while j < c.len() {
+                match c[j] {
+                    '{' => {
+                        depth += 1;
+                        item_start = depth == 1;
+                    }
+                    '}' => {
+                        depth -= 1;
+                        if depth == 0 {
+                            break;
+                        }
+                    }
+                    ',' if depth == 1 => item_start = true,
+                    ch if item_start && depth == 1 && !ch.is_whitespace() => {
+                        let (name, end) = ident_at(j);
+                        if !name.is_empty() && name != "self" {
+                            found.push((line_of(j), name));
+                        }
+                        item_start = false;
+                        j = end.max(j + 1);
+                        continue;
+                    }
+                    _ => {}
+                }
+                j += 1;
+            }
+        } else {
+            let (name, _) = ident_at(j);
+            if !name.is_empty() {
+                found.push((line_of(i), name));
+            }
+        }
+        i += 7;
+    }
+    found
+}
+
+/// The layer violations of one file of module `module`: `file:line: ...` messages.
+fn violations(file: &str, module: &str, source: &str) -> Vec<String> {
+    let Some(own) = rank(module) else {
+        return vec![format!("{file}: module `{module}` has no place in the layer table of tests/layers.rs")];
+    };
+    let mut out = Vec::new();
+    for (line, target) in crate_paths(&code_only(source)) {
+        if target == module {
+            continue;
+        }
+        match rank(&target) {
+            Some(r) if r < own => {}
+            Some(r) => out.push(format!(
+                "{file}:{line}: `{module}` (rank {own}) imports `crate::{target}` (rank {r}); a module may import only \
+                 lower ranks"
+            )),
+            // Crate-root items (none today) or a module the table does not know yet.
+            None => out.push(format!("{file}:{line}: `crate::{target}` is not a module of the layer table")),
+        }
+    }
+    out
+}
+
+fn rust_files(dir: &Path, into: &mut Vec<PathBuf>) {
+    for entry in fs::read_dir(dir).expect("read src/") {
+        let path = entry.expect("dir entry").path();
+        if path.is_dir() {
+            rust_files(&path, into);
+        } else if path.extension().is_some_and(|e| e == "rs") {
+            into.push(path);
+        }
+    }
+}
+
+#[test]
+fn every_module_imports_only_lower_layers() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut files = Vec::new();
+    rust_files(&src, &mut files);
+    files.sort();
+    assert!(files.len() > 20, "found only {} files under {}", files.len(), src.display());
+    let mut problems = Vec::new();
+    for path in &files {
+        let rel = path.strip_prefix(&src).expect("under src");
+        let first = rel.components().next().expect("non-empty").as_os_str().to_str().expect("UTF-8 path");
+        if rel.components().count() == 1 && ROOTS.contains(&first) {
+            continue;
+        }
+        let module = first.strip_suffix(".rs").unwrap_or(first);
+        let source = fs::read_to_string(path).expect("read source");
+        problems.extend(violations(&format!("src/{}", rel.display()), module, &source));
+    }
+    assert!(problems.is_empty(), "layer violations (ARCHITECTURE.md, \"Layers\"):\n{}", problems.join("\n"));
+}
+
+#[test]
+fn every_table_entry_is_a_module() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    for (module, _) in LAYERS {
+        assert!(
+            src.join(format!("{module}.rs")).is_file() || src.join(module).join("mod.rs").is_file(),
+            "the layer table names `{module}`, which is not a module under src/"
+        );
+    }
+}
+
+#[test]
+fn an_upward_import_is_reported() {
+    let v = violations("src/geometry/x.rs", "geometry", "use crate::math::V3;\nuse crate::accel::Spheres;\n");
+    assert_eq!(v.len(), 1, "{v:?}");
+    assert!(v[0].starts_with("src/geometry/x.rs:2:"), "{v:?}");
+    assert!(v[0].contains("crate::accel"), "{v:?}");
+}
+
+#[test]
+fn inline_paths_groups_and_siblings_are_reported() {
+    let inline = violations("src/simd/x.rs", "simd", "fn f() -> crate::geometry::Ray<f32> { todo!() }\n");
+    assert_eq!(inline.len(), 1, "{inline:?}");
+    let group =
+        violations("src/math/x.rs", "math", "use crate::{\n    math::V3,\n    simd::{Lanes, IdLanes},\n};\n");
+    assert_eq!(group.len(), 1, "{group:?}");
+    assert!(group[0].starts_with("src/math/x.rs:3:") && group[0].contains("crate::simd"), "{group:?}");
+    // accel and scene share a rank: neither may import the other.
+    let sibling = violations("src/accel/x.rs", "accel", "use crate::scene::desc::SceneDesc;\n");
+    assert_eq!(sibling.len(), 1, "{sibling:?}");
+}
+
+#[test]
+fn downward_and_own_imports_comments_and_strings_pass() {
+    let source = r##"
+//! Doc links may point anywhere: [`crate::render`].
+use crate::geometry::Ray;
+use crate::accel::{self, Geometry};
+use crate::{math::V3, simd::Lanes};
+/* crate::cli::main() in a block comment */
+fn f<'a>(x: &'a str) -> char { let _ = "crate::cli"; let _ = r#"crate::render"#; 'c' }
+pub(crate) fn g() {}
+"##;
+    assert_eq!(violations("src/accel/x.rs", "accel", source), Vec::<String>::new());
+}
+
+#[test]
+fn an_unknown_module_is_reported() {
+    assert_eq!(violations("src/newthing.rs", "newthing", "").len(), 1);
+    assert_eq!(violations("src/accel/x.rs", "accel", "use crate::newthing::X;\n").len(), 1);
+}
