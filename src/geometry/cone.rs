@@ -78,7 +78,8 @@ impl Cone<f64> {
     pub fn new(base: DVec3, base_radius: f64, apex: DVec3, apex_radius: f64) -> Option<Self> {
         let axis = apex - base;
         let height = axis.length();
-        let finite = base.is_finite() && apex.is_finite() && base_radius.is_finite() && apex_radius.is_finite();
+        let finite =
+            base.is_finite() && apex.is_finite() && base_radius.is_finite() && apex_radius.is_finite();
         let radii = base_radius >= 0.0 && apex_radius >= 0.0 && base_radius.max(apex_radius) > 0.0;
         if !(finite && radii && height > 0.0 && height.is_finite()) {
             return None;
@@ -458,7 +459,13 @@ mod tests {
         let apex = base + v(2.0) * 10f64.powf(v(4.0).x);
         let r0 = 10f64.powf(v(4.0).y) * 0.3;
         let kind = v(1.0).z;
-        let r1 = if kind < -0.3 { 0.0 } else if kind < 0.0 { r0 } else { 10f64.powf(v(4.0).x) * 0.3 };
+        let r1 = if kind < -0.3 {
+            0.0
+        } else if kind < 0.0 {
+            r0
+        } else {
+            10f64.powf(v(4.0).x) * 0.3
+        };
         if kind > 0.4 {
             (base, 0.0, apex, r1.max(0.01))
         } else {
