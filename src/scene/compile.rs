@@ -161,6 +161,16 @@ impl Scene {
         accel: Accel,
         preset: BvhPreset,
     ) -> Result<(Scene, Option<BvhJob>), CameraError> {
+        // The readers produce cones, and `geometry::Cones` and `geometry::intersect_cone` can store and
+        // intersect them, but no query (brute force, BVH, packets) or shader visits them yet: rendering
+        // such a scene would silently drop them.
+        if !desc.cones.is_empty() {
+            return Err(CameraError::Field(format!(
+                "the scene has {} cone(s)/cylinder(s) (NFF `c`, TOML [[cones]]), which bareray reads but \
+                 cannot render yet",
+                desc.cones.len()
+            )));
+        }
         let origin = desc.camera.eye;
         let mut camera_f64 = Camera::new(&desc.camera)?;
         camera_f64.eye = V3::all(0.0);
@@ -264,6 +274,17 @@ fn push_polygon(out: &mut Polygons, p: &PolygonDesc, origin: glam::DVec3) {
 mod tests {
     use super::*;
     use crate::scene::nff;
+
+    /// Cones are read but not yet rendered: compile says so rather than dropping them.
+    #[test]
+    fn scenes_with_cones_are_refused_with_a_message() {
+        let text =
+            "v\nfrom 0 0 -5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0\nresolution 8 8\nc 0 0 0 1 0 1 0 1\n";
+        let desc = nff::parse(std::path::Path::new("c.nff"), text).expect("parse");
+        let e = Scene::compile(&desc).expect_err("cones are refused");
+        assert!(e.to_string().contains("1 cone(s)/cylinder(s)"), "{e}");
+        assert!(Scene::compile(&crate::scene::SceneDesc { cones: vec![], ..desc }).is_ok());
+    }
 
     /// Compiling from a moved description (freed before the build) gives the scene compiling from a borrowed
     /// one gives: the same spheres in the same order, the same trees, lights and materials.
