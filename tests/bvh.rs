@@ -435,3 +435,85 @@ fn shape_bvh_equals_brute_force_at_every_width() {
         check_kind::<f32x16>(&bvh, &brute, &rays);
     }
 }
+
+/// Open cones and cylinders live in their own BVH: closest hits and occlusion equal brute force at every
+/// width, camera rays and rays leaving a cone (which may meet it again).
+#[test]
+fn cone_bvh_equals_brute_force_at_every_width() {
+    use bareray::scene::desc::ConeDesc;
+    for (n, seed) in [(4, 31), (300, 32)] {
+        let mut desc = field(3, seed);
+        let mut rng = Rng(SplitMix64::new(seed));
+        for k in 0..n {
+            let base = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+            let size = if n < 10 { 0.8 } else { 0.25 };
+            let axis = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * size;
+            let r0 = rng.range(0.01, 0.3) * size;
+            // Cylinders, pointed cones and truncated ones.
+            let r1 = [r0, 0.0, rng.range(0.01, 0.3) * size][k % 3];
+            desc.cones.push(ConeDesc {
+                base,
+                base_radius: r0,
+                apex: base + axis,
+                apex_radius: r1,
+                material: 0,
+            });
+        }
+        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        assert!(bvh.geometry.cone_bvh.is_some() && brute.geometry.cone_bvh.is_none());
+        let rays = rays(&desc, 3000, seed + 100);
+        let base = brute.geometry.cone_base() as u32;
+        let cone_hits = rays.iter().filter(|r| {
+            let h = brute.geometry.intersect(r, Departure::CAMERA, f32::INFINITY);
+            h.prim >= base && h.prim != u32::MAX
+        });
+        let hits = cone_hits.count();
+        assert!(hits > rays.len() / 40, "{n} cones: only {hits} rays hit one");
+        check_kind::<f32>(&bvh, &brute, &rays);
+        check_kind::<f32x4>(&bvh, &brute, &rays);
+        check_kind::<f32x8>(&bvh, &brute, &rays);
+        check_kind::<f32x16>(&bvh, &brute, &rays);
+    }
+}
+
+/// A ray that leaves an open cylinder's wall meets the same cylinder again: inward across the tube at the far
+/// wall, outward never (the solid a cone bounds is convex); inside a flaring cone, across the cup.
+#[test]
+fn rays_leaving_a_cone_meet_it_again() {
+    use bareray::scene::desc::ConeDesc;
+    let mut desc = field(1, 41);
+    desc.spheres.clear();
+    let tube =
+        ConeDesc { base: DVec3::ZERO, base_radius: 1.0, apex: DVec3::Z * 4.0, apex_radius: 1.0, material: 0 };
+    let flare = ConeDesc {
+        base: DVec3::X * 10.0,
+        base_radius: 0.1,
+        apex: DVec3::new(10.0, 0.0, 4.0),
+        apex_radius: 3.0,
+        material: 0,
+    };
+    desc.cones.extend([tube, flare]);
+    for accel in [Accel::Bvh, Accel::Brute] {
+        let scene = Scene::compile_with(&desc, accel).unwrap();
+        let g = &scene.geometry;
+        let (tube_id, flare_id) = (g.cone_base() as u32, g.cone_base() as u32 + 1);
+        let origin = scene.to_rendering(DVec3::new(1.0, 0.0, 2.0));
+        let across = Ray::new(origin, V3::new(-1.0, 0.0, 0.0));
+        let hit = g.intersect(&across, Departure { prim: tube_id, inward: true }, f32::INFINITY);
+        assert_eq!(hit.prim, tube_id, "{accel:?}: the far wall");
+        assert!((hit.t - 2.0).abs() < 1e-5, "{accel:?}: t {}", hit.t);
+        let away = Ray::new(origin, V3::new(1.0, 1.0, 0.0));
+        let miss = g.intersect(&away, Departure { prim: tube_id, inward: false }, f32::INFINITY);
+        assert_eq!(miss.prim, u32::MAX, "{accel:?}: leaving outward meets nothing");
+        // On the flaring cone's wall near its narrow end, heading across the cup and up.
+        let low = scene.to_rendering(DVec3::new(10.0 + 0.1 + 2.9 * 0.25, 0.0, 1.0));
+        let across = Ray::new(low, V3::new(-1.0, 0.0, 0.5));
+        let again = g.intersect(&across, Departure { prim: flare_id, inward: true }, f32::INFINITY);
+        assert_eq!(again.prim, flare_id, "{accel:?}: the far side of the cup");
+        // Up along the inside, flaring away faster than the ray: out through the open end.
+        let up = Ray::new(low, V3::new(0.3, 0.0, 1.0));
+        let out = g.intersect(&up, Departure { prim: flare_id, inward: true }, f32::INFINITY);
+        assert_eq!(out.prim, u32::MAX, "{accel:?}: out through the open end");
+    }
+}

@@ -8,8 +8,8 @@
 use bareray::accel::Geometry;
 use bareray::camera::Camera;
 use bareray::geometry::{
-    intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k, sphere_roots, Departure,
-    Hit, Ray, RayPacket, Shape, ShapeKind, Spheres,
+    intersect_cone, intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k,
+    sphere_roots, Cone, Departure, Hit, Ray, RayPacket, Shape, ShapeKind, Spheres,
 };
 use bareray::math::{Vec3f, V3};
 use bareray::scene::desc::CameraDesc;
@@ -279,6 +279,66 @@ fn check_camera<F: Lanes>(camera: &Camera<f64>, pixels: &[(f32, f32)]) -> Result
     Ok(())
 }
 
+/// A cone (rounded from f64 once, as the store does) and rays for it: aimed at points on or near its
+/// surface (some through the open ends, some tangent-ish), started inside, or free.
+fn cone_case() -> impl Strategy<Value = (Cone<f32>, Vec<LaneRay>)> {
+    let ends = (point(), point(), radius(), radius(), 0usize..4);
+    let aim = (0.0f32..1.0, 0.0f32..std::f32::consts::TAU, 0.8f32..1.2);
+    let rays = prop::collection::vec((recipe(), aim, t_max(), prop::bool::weighted(0.8)), 1..40);
+    (ends, rays).prop_filter_map("degenerate cone", |((b, a, r0, r1, kind), rays)| {
+        let (b, a) = (b.to_f64(), a.to_f64());
+        // Pointed at either end, a cylinder, or general.
+        let (r0, r1) = match kind {
+            0 => (f64::from(r0), 0.0),
+            1 => (0.0, f64::from(r1)),
+            2 => (f64::from(r0), f64::from(r0)),
+            _ => (f64::from(r0), f64::from(r1)),
+        };
+        let exact = Cone::new(DVec3::new(b.x, b.y, b.z), r0, DVec3::new(a.x, a.y, a.z), r1)?;
+        let cone = exact.to_f32();
+        let rays = rays
+            .into_iter()
+            .map(|(recipe, (s, angle, spread), t_max, active)| {
+                let z = s * cone.height;
+                let r = (cone.base_radius + cone.slope * z) * spread;
+                let on = cone.base + cone.axis * z + (cone.e1 * angle.cos() + cone.e2 * angle.sin()) * r;
+                let ray = match recipe {
+                    Recipe::Free(o, d) => Ray::new(o, d),
+                    Recipe::Aimed(_, o, jitter) => Ray::new(o, on + jitter * 1e-3 - o),
+                    Recipe::Inside(_, frac, d) => Ray::new(cone.base + cone.axis * z + frac * r, d),
+                };
+                (ray, t_max, active)
+            })
+            .collect();
+        Some((cone, rays))
+    })
+}
+
+fn check_cone_kernel<F: Lanes>(cone: &Cone<f32>, rays: &[LaneRay]) -> Result<(), TestCaseError> {
+    let lanes = cone.map(F::splat_f32);
+    for chunk in rays.chunks(F::K) {
+        let packet = RayPacket::<F>::from_fn(|i| chunk.get(i).copied().unwrap_or((chunk[0].0, 1.0, false)));
+        let (hit, t) = intersect_cone(&lanes, &packet.ray(), packet.t_max);
+        let local = lanes.to_object(packet.ray().at(t));
+        let normal = lanes.object_normal(local);
+        for (i, (ray, t_max, _)) in chunk.iter().enumerate() {
+            let (want_hit, want_t) = intersect_cone(cone, ray, *t_max);
+            check_mask("intersect_cone", F::K, i, F::mask_lane(hit, i), want_hit)?;
+            check_t("intersect_cone", F::K, i, t.lane(i), want_t)?;
+            let want_local = cone.to_object(ray.at(want_t));
+            let want_normal = cone.object_normal(want_local);
+            for (what, got, want) in
+                [("Cone::to_object", local, want_local), ("Cone::object_normal", normal, want_normal)]
+            {
+                check_t(what, F::K, i, got.x.lane(i), want.x)?;
+                check_t(what, F::K, i, got.y.lane(i), want.y)?;
+                check_t(what, F::K, i, got.z.lane(i), want.z)?;
+            }
+        }
+    }
+    Ok(())
+}
+
 // ---------------------------------------------------------------------------------------------------------
 // Packet kernels against the scalar brute-force query
 
@@ -400,6 +460,11 @@ proptest! {
     }
 
     #[test]
+    fn intersect_cone_matches_scalar((cone, rays) in cone_case()) {
+        at_every_width!(check_cone_kernel(&cone, &rays));
+    }
+
+    #[test]
     fn camera_ray_matches_scalar(camera in camera(), pixels in prop::collection::vec(pixel(), 1..40)) {
         at_every_width!(check_camera(&camera, &pixels));
     }
@@ -433,6 +498,27 @@ fn tangent_recipe_gives_exact_touching_roots() {
         let r_less = f32::from_bits(r.to_bits() - 1);
         assert!(!sphere_roots(c, r_less, &ray).hit);
     }
+}
+
+/// The cone cases hit and miss in good numbers, pointed cones and cylinders among them.
+#[test]
+fn cone_cases_cover_hits_misses_and_every_kind() {
+    let mut runner = proptest::test_runner::TestRunner::deterministic();
+    let (mut hits, mut misses, mut pointed, mut cylinders) = (0, 0, 0, 0);
+    for _ in 0..200 {
+        let (cone, rays) = cone_case().new_tree(&mut runner).unwrap().current();
+        pointed += usize::from(cone.base_radius == 0.0 || cone.base_radius + cone.slope * cone.height <= 0.0);
+        cylinders += usize::from(cone.slope == 0.0);
+        for (ray, t_max, _) in rays {
+            let hit = intersect_cone(&cone, &ray, t_max).0;
+            hits += usize::from(hit);
+            misses += usize::from(!hit);
+        }
+    }
+    assert!(
+        hits > 500 && misses > 500 && pointed > 40 && cylinders > 20,
+        "{hits} {misses} {pointed} {cylinders}"
+    );
 }
 
 #[test]

@@ -91,7 +91,7 @@ fn nff_errors_name_the_line() {
             9,
             "unknown entity `q`",
         ),
-        (&format!("{VIEW}s 0 0 0 1\nc\n0 0 0 1\n0 1 0 1\n"), 9, "cones"),
+        (&format!("{VIEW}s 0 0 0 1\nc\n0 0 0 1\n0 1 0 -1\n"), 9, "cone radii must not be negative"),
         (&format!("{VIEW}# x\ns 0 0 abc 1\n"), 9, "expected sphere centre"),
         (&format!("{VIEW}s 0 0 0\n-1\n"), 8, "radius must be positive"),
         (&format!("{VIEW}f 1 1 1 0.5 0.5 3 0 1\np 4\n0 0 0\n1 0 0\n1 1 0.5\n0 1 0\n"), 9, "not planar"),
@@ -470,11 +470,14 @@ fn cli_generates_and_renders_fields_and_flakes() {
 fn cli_reports_reader_errors_with_file_and_line_and_rejects_bad_generator_arguments() {
     let dir = tempfile::tempdir().unwrap();
     let scene = dir.path().join("cone.nff");
-    std::fs::write(&scene, format!("{VIEW}c\n0 0 0 1\n0 1 0 1\n")).unwrap();
+    std::fs::write(&scene, format!("{VIEW}c\n0 0 0 1\n0 0 0 1\n")).unwrap();
     let out =
         bareray(&["render", &scene.to_string_lossy(), "-o", &dir.path().join("x.png").to_string_lossy()]);
     let err = String::from_utf8_lossy(&out.stderr);
-    assert!(!out.status.success() && err.contains("cone.nff:8: cones"), "{err}");
+    assert!(
+        !out.status.success() && err.contains("cone.nff:8: cone base and apex are the same point"),
+        "{err}"
+    );
     let target = dir.path().join("never.xyzr").to_string_lossy().into_owned();
     for args in [
         &["gen", "field", "--count", "0", "-o", &target][..],

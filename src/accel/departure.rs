@@ -1,28 +1,34 @@
-//! The exit from the solid a ray leaves toward its inside, which no kind's query finds (the departure
-//! primitive is skipped there).
+//! Where a ray meets the primitive it leaves again, which no kind's query finds (the departure primitive is
+//! skipped there): the exit from a solid it heads into, and the second meeting with an open cone.
 
-use crate::geometry::{far_root, sphere_roots, DeparturePacket, Ray, RayPacket};
-use crate::math::Mask;
+use crate::geometry::{far_root, rehit_cone, sphere_roots, DeparturePacket, Ray, RayPacket};
 use crate::simd::{set_bits, IdLanes, Lanes};
 
 use super::{Geometry, PrimRef};
 
 impl Geometry {
-    /// For lanes whose ray heads into the solid it leaves: its exit from that solid, as a candidate hit.
-    /// Computed lane by lane with the scalar kernel (each lane's solid differs), so every width gets the
-    /// scalar bits.
+    /// For lanes whose ray heads into the solid it leaves: its exit from that solid; for lanes whose ray
+    /// leaves an open cone: where it meets that cone again. A candidate hit either way. Computed lane by lane
+    /// with the scalar kernels (each lane's primitive differs), so every width gets the scalar bits.
     pub(super) fn departure_exits_k<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> (F::Mask, F) {
-        let inward = from.inward & rays.active;
-        if !inward.any() {
-            return (inward, F::splat_f32(f32::INFINITY));
+        let inward = F::move_mask(from.inward & rays.active);
+        let cones = self.cone_base() as u32..self.len() as u32;
+        let on_cone = match self.cones.is_empty() {
+            true => 0,
+            false => set_bits(F::move_mask(rays.active))
+                .filter(|&i| cones.contains(&from.prim.lane(i)))
+                .fold(0u32, |bits, i| bits | 1 << i),
+        };
+        if inward | on_cone == 0 {
+            return (F::mask_from_bits(0), F::splat_f32(f32::INFINITY));
         }
         let mut t = F::splat_f32(f32::INFINITY).to_array();
         let mut found = 0u32;
-        for i in set_bits(F::move_mask(inward)) {
+        for i in set_bits(inward | on_cone) {
             let (ray, t_max, _) = rays.lane(i);
             if let Some(exit) = self.exit_of_departure(&ray, from.prim.lane(i), t_max) {
                 t.as_mut()[i] = exit;
@@ -33,11 +39,17 @@ impl Geometry {
     }
 
     /// For a ray that leaves a solid primitive toward its inside: where it leaves the primitive again.
-    /// Planar primitives (planes, polygons) have no inside, so nothing.
+    /// Planar primitives (planes, polygons) have no inside, so nothing. For a ray leaving an open cone:
+    /// where it meets the cone again ([`rehit_cone`]), whichever side the shading took it to be on (an open
+    /// surface is seen from inside through its ends, so the side a ray heads to is decided by the kernel).
     fn exit_of_departure(&self, ray: &Ray<f32>, prim: u32, t_max: f32) -> Option<f32> {
         let roots = match self.prim(prim) {
             PrimRef::Sphere(i) => sphere_roots(self.spheres.center(i), self.spheres.r[i], ray),
             PrimRef::Shape(shape) if shape.kind.is_solid() => shape.unit_sphere_roots(&shape.to_object(ray)),
+            PrimRef::Cone(k) => {
+                let (hit, t) = rehit_cone(&self.cones.cone(k), ray, t_max);
+                return hit.then_some(t);
+            }
             PrimRef::Shape(_) | PrimRef::Polygon(_) => return None,
         };
         let (hit, t) = far_root(&roots, t_max);

@@ -2,17 +2,19 @@
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
 //! Each bounded kind has its own BVH ([`bvh`], one tree type monomorphised over the kind's [`bvh::LeafQuery`]):
-//! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]) and bounded transformed shapes
-//! ([`ShapeQuery`]); a kind with few items is tested brute force by the same query, and so are unbounded
+//! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]), bounded transformed shapes
+//! ([`ShapeQuery`]) and open cones and cylinders ([`ConeQuery`]); a kind with few items is tested brute force by the same query, and so are unbounded
 //! shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
 //! walk exactly as it is without other kinds.
 
 pub mod bvh;
+mod cone_query;
 mod departure;
 mod polygons;
 mod shape_query;
 mod sphere_query;
 mod triangle_query;
+pub use cone_query::ConeQuery;
 pub use polygons::Polygons;
 pub use shape_query::ShapeQuery;
 pub use sphere_query::SphereQuery;
@@ -20,7 +22,9 @@ pub use triangle_query::TriangleQuery;
 
 use bvh::{Bvh, LeafQuery};
 
-use crate::geometry::{Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, Spheres, NO_PRIM};
+use crate::geometry::{
+    Cones, Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, Spheres, NO_PRIM,
+};
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
@@ -76,7 +80,7 @@ pub(crate) fn count_work(prim_tests: usize, box_tests: usize) {
     });
 }
 
-/// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons.
+/// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons, then the cones.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// Plain spheres, in BVH leaf order when there is a BVH.
@@ -95,6 +99,12 @@ pub struct Geometry {
     pub polygons: Polygons,
     /// The BVH over the polygons' triangles, or `None` for brute force.
     pub polygon_bvh: Option<Bvh>,
+    /// Open cones and cylinders, in file order.
+    pub cones: Cones,
+    /// The BVH over the cones, or `None` for brute force.
+    pub cone_bvh: Option<Bvh>,
+    /// With a cone BVH: its items, the cones' indices in its leaf order.
+    pub cone_order: Vec<u32>,
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
     pub origin: Vec3f,
@@ -147,6 +157,8 @@ pub enum PrimRef<'a> {
     Shape(&'a Shape<f32>),
     /// Index into [`Geometry::polygons`].
     Polygon(usize),
+    /// Index into [`Geometry::cones`].
+    Cone(usize),
 }
 
 /// What shading needs to know about a hit point.
@@ -191,6 +203,10 @@ impl Geometry {
                 rays.active,
                 &mut best,
             );
+        }
+        if !self.cones.is_empty() {
+            let q = self.cone_query(rays, from);
+            intersect_items(self.cone_bvh.as_ref(), &q, self.cone_items(), rays.active, &mut best);
         }
         let (exits, t) = self.departure_exits_k(rays, from);
         best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
@@ -253,6 +269,12 @@ impl Geometry {
             blocked =
                 blocked | occluded_items(self.shape_bvh.as_ref(), &tree, 0, live & !blocked, &mut shape);
         }
+        if !self.cones.is_empty() {
+            let q = self.cone_query(rays, from);
+            let mut cone = 0;
+            let n = self.cone_items();
+            blocked = blocked | occluded_items(self.cone_bvh.as_ref(), &q, n, live & !blocked, &mut cone);
+        }
         blocked | self.departure_exits_k(rays, from).0
     }
 
@@ -303,14 +325,38 @@ impl Geometry {
         }
     }
 
+    /// The cone part of a packet query: the BVH's items, or every cone without one.
+    fn cone_query<'a, F: Lanes>(
+        &'a self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> ConeQuery<'a, F> {
+        ConeQuery {
+            cones: &self.cones,
+            order: self.cone_bvh.as_ref().map(|_| self.cone_order.as_slice()),
+            base: self.cone_base() as u32,
+            ray: rays.ray(),
+            t_max: rays.t_max,
+            skip: from.prim,
+            pyramid: rays.pyramid,
+        }
+    }
+
+    /// The cone query's item count without a BVH.
+    fn cone_items(&self) -> usize {
+        self.cones.len()
+    }
+
     /// The BVHs the scene has.
     pub fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
-        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh].into_iter().flatten()
+        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh, &self.cone_bvh].into_iter().flatten()
     }
 
     /// The BVHs the scene has, to change their walk settings.
     pub fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
-        [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh].into_iter().flatten()
+        [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh, &mut self.cone_bvh]
+            .into_iter()
+            .flatten()
     }
 
     /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's
@@ -350,7 +396,7 @@ impl Geometry {
 
     /// Total number of primitives.
     pub fn len(&self) -> usize {
-        self.spheres.len() + self.shapes.len() + self.polygons.len()
+        self.cone_base() + self.cones.len()
     }
     /// True when the scene has no primitives.
     pub fn is_empty(&self) -> bool {
@@ -362,6 +408,11 @@ impl Geometry {
         self.spheres.len() + self.shapes.len()
     }
 
+    /// The id of the first cone (cone k has id `cone_base() + k`).
+    pub fn cone_base(&self) -> usize {
+        self.polygon_base() + self.polygons.len()
+    }
+
     /// What primitive id `prim` (< `len()`) refers to.
     pub fn prim(&self, prim: u32) -> PrimRef<'_> {
         let i = prim as usize;
@@ -369,8 +420,10 @@ impl Geometry {
             PrimRef::Sphere(i)
         } else if i < self.polygon_base() {
             PrimRef::Shape(&self.shapes[i - self.spheres.len()])
-        } else {
+        } else if i < self.cone_base() {
             PrimRef::Polygon(i - self.polygon_base())
+        } else {
+            PrimRef::Cone(i - self.cone_base())
         }
     }
 
@@ -391,6 +444,15 @@ impl Geometry {
                     normal: p.shading_normal(k, point),
                     object_point: point + self.origin,
                     material: p.material[k],
+                }
+            }
+            PrimRef::Cone(k) => {
+                let cone = self.cones.cone(k);
+                SurfacePoint {
+                    point,
+                    normal: cone.normal(point),
+                    object_point: cone.to_object(point),
+                    material: self.cones.material[k],
                 }
             }
             PrimRef::Shape(shape) => {

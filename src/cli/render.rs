@@ -180,12 +180,13 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
     let g = &scene.geometry;
     let count = |kind| g.shapes.iter().filter(|s| s.kind == kind).count();
     println!(
-        "scene: {} ({}, {}, {}, {}), {}, {}",
+        "scene: {} ({}, {}, {}, {}, {}), {}, {}",
         plural(g.len(), "primitive"),
         plural(g.spheres.len(), "sphere"),
         plural(count(ShapeKind::Sphere), "ellipsoid"),
         plural(count(ShapeKind::Plane), "plane"),
         plural(g.polygons.len(), "polygon"),
+        plural(g.cones.len(), "cone"),
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material")
     );
@@ -197,12 +198,14 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         scene.render.transfer.name()
     );
     println!("features: {}", crate::compile::features::Features::of(scene));
-    let search = |bvh: bool| if bvh { "BVH" } else { "brute force" };
+    let search = |bvh: &Option<crate::accel::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
     println!(
-        "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}",
-        search(g.sphere_bvh.is_some()),
+        "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}, ellipsoids by {}, cones by {}",
+        search(&g.sphere_bvh),
         scene.bytes_per_sphere(),
-        search(g.polygon_bvh.is_some()),
+        search(&g.polygon_bvh),
+        search(&g.shape_bvh),
+        search(&g.cone_bvh),
     );
     let c = r.counts;
     println!(
@@ -250,7 +253,8 @@ fn pattern_name(pattern: Pattern) -> String {
 /// while some material has a diffuse or specular term (which only lights light).
 pub fn scene_warnings(desc: &SceneDesc) -> Vec<&'static str> {
     let mut warnings = Vec::new();
-    if desc.spheres.is_empty() && desc.shapes.is_empty() && desc.polygons.is_empty() {
+    if desc.spheres.is_empty() && desc.shapes.is_empty() && desc.polygons.is_empty() && desc.cones.is_empty()
+    {
         warnings.push("no objects");
     }
     if desc.lights.is_empty() && desc.materials.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0) {

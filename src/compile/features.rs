@@ -19,6 +19,8 @@ pub struct Features {
     pub planes: bool,
     /// Polygons.
     pub polygons: bool,
+    /// Open cones and cylinders.
+    pub cones: bool,
     /// Lights that shade something: Lambert or Phong terms and shadow rays.
     pub direct: bool,
     /// Mirror materials and a depth limit above 0.
@@ -42,6 +44,7 @@ impl Features {
             ellipsoids: kind(ShapeKind::Sphere),
             planes: kind(ShapeKind::Plane),
             polygons: !g.polygons.is_empty(),
+            cones: !g.cones.is_empty(),
             direct: lights_shade(!scene.lights.is_empty(), m),
             reflection: bounces(scene.render.max_depth, m),
             refraction: deep && m.iter().any(|m| m.transmit > 0.0),
@@ -50,13 +53,14 @@ impl Features {
         }
     }
 
-    fn list(&self) -> [(&'static str, bool); 9] {
+    fn list(&self) -> [(&'static str, bool); 10] {
         [
             ("spheres", self.spheres),
             ("bvh", self.bvh),
             ("ellipsoids", self.ellipsoids),
             ("planes", self.planes),
             ("polygons", self.polygons),
+            ("cones", self.cones),
             ("direct light + shadow rays", self.direct),
             ("reflection", self.reflection),
             ("refraction", self.refraction),

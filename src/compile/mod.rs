@@ -203,6 +203,15 @@ impl Scene {
         for p in &desc.polygons {
             push_polygon(&mut geometry.polygons, p, origin);
         }
+        for c in &desc.cones {
+            let (base, apex) = (c.base - origin, c.apex - origin);
+            // A cone the readers would have rejected (a `SceneDesc` built by hand) still gets its id, as a
+            // needle no ray can see.
+            if geometry.cones.push(base, c.base_radius, apex, c.apex_radius, c.material).is_none() {
+                let needle = base + glam::DVec3::X * base.abs().max_element().max(1.0) * 1e-6;
+                geometry.cones.push(base, 0.0, needle, f64::MIN_POSITIVE, c.material);
+            }
+        }
         // obvhs cannot order boxes with infinite or NaN corners; readers reject such input, and a scene built
         // by hand with them falls back to brute force rather than failing.
         let sp = &geometry.spheres;
@@ -221,7 +230,9 @@ impl Scene {
             materials.push(Material::default());
         }
         let bounded = shape_boxes(desc);
+        let cones_finite = geometry.cones.height.iter().all(|h| h.is_finite());
         let job = BvhJob {
+            cones: cones_finite && wants(geometry.cones.len()),
             shapes: wants(bounded.len()).then_some(bounded),
             spheres: finite && wants(geometry.spheres.len()),
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
@@ -295,6 +306,18 @@ impl Scene {
             (g.shape_order, g.shape_bvh) = (order, Some(tree));
             self.build += stats;
         }
+        if job.cones {
+            let pad = Vec3A::splat(job.options.pad);
+            let cones = &g.cones;
+            let item_box = |j: usize| {
+                let (lo, hi) = cones.bounds(j);
+                Aabb { min: Vec3A::new(lo.x, lo.y, lo.z) - pad, max: Vec3A::new(hi.x, hi.y, hi.z) + pad }
+            };
+            let order = |order: &[u32]| order.to_vec();
+            let (tree, order, stats) = bvh::build(cones.len(), item_box, job.options, order);
+            (g.cone_order, g.cone_bvh) = (order, Some(tree));
+            self.build += stats;
+        }
     }
 }
 
@@ -320,6 +343,8 @@ fn shape_boxes(desc: &SceneDesc) -> Vec<(u32, Aabb)> {
 
 /// The BVH builds that [`Scene::assemble`] found the scene needs.
 struct BvhJob {
+    /// Whether to build the cones' BVH.
+    cones: bool,
     /// The bounded shapes' indices and boxes, when they get a BVH.
     shapes: Option<Vec<(u32, Aabb)>>,
     /// Whether to build the spheres' BVH.

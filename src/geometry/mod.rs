@@ -1,6 +1,7 @@
 //! Primitives and their intersection kernels. Each kernel is generic over [`crate::math::Real`]: the f32
 //! instance is the scalar reference path, the f64 instance the accuracy oracle.
 
+pub mod cone;
 mod packet;
 mod plane;
 pub mod polygon;
@@ -9,6 +10,7 @@ mod shape;
 mod sphere;
 mod spheres;
 
+pub use cone::{intersect_cone, rehit_cone, Cone, Cones};
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
 pub use polygon::intersect_triangle;

@@ -4,7 +4,9 @@
 //! split over lines and use any whitespace, numbers may use scientific notation, and `#` starts a comment that
 //! runs to the end of its line. Every error names `file:line` and what was expected there. Supported:
 //! `v` (with `from`, `at`, `up`, `angle`, `hither`, `resolution` in any order), `b`, `l` (with or without
-//! colour), `f`, `s`, `p`, `pp`. Cones (`c`) are an error naming the line until bareray has cones.
+//! colour), `f`, `s`, `p`, `pp`, and `c` (`base.x base.y base.z base_radius apex.x apex.y apex.z apex_radius`:
+//! an open cone or cylinder without caps; a radius may be 0 but not negative, not both are 0, and the two
+//! end points differ).
 //!
 //! # Framing
 //!
@@ -199,10 +201,10 @@ impl<'a> Reader<'a> {
             "s" => self.sphere(line),
             "p" => self.polygon(line, false),
             "pp" => self.polygon(line, true),
-            "c" => Err(self.err(line, "cones and cylinders (`c`) are not supported yet")),
+            "c" => self.cone(line),
             other => Err(self.err(
                 line,
-                format!("unknown entity `{other}`, expected one of v, b, l, f, s, p, pp (or a # comment)"),
+                format!("unknown entity `{other}`, expected one of v, b, l, f, s, p, pp, c (or a # comment)"),
             )),
         }
     }
@@ -311,6 +313,28 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
+    /// `c`: base point and radius, then apex point and radius, on one line or several. Errors name the
+    /// line of the `c`.
+    fn cone(&mut self, line: usize) -> Result<(), SceneError> {
+        let base = self.vec3("cone base x y z")?;
+        let base_radius = self.number("cone base radius")?;
+        let apex = self.vec3("cone apex x y z")?;
+        let apex_radius = self.number("cone apex radius")?;
+        if base_radius < 0.0 || apex_radius < 0.0 {
+            return Err(self
+                .err(line, format!("cone radii must not be negative, got {base_radius} and {apex_radius}")));
+        }
+        if base_radius == 0.0 && apex_radius == 0.0 {
+            return Err(self.err(line, "cone has radius 0 at both ends (it would be a line)"));
+        }
+        if base == apex {
+            return Err(self.err(line, format!("cone base and apex are the same point {base}")));
+        }
+        let material = self.current_material();
+        self.desc.cones.push(ConeDesc { base, base_radius, apex, apex_radius, material });
+        Ok(())
+    }
+
     /// `p n` then n vertices; `pp n` then n vertices each followed by its normal.
     fn polygon(&mut self, line: usize, patch: bool) -> Result<(), SceneError> {
         let n = self.integer("number of vertices", 3, 1 << 20)?;
@@ -360,6 +384,44 @@ mod tests {
         assert_eq!(d.spheres[0].center, DVec3::new(1.0, 2.0, 3.0));
         assert_eq!(d.spheres[0].radius, 0.5);
         assert_eq!((d.camera.width, d.camera.height), (64, 48));
+    }
+
+    #[test]
+    fn cones_on_one_line_or_split_across_lines() {
+        let d = parse_str(&format!(
+            "{VIEW}f 1 0 0 1 0 0 0 0\nc 0 0 0 1 0 0 2 0.5\nc\n1 2 3\n 0 # base\n4 5 6 2\n"
+        ))
+        .unwrap();
+        assert_eq!(d.cones.len(), 2);
+        let c = d.cones[0];
+        assert_eq!(
+            (c.base, c.base_radius, c.apex, c.apex_radius),
+            (DVec3::ZERO, 1.0, DVec3::new(0.0, 0.0, 2.0), 0.5)
+        );
+        let c = d.cones[1];
+        assert_eq!(
+            (c.base, c.base_radius, c.apex, c.apex_radius),
+            (DVec3::new(1.0, 2.0, 3.0), 0.0, DVec3::new(4.0, 5.0, 6.0), 2.0)
+        );
+        assert_eq!(c.material, 0, "the current fill");
+    }
+
+    #[test]
+    fn bad_cones_name_file_and_line() {
+        let view_lines = VIEW.lines().count();
+        for (body, line, says) in [
+            ("c 0 0 0 -1 0 0 1 1\n", 1, "must not be negative"),
+            ("\nc 0 0 0 1\n 0 0 1 -0.5\n", 2, "must not be negative"),
+            ("c 1 2 3 1 1 2 3 2\n", 1, "same point"),
+            ("c 0 0 0 0 0 0 1 0\n", 1, "both ends"),
+            ("c 0 0 0 1 0 0 x 1\n", 1, "cone apex x y z"),
+            ("c 0 0 0 1\n0 0 1\n", 2, "unexpected end of file, expected cone apex radius"),
+        ] {
+            let e = parse_str(&format!("{VIEW}{body}")).unwrap_err();
+            assert_eq!(e.line, view_lines + line, "{body:?}: {e}");
+            assert!(e.to_string().starts_with(&format!("t.nff:{}: ", view_lines + line)), "{e}");
+            assert!(e.message.contains(says), "{body:?}: {e}");
+        }
     }
 
     #[test]

@@ -31,6 +31,8 @@ struct File {
     spheres: Vec<SphereToml>,
     #[serde(default)]
     planes: Vec<PlaneToml>,
+    #[serde(default)]
+    cones: Vec<ConeToml>,
 }
 
 #[derive(Deserialize, Default)]
@@ -143,6 +145,16 @@ struct PlaneToml {
     normal: Option<Spanned<Vec3>>,
     material: Option<Spanned<String>>,
     transform: Option<Vec<Spanned<TransformOp>>>,
+}
+
+#[derive(Deserialize)]
+#[serde(deny_unknown_fields)]
+struct ConeToml {
+    base: Spanned<Vec3>,
+    base_radius: Spanned<f64>,
+    apex: Spanned<Vec3>,
+    apex_radius: Spanned<f64>,
+    material: Option<Spanned<String>>,
 }
 
 #[derive(Deserialize)]
@@ -291,7 +303,38 @@ impl Reader<'_> {
                 material: material(&p.material)?,
             });
         }
+        for c in &file.cones {
+            desc.cones.push(self.cone(c, material(&c.material)?)?);
+        }
         Ok(desc)
+    }
+
+    /// A `[[cones]]` entry: finite points within f32 range, radii not negative (not both 0), distinct ends.
+    fn cone(&self, c: &ConeToml, material: u32) -> Result<ConeDesc, SceneError> {
+        let point = |v: &Spanned<Vec3>, key: &str| {
+            if v.get_ref().iter().all(|x| x.is_finite() && (*x as f32).is_finite()) {
+                Ok(DVec3::from(*v.get_ref()))
+            } else {
+                Err(self
+                    .err(v.span(), format!("{key} must be finite (within f32 range), got {:?}", v.get_ref())))
+            }
+        };
+        let radius = |v: &Spanned<f64>, key: &str| {
+            self.ranged(v, key, |r| r >= 0.0 && (r as f32).is_finite(), "a non-negative number")
+                .map(|_| *v.get_ref())
+        };
+        let (base, apex) = (point(&c.base, "base")?, point(&c.apex, "apex")?);
+        let (base_radius, apex_radius) =
+            (radius(&c.base_radius, "base_radius")?, radius(&c.apex_radius, "apex_radius")?);
+        if base_radius == 0.0 && apex_radius == 0.0 {
+            return Err(self.err(c.base_radius.span(), "a cone needs a positive radius at one end at least"));
+        }
+        if base == apex {
+            return Err(
+                self.err(c.apex.span(), format!("cone apex must differ from its base, both are {base}"))
+            );
+        }
+        Ok(ConeDesc { base, base_radius, apex, apex_radius, material })
     }
 
     fn camera(&self, cam: Option<Spanned<CameraToml>>) -> Result<CameraDesc, SceneError> {
@@ -456,5 +499,46 @@ pub fn grid_side(samples: u32) -> Result<u32, String> {
         Ok(n)
     } else {
         Err(format!("samples must be a square number (1, 4, 9, 16, ...) for the regular grid, got {samples}"))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse_str(s: &str) -> Result<SceneDesc, SceneError> {
+        parse(Path::new("t.toml"), s)
+    }
+
+    #[test]
+    fn cones_are_read_with_their_material() {
+        let d = parse_str(
+            "[materials.red]\ncolor = [1, 0, 0]\n\n[[cones]]\nbase = [0, 0, 0]\nbase_radius = 1\n\
+             apex = [0, 2, 0]\napex_radius = 0\nmaterial = \"red\"\n\n[[cones]]\nbase = [1, 1, 1]\n\
+             base_radius = 0.5\napex = [1, 1, 3]\napex_radius = 0.5\n",
+        )
+        .unwrap();
+        assert_eq!(d.cones.len(), 2);
+        let c = d.cones[0];
+        assert_eq!((c.base, c.base_radius, c.apex, c.apex_radius), (DVec3::ZERO, 1.0, DVec3::Y * 2.0, 0.0));
+        assert_eq!(d.materials[c.material as usize].color, Rgb::new(1.0, 0.0, 0.0));
+        assert_eq!(d.cones[1].material, 0);
+    }
+
+    #[test]
+    fn bad_cones_name_line_and_column() {
+        let cone = |body: &str| format!("[[cones]]\n{body}");
+        for (body, line, column, says) in [
+            ("base = [0,0,0]\nbase_radius = -1\napex = [0,0,1]\napex_radius = 1\n", 3, 15, "non-negative"),
+            ("base = [0,0,0]\nbase_radius = 1\napex = [0,0,0]\napex_radius = 1\n", 4, 8, "differ"),
+            ("base = [0,0,0]\nbase_radius = 0\napex = [0,0,1]\napex_radius = 0\n", 3, 15, "positive radius"),
+            ("base = [0,0,0]\nbase_radius = 1\napex = [0,0,1]\n", 1, 1, "missing field `apex_radius`"),
+            ("base = [0,0,0]\nradius = 1\n", 3, 1, "unknown field `radius`, expected one of `base`"),
+            ("base = [0,0,1e39]\nbase_radius = 1\napex = [0,0,1]\napex_radius = 1\n", 2, 8, "within f32"),
+        ] {
+            let e = parse_str(&cone(body)).unwrap_err();
+            assert_eq!((e.line, e.column), (line, column), "{body:?}: {e}");
+            assert!(e.message.contains(says), "{body:?}: {e}");
+        }
     }
 }
