@@ -12,8 +12,8 @@ use serde::{Deserialize, Serialize};
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
-use super::values::BvhPresetArg;
-use crate::compile::{Accel, BvhPreset, CompileOptions, Scene};
+use super::values::{AccelArg, BvhPresetArg};
+use crate::compile::{Accel, CompileOptions, Scene};
 use crate::io::toml;
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::desc::Pattern;
@@ -74,17 +74,6 @@ pub struct BenchArgs {
     pub compare: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
-}
-
-/// `--accel`.
-#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
-pub enum AccelArg {
-    /// BVH from 4 spheres on.
-    Auto,
-    /// Always a BVH.
-    Bvh,
-    /// Always brute force.
-    Brute,
 }
 
 /// One measured setting.
@@ -317,11 +306,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let max_depth = desc.render.max_depth;
     let parse_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
-    let accel = match args.accel {
-        AccelArg::Auto => Accel::Auto,
-        AccelArg::Bvh => Accel::Bvh,
-        AccelArg::Brute => Accel::Brute,
-    };
+    let accel = Accel::from(args.accel);
     // The build runs on as many threads as the largest setting measured, not on every core: a 1-thread
     // bench builds on one thread, as a 1-thread peer run does.
     let build_threads = threads.iter().copied().max();
@@ -411,7 +396,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     width,
                     height,
                     frustum_culling: args.frustum_culling,
-                    bvh_preset: format!("{:?}", BvhPreset::from(args.bvh_preset)),
+                    bvh_preset: super::values::name(args.bvh_preset),
                     host: &host,
                     compare: old.as_ref().map(|o| CompareField {
                         file: o.path.display().to_string(),

@@ -1,7 +1,7 @@
 //! The command line's value enums for choices the library names in its own types: clap stays in `cli`, and
 //! each enum converts to the library's type.
 
-use crate::compile::BvhPreset;
+use crate::compile::{Accel, BvhPreset};
 use crate::scene::desc::Transfer;
 
 /// `--transfer`: [`Transfer`].
@@ -19,6 +19,32 @@ impl From<TransferArg> for Transfer {
         match t {
             TransferArg::Srgb => Transfer::Srgb,
             TransferArg::Linear => Transfer::Linear,
+        }
+    }
+}
+
+/// The name a value has on the command line (what `--help` lists and the user types), for reports.
+pub fn name(value: impl clap::ValueEnum) -> String {
+    value.to_possible_value().map_or_else(String::new, |v| v.get_name().to_owned())
+}
+
+/// `--accel`: [`Accel`].
+#[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
+pub enum AccelArg {
+    /// A BVH for each kind of primitive with 4 or more items, brute force below.
+    Auto,
+    /// A BVH for every kind with items.
+    Bvh,
+    /// Always brute force.
+    Brute,
+}
+
+impl From<AccelArg> for Accel {
+    fn from(a: AccelArg) -> Self {
+        match a {
+            AccelArg::Auto => Accel::Auto,
+            AccelArg::Bvh => Accel::Bvh,
+            AccelArg::Brute => Accel::Brute,
         }
     }
 }
