@@ -10,15 +10,17 @@
 pub mod bvh;
 mod cone_query;
 mod departure;
+mod item_query;
 mod polygons;
 mod shape_query;
 mod sphere_query;
 mod triangle_query;
-pub use cone_query::ConeQuery;
+pub use cone_query::{ConeItems, ConeQuery};
+pub use item_query::{ItemQuery, ItemTest};
 pub use polygons::Polygons;
-pub use shape_query::ShapeQuery;
+pub use shape_query::{ShapeQuery, Shapes};
 pub use sphere_query::SphereQuery;
-pub use triangle_query::TriangleQuery;
+pub use triangle_query::{TriangleQuery, Triangles};
 
 use bvh::{Bvh, LeafQuery};
 
@@ -199,14 +201,14 @@ impl Geometry {
             intersect_items(
                 None,
                 &loose,
-                loose.order.map_or(self.shapes.len(), <[u32]>::len),
+                loose.items.order.map_or(self.shapes.len(), <[u32]>::len),
                 rays.active,
                 &mut best,
             );
         }
         if !self.cones.is_empty() {
             let q = self.cone_query(rays, from);
-            intersect_items(self.cone_bvh.as_ref(), &q, self.cone_items(), rays.active, &mut best);
+            intersect_items(self.cone_bvh.as_ref(), &q, self.cones.len(), rays.active, &mut best);
         }
         let (exits, t) = self.departure_exits_k(rays, from);
         best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
@@ -264,7 +266,7 @@ impl Geometry {
         if !self.shapes.is_empty() {
             let (tree, loose) = self.shape_queries(rays, from);
             let mut shape = 0;
-            let n = loose.order.map_or(self.shapes.len(), <[u32]>::len);
+            let n = loose.items.order.map_or(self.shapes.len(), <[u32]>::len);
             blocked = blocked | occluded_items(None, &loose, n, live & !blocked, &mut shape);
             blocked =
                 blocked | occluded_items(self.shape_bvh.as_ref(), &tree, 0, live & !blocked, &mut shape);
@@ -272,7 +274,7 @@ impl Geometry {
         if !self.cones.is_empty() {
             let q = self.cone_query(rays, from);
             let mut cone = 0;
-            let n = self.cone_items();
+            let n = self.cones.len();
             blocked = blocked | occluded_items(self.cone_bvh.as_ref(), &q, n, live & !blocked, &mut cone);
         }
         blocked | self.departure_exits_k(rays, from).0
@@ -287,20 +289,23 @@ impl Geometry {
         SphereQuery::new(&self.spheres, rays.ray(), rays.t_max, from.prim, rays.pyramid, rays.active)
     }
 
+    /// A query of one kind's `items` for the packet.
+    fn item_query<F: Lanes, T: ItemTest>(
+        items: T,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> ItemQuery<F, T> {
+        ItemQuery { items, ray: rays.ray(), t_max: rays.t_max, skip: from.prim, pyramid: rays.pyramid }
+    }
+
     /// The triangle part of a packet query.
     fn triangle_query<'a, F: Lanes>(
         &'a self,
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> TriangleQuery<'a, F> {
-        TriangleQuery {
-            polygons: &self.polygons,
-            base: self.polygon_base() as u32,
-            ray: rays.ray(),
-            t_max: rays.t_max,
-            skip: from.prim,
-            pyramid: rays.pyramid,
-        }
+        let triangles = Triangles { polygons: &self.polygons, base: self.polygon_base() as u32 };
+        Self::item_query(triangles, rays, from)
     }
 
     /// The shape part of a packet query: the shapes of the BVH (if any), and those tested brute force (all
@@ -310,15 +315,8 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> (ShapeQuery<'a, F>, ShapeQuery<'a, F>) {
-        let query = |order| ShapeQuery {
-            shapes: &self.shapes,
-            order,
-            base: self.spheres.len() as u32,
-            ray: rays.ray(),
-            t_max: rays.t_max,
-            skip: from.prim,
-            pyramid: rays.pyramid,
-        };
+        let base = self.spheres.len() as u32;
+        let query = |order| Self::item_query(Shapes { shapes: &self.shapes, order, base }, rays, from);
         match self.shape_bvh {
             Some(_) => (query(Some(&self.shape_order)), query(Some(&self.loose_shapes))),
             None => (query(Some(&[])), query(None)),
@@ -331,20 +329,8 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> ConeQuery<'a, F> {
-        ConeQuery {
-            cones: &self.cones,
-            order: self.cone_bvh.as_ref().map(|_| self.cone_order.as_slice()),
-            base: self.cone_base() as u32,
-            ray: rays.ray(),
-            t_max: rays.t_max,
-            skip: from.prim,
-            pyramid: rays.pyramid,
-        }
-    }
-
-    /// The cone query's item count without a BVH.
-    fn cone_items(&self) -> usize {
-        self.cones.len()
+        let order = self.cone_bvh.as_ref().map(|_| self.cone_order.as_slice());
+        Self::item_query(ConeItems { cones: &self.cones, order, base: self.cone_base() as u32 }, rays, from)
     }
 
     /// The BVHs the scene has.

@@ -1,0 +1,110 @@
+//! The leaf query of every kind whose items are tested one at a time against all lanes, with nothing
+//! shared between items: triangles, transformed shapes, cones. Each kind says only how to test item `j`
+//! ([`ItemTest`]); the loops, the departure rule and the one-ray form are written once, here.
+
+use crate::geometry::{HitPacket, Pyramid, Ray};
+use crate::math::{Mask, Vec3f, V3};
+use crate::simd::{IdLanes, Lanes};
+
+use super::bvh::{LeafQuery, SingleLeafQuery};
+
+/// How one kind tests its items.
+pub trait ItemTest: Copy {
+    /// Item `j` against the rays in `[0, t_max)`: the lanes it is hit in, their t, and the item's primitive
+    /// id (the same for every lane).
+    fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32);
+}
+
+/// A query of rays against the items of one kind: the rays, each ray's exclusive end `t_max`, and the
+/// primitive each ray leaves (`skip`, never reported).
+#[derive(Clone, Copy)]
+pub struct ItemQuery<F: Lanes, T: ItemTest> {
+    /// The kind's items.
+    pub items: T,
+    /// The rays.
+    pub ray: Ray<F>,
+    /// Exclusive end of each ray's range.
+    pub t_max: F,
+    /// The departure primitive of each ray.
+    pub skip: F::Ids,
+    /// Planes enclosing the live rays, from the packet's maker.
+    pub pyramid: Option<Pyramid>,
+}
+
+impl<F: Lanes, T: ItemTest> ItemQuery<F, T> {
+    /// Item `j`'s hits for the lanes of `live` (the departure primitive's excluded), its t and id.
+    #[inline(always)]
+    fn item(&self, j: usize, live: F::Mask) -> (F::Mask, F, F::Ids) {
+        let (hit, t, id) = self.items.test(j, &self.ray, self.t_max);
+        let id = F::Ids::splat(id);
+        (live & hit & !F::ids_eq(id, self.skip), t, id)
+    }
+}
+
+impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
+    type One = ItemQuery<f32, T>;
+
+    #[inline(always)]
+    fn ray(&self) -> &Ray<F> {
+        &self.ray
+    }
+    #[inline(always)]
+    fn t_max(&self) -> F {
+        self.t_max
+    }
+    #[inline(always)]
+    fn pyramid(&self) -> Option<Pyramid> {
+        self.pyramid
+    }
+    #[inline(always)]
+    fn ball(&self, _: usize) -> Option<(Vec3f, f32)> {
+        None
+    }
+
+    #[inline(always)]
+    fn lane(&self, i: usize) -> ItemQuery<f32, T> {
+        let lane = |v: &V3<F>| V3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i));
+        ItemQuery {
+            items: self.items,
+            ray: Ray { origin: lane(&self.ray.origin), dir: lane(&self.ray.dir) },
+            t_max: self.t_max.lane(i),
+            skip: self.skip.lane(i),
+            pyramid: None,
+        }
+    }
+
+    #[inline(always)]
+    fn intersect(&self, items: impl Iterator<Item = usize>, live: F::Mask, best: &mut HitPacket<F>) {
+        for j in items {
+            let (hit, t, id) = self.item(j, live);
+            best.update(hit, t, id, id);
+        }
+    }
+
+    #[inline(always)]
+    fn occluded(&self, items: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask {
+        let mut blocked = F::mask_from_bits(0);
+        for j in items {
+            let (hit, _, _) = self.item(j, live);
+            if hit.any() {
+                *blocker = j as u32;
+                blocked = blocked | hit;
+                if (blocked | !live).all() {
+                    break;
+                }
+            }
+        }
+        blocked
+    }
+}
+
+impl<T: ItemTest> SingleLeafQuery for ItemQuery<f32, T> {
+    #[inline(always)]
+    fn intersect_leaf(&self, first: usize, count: usize, best: &mut HitPacket<f32>) {
+        self.intersect(first..first + count, true, best);
+    }
+    #[inline(always)]
+    fn occluded_leaf(&self, first: usize, count: usize, blocker: &mut u32) -> bool {
+        self.occluded(first..first + count, true, blocker)
+    }
+}
