@@ -12,7 +12,6 @@ use super::camera_args::CameraArgs;
 use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::compile::{CompileOptions, Scene};
-use crate::geometry::ShapeKind;
 use crate::io::toml;
 use crate::output::{write_image, Format};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
@@ -178,15 +177,16 @@ fn print_summary(output: &Path, scene: &Scene, r: &Rendered, time: &Timings) {
 
 fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
     let g = &scene.geometry;
-    let count = |kind| g.shapes.iter().filter(|s| s.kind == kind).count();
+    let features = crate::compile::features::Features::of(scene);
+    let n = features.counts;
     println!(
         "scene: {} ({}, {}, {}, {}, {}), {}, {}",
         plural(g.len(), "primitive"),
-        plural(g.spheres.len(), "sphere"),
-        plural(count(ShapeKind::Sphere), "ellipsoid"),
-        plural(count(ShapeKind::Plane), "plane"),
-        plural(g.polygons.len(), "polygon"),
-        plural(g.cones.len(), "cone"),
+        plural(n.spheres, "sphere"),
+        plural(n.ellipsoids, "ellipsoid"),
+        plural(n.planes, "plane"),
+        plural(n.polygons, "polygon"),
+        plural(n.cones, "cone"),
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material")
     );
@@ -197,7 +197,7 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         pattern_name(scene.render.pattern),
         scene.render.transfer.name()
     );
-    println!("features: {}", crate::compile::features::Features::of(scene));
+    println!("features: {features}");
     let search = |bvh: &Option<crate::accel::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
     println!(
         "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}, ellipsoids by {}, cones by {}",

@@ -6,21 +6,28 @@ use super::Scene;
 use crate::geometry::ShapeKind;
 use crate::scene::desc::{Material, Pattern, PostFilter};
 
+/// How many primitives of each kind a scene has.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Counts {
+    /// Plain spheres.
+    pub spheres: usize,
+    /// Transformed spheres (ellipsoids).
+    pub ellipsoids: usize,
+    /// Planes.
+    pub planes: usize,
+    /// Polygons.
+    pub polygons: usize,
+    /// Open cones and cylinders.
+    pub cones: usize,
+}
+
 /// The parts of the tracer a scene needs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Features {
-    /// Plain spheres (SoA kernel).
-    pub spheres: bool,
-    /// A BVH over the spheres (else brute force).
+    /// Primitives by kind: a kind with none is skipped.
+    pub counts: Counts,
+    /// Some kind is searched through a BVH (else all brute force).
     pub bvh: bool,
-    /// Transformed spheres (ellipsoids).
-    pub ellipsoids: bool,
-    /// Planes.
-    pub planes: bool,
-    /// Polygons.
-    pub polygons: bool,
-    /// Open cones and cylinders.
-    pub cones: bool,
     /// Lights that shade something: Lambert or Phong terms and shadow rays.
     pub direct: bool,
     /// Mirror materials and a depth limit above 0.
@@ -35,16 +42,18 @@ impl Features {
     /// Detects the features of a compiled scene.
     pub fn of(scene: &Scene) -> Features {
         let g = &scene.geometry;
-        let kind = |k: ShapeKind| g.shapes.iter().any(|s| s.kind == k);
+        let kind = |k: ShapeKind| g.shapes.iter().filter(|s| s.kind == k).count();
         let m = &scene.materials;
         let deep = scene.render.max_depth > 0;
         Features {
-            spheres: !g.spheres.is_empty(),
+            counts: Counts {
+                spheres: g.spheres.len(),
+                ellipsoids: kind(ShapeKind::Sphere),
+                planes: kind(ShapeKind::Plane),
+                polygons: g.polygons.len(),
+                cones: g.cones.len(),
+            },
             bvh: g.bvhs().next().is_some(),
-            ellipsoids: kind(ShapeKind::Sphere),
-            planes: kind(ShapeKind::Plane),
-            polygons: !g.polygons.is_empty(),
-            cones: !g.cones.is_empty(),
             direct: lights_shade(!scene.lights.is_empty(), m),
             reflection: bounces(scene.render.max_depth, m),
             refraction: deep && m.iter().any(|m| m.transmit > 0.0),
@@ -55,12 +64,12 @@ impl Features {
 
     fn list(&self) -> [(&'static str, bool); 10] {
         [
-            ("spheres", self.spheres),
+            ("spheres", self.counts.spheres > 0),
             ("bvh", self.bvh),
-            ("ellipsoids", self.ellipsoids),
-            ("planes", self.planes),
-            ("polygons", self.polygons),
-            ("cones", self.cones),
+            ("ellipsoids", self.counts.ellipsoids > 0),
+            ("planes", self.counts.planes > 0),
+            ("polygons", self.counts.polygons > 0),
+            ("cones", self.counts.cones > 0),
             ("direct light + shadow rays", self.direct),
             ("reflection", self.reflection),
             ("refraction", self.refraction),
