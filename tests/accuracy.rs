@@ -9,6 +9,8 @@
 //!    numbers are printed either way (`--nocapture`).
 //! 4. The twin's BVH returns brute force's hits bit for bit.
 
+mod common;
+
 use std::path::{Path, PathBuf};
 use std::process::Command;
 
@@ -16,21 +18,9 @@ use bareray::accuracy::{run, Options, Twin};
 use bareray::geometry::{Departure, Ray, NO_PRIM};
 use bareray::math::SplitMix64;
 use bareray::math::V3;
-use bareray::scene::desc::{Aim, CameraDesc, Field, LightDesc, SceneDesc, SphereDesc, Sweep};
+use bareray::scene::desc::{LightDesc, SceneDesc, SphereDesc};
+use common::camera;
 use glam::DVec3;
-
-fn camera(eye: DVec3, look: DVec3, hfov: f64, width: u32, height: u32) -> CameraDesc {
-    CameraDesc {
-        eye,
-        aim: Aim::LookAt(look),
-        up: DVec3::Y,
-        distance: 1.0,
-        field: Field::HorizontalAngle(hfov),
-        width,
-        height,
-        sweep: Sweep::PixelCentre,
-    }
-}
 
 fn opts(secondary: bool) -> Options {
     Options { lanes: 8, secondary, threads: Some(2), ..Options::default() }
@@ -44,7 +34,7 @@ fn opts(secondary: bool) -> Options {
 fn sphere_straight_ahead_matches_the_closed_form() {
     let (eye, centre, r) = (DVec3::new(0.1, 0.2, -3.0), DVec3::new(0.3, -0.2, 7.0), 1.0);
     let desc = SceneDesc {
-        camera: camera(eye, centre, 9.0, 64, 48),
+        camera: camera(eye, centre, DVec3::Y, 9.0, 64, 48),
         spheres: vec![SphereDesc { center: centre, radius: r, material: 0 }],
         lights: vec![LightDesc {
             position: DVec3::new(0.0, 1.0, -6.0),
@@ -241,7 +231,7 @@ fn twin_bvh_equals_brute_force() {
         spheres.push(SphereDesc { center: s.center + DVec3::X * (2.0 * s.radius), ..s });
     }
     let desc = SceneDesc {
-        camera: camera(DVec3::new(1.0, 2.0, -40.0), DVec3::ZERO, 50.0, 8, 8),
+        camera: camera(DVec3::new(1.0, 2.0, -40.0), DVec3::ZERO, DVec3::Y, 50.0, 8, 8),
         spheres,
         ..SceneDesc::default()
     };
