@@ -3,7 +3,7 @@
 //! 1. A sphere straight ahead: the twin's t is the closed form, the report counts every pixel, and the
 //!    secondary rays of a lone convex sphere behave as they must.
 //! 2. The binary's `--json` output: one object with every documented key.
-//! 3. Every stress scene (scenes/stress/) against the bounds: no unexplained disagreement, no
+//! 3. Every stress scene (scenes/stress/) against the accuracy bounds: no unexplained disagreement, no
 //!    self-hit, primary relative t error p99 ≤ 2e-6. Expected to fail on kernels that lose accuracy (a huge
 //!    ground sphere seen from close by, scenes far from the origin) until they are fixed; the measured
 //!    numbers are printed either way (`--nocapture`).
@@ -171,8 +171,9 @@ const STRESS_SCENES: [&str; 12] = [
     "touching-nested.toml",
 ];
 
-/// Every stress scene against the bounds, with secondary rays: 0 unexplained disagreements, 0
-/// self-hits, primary relative t error p99 ≤ 2e-6. All numbers are printed before any bound is checked. `ACCURACY_STRESS_DIR=dir` reads the scenes from `dir` instead.
+/// Every stress scene against the accuracy bounds, with secondary rays: 0 unexplained disagreements, 0
+/// self-hits, primary relative t error p99 ≤ 2e-6. All numbers are printed before any bound is checked.
+/// `ACCURACY_STRESS_DIR=dir` reads the scenes from `dir` instead.
 #[test]
 fn stress_scenes_meet_the_accuracy_bounds() {
     // `ACCURACY_STRESS_DIR` points the test at another copy of the scenes.
