@@ -2,26 +2,20 @@
 //! width, for closest hits and occlusion, over random sphere fields and rays (including rays starting inside
 //! spheres, grazing rays and axis-parallel rays), and through whole renders.
 
+mod common;
+
 use bareray::accel::bvh::Bvh;
 use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
-use bareray::math::SplitMix64;
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{SceneDesc, SphereDesc};
 use bareray::simd::Lanes;
+use common::rng::Rng;
 use glam::DVec3;
 use wide::{f32x16, f32x4, f32x8};
 
-/// Uniform numbers from the contract's generator, so failures reproduce.
-struct Rng(SplitMix64);
-impl Rng {
-    fn range(&mut self, lo: f64, hi: f64) -> f64 {
-        lo + (hi - lo) * self.0.unit()
-    }
-}
-
 fn field(n: usize, seed: u64) -> SceneDesc {
-    let mut rng = Rng(SplitMix64::new(seed));
+    let mut rng = Rng::new(seed);
     let mut desc = SceneDesc::default();
     for _ in 0..n {
         let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
@@ -35,7 +29,7 @@ fn field(n: usize, seed: u64) -> SceneDesc {
 
 /// Random rays: from outside the field, from inside spheres, axis-parallel ones.
 fn rays(desc: &SceneDesc, count: usize, seed: u64) -> Vec<Ray<f32>> {
-    let mut rng = Rng(SplitMix64::new(seed));
+    let mut rng = Rng::new(seed);
     (0..count)
         .map(|i| {
             let o = match i % 3 {
@@ -55,7 +49,7 @@ fn rays(desc: &SceneDesc, count: usize, seed: u64) -> Vec<Ray<f32>> {
 
 /// Camera-like packets: per packet one origin and directions within a narrow cone (K consecutive rays).
 fn coherent_rays(count: usize, k: usize, seed: u64) -> Vec<Ray<f32>> {
-    let mut rng = Rng(SplitMix64::new(seed));
+    let mut rng = Rng::new(seed);
     let mut out = Vec::with_capacity(count);
     while out.len() < count {
         let o = V3::new(rng.range(-3.0, 3.0), rng.range(-3.0, 3.0), -4.0);
@@ -213,7 +207,7 @@ fn frustum_culling_keeps_grazing_rays_from_near_and_far() {
     let desc = field(400, 11);
     let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
     let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-    let mut rng = Rng(SplitMix64::new(12));
+    let mut rng = Rng::new(12);
     // Arc: the packet's rays aim around the whole silhouette, or all at one point of it (a thin pyramid
     // tangent to the sphere, which the leaf's sphere test must not rule out).
     let cases =
@@ -300,7 +294,7 @@ fn camera_pyramids_keep_the_brute_force_answer() {
 /// Random planar polygons (triangles and quads, some with vertex normals) among the spheres of a field.
 fn polygon_field(n: usize, seed: u64) -> SceneDesc {
     let mut desc = field(n / 4 + 1, seed);
-    let mut rng = Rng(SplitMix64::new(seed ^ 0xa5a5));
+    let mut rng = Rng::new(seed ^ 0xa5a5);
     for k in 0..n {
         let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
         let size = rng.range(0.02, 0.3);
@@ -405,7 +399,7 @@ fn shape_bvh_equals_brute_force_at_every_width() {
     use glam::{DAffine3, DQuat};
     for (n, seed) in [(5, 21), (200, 22)] {
         let mut desc = field(3, seed);
-        let mut rng = Rng(SplitMix64::new(seed));
+        let mut rng = Rng::new(seed);
         for _ in 0..n {
             let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
             let size = if n < 10 { 0.6 } else { 0.2 };
@@ -443,7 +437,7 @@ fn cone_bvh_equals_brute_force_at_every_width() {
     use bareray::scene::desc::ConeDesc;
     for (n, seed) in [(4, 31), (300, 32)] {
         let mut desc = field(3, seed);
-        let mut rng = Rng(SplitMix64::new(seed));
+        let mut rng = Rng::new(seed);
         for k in 0..n {
             let base = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
             let size = if n < 10 { 0.8 } else { 0.25 };

@@ -136,8 +136,8 @@ fn single_column_window_edges_sweep_looks_straight_ahead() {
     assert_close(cam.ray(0.5, 0.5).dir, [0.0, 0.0, -1.0]);
 }
 
-/// The benchmark contract's camera (DESIGN.md), its ray for pixel (i, j) computed by the contract's own
-/// formula in f64.
+/// The benchmark contract's camera (bench-peers/README.md, "Embree harness"), its ray for pixel (i, j)
+/// computed by the contract's own formula in f64.
 fn contract_dir(i: u32, j: u32, w: u32, h: u32) -> DVec3 {
     let f = DVec3::new(0.0, 0.0, 4.0).normalize();
     let r = f.cross(DVec3::Y).normalize();

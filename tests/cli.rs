@@ -2,26 +2,15 @@
 //! error, no panic, and never touches an existing output file; argument errors exit with 2, scene, render
 //! and file errors with 1.
 
-use std::path::{Path, PathBuf};
-use std::process::{Command, Output};
+mod common;
 
-fn bareray(args: &[&str]) -> Output {
-    Command::new(env!("CARGO_BIN_EXE_bareray")).args(args).output().expect("bareray runs")
-}
+use std::path::{Path, PathBuf};
+use std::process::Command;
+
+use common::{bareray, scene_files, stderr};
 
 fn scenes() -> Vec<PathBuf> {
-    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let mut all: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml" || e == "nff" || e == "xyzr"))
-        .collect();
-    all.sort();
-    all
-}
-
-fn stderr(out: &Output) -> String {
-    String::from_utf8_lossy(&out.stderr).into_owned()
+    scene_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"))
 }
 
 #[test]

@@ -2,9 +2,12 @@
 //! exactly), so the difference is the f32 arithmetic alone: many seeded random cones and rays, aimed at
 //! the surface, started inside, and sent through the open ends.
 
+mod common;
+
 use bareray::geometry::{intersect_cone, Cone, Cones, Ray};
 use bareray::math::SplitMix64;
 use bareray::math::V3;
+use common::wide::wide_ray;
 use glam::DVec3;
 
 /// A ray grazes a cone when some nudge of the ray changes the f64 kernel's answer from hit to miss or back,
@@ -81,10 +84,6 @@ fn random_ray(rng: &mut SplitMix64, c: &Cone<f64>) -> Ray<f64> {
     Ray::new(V3::from(o), V3::from(d))
 }
 
-fn widen(r: &Ray<f32>) -> Ray<f64> {
-    Ray::new(r.origin.to_f64(), r.dir.to_f64())
-}
-
 /// Whether some nudge of the ray (see [`GRAZE`]) changes the f64 answer.
 fn grazes(c: &Cone<f64>, ray: &Ray<f64>, answer: (bool, f64)) -> bool {
     let (o, d) = (DVec3::from(ray.origin), DVec3::from(ray.dir));
@@ -137,7 +136,7 @@ fn f32_kernel_agrees_with_f64_within_the_measured_bound() {
                 let r = random_ray(&mut rng, &c64);
                 Ray::new(r.origin.to_f32(), r.dir.to_f32())
             };
-            let ray64 = widen(&ray32);
+            let ray64 = wide_ray(&ray32);
             let (h32, t32) = intersect_cone(&c32, &ray32, f32::INFINITY);
             let (h64, t64) = intersect_cone(&c64, &ray64, f64::INFINITY);
             let case = || format!("cone {i} {c64:?} ray {ray64:?} t32 {t32:e} ({h32}) t64 {t64:e} ({h64})");

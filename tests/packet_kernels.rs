@@ -5,6 +5,8 @@
 //! operand's, and LLVM may commute `a + b`), so only NaN-ness is a property of the formula. Hit lanes never
 //! carry a NaN t.
 
+mod common;
+
 use bareray::accel::Geometry;
 use bareray::camera::Camera;
 use bareray::geometry::{
@@ -14,6 +16,7 @@ use bareray::geometry::{
 use bareray::math::{Vec3f, V3};
 use bareray::scene::desc::CameraDesc;
 use bareray::simd::{IdLanes, Lanes};
+use common::wide::{f32v, wide_ray};
 use glam::{DAffine3, DQuat, DVec3};
 use proptest::prelude::*;
 use proptest::strategy::ValueTree;
@@ -52,10 +55,6 @@ impl Case {
             })
             .collect()
     }
-}
-
-fn v3(v: DVec3) -> Vec3f {
-    V3::new(v.x as f32, v.y as f32, v.z as f32)
 }
 
 /// Ordinary coordinates, with a few far and a few tiny ones.
@@ -576,15 +575,15 @@ fn f64_oracle_bounds_the_f32_sphere_error_on_far_small_spheres() {
         let ((log_dist, log_ratio), (x, y, z), (phi, off)) =
             strategy.new_tree(&mut runner).unwrap().current();
         let (dist, r) = (10f64.powf(log_dist), 10f64.powf(log_dist - log_ratio));
-        let centre = v3(DVec3::new(x, y, z).normalize() * dist);
+        let centre = f32v(DVec3::new(x, y, z).normalize() * dist);
         let r = r as f32;
         // Aim at a point `off·r` from the centre, perpendicular to the line of sight.
         let los = DVec3::from(centre.to_f64());
         let side = los.normalize().any_orthonormal_pair();
         let target = los + (side.0 * phi.cos() + side.1 * phi.sin()) * off * f64::from(r);
-        let ray = Ray::new(V3::all(0.0f32), v3(target.normalize()));
+        let ray = Ray::new(V3::all(0.0f32), f32v(target.normalize()));
         let (hit32, t32) = intersect_sphere(centre, r, &ray, f32::INFINITY);
-        let ray64 = Ray::new(ray.origin.to_f64(), ray.dir.to_f64());
+        let ray64 = wide_ray(&ray);
         let (hit64, t64) = intersect_sphere(centre.to_f64(), f64::from(r), &ray64, f64::INFINITY);
         assert!(hit64, "the f64 oracle misses: {centre:?} {r} {ray:?}");
         assert!(hit32, "f32 loses the sphere: {centre:?} {r} {ray:?}");

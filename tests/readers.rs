@@ -1,6 +1,8 @@
 //! Scene readers (NFF, xyzr), generators (contract field, SPD sphereflake) and the polygon primitive, through
 //! the library API.
 
+mod common;
+
 use std::path::Path;
 
 use bareray::accel::Geometry;
@@ -12,15 +14,12 @@ use bareray::io::{nff, xyzr, SceneError};
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{Aim, Field, PolygonDesc, SphereDesc, Sweep};
 use bareray::scene::SceneDesc;
+use common::{bareray, stderr};
 use glam::DVec3;
 
-const BALLS2: &str = "../shared/scenes/balls2.nff";
-
-fn balls2_source() -> String {
-    let path = Path::new(env!("CARGO_MANIFEST_DIR")).join(BALLS2);
-    let alt = Path::new("/work/shared/scenes/balls2.nff");
-    std::fs::read_to_string(&path).or_else(|_| std::fs::read_to_string(alt)).expect("balls2.nff is readable")
-}
+/// SPD's `balls` output at size 2 (91 spheres on a floor polygon, its view and lights), as SPD's NFF writer
+/// prints it (`%g`, six significant digits): the independent reference for the sphereflake generator.
+const BALLS2: &str = include_str!("data/balls2.nff");
 
 fn nff_err(src: &str) -> SceneError {
     nff::parse(Path::new("t.nff"), src).expect_err("the scene must be rejected")
@@ -36,7 +35,7 @@ const VIEW: &str = "v\nfrom 0 0 -5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.01\nr
 
 #[test]
 fn balls2_counts_camera_lights_and_fills() {
-    let d = nff::parse(Path::new("balls2.nff"), &balls2_source()).unwrap();
+    let d = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
     assert_eq!((d.spheres.len(), d.polygons.len(), d.lights.len()), (91, 1, 3));
     assert_eq!(d.camera.eye, DVec3::new(2.1, 1.3, 1.7));
     assert_eq!(d.camera.aim, Aim::LookAt(DVec3::ZERO));
@@ -61,7 +60,7 @@ fn balls2_counts_camera_lights_and_fills() {
 fn balls2_frames_like_spd_pov_ray_output() {
     // SPD's POV-Ray camera spans 2·tan(angle/2) edge to edge: the ray through the image's left edge
     // (pixel-space x = 0) makes exactly half the angle with the view direction.
-    let d = nff::parse(Path::new("balls2.nff"), &balls2_source()).unwrap();
+    let d = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
     let scene = Scene::compile(&d).unwrap();
     let cam = &scene.camera_f64;
     let edge = cam.ray(0.0, 256.0).dir;
@@ -71,7 +70,7 @@ fn balls2_frames_like_spd_pov_ray_output() {
 
 #[test]
 fn balls2_floor_is_one_primitive_after_the_spheres() {
-    let d = nff::parse(Path::new("balls2.nff"), &balls2_source()).unwrap();
+    let d = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
     let scene = Scene::compile(&d).unwrap();
     let g = &scene.geometry;
     assert_eq!((g.len(), g.polygons.len(), g.polygons.triangles()), (92, 1, 2));
@@ -149,14 +148,13 @@ fn lcg(state: &mut u64) -> u64 {
 
 #[test]
 fn truncated_and_garbled_files_never_panic() {
-    let balls = balls2_source();
     let extra = format!(
         "{VIEW}pp 3\n0 0 0 0 0 1\n1 0 0 0 0 1\n0 1 0 0 0 1\nl 1 1 1 0.2 0.3 0.4\nc 0 0 0 1 0 1 0 1\n"
     );
     let field = "# a field\n0 0 0 1\n\n1e0 2 3 0.5\n-1 -2 -3 2.5e-1\n";
     let junk = [" ", "\n", "#", "-", "e", "1e999", "nan", "inf", "p 0", "pp", "x", "0", "é", "\t", "v", "f"];
     let mut state = 7u64;
-    for src in [balls.as_str(), extra.as_str(), field] {
+    for src in [BALLS2, extra.as_str(), field] {
         for cut in (0..=src.len()).filter(|&i| src.is_char_boundary(i)) {
             let _ = nff::parse(Path::new("t.nff"), &src[..cut]);
             let _ = xyzr::parse(Path::new("t.xyzr"), &src[..cut]);
@@ -247,10 +245,10 @@ fn long_xyzr_lists_keep_order_and_line_numbers() {
 
 // ---------------------------------------------------------------------------------------------------- field
 
-// Expected spheres were computed independently in Python 3.11 from DESIGN.md's contract text: a direct
-// transcription of splitmix64 on Python integers masked to 64 bits, u = (next >> 40) * 2.0**-24 in f64,
-// s = 2 / math.cbrt(N), rmin = 0.1*s, rmax = 0.25*s, each value rounded with numpy.float32 and printed
-// with str() (shortest round-trip, the same digits as Rust's f32 Display).
+// Expected spheres were computed independently in Python 3.11 from the contract's text (bench-peers/README.md,
+// "Embree harness"): a direct transcription of splitmix64 on Python integers masked to 64 bits,
+// u = (next >> 40) * 2.0**-24 in f64, s = 2 / math.cbrt(N), rmin = 0.1*s, rmax = 0.25*s, each value rounded
+// with numpy.float32 and printed with str() (shortest round-trip, the same digits as Rust's f32 Display).
 
 #[test]
 fn field_1e3_matches_the_contract() {
@@ -323,7 +321,7 @@ fn flake_counts_follow_nine_children_per_sphere() {
 
 #[test]
 fn flake_level_2_reproduces_spd_balls2_to_its_printed_precision() {
-    let reference = nff::parse(Path::new("balls2.nff"), &balls2_source()).unwrap();
+    let reference = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
     let mine = flake(2).unwrap();
     assert_eq!(mine.len(), reference.spheres.len());
     for (i, (m, r)) in mine.iter().zip(&reference.spheres).enumerate() {
@@ -339,7 +337,7 @@ fn flake_level_2_reproduces_spd_balls2_to_its_printed_precision() {
 #[test]
 fn flake_nff_parses_back_with_balls_view_lights_and_floor() {
     let d = nff::parse(Path::new("b4.nff"), &flake_nff(4).unwrap()).unwrap();
-    let balls = nff::parse(Path::new("balls2.nff"), &balls2_source()).unwrap();
+    let balls = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
     assert_eq!((d.spheres.len(), d.polygons.len(), d.lights.len()), (7381, 1, 3));
     assert_eq!((d.camera, d.render, &d.materials), (balls.camera, balls.render, &balls.materials));
     assert_eq!(d.polygons, balls.polygons);
@@ -444,24 +442,20 @@ fn a_ray_leaving_a_polygon_never_hits_it_again() {
 
 // ---------------------------------------------------------------------------------------------------- CLI
 
-fn bareray(args: &[&str]) -> std::process::Output {
-    std::process::Command::new(env!("CARGO_BIN_EXE_bareray")).args(args).output().expect("the binary runs")
-}
-
 #[test]
 fn cli_generates_and_renders_fields_and_flakes() {
     let dir = tempfile::tempdir().unwrap();
     let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
     let out = bareray(&["gen", "field", "--count", "1000", "-o", &path("f.xyzr")]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{}", stderr(&out));
     let text = std::fs::read_to_string(path("f.xyzr")).unwrap();
     assert_eq!(text, FieldParams { count: 1000, ..Default::default() }.to_xyzr().unwrap());
     let out = bareray(&["gen", "flake", "--level", "2", "-o", &path("b.nff")]);
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(out.status.success(), "{}", stderr(&out));
     assert_eq!(std::fs::read_to_string(path("b.nff")).unwrap(), flake_nff(2).unwrap());
     for (scene, png) in [("f.xyzr", "f.png"), ("b.nff", "b.png")] {
         let out = bareray(&["render", &path(scene), "--width", "32", "-q", "-o", &path(png)]);
-        assert!(out.status.success(), "{scene}: {}", String::from_utf8_lossy(&out.stderr));
+        assert!(out.status.success(), "{scene}: {}", stderr(&out));
         assert!(std::fs::metadata(path(png)).unwrap().len() > 0);
     }
 }
@@ -473,7 +467,7 @@ fn cli_reports_reader_errors_with_file_and_line_and_rejects_bad_generator_argume
     std::fs::write(&scene, format!("{VIEW}c\n0 0 0 1\n0 0 0 1\n")).unwrap();
     let out =
         bareray(&["render", &scene.to_string_lossy(), "-o", &dir.path().join("x.png").to_string_lossy()]);
-    let err = String::from_utf8_lossy(&out.stderr);
+    let err = stderr(&out);
     assert!(
         !out.status.success() && err.contains("cone.nff:8: cone base and apex are the same point"),
         "{err}"
@@ -487,7 +481,7 @@ fn cli_reports_reader_errors_with_file_and_line_and_rejects_bad_generator_argume
     ] {
         let out = bareray(args);
         assert!(!out.status.success(), "{args:?} must fail");
-        assert!(String::from_utf8_lossy(&out.stderr).starts_with("error: "), "{args:?}");
+        assert!(stderr(&out).starts_with("error: "), "{args:?}");
     }
     assert!(!Path::new(&target).exists(), "failed runs leave no file");
 }

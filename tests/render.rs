@@ -1,18 +1,15 @@
 //! Whole renders checked against closed-form answers, and the image's independence of the thread count.
 
-use std::path::Path;
+mod common;
 
 use bareray::compile::Scene;
 use bareray::film::Image;
-use bareray::io::toml;
 use bareray::render::{render_lanes, thread_pool};
+use common::{compile, parse_toml, render, scene_files};
 use indicatif::ProgressBar;
 
 fn render_toml(src: &str, threads: usize) -> Image {
-    let desc = toml::parse(Path::new("test.toml"), src).expect("scene parses");
-    let scene = Scene::compile(&desc).expect("scene compiles");
-    let pool = thread_pool(Some(threads)).expect("thread pool");
-    render_lanes(&scene, 8, &pool, &ProgressBar::hidden()).image
+    render(&compile(&parse_toml(src)), threads)
 }
 
 /// pbrt's inside-out test: the camera sits inside a diffuse sphere of radius R with a point light of intensity
@@ -155,13 +152,8 @@ fn half_pixel_pattern_agrees_with_a_fine_grid() {
 #[test]
 fn every_scene_is_identical_at_every_width_and_thread_count() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
-    let is_scene =
-        |p: &std::path::PathBuf| p.extension().is_some_and(|e| e == "toml" || e == "nff" || e == "xyzr");
-    let mut scenes: Vec<_> = [root.clone(), root.join("stress")]
-        .iter()
-        .flat_map(|dir| std::fs::read_dir(dir).unwrap().map(|e| e.unwrap().path()))
-        .filter(is_scene)
-        .collect();
+    let mut scenes = scene_files(&root);
+    scenes.extend(scene_files(&root.join("stress")));
     scenes.sort();
     let mut checked = 0;
     for path in &scenes {

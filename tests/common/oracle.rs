@@ -1,0 +1,142 @@
+//! The f64 oracle: a scene's f32 geometry (centres, radii, the f32 inverse transforms, triangle edges)
+//! widened exactly to f64 and intersected by the f64 instances of the same kernels, brute force. What it
+//! measures against the f32 path is the f32 arithmetic of the kernels, not the rounding of the scene
+//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, shapes, polygons),
+//! as `Geometry::intersect` reports them.
+
+use bareray::accel::Geometry;
+use bareray::geometry::{intersect_sphere, intersect_triangle, sphere_roots, Ray, Shape, ShapeKind, NO_PRIM};
+use bareray::math::V3;
+
+use super::wide::{dv, wide, wide_shape};
+use super::EPS32;
+
+/// The scene's f32 geometry widened exactly to f64, intersected by the f64 instances of the same kernels,
+/// brute force, ties to the lower id (the renderer's rule).
+pub struct Oracle {
+    spheres: Vec<(V3<f64>, f64)>,
+    shapes: Vec<Shape<f64>>,
+    tris: Vec<Tri>,
+}
+
+/// A triangle for the oracle: v0, e1, e2 and its polygon's primitive id.
+pub type Tri = (V3<f64>, V3<f64>, V3<f64>, u32);
+
+impl Oracle {
+    pub fn new(g: &Geometry) -> Self {
+        let s = &g.spheres;
+        let p = &g.polygons;
+        let base = g.polygon_base() as u32;
+        Self {
+            spheres: (0..s.len()).map(|i| (wide(s.center(i)), f64::from(s.r[i]))).collect(),
+            shapes: g.shapes.iter().map(wide_shape).collect(),
+            tris: (0..p.triangles())
+                .map(|j| (wide(p.v0[j]), wide(p.e1[j]), wide(p.e2[j]), base + p.polygon[j]))
+                .collect(),
+        }
+    }
+
+    /// The hit of `ray` with primitive `prim` alone, in `[0, inf)`.
+    pub fn hit_of(&self, prim: u32, ray: &Ray<f64>) -> Option<f64> {
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let (hit, t) = if i < ns {
+            intersect_sphere(self.spheres[i].0, self.spheres[i].1, ray, f64::INFINITY)
+        } else if i < ns + self.shapes.len() {
+            self.shapes[i - ns].intersect(ray, f64::INFINITY)
+        } else {
+            let mut best = (false, f64::INFINITY);
+            for &(v0, e1, e2, id) in &self.tris {
+                if id == prim {
+                    let (h, t) = intersect_triangle(v0, e1, e2, ray, best.1);
+                    if h {
+                        best = (true, t);
+                    }
+                }
+            }
+            best
+        };
+        hit.then_some(t)
+    }
+
+    /// Closest hit `(prim, t)`, skipping `skip` entirely (an outward departure), `NO_PRIM` on a miss.
+    pub fn closest(&self, ray: &Ray<f64>, skip: u32) -> (u32, f64) {
+        let mut best = (NO_PRIM, f64::INFINITY);
+        for (i, &(c, r)) in self.spheres.iter().enumerate() {
+            let (h, t) = intersect_sphere(c, r, ray, best.1);
+            if h && i as u32 != skip {
+                best = (i as u32, t);
+            }
+        }
+        let ns = self.spheres.len() as u32;
+        for (k, s) in self.shapes.iter().enumerate() {
+            let (h, t) = s.intersect(ray, best.1);
+            if h && ns + k as u32 != skip {
+                best = (ns + k as u32, t);
+            }
+        }
+        for &(v0, e1, e2, id) in &self.tris {
+            let (h, t) = intersect_triangle(v0, e1, e2, ray, best.1);
+            if h && id != skip {
+                best = (id, t);
+            }
+        }
+        best
+    }
+
+    /// True when `ray` starts within `k` f32 roundings of the surface of solid `prim` (its near root is within
+    /// `k·ε·(|c − o| + r)/|d|` of zero): at the contact point of touching spheres a ray leaving one sphere
+    /// starts on the other, and whether it enters at t ≈ 0 or is already inside is decided by rounding.
+    pub fn starts_on(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
+        let i = prim as usize;
+        if prim == NO_PRIM || i >= self.spheres.len() {
+            return false;
+        }
+        let (c, r) = self.spheres[i];
+        let roots = sphere_roots(c, r, ray);
+        let scale = ((dv(c) - dv(ray.origin)).length() + r) / dv(ray.dir).length();
+        roots.hit && roots.near.abs() <= k * EPS32 * scale
+    }
+
+    /// True when `ray` passes within `k` f32 roundings (of the coordinates involved) of tangency with `prim`:
+    /// the line's distance l from the centre differs from the radius by at most `k·ε·(|c| + r)`, in object
+    /// space for ellipsoids (with the transform's magnitudes in the scale). Planes: the direction is within
+    /// `k·ε` of parallel. That is where the f32 and f64 kernels may legitimately disagree on hit or miss.
+    pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
+        if prim == NO_PRIM {
+            return false;
+        }
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let near_tangent = |c: V3<f64>, r: f64, ray: &Ray<f64>, scale: f64| {
+            let c = dv(c) - dv(ray.origin);
+            let d = dv(ray.dir);
+            let proj = c.dot(d) / d.dot(d);
+            let l = (c - d * proj).length();
+            (l - r).abs() <= k * EPS32 * scale
+        };
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            let scale = (dv(c) - dv(ray.origin)).length() + r;
+            near_tangent(c, r, ray, scale)
+        } else if i < ns + self.shapes.len() {
+            let s = &self.shapes[i - ns];
+            let local = s.to_object(ray);
+            let m = &s.object_from_world;
+            let o = dv(ray.origin);
+            let spread = dv(m.cols[0]).length() * o.x.abs()
+                + dv(m.cols[1]).length() * o.y.abs()
+                + dv(m.cols[2]).length() * o.z.abs()
+                + dv(m.translation).length();
+            match s.kind {
+                ShapeKind::Sphere => near_tangent(V3::all(0.0), 1.0, &local, spread + 1.0),
+                ShapeKind::Plane => {
+                    let d = dv(local.dir);
+                    d.z.abs() <= k * EPS32 * d.length()
+                }
+            }
+        } else {
+            false
+        }
+    }
+}
