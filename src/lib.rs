@@ -14,6 +14,7 @@ pub mod aov;
 pub mod camera;
 pub mod cli;
 pub mod compile;
+pub mod converge;
 pub mod cpu;
 pub mod film;
 pub mod geometry;

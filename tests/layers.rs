@@ -39,6 +39,7 @@ const LAYERS: &[(&str, u32)] = &[
     // Tools over the renderer and images, and the platform pieces the binary starts with.
     ("aov", 9),
     ("accuracy", 9),
+    ("converge", 9),
     ("imagediff", 9),
     ("cpu", 9),
     ("huge_pages", 9),

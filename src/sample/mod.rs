@@ -2,6 +2,7 @@
 //! (postfiltering).
 
 mod postfilter;
+pub mod sequence;
 
 pub use postfilter::lecture_3x3;
 

@@ -1,0 +1,148 @@
+//! The time-against-error picture: an SVG with log-log axes, one curve per method, labelled axes and a
+//! legend, written by hand (a few dozen elements; no plotting crate needed).
+
+use std::fmt::Write as _;
+
+/// One curve: a name and its points `(seconds, error)`, both positive.
+pub struct Curve {
+    /// The legend's label.
+    pub name: String,
+    /// Points in the order to join them.
+    pub points: Vec<(f64, f64)>,
+}
+
+/// Plot width, in SVG user units.
+const W: f64 = 720.0;
+/// Plot height.
+const H: f64 = 480.0;
+/// Margin left of the axes (tick labels and the y label).
+const LEFT: f64 = 80.0;
+/// Margin right of the axes (the legend).
+const RIGHT: f64 = 180.0;
+/// Margin above the axes (the title).
+const TOP: f64 = 30.0;
+/// Margin below the axes (tick labels and the x label).
+const BOTTOM: f64 = 60.0;
+
+/// Line colours, one per curve in turn (a colour-blind-safe set).
+const COLOURS: [&str; 8] =
+    ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442"];
+
+/// The decades `10^a ..= 10^b` that cover `[lo, hi]`.
+fn decades(lo: f64, hi: f64) -> (i32, i32) {
+    (lo.log10().floor() as i32, hi.log10().ceil().max(lo.log10().floor() + 1.0) as i32)
+}
+
+/// The SVG text of the plot: x = seconds, y = `y_label` (both log scale), title on top.
+pub fn svg(title: &str, y_label: &str, curves: &[Curve]) -> String {
+    let points = curves.iter().flat_map(|c| c.points.iter().copied()).filter(|&(x, y)| x > 0.0 && y > 0.0);
+    let (mut x_lo, mut x_hi, mut y_lo, mut y_hi) = (f64::MAX, f64::MIN_POSITIVE, f64::MAX, f64::MIN_POSITIVE);
+    for (x, y) in points {
+        (x_lo, x_hi, y_lo, y_hi) = (x_lo.min(x), x_hi.max(x), y_lo.min(y), y_hi.max(y));
+    }
+    if x_lo > x_hi {
+        (x_lo, x_hi, y_lo, y_hi) = (1.0, 10.0, 1.0, 10.0);
+    }
+    let ((xa, xb), (ya, yb)) = (decades(x_lo, x_hi), decades(y_lo, y_hi));
+    let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+    let sx = |x: f64| LEFT + (x.log10() - f64::from(xa)) / f64::from(xb - xa) * pw;
+    let sy = |y: f64| TOP + ph - (y.log10() - f64::from(ya)) / f64::from(yb - ya) * ph;
+    let mut s = String::new();
+    let _ = writeln!(
+        s,
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="12">"#
+    );
+    let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{}" y="18" text-anchor="middle" font-size="14">{}</text>"#,
+        LEFT + pw / 2.0,
+        escape(title)
+    );
+    for e in xa..=xb {
+        let x = sx(10f64.powi(e));
+        let _ =
+            writeln!(s, r##"<line x1="{x:.1}" y1="{TOP}" x2="{x:.1}" y2="{:.1}" stroke="#ddd"/>"##, TOP + ph);
+        let _ =
+            writeln!(s, r#"<text x="{x:.1}" y="{:.1}" text-anchor="middle">1e{e}</text>"#, TOP + ph + 16.0);
+    }
+    for e in ya..=yb {
+        let y = sy(10f64.powi(e));
+        let _ = writeln!(
+            s,
+            r##"<line x1="{LEFT}" y1="{y:.1}" x2="{:.1}" y2="{y:.1}" stroke="#ddd"/>"##,
+            LEFT + pw
+        );
+        let _ =
+            writeln!(s, r#"<text x="{:.1}" y="{:.1}" text-anchor="end">1e{e}</text>"#, LEFT - 6.0, y + 4.0);
+    }
+    let _ =
+        writeln!(s, r#"<rect x="{LEFT}" y="{TOP}" width="{pw}" height="{ph}" fill="none" stroke="black"/>"#);
+    let _ = writeln!(
+        s,
+        r#"<text x="{:.1}" y="{:.1}" text-anchor="middle">wall time (s)</text>"#,
+        LEFT + pw / 2.0,
+        H - 16.0
+    );
+    let _ = writeln!(
+        s,
+        r#"<text x="18" y="{:.1}" text-anchor="middle" transform="rotate(-90 18 {:.1})">{}</text>"#,
+        TOP + ph / 2.0,
+        TOP + ph / 2.0,
+        escape(y_label)
+    );
+    for (k, c) in curves.iter().enumerate() {
+        let colour = COLOURS[k % COLOURS.len()];
+        let pts: Vec<String> = c
+            .points
+            .iter()
+            .filter(|&&(x, y)| x > 0.0 && y > 0.0)
+            .map(|&(x, y)| format!("{:.1},{:.1}", sx(x), sy(y)))
+            .collect();
+        let _ = writeln!(
+            s,
+            r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"/>"#,
+            pts.join(" ")
+        );
+        for p in &pts {
+            let (x, y) = p.split_once(',').unwrap_or(("0", "0"));
+            let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="3" fill="{colour}"/>"#);
+        }
+        let ly = TOP + 10.0 + 20.0 * k as f64;
+        let lx = W - RIGHT + 16.0;
+        let _ = writeln!(
+            s,
+            r#"<line x1="{lx}" y1="{ly}" x2="{}" y2="{ly}" stroke="{colour}" stroke-width="2"/>"#,
+            lx + 24.0
+        );
+        let _ = writeln!(s, r#"<text x="{}" y="{:.1}">{}</text>"#, lx + 30.0, ly + 4.0, escape(&c.name));
+    }
+    s.push_str("</svg>\n");
+    s
+}
+
+/// `text` with XML's special characters escaped.
+fn escape(text: &str) -> String {
+    text.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;").replace('"', "&quot;")
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_plot_has_a_curve_and_a_legend_entry_per_method_and_labelled_axes() {
+        let curves = [
+            Curve { name: "grid".into(), points: vec![(0.01, 0.1), (0.04, 0.05), (0.16, 0.02)] },
+            Curve { name: "r2 <low-discrepancy>".into(), points: vec![(0.01, 0.08), (0.04, 0.02)] },
+        ];
+        let s = svg("whitted.toml", "RMSE", &curves);
+        assert_eq!(s.matches("<polyline").count(), 2);
+        assert_eq!(s.matches("<circle").count(), 5);
+        assert!(s.contains(">grid<") && s.contains("r2 &lt;low-discrepancy&gt;"));
+        assert!(s.contains("wall time (s)") && s.contains(">RMSE<"));
+        // Decade ticks 1e-2 .. 1e0 on x (0.01 to 0.16), 1e-2 .. 1e-1 on y.
+        assert!(s.contains(">1e-2<") && s.contains(">1e0<") && s.contains(">1e-1<"));
+        assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+    }
+}
