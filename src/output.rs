@@ -298,7 +298,7 @@ fn encode(img: &Image, format: Format, transfer: Transfer, tmp: &Path) -> Result
 /// `image` crate's encoder writes no text chunks), with that encoder's settings here: fast deflate and Paeth
 /// on every row rather than the adaptive choice per row (on balls4 at 1024², 3.4 against 4.2 ms to encode
 /// and a smaller file; docs/perf-log/2026-11.md).
-pub fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
+fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
     let mut encoder = png::Encoder::new(out, img.width(), img.height());
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -313,14 +313,9 @@ pub fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<
 
 /// Binary 8-bit PPM: the header `P6\n<width> <height>\n255\n`, then the RGB bytes row by row, top row
 /// first (netpbm's `P6`, which every PPM reader takes; the `image` crate's PNM encoder writes PAM `P7`).
-pub fn write_ppm(img: &RgbImage, out: &mut impl Write) -> std::io::Result<()> {
+fn write_ppm(img: &RgbImage, out: &mut impl Write) -> std::io::Result<()> {
     write!(out, "P6\n{} {}\n255\n", img.width(), img.height())?;
     out.write_all(img.as_raw())
-}
-
-/// Writes raw bytes atomically (for text outputs such as generated scenes).
-pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    write_atomic_with(path, |w| w.write_all(bytes))
 }
 
 /// Streams a file atomically: `fill` writes into a buffered temporary file in the same directory, which
