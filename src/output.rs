@@ -261,6 +261,20 @@ pub fn to_rgb8(img: &Image, transfer: Transfer) -> RgbImage {
 pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Writes `img` to `path` in the format its extension names, atomically; 8-bit formats under `transfer`.
+///
+/// ```
+/// use bareray::{film::Image, math::Rgb, output, scene::desc::Transfer};
+///
+/// let mut img = Image::new(4, 2);
+/// img.pixels[0] = Rgb::new(1.0, 0.5, 0.0);
+/// let dir = std::env::temp_dir();
+/// for name in ["bareray-doc-write.png", "bareray-doc-write.exr", "bareray-doc-write.ppm"] {
+///     output::write_image(&img, &dir.join(name), Transfer::Srgb)?;
+/// #   std::fs::remove_file(dir.join(name))?;
+/// }
+/// assert!(output::write_image(&img, &dir.join("bareray-doc-write.jpg"), Transfer::Srgb).is_err());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn write_image(img: &Image, path: &Path, transfer: Transfer) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
     write_atomic(path, |tmp| encode(img, format, transfer, tmp))
