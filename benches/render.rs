@@ -17,7 +17,6 @@ use bareray::simd::Lanes;
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
 use glam::DVec3;
-use indicatif::ProgressBar;
 use wide::{f32x16, f32x4, f32x8};
 
 fn field_scene() -> Scene {
@@ -63,7 +62,7 @@ fn bvh_primary<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, scene: &Scene) {
 fn shading<F: Lanes>(group: &mut BenchmarkGroup<WallTime>, scene: &Scene) {
     group.bench_function(BenchmarkId::from_parameter(F::K), |b| {
         let pool = thread_pool(Some(1)).expect("thread pool");
-        b.iter(|| render::<F>(scene, &pool, &ProgressBar::hidden()).counts.total())
+        b.iter(|| render::<F>(scene, &pool, &()).counts.total())
     });
 }
 
@@ -83,7 +82,7 @@ fn benches(c: &mut Criterion) {
     desc.camera.height = 72;
     let whitted = Scene::compile(&desc).expect("scene compiles");
     let pool = thread_pool(Some(1)).expect("thread pool");
-    let rays = render::<f32>(&whitted, &pool, &ProgressBar::hidden()).counts.total();
+    let rays = render::<f32>(&whitted, &pool, &()).counts.total();
     let mut group = c.benchmark_group("shading");
     group.throughput(Throughput::Elements(rays));
     shading::<f32>(&mut group, &whitted);

@@ -109,13 +109,14 @@ features! {
 }
 
 /// The x86 features this binary was compiled for, among those the check knows (the `target_feature`s
-/// enabled by `-C target-cpu=...`), in the order of [`FEATURES`]: CPUID's. Empty on other architectures.
+/// enabled by `-C target-cpu=...`), in the order of CPUID's registers and bits. Empty on other architectures.
 pub fn required_features() -> Vec<&'static str> {
     FEATURES.iter().filter(|f| f.compiled).map(|f| f.name).collect()
 }
 
 /// The compiled-for features that `has` says the CPU lacks.
-pub fn missing_features(has: impl Fn(&str) -> bool) -> Vec<&'static str> {
+#[cfg(test)]
+fn missing_features(has: impl Fn(&str) -> bool) -> Vec<&'static str> {
     names(missing_mask(has)).collect()
 }
 
@@ -169,7 +170,8 @@ fn emit_message<'a>(
     );
 }
 
-/// [`emit_message`] as one string (ending in a newline).
+/// The message that names the features the CPU lacks and how to build for it, as one string (ending in a
+/// newline).
 pub fn message(required: &[&str], missing: &[&str]) -> String {
     let mut out = String::new();
     emit_message(required.iter().copied(), missing.iter().copied(), |s| out.push_str(s));
@@ -239,7 +241,7 @@ pub mod detect {
     #[cfg(target_arch = "x86_64")]
     use core::arch::x86_64::{__cpuid, __cpuid_count};
 
-    /// The CPUID registers that hold the features of [`FEATURES`], and the register state the OS saves.
+    /// The CPUID registers that hold the features the check knows, and the register state the OS saves.
     #[derive(Clone, Copy, Debug, Default)]
     pub struct Cpu {
         l1_ecx: u32,

@@ -261,6 +261,20 @@ pub fn to_rgb8(img: &Image, transfer: Transfer) -> RgbImage {
 pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Writes `img` to `path` in the format its extension names, atomically; 8-bit formats under `transfer`.
+///
+/// ```
+/// use bareray::{film::Image, math::Rgb, output, scene::desc::Transfer};
+///
+/// let mut img = Image::new(4, 2);
+/// img.pixels[0] = Rgb::new(1.0, 0.5, 0.0);
+/// let dir = std::env::temp_dir();
+/// for name in ["bareray-doc-write.png", "bareray-doc-write.exr", "bareray-doc-write.ppm"] {
+///     output::write_image(&img, &dir.join(name), Transfer::Srgb)?;
+/// #   std::fs::remove_file(dir.join(name))?;
+/// }
+/// assert!(output::write_image(&img, &dir.join("bareray-doc-write.jpg"), Transfer::Srgb).is_err());
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn write_image(img: &Image, path: &Path, transfer: Transfer) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
     write_atomic(path, |tmp| encode(img, format, transfer, tmp))
@@ -298,7 +312,7 @@ fn encode(img: &Image, format: Format, transfer: Transfer, tmp: &Path) -> Result
 /// `image` crate's encoder writes no text chunks), with that encoder's settings here: fast deflate and Paeth
 /// on every row rather than the adaptive choice per row (on balls4 at 1024², 3.4 against 4.2 ms to encode
 /// and a smaller file; docs/perf-log/2026-11.md).
-pub fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
+fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
     let mut encoder = png::Encoder::new(out, img.width(), img.height());
     encoder.set_color(png::ColorType::Rgb);
     encoder.set_depth(png::BitDepth::Eight);
@@ -313,14 +327,9 @@ pub fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<
 
 /// Binary 8-bit PPM: the header `P6\n<width> <height>\n255\n`, then the RGB bytes row by row, top row
 /// first (netpbm's `P6`, which every PPM reader takes; the `image` crate's PNM encoder writes PAM `P7`).
-pub fn write_ppm(img: &RgbImage, out: &mut impl Write) -> std::io::Result<()> {
+fn write_ppm(img: &RgbImage, out: &mut impl Write) -> std::io::Result<()> {
     write!(out, "P6\n{} {}\n255\n", img.width(), img.height())?;
     out.write_all(img.as_raw())
-}
-
-/// Writes raw bytes atomically (for text outputs such as generated scenes).
-pub fn write_bytes_atomic(path: &Path, bytes: &[u8]) -> std::io::Result<()> {
-    write_atomic_with(path, |w| w.write_all(bytes))
 }
 
 /// Streams a file atomically: `fill` writes into a buffered temporary file in the same directory, which

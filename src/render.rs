@@ -3,9 +3,9 @@
 //! for K = 1), one sample offset at a time. Each pixel's samples are summed in the same fixed order at every
 //! width and thread count, so the image is the same bits whatever K and the number of threads.
 
+use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
-use indicatif::ProgressBar;
 use rayon::prelude::*;
 use wide::{f32x16, f32x4, f32x8};
 
@@ -76,12 +76,82 @@ pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, rayon::T
     builder.build()
 }
 
-/// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on the threads of `pool`.
+/// Where a render reports how far it got: its work is cut into tiles, and it tells how many there are
+/// before tracing, then once per finished tile.
+///
+/// Implemented by `()` (reports go nowhere) and by every `Fn(u64, u64) + Sync` closure, which is called with
+/// `(done, total)`: `(0, total)` first, then once per tile with `done` from 1 to `total`. Tiles finish on
+/// the render's worker threads, so the calls come from them and concurrent ones may arrive out of order.
+///
+/// ```
+/// use std::path::Path;
+/// use std::sync::atomic::{AtomicU64, Ordering};
+///
+/// use bareray::{compile::Scene, io, render};
+///
+/// let mut desc = io::load(Path::new("scenes/whitted.toml"))?;
+/// (desc.camera.width, desc.camera.height) = (40, 30);
+/// let scene = Scene::compile(&desc)?;
+/// let pool = render::thread_pool(Some(2))?;
+///
+/// let finished = AtomicU64::new(0);
+/// let count = |done: u64, _total: u64| {
+///     finished.fetch_max(done, Ordering::Relaxed);
+/// };
+/// render::render_lanes(&scene, 8, &pool, &count);
+/// assert_eq!(finished.into_inner(), render::tiles(40, 30).len() as u64);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub trait Progress: Sync {
+    /// The render has `total` tiles; called once, before any tile is traced.
+    fn start(&self, total: u64);
+    /// One more tile is finished, `done` of `total` so far (each `done` from 1 to `total` comes once).
+    fn tile_done(&self, done: u64, total: u64);
+}
+
+impl Progress for () {
+    fn start(&self, _: u64) {}
+    fn tile_done(&self, _: u64, _: u64) {}
+}
+
+impl<F: Fn(u64, u64) + Sync> Progress for F {
+    fn start(&self, total: u64) {
+        self(0, total);
+    }
+    fn tile_done(&self, done: u64, total: u64) {
+        self(done, total);
+    }
+}
+
+/// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on the threads of `pool`, reporting each
+/// finished tile to `progress` (`&()` for no reports).
+///
+/// Every width and thread count gives the same image, bit for bit; 1 is the scalar reference path. Panics
+/// on a width not in [`LANE_CHOICES`].
+///
+/// ```
+/// use std::path::Path;
+///
+/// use bareray::{compile::Scene, io, render};
+///
+/// let mut desc = io::load(Path::new("scenes/whitted.toml"))?;
+/// (desc.camera.width, desc.camera.height) = (64, 48);
+/// let scene = Scene::compile(&desc)?;
+/// let pool = render::thread_pool(Some(2))?;
+///
+/// let scalar = render::render_lanes(&scene, 1, &pool, &());
+/// let packets = render::render_lanes(&scene, 8, &pool, &|done: u64, total: u64| {
+///     eprintln!("{done}/{total} tiles");
+/// });
+/// assert_eq!(scalar.image.pixels, packets.image.pixels);
+/// assert!(packets.counts.primary >= 64 * 48);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
 pub fn render_lanes(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,
-    progress: &ProgressBar,
+    progress: &dyn Progress,
 ) -> Rendered {
     match lanes {
         1 => render::<f32>(scene, pool, progress),
@@ -92,12 +162,15 @@ pub fn render_lanes(
     }
 }
 
-/// Renders `scene` with packets of `F::K` rays on the threads of `pool`, ticking `progress` once per tile.
-pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &ProgressBar) -> Rendered {
+/// Renders `scene` with packets of `F::K` rays on the threads of `pool`, reporting each finished tile to
+/// `progress`: [`render_lanes`] with the width as a type (`f32`, or `wide`'s `f32x4`, `f32x8`, `f32x16`).
+pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &dyn Progress) -> Rendered {
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let tiles = tiles(width, height);
-    progress.set_length(tiles.len() as u64);
+    let total = tiles.len() as u64;
+    progress.start(total);
+    let done = AtomicU64::new(0);
     let mut image = Image::new(width, height);
     let rows = tile_rows(&mut image.pixels, width, &tiles);
     let traced: Vec<(RayCounts, Work)> = pool.install(|| {
@@ -115,7 +188,7 @@ pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &Prog
                 for (row, traced) in rows.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
                     row.copy_from_slice(traced);
                 }
-                progress.inc(1);
+                progress.tile_done(done.fetch_add(1, Ordering::Relaxed) + 1, total);
                 (tracer.counts, take_work())
             })
             .collect()
@@ -322,7 +395,7 @@ impl PrimaryHits {
 }
 
 /// FNV-1a 64 of a byte stream (offset basis 0xcbf29ce484222325, prime 0x100000001b3).
-pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+pub(crate) fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
     bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
 }
 

@@ -390,7 +390,7 @@ fn surface_color(mat: &Material, object_point: Vec3f) -> Rgb {
 /// Snell refraction of unit direction `d` through unit normal `n` (facing against `d`) with
 /// `eta = n_incident / n_transmitted`. Returns the lanes that refract (not totally internally reflected),
 /// the unit transmitted direction and the unpolarised dielectric Fresnel reflectance.
-pub fn refract<F: Real>(d: V3<F>, n: V3<F>, eta: F) -> (F::Mask, V3<F>, F) {
+fn refract<F: Real>(d: V3<F>, n: V3<F>, eta: F) -> (F::Mask, V3<F>, F) {
     let one = F::splat(1.0);
     let cos_i = -d.dot(n);
     let sin2_t = eta * eta * (one - cos_i * cos_i);

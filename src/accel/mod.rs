@@ -180,6 +180,29 @@ pub struct SurfacePoint {
 impl Geometry {
     /// Closest hits of a packet in each lane's `[0, t_max)`, never on the near side of its departure surface.
     /// Misses and inactive lanes report `t = inf` and [`NO_PRIM`].
+    ///
+    /// Lane `i` of the result is what [`Geometry::intersect`] finds for lane `i`'s ray, bit for bit:
+    ///
+    /// ```
+    /// use std::path::Path;
+    ///
+    /// use bareray::geometry::{Departure, DeparturePacket, RayPacket};
+    /// use wide::f32x8;
+    ///
+    /// let desc = bareray::io::load(Path::new("scenes/field.toml"))?;
+    /// let scene = bareray::compile::Scene::compile(&desc)?;
+    /// // Camera rays through eight pixel centres along the middle row (rendering space: eye at the origin).
+    /// let row = scene.camera.height as f32 / 2.0;
+    /// let rays: Vec<_> = (0..8).map(|i| scene.camera_f64.ray_f32(40.0 * i as f32 + 0.5, row)).collect();
+    ///
+    /// let packet = RayPacket::<f32x8>::from_rays(&rays, f32::INFINITY);
+    /// let hits = scene.geometry.intersect_k(&packet, &DeparturePacket::camera());
+    /// for (i, ray) in rays.iter().enumerate() {
+    ///     let one = scene.geometry.intersect(ray, Departure::CAMERA, f32::INFINITY);
+    ///     assert_eq!(hits.lane(i), one);
+    /// }
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn intersect_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> HitPacket<F> {
         let mut best = HitPacket::miss();
         if !rays.active.any() {
@@ -352,6 +375,32 @@ impl Geometry {
     }
 
     /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].
+    ///
+    /// The geometry lives in the compiled scene's rendering space, whose origin is the camera's eye
+    /// ([`crate::compile::Scene::to_rendering`] maps world points into it); `from` is
+    /// [`Departure::CAMERA`] for a ray that starts on no surface.
+    ///
+    /// ```
+    /// use std::path::Path;
+    ///
+    /// use bareray::geometry::{Departure, Ray};
+    /// use bareray::math::V3;
+    ///
+    /// let desc = bareray::io::load(Path::new("scenes/whitted.toml"))?;
+    /// let scene = bareray::compile::Scene::compile(&desc)?;
+    /// // From the eye (the origin of rendering space) through the image centre.
+    /// let (width, height) = (scene.camera.width as f32, scene.camera.height as f32);
+    /// let ahead = scene.camera_f64.ray_f32(width / 2.0, height / 2.0);
+    /// let hit = scene.geometry.intersect(&ahead, Departure::CAMERA, f32::INFINITY);
+    /// if hit.is_hit() {
+    ///     let id = scene.geometry.file_id(hit.prim);
+    ///     println!("primitive {id} (scene-file numbering) at t = {}", hit.t);
+    /// }
+    /// // Straight up from far below the scene: nothing there.
+    /// let up = Ray::new(scene.to_rendering(glam::DVec3::new(0.0, -1e6, 0.0)), V3::new(0.0, -1.0, 0.0));
+    /// assert!(!scene.geometry.intersect(&up, Departure::CAMERA, f32::INFINITY).is_hit());
+    /// # Ok::<(), Box<dyn std::error::Error>>(())
+    /// ```
     pub fn intersect(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> Hit {
         let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         let hit = self.intersect_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward });

@@ -145,7 +145,7 @@ impl<'a, F: Lanes> LeafQuery<F> for SphereQuery<'a, F> {
 }
 
 impl SingleLeafQuery for SphereQuery<'_, f32> {
-    /// [`SphereQuery::intersect`] over the leaf `first..first + count`, [`LeafLanes`] spheres at a time:
+    /// [`SphereQuery::intersect`] over the leaf `first..first + count`, `LeafLanes` spheres at a time:
     /// the same hits, merged by the same (t, id) order.
     #[inline(always)]
     fn intersect_leaf(&self, first: usize, count: usize, best: &mut HitPacket<f32>) {
@@ -159,7 +159,7 @@ impl SingleLeafQuery for SphereQuery<'_, f32> {
         }
     }
 
-    /// [`SphereQuery::occluded`] over the leaf `first..first + count` for the one ray, [`LeafLanes`]
+    /// [`SphereQuery::occluded`] over the leaf `first..first + count` for the one ray, `LeafLanes`
     /// spheres at a time; `blocker` is set to the lowest-index blocking sphere, as the scalar loop finds it.
     #[inline(always)]
     fn occluded_leaf(&self, first: usize, count: usize, blocker: &mut u32) -> bool {
@@ -179,7 +179,7 @@ impl SingleLeafQuery for SphereQuery<'_, f32> {
 
 /// The lane type of a single ray's leaf test, one sphere per lane: obvhs leaves hold at most 8 spheres
 /// (`max_prims_per_leaf` of every preset bareray uses), so one pass covers a leaf.
-pub type LeafLanes = wide::f32x8;
+pub(crate) type LeafLanes = wide::f32x8;
 
 impl SphereQuery<'_, f32> {
     /// Spheres `at..at + min(count, L::K)` against the one ray (lanes = spheres, the transpose of

@@ -167,7 +167,7 @@ pub struct Example {
 /// The comparison of one scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Report {
-    /// The scene's name (as given to [`run`]).
+    /// The scene's name (as given to [`super::run`]).
     pub scene: String,
     /// Image columns.
     pub width: u32,

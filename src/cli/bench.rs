@@ -7,7 +7,6 @@ use std::time::Instant;
 
 use anyhow::{anyhow, Context, Result};
 use clap::Args;
-use indicatif::ProgressBar;
 use serde::{Deserialize, Serialize};
 
 use super::camera_args::CameraArgs;
@@ -483,7 +482,7 @@ fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Res
             checksum = hits.checksum(scene);
             hits.seconds
         } else {
-            let r = render_lanes(scene, lanes, &pool, &ProgressBar::hidden());
+            let r = render_lanes(scene, lanes, &pool, &());
             rays = r.counts.total();
             checksum = image_checksum(&r.image);
             r.seconds

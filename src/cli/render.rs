@@ -143,6 +143,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
     Ok(())
 }
 
+/// The render's tiles as the bar's length and position.
+impl crate::render::Progress for ProgressBar {
+    fn start(&self, total: u64) {
+        self.set_length(total);
+    }
+    fn tile_done(&self, _: u64, _: u64) {
+        self.inc(1);
+    }
+}
+
 fn progress_bar(quiet: bool) -> ProgressBar {
     if quiet || !std::io::stderr().is_terminal() {
         return ProgressBar::hidden();

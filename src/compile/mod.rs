@@ -157,6 +157,28 @@ impl Scene {
 
     /// Compiles a description. Fails only on a camera that cannot form an image; everything else was
     /// validated by the reader.
+    ///
+    /// A scene built in code, compiled:
+    ///
+    /// ```
+    /// use bareray::compile::Scene;
+    /// use bareray::math::Rgb;
+    /// use bareray::scene::desc::{LightDesc, Material, SceneDesc, SphereDesc};
+    /// use glam::DVec3;
+    ///
+    /// let desc = SceneDesc {
+    ///     materials: vec![Material { color: Rgb::new(0.9, 0.3, 0.2), ..Material::default() }],
+    ///     lights: vec![LightDesc { position: DVec3::new(5.0, 5.0, -5.0), color: Rgb::all(1.0), falloff: Default::default() }],
+    ///     spheres: (0..10)
+    ///         .map(|i| SphereDesc { center: DVec3::new(i as f64 - 4.5, 0.0, 0.0), radius: 0.4, material: 0 })
+    ///         .collect(),
+    ///     ..SceneDesc::default() // camera at (0, 0, −5) looking at the origin, 640×480
+    /// };
+    /// let scene = Scene::compile(&desc)?;
+    /// assert_eq!(scene.geometry.len(), 10);
+    /// assert!(scene.geometry.sphere_bvh.is_some()); // 10 spheres: a BVH rather than brute force
+    /// # Ok::<(), bareray::camera::CameraError>(())
+    /// ```
     pub fn compile(desc: &SceneDesc) -> Result<Scene, CameraError> {
         Self::compile_with(desc, Accel::Auto)
     }

@@ -122,7 +122,7 @@ pub fn flake(level: u32) -> Result<Vec<[f64; 4]>, GenError> {
 }
 
 /// Calls `visit` with each sphere of [`flake`] in order, without storing them.
-pub fn for_each_flake_sphere(level: u32, visit: &mut dyn FnMut([f64; 4])) -> Result<(), GenError> {
+fn for_each_flake_sphere(level: u32, visit: &mut dyn FnMut([f64; 4])) -> Result<(), GenError> {
     if level > MAX_FLAKE_LEVEL {
         return Err(GenError(format!("--level must be at most {MAX_FLAKE_LEVEL}, got {level}")));
     }

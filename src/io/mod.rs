@@ -13,6 +13,18 @@ use crate::scene::SceneDesc;
 
 /// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr` (a directory is an
 /// error saying so, whatever its name).
+///
+/// ```
+/// use std::path::Path;
+///
+/// let desc = bareray::io::load(Path::new("scenes/balls3.nff"))?;
+/// println!("{} spheres, {} polygons", desc.spheres.len(), desc.polygons.len());
+/// assert!(!desc.spheres.is_empty() && !desc.lights.is_empty());
+///
+/// let err = bareray::io::load(Path::new("scenes/whitted.obj")).unwrap_err();
+/// assert!(err.to_string().contains("unknown scene format"));
+/// # Ok::<(), bareray::io::SceneError>(())
+/// ```
 pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
     if path.is_dir() {
         return Err(SceneError::whole_file(path, "is a directory"));

@@ -17,7 +17,7 @@ use super::{binary, piles, BuildStats, Bvh};
 /// How to build a tree.
 #[derive(Clone, Copy, Debug)]
 pub struct BuildOptions {
-    /// The padding the item boxes carry ([`padding`]), kept for the packet walk's frustum test of single items.
+    /// The padding the item boxes carry ([`super::padding`]), kept for the packet walk's frustum test of single items.
     pub pad: f32,
     /// obvhs's settings.
     pub params: BvhBuildParams,

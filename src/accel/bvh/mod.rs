@@ -1,22 +1,22 @@
 //! A 4-wide BVH over boxes, built by obvhs (PLOC) as a binary tree and collapsed into bareray's own node
 //! layout: each node holds the boxes of up to [`N`] children in SoA form (two 64-byte cache lines), so one node
-//! visit tests all its children — K rays against each child in the packet walk ([`packet`]), one ray against
-//! all children at once in the single-ray walk ([`single`]).
+//! visit tests all its children — K rays against each child in the packet walk (`packet.rs`), one ray against
+//! all children at once in the single-ray walk (`single.rs`).
 //!
-//! The tree knows nothing of primitives. It is built over one box per item ([`build`]), returns the leaf
+//! The tree knows nothing of primitives. It is built over one box per item ([`build()`]), returns the leaf
 //! order of the items (their owner stores them in that order, so leaves index the arrays directly), and its
 //! walks ask a [`LeafQuery`] to test the items of a leaf: spheres, triangles and cones each implement it, and
 //! each kind's walk is monomorphised over its own query.
 //!
 //! Culling is conservative: boxes are padded by a bound on the kernels' rounding error ([`padding`]), and every
 //! slab test widens its exit distance by 6ε, which covers the fused slab distances' rounding
-//! ([`slab::WIDEN`]). With the (t, id) order of [`crate::geometry::HitPacket::update`] this makes every lane's
+//! (`slab::WIDEN`). With the (t, id) order of [`crate::geometry::HitPacket::update`] this makes every lane's
 //! result equal, bit for bit, to brute force over the same items, whatever order the nodes are visited in and
 //! whichever walk runs.
 //!
-//! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`build`] (obvhs,
-//! the fallbacks for piles and deep trees), [`collapse`] (binary tree to wide nodes), [`slab`] (slab tests and
-//! the traversal stack), [`packet`] and [`single`] (the walks).
+//! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`mod@build`] (obvhs,
+//! the fallbacks for piles and deep trees), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and
+//! the traversal stack), `packet.rs` and `single.rs` (the walks).
 
 mod binary;
 pub mod build;
@@ -86,13 +86,13 @@ pub struct Bvh {
     /// ([`SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
     pub single_ray_lanes: u32,
     /// Test each node's children and each leaf's spheres against a shared-origin packet as a whole (its
-    /// frustum, [`packet`]) before their lanes. On by default (docs/perf-log/2026-11.md, "Frustum culling").
+    /// frustum) before their lanes. On by default (docs/perf-log/2026-11.md, "Frustum culling").
     pub frustum_culling: bool,
     /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
     pub extent: f32,
     /// The padding the spheres' boxes were built with ([`padding`]): the frustum's sphere test pads by it too.
     pub pad: f32,
-    /// The same tree in 8-wide nodes for rays walked alone from the root ([`node8`]), when the scene traces
+    /// The same tree in 8-wide nodes for rays walked alone from the root ([`WideNode`]), when the scene traces
     /// secondary rays.
     pub wide: Option<Vec<WideNode>>,
 }
@@ -150,7 +150,7 @@ impl std::ops::AddAssign for BuildStats {
 /// The padding that keeps culling conservative: the sphere kernel may accept a ray passing up to a few ulps
 /// of the ray's distance outside the sphere, and that distance is at most about the scene's extent `reach`
 /// (the largest coordinate magnitude of any sphere, eye or light); the fused slab test may move a box plane
-/// by up to one more ulp of it ([`WIDEN`]). 64 ulps is ample and far below any sphere the scene can resolve.
+/// by up to one more ulp of it (`slab::WIDEN`). 64 ulps is ample and far below any sphere the scene can resolve.
 pub fn padding(reach: f32) -> f32 {
     reach * (64.0 * f32::EPSILON)
 }

@@ -1,5 +1,5 @@
 //! The 4-wide node of the packet walk ([`Node`]) and what every node width shares: the SoA child slots, the
-//! reference to a child, and the [`RayNode`] interface the collapse and the single-ray walk use.
+//! reference to a child, and the `RayNode` interface the collapse and the single-ray walk use.
 
 use crate::simd::Lanes;
 
