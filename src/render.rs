@@ -282,9 +282,8 @@ pub fn for_each_packet<F: Lanes>(
 
 /// The image's pixels as one list of row slices per tile, in the order of `tiles`, which must be
 /// [`tiles`]`(width, height)` (row-major bands of TILE rows), so each tile's job writes its own pixels in
-/// place. Before, every tile returned its pixels and they were merged after the trace: the merge (first
-/// serial, then parallel) and the first touch of 4096 live tile buffers cost 1–5% of a 1024² sphereflake
-/// (docs/perf-log/2026-11.md).
+/// place: returning each tile's pixels and merging them after the trace measured 1–5% slower on a 1024²
+/// sphereflake (the merge, and the first touch of 4096 live tile buffers; docs/perf-log/2026-11.md).
 fn tile_rows<'a>(pixels: &'a mut [Rgb], width: u32, tiles: &[Tile]) -> Vec<Vec<&'a mut [Rgb]>> {
     let mut out: Vec<Vec<&mut [Rgb]>> = tiles.iter().map(|t| Vec::with_capacity(t.h as usize)).collect();
     let per_band = width.div_ceil(TILE) as usize;
