@@ -15,7 +15,7 @@ use crate::compile::Scene;
 use crate::film::Image;
 use crate::geometry::RayPacket;
 use crate::math::{Rgb, V3};
-use crate::sample::{grid_offsets, lecture_3x3, HALF_PIXEL_WEIGHTS};
+use crate::sample::{grid_offsets, lecture_3x3, sequence, HALF_PIXEL_WEIGHTS};
 use crate::scene::desc::{Pattern, PostFilter};
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
@@ -249,6 +249,26 @@ pub fn for_each_packet<F: Lanes>(
     tile: Tile,
     (dx, dy): (f32, f32),
     pyramids: bool,
+    visit: impl FnMut(&RayPacket<F>, Block),
+) {
+    for_each_packet_at(camera, tile, &Offsets::Shared(dx, dy), pyramids, visit);
+}
+
+/// Where a pass of samples lies in each pixel, from the pixel's corner.
+pub enum Offsets<'a> {
+    /// The same offset in every pixel.
+    Shared(f32, f32),
+    /// Each pixel's own offset, given its image column and row.
+    PerPixel(&'a (dyn Fn(u32, u32) -> (f32, f32) + Sync)),
+}
+
+/// [`for_each_packet`] with an offset per pixel: lane i's position is `(column + lane column) + dx_i`, the sums
+/// a one-lane packet of that pixel computes, so every width gives the same rays.
+pub fn for_each_packet_at<F: Lanes>(
+    camera: &Camera<f64>,
+    tile: Tile,
+    offsets: &Offsets,
+    pyramids: bool,
     mut visit: impl FnMut(&RayPacket<F>, Block),
 ) {
     let (bw, bh) = block::<F>();
@@ -258,8 +278,16 @@ pub fn for_each_packet<F: Lanes>(
     for by in (0..tile.h).step_by(bh as usize) {
         for bx in (0..tile.w).step_by(bw as usize) {
             let b = Block { x: bx, y: by, w: bw.min(tile.w - bx), h: bh.min(tile.h - by), bw };
-            let sx = (F::splat_f32((tile.x0 + bx) as f32) + lane_x) + F::splat_f32(dx);
-            let sy = (F::splat_f32((tile.y0 + by) as f32) + lane_y) + F::splat_f32(dy);
+            let (x0, y0) = (tile.x0 + bx, tile.y0 + by);
+            let (dx, dy) = match offsets {
+                Offsets::Shared(dx, dy) => (F::splat_f32(*dx), F::splat_f32(*dy)),
+                Offsets::PerPixel(at) => {
+                    let lane = |i: usize| at(x0 + i as u32 % bw, y0 + i as u32 / bw);
+                    (F::from_fn(|i| lane(i).0), F::from_fn(|i| lane(i).1))
+                }
+            };
+            let sx = (F::splat_f32(x0 as f32) + lane_x) + dx;
+            let sy = (F::splat_f32(y0 as f32) + lane_y) + dy;
             let ray = camera.rays(sx, sy);
             let active = if b.w == bw && b.h == bh {
                 F::mask_from_bits(u32::MAX)
@@ -310,24 +338,35 @@ fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
 /// The pixels of one tile, row by row.
 fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
     let camera = &scene.camera_f64;
-    match scene.render.pattern {
+    let pyramids = scene.geometry.culls_by_pyramid();
+    let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
+    let mut pass = |offsets: &Offsets| {
+        for_each_packet_at(camera, tile, offsets, pyramids, |rays, block| {
+            let c = tracer.primary(rays);
+            for (i, x, y) in block.pixels() {
+                let p = (y * tile.w + x) as usize;
+                sum[p] = sum[p] + lane_rgb(&c, i);
+            }
+        });
+    };
+    let count = match scene.render.pattern {
         Pattern::Grid(n) => {
             let offsets = grid_offsets(n);
-            let scale = 1.0 / offsets.len() as f32;
-            let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
-            for &offset in &offsets {
-                for_each_packet(camera, tile, offset, scene.geometry.culls_by_pyramid(), |rays, block| {
-                    let c = tracer.primary(rays);
-                    for (i, x, y) in block.pixels() {
-                        let p = (y * tile.w + x) as usize;
-                        sum[p] = sum[p] + lane_rgb(&c, i);
-                    }
-                });
-            }
-            sum.into_iter().map(|s| s * scale).collect()
+            offsets.iter().for_each(|&(dx, dy)| pass(&Offsets::Shared(dx, dy)));
+            offsets.len()
         }
-        Pattern::HalfPixel => half_pixel_tile(camera, tracer, tile),
-    }
+        Pattern::Stratified(n) => {
+            (0..n * n).for_each(|k| pass(&Offsets::PerPixel(&|x, y| sequence::stratified(n, x, y, k))));
+            (n * n) as usize
+        }
+        Pattern::R2(count) => {
+            (0..count).for_each(|k| pass(&Offsets::PerPixel(&|x, y| sequence::r2(x, y, k))));
+            count as usize
+        }
+        Pattern::HalfPixel => return half_pixel_tile(camera, tracer, tile),
+    };
+    let scale = 1.0 / count as f32;
+    sum.into_iter().map(|s| s * scale).collect()
 }
 
 /// The 9-sample half-pixel grid: a (2w+1)×(2h+1) lattice at half-pixel spacing over the tile, each interior

@@ -181,3 +181,47 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
     }
     assert!(checked >= 18, "toml, nff and xyzr scenes, and the stress scenes: {checked}");
 }
+
+/// The per-pixel patterns (jittered strata, rotated R2) give the same bits at every width and thread count:
+/// each pixel's positions come from its coordinates, not from the tile, thread or lane that traces it. They
+/// also differ from the regular grid (the jitter is real) and converge toward the same image: with 16
+/// samples each, both lie closer to a 64-sample stratified render than one centred sample does.
+#[test]
+fn per_pixel_patterns_are_deterministic_and_converge() {
+    use bareray::scene::desc::Pattern;
+    let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/whitted.toml")).unwrap();
+    let mut desc = parse_toml(&src);
+    desc.camera.width = 80;
+    desc.camera.height = 60;
+    let image = |pattern: Pattern, lanes: usize, threads: usize| {
+        let mut d = desc.clone();
+        d.render.pattern = pattern;
+        let scene = Scene::compile(&d).unwrap();
+        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden()).image
+    };
+    let bits =
+        |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
+    for pattern in [Pattern::Stratified(2), Pattern::R2(3)] {
+        let reference = bits(&image(pattern, 1, 1));
+        for (lanes, threads) in [(4, 2), (8, 1), (16, 2)] {
+            assert!(
+                bits(&image(pattern, lanes, threads)) == reference,
+                "{pattern:?} at {lanes} lanes, {threads} threads"
+            );
+        }
+    }
+    assert!(bits(&image(Pattern::Stratified(2), 8, 2)) != bits(&image(Pattern::Grid(2), 8, 2)));
+    let fine = image(Pattern::Stratified(8), 16, 2);
+    let err = |img: &Image| {
+        img.pixels
+            .iter()
+            .zip(&fine.pixels)
+            .map(|(a, b)| f64::from((a.x - b.x).abs() + (a.y - b.y).abs()))
+            .sum::<f64>()
+    };
+    let one = err(&image(Pattern::Grid(1), 8, 2));
+    for pattern in [Pattern::Stratified(4), Pattern::R2(16), Pattern::Grid(4)] {
+        let e = err(&image(pattern, 8, 2));
+        assert!(e < 0.5 * one, "{pattern:?}: {e} against one sample's {one}");
+    }
+}

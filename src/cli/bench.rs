@@ -41,8 +41,11 @@ pub struct BenchArgs {
     #[arg(long)]
     pub primary_only: bool,
     /// Samples per pixel (a square number: an n×n grid); overrides the scene, as `render --spp` does.
-    #[arg(long, value_parser = super::render::parse_spp, conflicts_with = "primary_only")]
+    #[arg(long, value_parser = super::render::parse_spp, conflicts_with_all = ["primary_only", "aa"])]
     pub spp: Option<u32>,
+    /// Sampling method and samples per pixel, as `render --aa` takes it; overrides the scene.
+    #[arg(long, value_parser = super::values::parse_aa, conflicts_with = "primary_only")]
+    pub aa: Option<Pattern>,
     /// Reflection/refraction depth limit; overrides the scene, as `render --depth` does.
     #[arg(long, conflicts_with = "primary_only")]
     pub depth: Option<u32>,
@@ -285,6 +288,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let clock = Instant::now();
     let mut desc = load_scene(&args.scene)?;
     args.camera.apply(&mut desc);
+    if let Some(pattern) = args.aa {
+        desc.render.pattern = pattern;
+    }
     if let Some(spp) = args.spp {
         let n = toml::grid_side(spp).map_err(|m| anyhow!("--spp: {m}"))?;
         desc.render.pattern = Pattern::Grid(n);
@@ -300,6 +306,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let (spp, pattern) = match (args.primary_only, desc.render.pattern) {
         (true, _) => (Some(1), "pixel centre".to_owned()),
         (false, Pattern::Grid(n)) => (Some(n * n), format!("grid {n}x{n}")),
+        (false, Pattern::Stratified(n)) => (Some(n * n), format!("stratified {n}x{n}")),
+        (false, Pattern::R2(count)) => (Some(count), format!("r2 {count}")),
         (false, Pattern::HalfPixel) => (None, "half-pixel".to_owned()),
     };
     let max_depth = desc.render.max_depth;

@@ -41,8 +41,15 @@ pub struct RenderArgs {
     #[command(flatten)]
     pub camera: CameraArgs,
     /// Samples per pixel on a regular n×n grid (1, 4, 9, 16, ...); overrides the scene.
-    #[arg(long, value_parser = parse_spp)]
+    #[arg(long, value_parser = parse_spp, conflicts_with = "aa")]
     pub spp: Option<u32>,
+    /// Sampling method and samples per pixel N, overriding the scene: `grid:N` (regular √N×√N grid of
+    /// stratum centres), `stratified:N` (one jittered sample per stratum of a √N×√N grid), `r2:N` (N points
+    /// of the R2 low-discrepancy sequence, rotated per pixel), `lecture` (the 9-point half-pixel grid shared
+    /// with the neighbours). Jitter and rotation are seeded by the pixel, so every width and thread count
+    /// gives the same image.
+    #[arg(long, value_parser = super::values::parse_aa)]
+    pub aa: Option<Pattern>,
     /// Reflection/refraction depth limit; overrides the scene.
     #[arg(long)]
     pub depth: Option<u32>,
@@ -253,6 +260,16 @@ fn pattern_name(pattern: Pattern) -> String {
             let spp = n * n;
             format!("{spp} sample{} per pixel ({n}×{n} grid)", if spp == 1 { "" } else { "s" })
         }
+        Pattern::Stratified(n) => {
+            let spp = n * n;
+            format!("{spp} sample{} per pixel ({n}×{n} jittered grid)", if spp == 1 { "" } else { "s" })
+        }
+        Pattern::R2(count) => {
+            format!(
+                "{count} sample{} per pixel (R2 sequence, rotated per pixel)",
+                if count == 1 { "" } else { "s" }
+            )
+        }
         Pattern::HalfPixel => {
             "half-pixel pattern (9 samples per pixel shared with the neighbours)".to_owned()
         }
@@ -320,6 +337,9 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
     args.camera.apply(desc);
     if let Some(spp) = args.spp {
         desc.render.pattern = Pattern::Grid(toml::grid_side(spp).expect("--spp was checked"));
+    }
+    if let Some(pattern) = args.aa {
+        desc.render.pattern = pattern;
     }
     if let Some(d) = args.depth {
         desc.render.max_depth = d;

@@ -2,7 +2,7 @@
 //! each enum converts to the library's type.
 
 use crate::compile::{Accel, BvhPreset};
-use crate::scene::desc::Transfer;
+use crate::scene::desc::{Pattern, Transfer};
 
 /// `--transfer`: [`Transfer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -20,6 +20,30 @@ impl From<TransferArg> for Transfer {
             TransferArg::Srgb => Transfer::Srgb,
             TransferArg::Linear => Transfer::Linear,
         }
+    }
+}
+
+/// Parses `--aa METHOD[:N]`: `grid:N` and `stratified:N` (N a square number of samples per pixel), `r2:N`
+/// (any N from 1), `lecture` (the half-pixel pattern, no N).
+pub fn parse_aa(s: &str) -> Result<Pattern, String> {
+    let (method, count) = match s.trim().split_once(':') {
+        Some((m, n)) => (m, Some(n)),
+        None => (s.trim(), None),
+    };
+    let samples = || -> Result<u32, String> {
+        let n = count.ok_or_else(|| format!("`{method}` takes a sample count: `{method}:N`"))?;
+        match n.trim().parse::<u32>() {
+            Ok(n) if (1..=65_536).contains(&n) => Ok(n),
+            _ => Err(format!("samples per pixel run from 1 to 65536, got `{n}`")),
+        }
+    };
+    match method {
+        "grid" => Ok(Pattern::Grid(crate::io::toml::grid_side(samples()?)?)),
+        "stratified" => Ok(Pattern::Stratified(crate::io::toml::grid_side(samples()?)?)),
+        "r2" => Ok(Pattern::R2(samples()?)),
+        "lecture" if count.is_none() => Ok(Pattern::HalfPixel),
+        "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
+        _ => Err(format!("unknown method `{method}`: grid:N, stratified:N, r2:N or lecture")),
     }
 }
 
@@ -80,6 +104,17 @@ impl From<BvhPresetArg> for BvhPreset {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn aa_methods_parse_with_their_counts() {
+        assert_eq!(parse_aa("grid:16"), Ok(Pattern::Grid(4)));
+        assert_eq!(parse_aa("stratified:9"), Ok(Pattern::Stratified(3)));
+        assert_eq!(parse_aa("r2:5"), Ok(Pattern::R2(5)));
+        assert_eq!(parse_aa("lecture"), Ok(Pattern::HalfPixel));
+        for bad in ["grid:5", "grid", "r2:0", "r2:x", "lecture:9", "sobol:4", ""] {
+            assert!(parse_aa(bad).is_err(), "{bad}");
+        }
+    }
     use clap::ValueEnum;
 
     #[test]

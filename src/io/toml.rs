@@ -81,6 +81,8 @@ enum TransferToml {
 enum PatternToml {
     Grid,
     HalfPixel,
+    Stratified,
+    R2,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -387,6 +389,15 @@ impl Reader<'_> {
             (PatternToml::Grid, Some(s)) => {
                 Pattern::Grid(grid_side(*s.get_ref()).map_err(|m| self.err(s.span(), m))?)
             }
+            (PatternToml::Stratified, None) => Pattern::Stratified(1),
+            (PatternToml::Stratified, Some(s)) => {
+                Pattern::Stratified(grid_side(*s.get_ref()).map_err(|m| self.err(s.span(), m))?)
+            }
+            (PatternToml::R2, None) => Pattern::R2(1),
+            (PatternToml::R2, Some(s)) if *s.get_ref() == 0 => {
+                return Err(self.err(s.span(), "the R2 pattern takes at least 1 sample per pixel"));
+            }
+            (PatternToml::R2, Some(s)) => Pattern::R2(*s.get_ref()),
         };
         Ok(RenderDesc {
             pattern,

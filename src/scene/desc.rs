@@ -78,6 +78,22 @@ pub enum Pattern {
     /// The lecture's 9 samples at half-pixel spacing (corners, edge midpoints, centre), shared with the
     /// neighbouring pixels (about 4 rays per pixel), weighted by the trapezoid rule.
     HalfPixel,
+    /// An n×n jittered grid: one uniform position in each of the n² strata, different in every pixel (seeded
+    /// by the pixel's coordinates, so the image does not depend on tiles or threads); box filter.
+    Stratified(u32),
+    /// N points of the R2 low-discrepancy sequence, rotated by a per-pixel random shift; box filter.
+    R2(u32),
+}
+
+impl Pattern {
+    /// Camera rays per pixel (the half-pixel pattern shares its 9 with the neighbours: about 4).
+    pub fn rays_per_pixel(self) -> f64 {
+        match self {
+            Pattern::Grid(n) | Pattern::Stratified(n) => f64::from(n * n),
+            Pattern::R2(count) => f64::from(count),
+            Pattern::HalfPixel => 4.0,
+        }
+    }
 }
 
 /// A filter over the finished image.
