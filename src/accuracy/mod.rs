@@ -14,10 +14,11 @@
 //!
 //! - **graze** ([`K_GRAZE`]): the ray passes within tolerance of tangency with either primitive
 //!   ([`Twin::grazing`]: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
-//!   outlines);
+//!   outlines, cones near tangency or with a hit near an end rim);
 //! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other;
 //! - **start** ([`K_START`], secondary rays): the ray starts within tolerance of either primitive's surface
-//!   ([`Twin::near_surface`]: contact points of touching spheres);
+//!   ([`Twin::near_surface`]: contact points of touching spheres, a ray leaving one cone where another's
+//!   wall or rim is);
 //! - **light** ([`K_START`], shadow rays): the light lies within tolerance of the blocker's surface;
 //! - **facing** ([`K_GRAZE`], shadow rays): the light is in front of the surface in one precision only and
 //!   within `K_GRAZE·ε32` of its tangent plane (|cos| in f64);
