@@ -598,7 +598,7 @@ fn cone_grazing(cone: &Cone<f64>, ray: &Ray<f64>, nudge: f64, slack: Slack) -> b
             return true;
         }
     }
-    if !(disc >= 0.0) {
+    if disc.is_nan() || disc < 0.0 {
         return false;
     }
     let root = disc.sqrt();
