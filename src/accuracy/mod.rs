@@ -14,10 +14,11 @@
 //!
 //! - **graze** ([`K_GRAZE`]): the ray passes within tolerance of tangency with either primitive
 //!   ([`Twin::grazing`]: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
-//!   outlines);
+//!   outlines, cones near tangency or with a hit near an end rim);
 //! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other;
 //! - **start** ([`K_START`], secondary rays): the ray starts within tolerance of either primitive's surface
-//!   ([`Twin::near_surface`]: contact points of touching spheres);
+//!   ([`Twin::near_surface`]: contact points of touching spheres, a ray leaving one cone where another's
+//!   wall or rim is);
 //! - **light** ([`K_START`], shadow rays): the light lies within tolerance of the blocker's surface;
 //! - **facing** ([`K_GRAZE`], shadow rays): the light is in front of the surface in one precision only and
 //!   within `K_GRAZE·ε32` of its tangent plane (|cos| in f64);
@@ -264,12 +265,14 @@ fn mirror<F: crate::math::Real>(d: V3<F>, n: V3<F>) -> V3<F> {
 /// Whether a secondary ray leaving primitive `departed` self-hits in one precision only: its hit (`a` in
 /// f32, `b` in f64) is the departure primitive itself, or lies within `tol` of the origin, in one and not in
 /// the other. Both hitting the same other primitive is agreement, however close to the origin (a neighbour
-/// closer than the f32 rounding of the origin's position).
-fn is_self_hit(a: Hit64, b: Hit64, departed: u32, tol: f64) -> bool {
+/// closer than the f32 rounding of the origin's position). When the departure primitive can be met again
+/// away from the origin (`meets_again`: an open cone's far wall), only hits within `tol` count: a far-wall
+/// hit in one precision and not the other is a disagreement like any other, to be explained or not.
+fn is_self_hit(a: Hit64, b: Hit64, departed: u32, tol: f64, meets_again: bool) -> bool {
     if a.is_hit() && a.prim == b.prim && a.prim != departed {
         return false;
     }
-    let selfish = |h: Hit64| h.is_hit() && (h.prim == departed || h.t <= tol);
+    let selfish = |h: Hit64| h.is_hit() && ((h.prim == departed && !meets_again) || h.t <= tol);
     selfish(a) != selfish(b)
 }
 
@@ -357,7 +360,7 @@ impl Comparer<'_> {
             let b32 = g.intersect(&s32, from32, dist32);
             let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
             let b64 = self.twin.intersect(&s64, from64, dist64);
-            if is_self_hit(b32, b64, h64.prim, self_tol) {
+            if is_self_hit(b32, b64, h64.prim, self_tol, self.twin.meets_again(h64.prim)) {
                 acc.shadow.self_hits += 1;
                 acc.example("shadow self-hit", (x, y), Some(k), b32, b64);
             }
@@ -405,7 +408,7 @@ impl Comparer<'_> {
             m64,
             slack,
         );
-        if is_self_hit(m32, m64, h64.prim, self_tol) {
+        if is_self_hit(m32, m64, h64.prim, self_tol, self.twin.meets_again(h64.prim)) {
             acc.reflection.self_hits += 1;
             acc.example("reflection self-hit", (x, y), None, m32, m64);
         }

@@ -3,15 +3,17 @@
 //!
 //! It reads the [`SceneDesc`] (already f64) and never the compiled f32 scene, and works in the renderer's
 //! camera-relative space: every position `p` is stored as `p − eye`, computed in f64 (sphere centres, shape
-//! translations, polygon vertices, lights), and camera rays start at exactly 0 with f64 unit directions from
-//! [`Camera<f64>::ray`], not rounded to f32. Intersections run the generic kernels of [`crate::geometry`]
-//! instantiated at f64 ([`intersect_sphere`], [`Shape::intersect`], [`intersect_triangle`]), with the
-//! renderer's rules: closest hit by the total order (smaller t, then lower id), and a ray that leaves a
-//! primitive ([`Departure`]) never hits it again except, for a solid left toward its inside, at its exit root.
+//! translations, polygon vertices, cone bases and apexes, lights), and camera rays start at exactly 0 with
+//! f64 unit directions from [`Camera<f64>::ray`], not rounded to f32. Intersections run the generic kernels
+//! of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`], [`Shape::intersect`],
+//! [`intersect_triangle`], [`intersect_cone`] on [`Cone<f64>`]), with the renderer's rules: closest hit by the
+//! total order (smaller t, then lower id), and a ray that leaves a primitive ([`Departure`]) never hits it
+//! again except, for a solid left toward its inside, at its exit root, and for an open cone, wherever it
+//! meets that cone again ([`rehit_cone`], whichever side the ray heads to, as `accel/departure.rs` rules).
 //!
-//! Ids are scene-file ids: spheres `0..` in file order, then shapes, then polygons (one id per polygon).
-//! Spheres are searched through the twin's own BVH ([`super::bvh64`]) from [`TWIN_BVH_MIN_SPHERES`] on;
-//! shapes and polygons brute force (planes are unbounded).
+//! Ids are scene-file ids: spheres `0..` in file order, then shapes, then polygons (one id per polygon), then
+//! cones. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from [`TWIN_BVH_MIN_SPHERES`]
+//! on; shapes, polygons and cones brute force (planes are unbounded).
 
 use std::ops::Range;
 
@@ -20,8 +22,8 @@ use glam::{DAffine3, DVec3};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::{
-    far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, Shape,
-    ShapeKind, NO_PRIM,
+    far_root, first_root, intersect_cone, intersect_sphere, intersect_triangle, rehit_cone, sphere_roots,
+    Cone, Departure, Ray, Shape, ShapeKind, NO_PRIM,
 };
 use crate::math::{Affine, V3};
 use crate::scene::desc::SceneDesc;
@@ -115,6 +117,7 @@ pub struct Twin {
     shapes: Vec<Shape<f64>>,
     tris: Vec<Tri64>,
     polygons: Vec<Polygon64>,
+    cones: Vec<Cone<f64>>,
     bvh: Option<Bvh64>,
 }
 
@@ -188,6 +191,18 @@ impl Twin {
                 outline: vertices.iter().map(|&x| v(x)).collect(),
             });
         }
+        let cones = desc
+            .cones
+            .iter()
+            .map(|c| {
+                let (base, apex) = (c.base - eye, c.apex - eye);
+                // compile's rule: a cone the readers would have rejected still gets its id, as a needle.
+                Cone::new(base, c.base_radius, apex, c.apex_radius).unwrap_or_else(|| {
+                    let needle = base + DVec3::X * base.abs().max_element().max(1.0) * 1e-6;
+                    Cone::new(base, 0.0, needle, f64::MIN_POSITIVE).expect("a needle is a valid cone")
+                })
+            })
+            .collect();
         let finite = spheres
             .iter()
             .all(|(c, r)| c.x.is_finite() && c.y.is_finite() && c.z.is_finite() && r.is_finite());
@@ -200,12 +215,24 @@ impl Twin {
             shapes,
             tris,
             polygons,
+            cones,
             bvh,
         })
     }
 
     /// Number of primitives.
     pub fn len(&self) -> usize {
+        self.cone_base() + self.cones.len()
+    }
+
+    /// Whether a ray leaving primitive `prim` can meet it again away from its origin whichever way it heads:
+    /// an open cone's far wall (a solid's exit needs the ray to head inward).
+    pub fn meets_again(&self, prim: u32) -> bool {
+        (prim as usize) >= self.cone_base() && (prim as usize) < self.len()
+    }
+
+    /// The id of the first cone (cone k has id `cone_base() + k`).
+    fn cone_base(&self) -> usize {
         self.spheres.len() + self.shapes.len() + self.polygons.len()
     }
 
@@ -259,12 +286,38 @@ impl Twin {
                 }
             }
         }
-        if from.inward {
-            if let Some(t) = self.exit(from.prim, ray, t_max) {
-                best.update(from.prim, t);
+        let nc = self.cone_base() as u32;
+        for (k, cone) in self.cones.iter().enumerate() {
+            let id = nc + k as u32;
+            if id != from.prim {
+                let (hit, t) = intersect_cone(cone, ray, t_max);
+                if hit {
+                    best.update(id, t);
+                }
             }
         }
+        if let Some(t) = self.departure_hit(from, ray, t_max) {
+            best.update(from.prim, t);
+        }
         best
+    }
+
+    /// Where `ray` meets the primitive it leaves again, in `[0, t_max)`: for a solid left toward its inside,
+    /// its exit root; for an open cone, left to either side, where it meets the cone again ([`rehit_cone`]).
+    fn departure_hit(&self, from: Departure, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+        match self.cone(from.prim) {
+            Some(cone) => {
+                let (hit, t) = rehit_cone(cone, ray, t_max);
+                hit.then_some(t)
+            }
+            None if from.inward => self.exit(from.prim, ray, t_max),
+            None => None,
+        }
+    }
+
+    /// Primitive `prim` when it is a cone.
+    fn cone(&self, prim: u32) -> Option<&Cone<f64>> {
+        (prim as usize).checked_sub(self.cone_base()).and_then(|k| self.cones.get(k))
     }
 
     /// Whether `ray` meets anything in `[0, t_max)` (its departure surface's near side excluded).
@@ -295,13 +348,15 @@ impl Twin {
             return None;
         }
         if prim == from.prim {
-            return if from.inward { self.exit(prim, ray, f64::INFINITY) } else { None };
+            return self.departure_hit(from, ray, f64::INFINITY);
         }
         let ns = self.spheres.len();
         let (hit, t) = if i < ns {
             first_root(&sphere_roots(self.spheres[i].0, self.spheres[i].1, ray), f64::INFINITY)
         } else if i < ns + self.shapes.len() {
             self.shapes[i - ns].intersect(ray, f64::INFINITY)
+        } else if let Some(cone) = self.cone(prim) {
+            intersect_cone(cone, ray, f64::INFINITY)
         } else {
             let mut best = Hit64::MISS;
             for tri in &self.tris[self.polygons[i - ns - self.shapes.len()].tris.clone()] {
@@ -316,7 +371,7 @@ impl Twin {
     }
 
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated
-    /// vertex normal when it has them), computed as [`crate::accel::Geometry::surface`] computes them in f32.
+    /// vertex normal when it has them, a cone's normal away from its axis), computed as [`crate::accel::Geometry::surface`] computes them in f32.
     pub fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
         let point = ray.at(t);
         let i = prim as usize;
@@ -330,6 +385,8 @@ impl Twin {
                 ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
             };
             s.normal_to_world.vector(n).normalize()
+        } else if let Some(cone) = self.cone(prim) {
+            cone.normal(point)
         } else {
             self.polygon_normal(i - ns - self.shapes.len(), point)
         };
@@ -362,7 +419,9 @@ impl Twin {
     }
 
     /// How big the f32 rounding of a ray near `prim` can be, per ε32, for a ray from `origin`: |origin|
-    /// plus the primitive's centre distance and radius (the magnitudes the kernel's f32 operations round).
+    /// plus the primitive's centre distance and radius (the magnitudes the kernel's f32 operations round);
+    /// for a cone, the base point's distance, the height and the larger end radius (the scale its stored f32
+    /// values and its frame coordinates `origin − B` are rounded at).
     fn magnitude(&self, prim: u32, origin: V3<f64>) -> f64 {
         let i = prim as usize;
         let ns = self.spheres.len();
@@ -372,6 +431,9 @@ impl Twin {
             o + len(c - origin) + r
         } else if i < ns + self.shapes.len() {
             o + len(self.shapes[i - ns].center - origin)
+        } else if let Some(cone) = self.cone(prim) {
+            let apex_radius = cone.base_radius + cone.slope * cone.height;
+            o + len(cone.base - origin) + cone.height + cone.base_radius.max(apex_radius)
         } else {
             o
         }
@@ -386,7 +448,12 @@ impl Twin {
     ///   object-from-world map, whose f32 rounding the object-space ray carries), as tests/stress.rs does;
     /// - planes: the object-space direction is within `k·ε32` (plus the direction slack) of parallel;
     /// - polygons: the direction is within that of parallel to the plane, or the line meets the plane within
-    ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline.
+    ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline;
+    /// - cones: a nudge of the line by `δ = k·ε32·(|o| + |B − o| + h + max(r0, r1))` plus slack can change
+    ///   hit or miss, in one of two ways ([`cone_grazing`]): the line is within `δ` of tangency with the
+    ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets the
+    ///   quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
+    ///   crosses the rim, as a polygon's hit crosses an edge).
     pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64, slack: Slack) -> bool {
         if prim == NO_PRIM || prim as usize >= self.len() {
             return false;
@@ -424,6 +491,9 @@ impl Twin {
                 ShapeKind::Plane => d.z.abs() <= (tol + stretch * slack.dir) * len(d),
             };
         }
+        if let Some(cone) = self.cone(prim) {
+            return cone_grazing(cone, ray, tol * self.magnitude(prim, ray.origin), slack);
+        }
         let poly = &self.polygons[i - ns - self.shapes.len()];
         let (n, d) = (poly.normal, ray.dir);
         let cos = n.dot(d).abs() / len(d);
@@ -442,7 +512,8 @@ impl Twin {
 
     /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
     /// `slack` for spheres, the object-space equivalent for shapes (unit sphere or plane z = 0), the distance
-    /// to the plane for polygons. This is where a ray that starts at `p` (a secondary ray's origin on another
+    /// to the plane for polygons, for cones the distance to the lateral surface (to the infinite cone between
+    /// the end planes, to the nearer rim circle beyond them) within `k·ε32` of [`Twin::magnitude`]'s scale. This is where a ray that starts at `p` (a secondary ray's origin on another
     /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
     /// find or miss `prim` by rounding.
     pub fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
@@ -470,11 +541,81 @@ impl Twin {
             };
             return off <= tol * (spread + 1.0) + norm_bound(m) * slack;
         }
+        if let Some(cone) = self.cone(prim) {
+            let q = cone.to_object(p);
+            let radial = (q.x * q.x + q.y * q.y).sqrt();
+            let z = q.z.clamp(0.0, cone.height);
+            let rho = cone.slope.mul_add(z, cone.base_radius);
+            let off = if z == q.z {
+                (radial - rho).abs() / cone.slope.hypot(1.0)
+            } else {
+                (q.z - z).hypot(radial - rho)
+            };
+            return off <= tol * self.magnitude(prim, p) + slack;
+        }
         let poly = &self.polygons[i - ns - self.shapes.len()];
         let Some(&anchor) = poly.outline.first() else { return false };
         let extent = poly.outline.iter().map(|&x| len(x - anchor)).fold(0.0, f64::max);
         poly.normal.dot(p - anchor).abs() <= tol * (len(p) + len(anchor) + extent) + slack
     }
+}
+
+/// `ray`'s line against `cone`'s quadric, in f64: the ray in the cone's frame and the kernel's
+/// `[a, b, c, Δ]` of `a·t² + 2b·t + c = 0` ([`crate::geometry::cone`]; `Δ = b² − a·c` in its perpendicular
+/// form).
+fn cone_line(cone: &Cone<f64>, ray: &Ray<f64>) -> (Ray<f64>, [f64; 4]) {
+    let local = cone.ray_to_object(ray);
+    let (o, d) = (local.origin, local.dir);
+    let rho = cone.slope.mul_add(o.z, cone.base_radius);
+    let g = cone.slope * d.z;
+    let a = d.x * d.x + d.y * d.y - g * g;
+    let b = o.x * d.x + o.y * d.y - g * rho;
+    let c = o.x * o.x + o.y * o.y - rho * rho;
+    let (px, py) = (rho * d.x - g * o.x, rho * d.y - g * o.y);
+    let cross = o.x * d.y - o.y * d.x;
+    (local, [a, b, c, px * px + py * py - cross * cross])
+}
+
+/// Whether moving `ray`'s line by `nudge` plus `slack` can change whether it hits `cone` ([`Twin::grazing`]).
+///
+/// - **Tangency.** Along the line, `f = x² + y² − ρ(z)²` is `a·t² + 2b·t + c`, whose extremum is `−Δ/a` at
+///   `t* = −b/a`. Moving the line by `δ` changes that extremum by at most `|∇f(p*)|·δ` to first order, so
+///   two roots can merge or appear when `|Δ/a| ≤ |∇f(p*)|·δ`. It counts where the roots a nudge makes lie
+///   within `sqrt(|∇f|·δ/|a|)` of `t*` in t (the quadratic's spread for that change of its extremum), so
+///   where that window reaches `[0, ∞)` and, in height, the end planes.
+/// - **Rim.** A root in front of the origin moves along the surface by up to `δ / cos` (the cosine of
+///   incidence with the outward normal there) when the line moves by `δ`, so it can cross an end plane when
+///   its height is within that of 0 or `h`.
+fn cone_grazing(cone: &Cone<f64>, ray: &Ray<f64>, nudge: f64, slack: Slack) -> bool {
+    let (local, [a, b, c, disc]) = cone_line(cone, ray);
+    let d = local.dir;
+    let dl = len(d);
+    let h = cone.height;
+    if a != 0.0 {
+        let ts = -b / a;
+        let p = local.at(ts);
+        let rho = cone.slope.mul_add(p.z, cone.base_radius);
+        let grad = 2.0 * (p.x * p.x + p.y * p.y + (cone.slope * rho).powi(2)).sqrt();
+        let delta = nudge + slack.at(ts * dl);
+        let spread = (grad * delta / a.abs()).sqrt() + delta / dl;
+        let reach = d.z.abs() * spread;
+        let in_range = ts + spread >= 0.0 && p.z >= -reach && p.z <= h + reach;
+        if in_range && (disc / a).abs() <= grad * delta {
+            return true;
+        }
+    }
+    if disc.is_nan() || disc < 0.0 {
+        return false;
+    }
+    let root = disc.sqrt();
+    let q = if b >= 0.0 { -(b + root) } else { root - b };
+    let roots = if q == 0.0 { [q / a; 2] } else { [q / a, c / q] };
+    roots.into_iter().filter(|t| t.is_finite() && *t >= 0.0).any(|t| {
+        let p = local.at(t);
+        let rim = p.z.abs().min((p.z - h).abs());
+        let cos = cone.object_normal(p).dot(d).abs() / dl;
+        rim * cos <= nudge + slack.at(t * dl)
+    })
 }
 
 /// Distance from `p` to the segment `a..b`.
