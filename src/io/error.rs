@@ -78,8 +78,8 @@ mod tests {
         let path = dir.path().join("s.nff");
         std::fs::write(&path, b"v\nfrom 0 0 \xE2\x82\n").unwrap();
         let e = read_text(&path, "scene").unwrap_err();
-        assert_eq!((e.line, e.column), (2, 11), "{e}");
-        assert!(e.to_string().starts_with(&format!("{}:2:11: not UTF-8", path.display())), "{e}");
+        assert_eq!((e.line, e.column), (2, 10), "{e}");
+        assert!(e.to_string().starts_with(&format!("{}:2:10: not UTF-8", path.display())), "{e}");
     }
 
     #[test]
