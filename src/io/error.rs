@@ -32,6 +32,18 @@ impl SceneError {
     }
 }
 
+/// The text of a scene file. Bytes that are not UTF-8 are an error at the line and column where they start;
+/// `what` names the file's kind in the error when it cannot be read at all.
+pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
+    let bytes =
+        std::fs::read(path).map_err(|e| SceneError::whole_file(path, format!("cannot read {what}: {e}")))?;
+    String::from_utf8(bytes).map_err(|e| {
+        let valid = e.utf8_error().valid_up_to();
+        let before = std::str::from_utf8(&e.as_bytes()[..valid]).expect("valid up to there");
+        SceneError::at_offset(path, before, valid, "not UTF-8 text: invalid byte sequence")
+    })
+}
+
 /// 1-based line and column (in characters) of byte `offset` in `source`.
 fn line_column(source: &str, offset: usize) -> (usize, usize) {
     let offset = offset.min(source.len());
@@ -59,6 +71,16 @@ impl std::error::Error for SceneError {}
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn invalid_utf8_is_an_error_at_its_line_and_column() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("s.nff");
+        std::fs::write(&path, b"v\nfrom 0 0 \xE2\x82\n").unwrap();
+        let e = read_text(&path, "scene").unwrap_err();
+        assert_eq!((e.line, e.column), (2, 10), "{e}");
+        assert!(e.to_string().starts_with(&format!("{}:2:10: not UTF-8", path.display())), "{e}");
+    }
 
     #[test]
     fn line_and_column_are_one_based() {

@@ -56,8 +56,7 @@ pub const NFF_AMBIENT: f32 = 0.1;
 
 /// Reads an NFF scene from a file.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
-    let source = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::whole_file(path, format!("cannot read scene: {e}")))?;
+    let source = super::error::read_text(path, "scene")?;
     parse(path, &source)
 }
 

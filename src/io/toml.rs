@@ -183,18 +183,42 @@ struct Rotation {
 
 /// Reads a TOML scene from a file.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
-    let source = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::whole_file(path, format!("cannot read scene: {e}")))?;
+    let source = super::error::read_text(path, "scene")?;
     parse(path, &source)
 }
 
 /// Parses TOML scene text; `path` names it in errors.
 pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
-    let file: File = ::toml::from_str(source).map_err(|e| {
-        let offset = e.span().map_or(0, |s| s.start);
-        SceneError::at_offset(path, source, offset, e.message().trim())
+    let file: File = ::toml::from_str(source).map_err(|e| match e.span() {
+        Some(span) => SceneError::at_offset(path, source, span.start, e.message().trim()),
+        None => spanless(path, source, e.message().trim()),
     })?;
     Reader { path, source }.build(file)
+}
+
+/// An error the toml crate gives without a place. The one known is its limit on the parts of a dotted key
+/// or table name (80), which it reports as "recursion limit": that is put at the line whose key has the most
+/// dots, or at the start of the file if no key has any.
+fn spanless(path: &Path, source: &str, message: &str) -> SceneError {
+    let dots = |line: &str| {
+        let line = line.trim_start();
+        let key = if line.starts_with('[') { line.split(']').next() } else { line.split('=').next() };
+        key.map_or(0, |k| k.matches('.').count())
+    };
+    let (mut best, mut offset, mut at) = (0, 0, 0);
+    for line in source.split_inclusive('\n') {
+        let n = dots(line);
+        if n > best {
+            (best, offset) = (n, at + (line.len() - line.trim_start().len()));
+        }
+        at += line.len();
+    }
+    let message = if message == "recursion limit" && best > 0 {
+        format!("{message}: a dotted key or table name of {} parts (the limit is 80)", best + 1)
+    } else {
+        message.to_owned()
+    };
+    SceneError::at_offset(path, source, offset, message)
 }
 
 struct Reader<'a> {
@@ -519,6 +543,16 @@ mod tests {
 
     fn parse_str(s: &str) -> Result<SceneDesc, SceneError> {
         parse(Path::new("t.toml"), s)
+    }
+
+    #[test]
+    fn overlong_dotted_keys_name_their_line() {
+        let key = vec!["a"; 100].join(".");
+        for line in [format!("{key} = 1"), format!("[{key}]"), format!("[[{key}]]")] {
+            let e = parse_str(&format!("[camera]\nwidth = 64\n\n  {line}\n")).unwrap_err();
+            assert_eq!((e.line, e.column), (4, 3), "{e}");
+            assert!(e.message.contains("100 parts"), "{e}");
+        }
     }
 
     #[test]

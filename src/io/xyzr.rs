@@ -21,8 +21,7 @@ use crate::scene::desc::*;
 
 /// Reads an `.xyzr` file.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
-    let source = std::fs::read_to_string(path)
-        .map_err(|e| SceneError::whole_file(path, format!("cannot read sphere list: {e}")))?;
+    let source = super::error::read_text(path, "sphere list")?;
     parse(path, &source)
 }
 
