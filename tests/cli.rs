@@ -585,3 +585,45 @@ fn the_cpu_that_built_the_binary_passes_the_check() {
     assert!(version.contains("compiled for: "), "{version}");
     assert!(required.iter().all(|f| version.contains(f)), "{version}");
 }
+
+/// `converge` measures every method against a reference and writes the CSV (the columns, one line
+/// per run, errors falling as samples grow) and an SVG plot; a second run reuses the cached reference, and
+/// an unknown method is an argument error before anything renders.
+#[test]
+fn converge_writes_csv_and_plot_and_reuses_its_reference() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, svg) = (dir.path().join("w.csv"), dir.path().join("w.svg"));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let args = |extra: &[&str]| {
+        let mut a = vec!["converge", scene.to_str().unwrap(), "--width", "48", "--height", "36"];
+        a.extend_from_slice(&["--max-spp", "16", "--reference-spp", "64", "--csv", csv.to_str().unwrap()]);
+        a.extend_from_slice(extra);
+        a.iter().map(|s| s.to_string()).collect::<Vec<_>>()
+    };
+    let run = |extra: &[&str]| {
+        let a = args(extra);
+        bareray(&a.iter().map(String::as_str).collect::<Vec<_>>())
+    };
+    let first = run(&["--plot", svg.to_str().unwrap()]);
+    assert!(first.status.success(), "{}", stderr(&first));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("method,spp,seconds,rays,rmse,rmse_edges,psnr"));
+    let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(String::from).collect()).collect();
+    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; lecture once.
+    assert_eq!(rows.len(), 3 + 3 + 5 + 1, "{text}");
+    let rmse = |method: &str, spp: &str| -> f64 {
+        rows.iter().find(|r| r[0] == method && r[1] == spp).map(|r| r[4].parse().unwrap()).unwrap()
+    };
+    for method in ["grid", "stratified", "r2"] {
+        assert!(rmse(method, "16") < 0.6 * rmse(method, "1"), "{method}: {text}");
+    }
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 4);
+    assert!(stderr(&first).contains("stratified 8×8"), "{}", stderr(&first));
+    let second = run(&[]);
+    assert!(second.status.success() && stderr(&second).contains("(cached)"), "{}", stderr(&second));
+    let bad = run(&["--methods", "grid,sobol"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("unknown method `sobol`"));
+}

@@ -3,6 +3,7 @@
 mod accuracy;
 mod bench;
 mod camera_args;
+mod converge;
 mod diff;
 mod gen;
 mod render;
@@ -41,6 +42,9 @@ enum Command {
     /// Compare the f32 renderer's hits with an f64 twin of the scene, ray by ray (primary, and with
     /// --secondary shadow and mirror rays), and report disagreements and t errors.
     Accuracy(accuracy::AccuracyArgs),
+    /// Run time against error: each sampling method at increasing sample counts against a reference (CSV,
+    /// SVG plot).
+    Converge(converge::ConvergeArgs),
     /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
     Gen(gen::GenArgs),
     /// Compare two images (PNG, EXR, PPM): size, RMSE, PSNR, max difference, differing pixels; exit 0 when
@@ -82,6 +86,7 @@ pub fn main() -> ExitCode {
         Command::Gen(args) => gen::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Accuracy(args) => accuracy::run(args),
+        Command::Converge(args) => converge::run(args),
         Command::Diff(args) => return diff::run(args),
     };
     match result {

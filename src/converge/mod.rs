@@ -1,5 +1,150 @@
-//! Run time against error: the measures `bareray converge` reports for each sampling method and sample
-//! count against a high-sample reference ([`metrics`]), and its log-log plot ([`plot`]).
+//! Run time against error: each sampling method at increasing sample counts, timed and compared with a
+//! high-sample reference ([`metrics`]), and the log-log picture of the result ([`plot`]). `bareray converge`
+//! is the command line over [`study`].
 
 pub mod metrics;
 pub mod plot;
+
+use crate::compile::Scene;
+use crate::film::Image;
+use crate::render::{primary_hits_lanes, render_lanes, Progress};
+use crate::scene::desc::Pattern;
+
+use metrics::{edge_mask, errors, Errors};
+
+/// The sampling methods a study can compare, by their `--aa` names.
+pub const METHODS: [&str; 4] = ["grid", "stratified", "r2", "lecture"];
+
+/// The patterns a method runs at, by increasing sample count up to `max_spp` samples per pixel: squares
+/// (1, 4, 16, 64, …) for the grids, powers of two for R2, the one half-pixel pattern for `lecture`.
+pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
+    let squares = || {
+        (1..).map(|n: u32| n * n).take_while(move |&s| s <= max_spp.max(1)).filter(|s| s.is_power_of_two())
+    };
+    match method {
+        "grid" => Ok(squares().map(|s| Pattern::Grid(s.isqrt())).collect()),
+        "stratified" => Ok(squares().map(|s| Pattern::Stratified(s.isqrt())).collect()),
+        "r2" => Ok((0..).map(|e| 1u32 << e).take_while(|&s| s <= max_spp.max(1)).map(Pattern::R2).collect()),
+        "lecture" => Ok(vec![Pattern::HalfPixel]),
+        _ => Err(format!("unknown method `{method}`: {}", METHODS.join(", "))),
+    }
+}
+
+/// One measured render.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Run {
+    /// The method's name.
+    pub method: String,
+    /// Camera rays per pixel ([`Pattern::rays_per_pixel`]).
+    pub spp: f64,
+    /// Wall-clock seconds of the render (tracing and filtering).
+    pub seconds: f64,
+    /// Rays traced, of every kind.
+    pub rays: u64,
+    /// The error against the reference.
+    pub errors: Errors,
+}
+
+/// The reference of a study: the scene rendered with `pattern` (e.g. 32×32 stratified), and the edge pixels
+/// of the image (where the primitive seen at the pixel centre changes between neighbours).
+pub struct Reference {
+    /// The reference image.
+    pub image: Image,
+    /// Edge pixels, row-major.
+    pub edges: Vec<bool>,
+}
+
+impl Reference {
+    /// Renders the reference of `scene` with `pattern` (the scene's own pattern is not used), at `lanes`.
+    pub fn render(scene: &mut Scene, pattern: Pattern, lanes: usize, pool: &rayon::ThreadPool) -> Reference {
+        let image = with_pattern(scene, pattern, |s| render_lanes(s, lanes, pool, &()).image);
+        Reference::from_image(scene, image, lanes, pool)
+    }
+
+    /// A reference from an image rendered before (a cached file), with the edges found again.
+    pub fn from_image(scene: &Scene, image: Image, lanes: usize, pool: &rayon::ThreadPool) -> Reference {
+        let hits = primary_hits_lanes(scene, lanes, pool);
+        let edges = edge_mask(&hits.prim, hits.width);
+        Reference { image, edges }
+    }
+}
+
+/// `f` of `scene` with `pattern` in place of its own, which is put back after.
+fn with_pattern<T>(scene: &mut Scene, pattern: Pattern, f: impl FnOnce(&Scene) -> T) -> T {
+    let own = std::mem::replace(&mut scene.render.pattern, pattern);
+    let result = f(scene);
+    scene.render.pattern = own;
+    result
+}
+
+/// Renders `scene` with every pattern of every method in `methods` (each `(name, patterns)`, in order),
+/// and measures each against `reference`; `progress` counts the renders.
+pub fn study(
+    scene: &mut Scene,
+    methods: &[(String, Vec<Pattern>)],
+    reference: &Reference,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    progress: &dyn Progress,
+) -> Vec<Run> {
+    let total = methods.iter().map(|(_, p)| p.len() as u64).sum();
+    progress.start(total);
+    let mut runs = Vec::new();
+    for (name, patterns) in methods {
+        for &pattern in patterns {
+            let rendered = with_pattern(scene, pattern, |s| render_lanes(s, lanes, pool, &()));
+            runs.push(Run {
+                method: name.clone(),
+                spp: pattern.rays_per_pixel(),
+                seconds: rendered.seconds,
+                rays: rendered.counts.total(),
+                errors: errors(&rendered.image, &reference.image, &reference.edges),
+            });
+            progress.tile_done(runs.len() as u64, total);
+        }
+    }
+    runs
+}
+
+/// The runs as CSV: a header `method,spp,seconds,rays,rmse,rmse_edges,psnr`, one line per run.
+pub fn csv(runs: &[Run]) -> String {
+    let mut out = String::from("method,spp,seconds,rays,rmse,rmse_edges,psnr\n");
+    for r in runs {
+        let e = &r.errors;
+        out += &format!(
+            "{},{},{:.6},{},{:.6e},{:.6e},{:.3}\n",
+            r.method, r.spp, r.seconds, r.rays, e.rmse, e.rmse_edges, e.psnr
+        );
+    }
+    out
+}
+
+/// The runs as curves of RMSE against seconds, one per method, for [`plot::svg`].
+pub fn curves(runs: &[Run]) -> Vec<plot::Curve> {
+    let mut curves: Vec<plot::Curve> = Vec::new();
+    for r in runs {
+        let point = (r.seconds, r.errors.rmse);
+        match curves.iter_mut().find(|c| c.name == r.method) {
+            Some(c) => c.points.push(point),
+            None => curves.push(plot::Curve { name: r.method.clone(), points: vec![point] }),
+        }
+    }
+    curves
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn ladders_climb_to_the_largest_count() {
+        assert_eq!(
+            ladder("grid", 64),
+            Ok(vec![Pattern::Grid(1), Pattern::Grid(2), Pattern::Grid(4), Pattern::Grid(8)])
+        );
+        assert_eq!(ladder("stratified", 20).unwrap().len(), 3);
+        assert_eq!(ladder("r2", 8), Ok(vec![Pattern::R2(1), Pattern::R2(2), Pattern::R2(4), Pattern::R2(8)]));
+        assert_eq!(ladder("lecture", 64), Ok(vec![Pattern::HalfPixel]));
+        assert!(ladder("sobol", 64).is_err());
+    }
+}

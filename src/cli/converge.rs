@@ -1,0 +1,153 @@
+//! `bareray converge`: run time against error for the sampling methods; the study itself is
+//! [`crate::converge`].
+
+use std::io::Write as _;
+use std::path::{Path, PathBuf};
+
+use anyhow::{anyhow, Context, Result};
+use clap::Args;
+use indicatif::ProgressBar;
+
+use super::camera_args::CameraArgs;
+use super::render::{load_scene, parse_lanes, parse_threads};
+use crate::compile::Scene;
+use crate::converge::{csv, curves, ladder, plot, study, Reference, METHODS};
+use crate::film::Image;
+use crate::math::Rgb;
+use crate::output::{write_atomic_with, write_image};
+use crate::scene::desc::{Pattern, Transfer};
+
+/// Arguments of `bareray converge`.
+#[derive(Args, Debug)]
+#[command(
+    after_help = "Renders a reference (32×32 stratified samples per pixel unless --reference-spp says \
+otherwise; cached next to the CSV, reused while the scene file and settings are unchanged), then each method \
+at 1, 4, 16, … samples per pixel (R2 at 1, 2, 4, …) up to --max-spp, and reports wall time, rays traced, and \
+the error against the reference: RMSE over the image, RMSE over edge pixels (where the primitive seen at \
+the pixel centre changes between neighbours), PSNR. Values are linear film values clamped to [0, 1].\n\n\
+Examples:\n  bareray converge scenes/whitted.toml --width 320 --height 240 --csv w.csv --plot w.svg\n  \
+bareray converge scenes/balls3.nff --methods grid,r2 --max-spp 16"
+)]
+pub struct ConvergeArgs {
+    /// Scene file (.toml, .nff or .xyzr).
+    pub scene: PathBuf,
+    /// Methods to compare, comma-separated: grid, stratified, r2, lecture.
+    #[arg(long, value_delimiter = ',', default_values_t = METHODS.map(String::from), value_parser = parse_method)]
+    pub methods: Vec<String>,
+    /// Largest samples per pixel of a method's runs.
+    #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
+    pub max_spp: u32,
+    /// Samples per pixel of the reference, a square number (stratified √N×√N).
+    #[arg(long, default_value_t = 1024, value_parser = super::render::parse_spp)]
+    pub reference_spp: u32,
+    /// Write the runs as CSV (`method,spp,seconds,rays,rmse,rmse_edges,psnr`); the reference is cached
+    /// beside it.
+    #[arg(long)]
+    pub csv: Option<PathBuf>,
+    /// Write the log-log plot of RMSE against time as SVG.
+    #[arg(long)]
+    pub plot: Option<PathBuf>,
+    /// Rays per packet: 1, 4, 8 or 16.
+    #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
+    pub lanes: usize,
+    /// Worker threads (default: all cores).
+    #[arg(long, value_parser = parse_threads)]
+    pub threads: Option<usize>,
+    #[command(flatten)]
+    pub camera: CameraArgs,
+}
+
+/// Runs `bareray converge`.
+pub fn run(args: ConvergeArgs) -> Result<()> {
+    let methods = args
+        .methods
+        .iter()
+        .map(|m| Ok((m.clone(), ladder(m, args.max_spp).map_err(|e| anyhow!("--methods: {e}"))?)))
+        .collect::<Result<Vec<_>>>()?;
+    for out in [&args.csv, &args.plot].into_iter().flatten() {
+        crate::output::check_writable(out)?;
+    }
+    let source = std::fs::read(&args.scene).with_context(|| format!("{}", args.scene.display()))?;
+    let mut desc = load_scene(&args.scene)?;
+    args.camera.apply(&mut desc);
+    let pool = crate::render::thread_pool(args.threads)?;
+    let mut scene = pool.install(|| Scene::compile(&desc)).context("camera")?;
+    let side = crate::io::toml::grid_side(args.reference_spp).map_err(|e| anyhow!(e))?;
+    let key = reference_key(&source, &desc, args.reference_spp);
+    let cached = args.csv.as_ref().map(|csv| csv.with_extension("reference.exr"));
+    let reference = match cached.as_deref().and_then(|path| read_cached(path, &key, &scene)) {
+        Some(image) => {
+            eprintln!(
+                "reference: {} (cached)",
+                cached.as_deref().map_or(String::new(), |p| p.display().to_string())
+            );
+            Reference::from_image(&scene, image, args.lanes, &pool)
+        }
+        None => {
+            eprintln!("reference: {} samples per pixel (stratified {side}×{side}) ...", args.reference_spp);
+            let reference = Reference::render(&mut scene, Pattern::Stratified(side), args.lanes, &pool);
+            if let Some(path) = cached.as_deref() {
+                write_image(&reference.image, path, Transfer::Linear)?;
+                std::fs::write(path.with_extension("key"), &key)?;
+            }
+            reference
+        }
+    };
+    let bar = ProgressBar::new(0);
+    let runs = study(&mut scene, &methods, &reference, args.lanes, &pool, &bar);
+    bar.finish_and_clear();
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{:<11} {:>7} {:>9} {:>12} {:>10} {:>10} {:>7}",
+        "method", "spp", "seconds", "rays", "rmse", "rmse_edges", "psnr"
+    )?;
+    for r in &runs {
+        let e = &r.errors;
+        writeln!(
+            out,
+            "{:<11} {:>7} {:>9.4} {:>12} {:>10.3e} {:>10.3e} {:>7.2}",
+            r.method, r.spp, r.seconds, r.rays, e.rmse, e.rmse_edges, e.psnr
+        )?;
+    }
+    if let Some(path) = &args.csv {
+        write_atomic_with(path, |w| w.write_all(csv(&runs).as_bytes()))
+            .with_context(|| format!("{}", path.display()))?;
+    }
+    if let Some(path) = &args.plot {
+        let title = format!("{}: error against time", args.scene.display());
+        let svg = plot::svg(&title, "RMSE against the reference", &curves(&runs));
+        write_atomic_with(path, |w| w.write_all(svg.as_bytes()))
+            .with_context(|| format!("{}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// Parses one of `--methods`: a name in [`METHODS`].
+fn parse_method(s: &str) -> Result<String, String> {
+    match METHODS.contains(&s) {
+        true => Ok(s.to_owned()),
+        false => Err(format!("unknown method `{s}`: {}", METHODS.join(", "))),
+    }
+}
+
+/// What the cached reference depends on: the scene file's bytes, the description after the command line's
+/// camera changes (its debug form), the reference's sample count and the version.
+fn reference_key(source: &[u8], desc: &crate::scene::SceneDesc, spp: u32) -> String {
+    let text = format!("{:?}|{spp}|{}", desc, env!("CARGO_PKG_VERSION"));
+    let hash = crate::render::fnv1a(source.iter().copied().chain(text.bytes()));
+    format!("bareray converge reference {hash:016x}\n")
+}
+
+/// The cached reference at `path`, if its key file matches `key` and it has the scene's size.
+fn read_cached(path: &Path, key: &str, scene: &Scene) -> Option<Image> {
+    if std::fs::read_to_string(path.with_extension("key")).ok()? != key {
+        return None;
+    }
+    let img = crate::imagediff::load(path).ok()?.to_rgb32f();
+    if (img.width(), img.height()) != (scene.camera.width, scene.camera.height) {
+        return None;
+    }
+    let pixels = img.pixels().map(|p| Rgb::new(p[0], p[1], p[2])).collect();
+    Some(Image { width: img.width(), height: img.height(), pixels })
+}
