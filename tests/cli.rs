@@ -627,3 +627,36 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
     assert!(stderr(&bad).contains("unknown method `sobol`"));
 }
+
+/// `converge --precision`: the f32 packet and scalar paths give the same hits (so the same error against
+/// the f64 twin), small but measured; the f64 twin is the reference (error 0); CSV has one line per path.
+#[test]
+fn converge_precision_compares_the_three_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let csv = dir.path().join("p.csv");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/field1k.xyzr");
+    let run = bareray(&[
+        "converge",
+        scene.to_str().unwrap(),
+        "--precision",
+        "--width",
+        "96",
+        "--height",
+        "54",
+        "--csv",
+        csv.to_str().unwrap(),
+    ]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
+    assert_eq!(rows.len(), 3, "{text}");
+    assert!(
+        rows[0][0].starts_with("f32 packets")
+            && rows[1][0].starts_with("f32 scalar")
+            && rows[2][0] == "f64 twin"
+    );
+    assert_eq!(rows[0][2..], rows[1][2..], "packets and scalar: the same hits");
+    let p99: f64 = rows[0][4].parse().unwrap();
+    assert!(p99 > 0.0 && p99 < 2e-6, "{text}");
+    assert!(rows[2][2..].iter().all(|v| v.parse::<f64>().unwrap() == 0.0));
+}

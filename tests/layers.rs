@@ -39,12 +39,13 @@ const LAYERS: &[(&str, u32)] = &[
     // Tools over the renderer and images, and the platform pieces the binary starts with.
     ("aov", 9),
     ("accuracy", 9),
-    ("converge", 9),
     ("imagediff", 9),
     ("cpu", 9),
     ("huge_pages", 9),
+    // Run time against error, over the renderer and the accuracy twin.
+    ("converge", 10),
     // The command line.
-    ("cli", 10),
+    ("cli", 11),
 ];
 
 /// Files that belong to no layer: the crate root declares the modules.

@@ -47,6 +47,10 @@ pub struct ConvergeArgs {
     /// Write the log-log plot of RMSE against time as SVG.
     #[arg(long)]
     pub plot: Option<PathBuf>,
+    /// Compare precision paths instead of sampling methods: primary hits at pixel centres by f32 packets,
+    /// f32 single rays and the f64 twin, each timed, the f32 ones measured against the f64 one.
+    #[arg(long)]
+    pub precision: bool,
     /// Rays per packet: 1, 4, 8 or 16.
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
@@ -72,6 +76,9 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
     args.camera.apply(&mut desc);
     let pool = crate::render::thread_pool(args.threads)?;
     let mut scene = pool.install(|| Scene::compile(&desc)).context("camera")?;
+    if args.precision {
+        return run_precision(&args, &desc, &scene, &pool);
+    }
     let side = crate::io::toml::grid_side(args.reference_spp).map_err(|e| anyhow!(e))?;
     let key = reference_key(&source, &desc, args.reference_spp);
     let cached = args.csv.as_ref().map(|csv| csv.with_extension("reference.exr"));
@@ -117,6 +124,51 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
     if let Some(path) = &args.plot {
         let title = format!("{}: error against time", args.scene.display());
         let svg = plot::svg(&title, "RMSE against the reference", &curves(&runs));
+        write_atomic_with(path, |w| w.write_all(svg.as_bytes()))
+            .with_context(|| format!("{}", path.display()))?;
+    }
+    Ok(())
+}
+
+/// `converge --precision`: the three primary-hit paths, a table, and the CSV and plot when asked.
+fn run_precision(
+    args: &ConvergeArgs,
+    desc: &crate::scene::SceneDesc,
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+) -> Result<()> {
+    let runs = crate::converge::precision::primary_paths(desc, scene, args.lanes, pool).context("camera")?;
+    let mut out = std::io::stdout().lock();
+    writeln!(
+        out,
+        "{:<22} {:>9} {:>10} {:>10} {:>10} {:>10}",
+        "path", "seconds", "disagree", "t_err_p50", "t_err_p99", "t_err_max"
+    )?;
+    let mut csv = String::from("path,seconds,disagree,t_err_p50,t_err_p99,t_err_max\n");
+    for r in &runs {
+        let [p50, p99, max] = r.t_err;
+        writeln!(
+            out,
+            "{:<22} {:>9.4} {:>10.3e} {:>10.3e} {:>10.3e} {:>10.3e}",
+            r.path, r.seconds, r.disagree, p50, p99, max
+        )?;
+        csv +=
+            &format!("{},{:.6},{:.6e},{:.6e},{:.6e},{:.6e}\n", r.path, r.seconds, r.disagree, p50, p99, max);
+    }
+    if let Some(path) = &args.csv {
+        write_atomic_with(path, |w| w.write_all(csv.as_bytes()))
+            .with_context(|| format!("{}", path.display()))?;
+    }
+    if let Some(path) = &args.plot {
+        // The f64 twin is the reference: its error is 0, which a log axis cannot show.
+        let curves: Vec<plot::Curve> = runs
+            .iter()
+            .filter(|r| r.t_err[1] > 0.0)
+            .map(|r| plot::Curve { name: r.path.clone(), points: vec![(r.seconds, r.t_err[1])] })
+            .collect();
+        let title =
+            format!("{}: primary hits, precision against time (f64 twin: reference)", args.scene.display());
+        let svg = plot::svg(&title, "relative t error p99 against f64", &curves);
         write_atomic_with(path, |w| w.write_all(svg.as_bytes()))
             .with_context(|| format!("{}", path.display()))?;
     }

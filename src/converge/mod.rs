@@ -4,6 +4,7 @@
 
 pub mod metrics;
 pub mod plot;
+pub mod precision;
 
 use crate::compile::Scene;
 use crate::film::Image;
