@@ -13,6 +13,13 @@ pub trait ItemTest: Copy {
     /// Item `j` against the rays in `[0, t_max)`: the lanes it is hit in, their t, and the item's primitive
     /// id (the same for every lane).
     fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32);
+    /// Lanes whose ray cannot meet item `j` before `reach` (its best hit so far, or its `t_max`): a
+    /// conservative test cheaper than [`ItemTest::test`], which is skipped when it rules out every live lane.
+    /// None by default.
+    #[inline(always)]
+    fn culled<F: Lanes>(&self, _j: usize, _ray: &Ray<F>, _reach: F) -> F::Mask {
+        F::mask_from_bits(0)
+    }
 }
 
 /// A query of rays against the items of one kind: the rays, each ray's exclusive end `t_max`, and the
@@ -76,7 +83,11 @@ impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
     #[inline(always)]
     fn intersect(&self, items: impl Iterator<Item = usize>, live: F::Mask, best: &mut HitPacket<F>) {
         for j in items {
-            let (hit, t, id) = self.item(j, live);
+            let lanes = live & !self.items.culled(j, &self.ray, best.t.min_of(self.t_max));
+            if !lanes.any() {
+                continue;
+            }
+            let (hit, t, id) = self.item(j, lanes);
             best.update(hit, t, id, id);
         }
     }
@@ -85,7 +96,11 @@ impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
     fn occluded(&self, items: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask {
         let mut blocked = F::mask_from_bits(0);
         for j in items {
-            let (hit, _, _) = self.item(j, live);
+            let lanes = live & !self.items.culled(j, &self.ray, self.t_max);
+            if !lanes.any() {
+                continue;
+            }
+            let (hit, _, _) = self.item(j, lanes);
             if hit.any() {
                 *blocker = j as u32;
                 blocked = blocked | hit;

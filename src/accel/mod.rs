@@ -327,7 +327,8 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> TriangleQuery<'a, F> {
-        let triangles = Triangles { polygons: &self.polygons, base: self.polygon_base() as u32 };
+        let plane_cull = self.polygon_bvh.is_none();
+        let triangles = Triangles { polygons: &self.polygons, base: self.polygon_base() as u32, plane_cull };
         Self::item_query(triangles, rays, from)
     }
 

@@ -22,6 +22,11 @@ pub struct Polygons {
     pub first: Vec<u32>,
     /// Per polygon: unit geometric normal (right-hand rule over the vertex order).
     pub normal: Vec<Vec3f>,
+    /// Per polygon: a vertex, on the plane through which `normal` is taken.
+    pub anchor: Vec<Vec3f>,
+    /// Per polygon: how far (at most) its vertices lie off that plane, rounded up: polygons need only be
+    /// planar to a tolerance.
+    pub thickness: Vec<f32>,
     /// Per polygon: material index.
     pub material: Vec<u32>,
 }
@@ -70,6 +75,21 @@ impl Polygons {
             self.vertex_normals.push(normals.map(|n| [n[a], n[b], n[c]]));
         }
         self.first.push(self.members.len() as u32);
+        let anchor = vertices[0];
+        // Each vertex's offset from the anchor, in f64 from the stored f32 values.
+        let offsets = vertices.iter().map(|v| {
+            [(v.x, anchor.x), (v.y, anchor.y), (v.z, anchor.z)].map(|(a, b)| f64::from(a) - f64::from(b))
+        });
+        let n = [normal.x, normal.y, normal.z].map(f64::from);
+        let (height, far) = offsets.fold((0.0f64, 0.0f64), |(height, far), d| {
+            let h = (0..3).map(|i| n[i] * d[i]).sum::<f64>().abs();
+            (height.max(h), far.max(d.iter().map(|x| x.abs()).sum()))
+        });
+        // The triangles' edges are stored rounded (ε/2 of their 1-norm, at most twice the farthest vertex's
+        // `far`); the factor rounds the f64 heights up.
+        let thickness = (height + f64::from(f32::EPSILON) * 2.0 * far) * (1.0 + 1e-6);
+        self.anchor.push(anchor);
+        self.thickness.push((thickness as f32).max(f32::MIN_POSITIVE));
         self.normal.push(normal);
         self.material.push(material);
     }
@@ -93,6 +113,8 @@ impl Polygons {
             members: self.members.iter().map(|&j| moved_to[j as usize]).collect(),
             first: self.first.clone(),
             normal: self.normal.clone(),
+            anchor: self.anchor.clone(),
+            thickness: self.thickness.clone(),
             material: self.material.clone(),
         }
     }

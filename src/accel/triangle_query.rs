@@ -1,7 +1,7 @@
 //! Polygons' triangles as the items of BVH leaves and of brute force ([`ItemQuery`]): the triangle kernel,
 //! each hit reported under its polygon's id.
 
-use crate::geometry::{intersect_triangle, Ray};
+use crate::geometry::{intersect_triangle, stays_off_plane, Ray};
 use crate::simd::Lanes;
 
 use super::item_query::{ItemQuery, ItemTest};
@@ -14,6 +14,11 @@ pub struct Triangles<'a> {
     pub polygons: &'a Polygons,
     /// The id of polygon 0.
     pub base: u32,
+    /// Skip a triangle for the rays that stay off its polygon's plane up to their reach ([`stays_off_plane`]):
+    /// worth it without a BVH, where every triangle meets every packet (a floor under a sphere field is
+    /// passed over by the rays that hit a sphere first and by those heading up); in a BVH's leaves the boxes
+    /// have culled already.
+    pub plane_cull: bool,
 }
 
 impl ItemTest for Triangles<'_> {
@@ -23,6 +28,16 @@ impl ItemTest for Triangles<'_> {
         let (v0, e1, e2) = (F::splat_v3(p.v0[j]), F::splat_v3(p.e1[j]), F::splat_v3(p.e2[j]));
         let (hit, t) = intersect_triangle(v0, e1, e2, ray, t_max);
         (hit, t, self.base + p.polygon[j])
+    }
+
+    #[inline(always)]
+    fn culled<F: Lanes>(&self, j: usize, ray: &Ray<F>, reach: F) -> F::Mask {
+        if !self.plane_cull {
+            return F::mask_from_bits(0);
+        }
+        let (p, k) = (self.polygons, self.polygons.polygon[j] as usize);
+        let (anchor, normal) = (F::splat_v3(p.anchor[k]), F::splat_v3(p.normal[k]));
+        stays_off_plane(anchor, normal, F::splat_f32(p.thickness[k]), ray, reach)
     }
 }
 

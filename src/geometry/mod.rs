@@ -13,7 +13,7 @@ mod spheres;
 pub use cone::{intersect_cone, rehit_cone, Cone, Cones};
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
-pub use polygon::intersect_triangle;
+pub use polygon::{intersect_triangle, stays_off_plane};
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub use shape::{Shape, ShapeKind};
 pub use sphere::{

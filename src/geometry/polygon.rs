@@ -36,6 +36,39 @@ pub fn intersect_triangle<F: Real>(v0: V3<F>, e1: V3<F>, e2: V3<F>, ray: &Ray<F>
     (facing & inside & t.ge(zero) & t.lt(t_max), t)
 }
 
+/// Rounding allowance of [`stays_off_plane`] per unit of the coordinates it sums: its heights are a few
+/// products and sums of values within that 1-norm, each rounded by at most ε/2.
+const PLANE_ROUNDING: f64 = 16.0 * f32::EPSILON as f64;
+
+/// Lanes whose ray stays on one side of a plane over its `[0, reach)`: at both ends it is farther than
+/// `thickness`, plus an allowance for this test's rounding, from the plane through `anchor` with unit
+/// normal `normal`, on the same side. Such a ray cannot meet a polygon that lies within `thickness` of the
+/// plane, so its triangle tests can be skipped; a lane that grazes the plane is never culled. The same
+/// operations at every width, so every width culls the same lanes.
+#[inline(always)]
+pub fn stays_off_plane<F: Real>(
+    anchor: V3<F>,
+    normal: V3<F>,
+    thickness: F,
+    ray: &Ray<F>,
+    reach: F,
+) -> F::Mask {
+    let zero = F::splat(0.0);
+    let rounding = F::splat(PLANE_ROUNDING);
+    let norm1 = |v: V3<F>| v.x.abs() + v.y.abs() + v.z.abs();
+    let rel = ray.origin - anchor;
+    let (start, rate) = (normal.dot(rel), normal.dot(ray.dir));
+    let near = norm1(rel);
+    let start_tol = thickness + rounding * near;
+    // With an infinite reach the end's height is ±inf or NaN, and its tolerance inf: only `rate` decides.
+    let end = start + rate * reach;
+    let end_tol = thickness + rounding * (near + reach * norm1(ray.dir));
+    let above = start.gt(start_tol) & (rate.ge(zero) | end.gt(end_tol));
+    let below = start.lt(-start_tol) & (rate.le(zero) | end.lt(-end_tol));
+    above | below
+}
+
+/// Why a list of vertices is not a usable polygon.
 /// Why a list of vertices is not a usable polygon.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub enum PolygonError {
@@ -148,6 +181,41 @@ fn is_ear(flat: &[DVec2], left: &[usize], a: usize, b: usize, c: usize) -> bool 
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// The plane cull never drops a ray the triangle test hits within its reach (rays not within 1e-3 of
+    /// parallel to the plane, from near and far), and it drops rays that stay clearly on one side.
+    #[test]
+    fn plane_cull_keeps_every_hit_and_drops_rays_that_stay_off() {
+        let mut state = 0x9e37_79b9_7f4a_7c15u64;
+        let mut next = move || {
+            state = state.wrapping_mul(6_364_136_223_846_793_005).wrapping_add(1_442_695_040_888_963_407);
+            (state >> 40) as f32 / (1u64 << 24) as f32 * 2.0 - 1.0
+        };
+        let (mut hits, mut culled) = (0, 0);
+        for case in 0..20_000 {
+            let scale = [1e-2f32, 1.0, 1e3][case % 3];
+            let v = |next: &mut dyn FnMut() -> f32| V3::new(next(), next(), next()) * scale;
+            let (v0, e1, e2) = (v(&mut next), v(&mut next), v(&mut next));
+            let n = e1.cross(e2);
+            let normal = n * (1.0 / n.length());
+            // Aimed at a point of the triangle's plane (inside or a little outside it), with a reach from
+            // well short of it to well past it, or none.
+            let (a, b) = (next() * 0.6 + 0.4, next() * 0.6 + 0.4);
+            let target = v0 + e1 * a + e2 * b;
+            let origin = v(&mut next) * 3.0;
+            let ray = Ray::new(origin, target - origin);
+            let reach = [f32::INFINITY, 1.0 + next() * 0.5, 1.0 + next() * 1e-3][case / 3 % 3];
+            let off = stays_off_plane(v0, normal, 0.0, &ray, reach);
+            let (hit, _) = intersect_triangle(v0, e1, e2, &ray, reach);
+            let grazing = normal.dot(ray.dir).abs() < 1e-3 * ray.dir.length();
+            if hit && !grazing {
+                hits += 1;
+                assert!(!off, "case {case}: culled a hit: {ray:?} reach {reach}");
+            }
+            culled += usize::from(off);
+        }
+        assert!(hits > 1000 && culled > 5000, "{hits} hits, {culled} culled");
+    }
 
     fn square() -> Vec<DVec3> {
         [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0], [0.0, 1.0, 0.0]].map(DVec3::from).to_vec()
