@@ -450,7 +450,7 @@ impl Twin {
     /// - polygons: the direction is within that of parallel to the plane, or the line meets the plane within
     ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline;
     /// - cones: a nudge of the line by `δ = k·ε32·(|o| + |B − o| + h + max(r0, r1))` plus slack can change
-    ///   hit or miss, in one of two ways ([`cone_grazing`]): the line is within `δ` of tangency with the
+    ///   hit or miss, in one of two ways (`cone_grazing`): the line is within `δ` of tangency with the
     ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets the
     ///   quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
     ///   crosses the rim, as a polygon's hit crosses an edge).
@@ -513,7 +513,7 @@ impl Twin {
     /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
     /// `slack` for spheres, the object-space equivalent for shapes (unit sphere or plane z = 0), the distance
     /// to the plane for polygons, for cones the distance to the lateral surface (to the infinite cone between
-    /// the end planes, to the nearer rim circle beyond them) within `k·ε32` of [`Twin::magnitude`]'s scale. This is where a ray that starts at `p` (a secondary ray's origin on another
+    /// the end planes, to the nearer rim circle beyond them) within `k·ε32` of `Twin::magnitude`'s scale. This is where a ray that starts at `p` (a secondary ray's origin on another
     /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
     /// find or miss `prim` by rounding.
     pub fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
