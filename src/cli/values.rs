@@ -37,9 +37,15 @@ pub fn parse_aa(s: &str) -> Result<Pattern, String> {
             _ => Err(format!("samples per pixel run from 1 to 65536, got `{n}`")),
         }
     };
+    let side = |n: u32| {
+        crate::io::toml::grid_side(n).map_err(|_| {
+            let (lo, hi) = ((n as f64).sqrt().floor() as u32, (n as f64).sqrt().ceil() as u32);
+            format!("`{method}:{n}`: N is samples per pixel, a square ({method}:{} is {lo}×{lo}, {method}:{} is {hi}×{hi})", lo * lo, hi * hi)
+        })
+    };
     match method {
-        "grid" => Ok(Pattern::Grid(crate::io::toml::grid_side(samples()?)?)),
-        "stratified" => Ok(Pattern::Stratified(crate::io::toml::grid_side(samples()?)?)),
+        "grid" => Ok(Pattern::Grid(side(samples()?)?)),
+        "stratified" => Ok(Pattern::Stratified(side(samples()?)?)),
         "r2" => Ok(Pattern::R2(samples()?)),
         "lecture" if count.is_none() => Ok(Pattern::HalfPixel),
         "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
@@ -114,6 +120,11 @@ mod tests {
         for bad in ["grid:5", "grid", "r2:0", "r2:x", "lecture:9", "sobol:4", ""] {
             assert!(parse_aa(bad).is_err(), "{bad}");
         }
+        let e = parse_aa("grid:3").unwrap_err();
+        assert!(
+            e.contains("samples per pixel") && e.contains("grid:1 is 1×1") && e.contains("grid:4 is 2×2"),
+            "{e}"
+        );
     }
     use clap::ValueEnum;
 
