@@ -132,3 +132,22 @@ fn camera_errors_point_at_the_camera_table() {
     error_at("[camera]\nhfov = 40\npixel_size = 0.1\n", 1, "not both");
     error_at("[camera]\nhfov = 200\n", 1, "(0, 180)");
 }
+
+/// `[render]` sampling patterns and filters: stratified and R2 with their counts, a filter with its default
+/// radius or a given one; a radius without a filter, a radius out of range and a non-square stratified count
+/// are errors at their line.
+#[test]
+fn patterns_and_filters_are_read() {
+    use bareray::scene::desc::{Filter, FilterKind};
+    let d = parse("[render]\npattern = \"stratified\"\nsamples = 16\nfilter = \"tent\"\n").unwrap();
+    assert_eq!(d.render.pattern, Pattern::Stratified(4));
+    assert_eq!(d.render.filter, Some(Filter { kind: FilterKind::Tent, radius: 1.0 }));
+    let d = parse("[render]\npattern = \"r2\"\nsamples = 5\nfilter = \"mitchell\"\nfilter_radius = 1.5\n")
+        .unwrap();
+    assert_eq!(d.render.pattern, Pattern::R2(5));
+    assert_eq!(d.render.filter, Some(Filter { kind: FilterKind::Mitchell, radius: 1.5 }));
+    assert_eq!(parse("").unwrap().render.filter, None);
+    error_at("[render]\nfilter_radius = 1.0\n", 2, "needs a filter");
+    error_at("[render]\nfilter = \"box\"\nfilter_radius = 9.0\n", 3, "filter_radius");
+    error_at("[render]\npattern = \"stratified\"\nsamples = 5\n", 3, "square");
+}

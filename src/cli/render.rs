@@ -50,6 +50,11 @@ pub struct RenderArgs {
     /// gives the same image.
     #[arg(long, value_parser = super::values::parse_aa)]
     pub aa: Option<Pattern>,
+    /// Reconstruction filter over the samples, overriding the scene: `box`, `tent`, `gaussian` or `mitchell`,
+    /// optionally with a radius in pixels (`tent:1.5`; defaults 0.5, 1, 1.5, 2). Each sample counts in every
+    /// pixel whose centre is within the radius; without a filter a pixel averages its own samples.
+    #[arg(long, value_parser = super::values::parse_filter)]
+    pub filter: Option<crate::scene::desc::Filter>,
     /// Reflection/refraction depth limit; overrides the scene.
     #[arg(long)]
     pub depth: Option<u32>,
@@ -340,6 +345,9 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
     }
     if let Some(pattern) = args.aa {
         desc.render.pattern = pattern;
+    }
+    if let Some(filter) = args.filter {
+        desc.render.filter = Some(filter);
     }
     if let Some(d) = args.depth {
         desc.render.max_depth = d;

@@ -2,7 +2,7 @@
 //! each enum converts to the library's type.
 
 use crate::compile::{Accel, BvhPreset};
-use crate::scene::desc::{Pattern, Transfer};
+use crate::scene::desc::{Filter, FilterKind, Pattern, Transfer};
 
 /// `--transfer`: [`Transfer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -51,6 +51,32 @@ pub fn parse_aa(s: &str) -> Result<Pattern, String> {
         "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
         _ => Err(format!("unknown method `{method}`: grid:N, stratified:N, r2:N or lecture")),
     }
+}
+
+/// Parses `--filter KIND[:RADIUS]`: `box`, `tent`, `gaussian` or `mitchell`, with a radius in pixels above 0
+/// up to [`Filter::MAX_RADIUS`] (default: [`Filter::default_radius`]).
+pub fn parse_filter(s: &str) -> Result<Filter, String> {
+    let (name, radius) = match s.trim().split_once(':') {
+        Some((n, r)) => (n, Some(r)),
+        None => (s.trim(), None),
+    };
+    let kind = match name {
+        "box" => FilterKind::Box,
+        "tent" => FilterKind::Tent,
+        "gaussian" => FilterKind::Gaussian,
+        "mitchell" => FilterKind::Mitchell,
+        _ => return Err(format!("unknown filter `{name}`: box, tent, gaussian or mitchell")),
+    };
+    let radius = match radius {
+        None => Filter::default_radius(kind),
+        Some(r) => match r.trim().parse::<f32>() {
+            Ok(v) if v > 0.0 && v <= Filter::MAX_RADIUS => v,
+            _ => {
+                return Err(format!("the radius runs above 0 up to {} pixels, got `{r}`", Filter::MAX_RADIUS))
+            }
+        },
+    };
+    Ok(Filter { kind, radius })
 }
 
 /// The name a value has on the command line (what `--help` lists and the user types), for reports.
@@ -119,6 +145,11 @@ mod tests {
         assert_eq!(parse_aa("lecture"), Ok(Pattern::HalfPixel));
         for bad in ["grid:5", "grid", "r2:0", "r2:x", "lecture:9", "sobol:4", ""] {
             assert!(parse_aa(bad).is_err(), "{bad}");
+        }
+        assert_eq!(parse_filter("tent"), Ok(Filter { kind: FilterKind::Tent, radius: 1.0 }));
+        assert_eq!(parse_filter("mitchell:1.5"), Ok(Filter { kind: FilterKind::Mitchell, radius: 1.5 }));
+        for bad in ["sinc", "tent:0", "tent:9", "box:x"] {
+            assert!(parse_filter(bad).is_err(), "{bad}");
         }
         let e = parse_aa("grid:3").unwrap_err();
         assert!(

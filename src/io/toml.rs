@@ -63,6 +63,8 @@ struct RenderToml {
     samples: Option<Spanned<u32>>,
     pattern: Option<PatternToml>,
     postfilter: Option<PostFilterToml>,
+    filter: Option<FilterToml>,
+    filter_radius: Option<Spanned<f64>>,
     max_depth: Option<u32>,
     background: Option<Spanned<Vec3>>,
     ambient: Option<Spanned<Vec3>>,
@@ -83,6 +85,15 @@ enum PatternToml {
     HalfPixel,
     Stratified,
     R2,
+}
+
+#[derive(Deserialize, Clone, Copy)]
+#[serde(rename_all = "kebab-case")]
+enum FilterToml {
+    Box,
+    Tent,
+    Gaussian,
+    Mitchell,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -423,8 +434,34 @@ impl Reader<'_> {
             }
             (PatternToml::R2, Some(s)) => Pattern::R2(*s.get_ref()),
         };
+        let filter = match (r.filter, &r.filter_radius) {
+            (None, None) => None,
+            (None, Some(radius)) => return Err(self.err(radius.span(), "filter_radius needs a filter")),
+            (Some(kind), radius) => {
+                let kind = match kind {
+                    FilterToml::Box => FilterKind::Box,
+                    FilterToml::Tent => FilterKind::Tent,
+                    FilterToml::Gaussian => FilterKind::Gaussian,
+                    FilterToml::Mitchell => FilterKind::Mitchell,
+                };
+                let radius = match radius {
+                    None => Filter::default_radius(kind),
+                    Some(r) => match *r.get_ref() {
+                        v if v > 0.0 && v <= f64::from(Filter::MAX_RADIUS) => v as f32,
+                        _ => {
+                            let max = Filter::MAX_RADIUS;
+                            return Err(
+                                self.err(r.span(), format!("filter_radius runs above 0 up to {max} pixels"))
+                            );
+                        }
+                    },
+                };
+                Some(Filter { kind, radius })
+            }
+        };
         Ok(RenderDesc {
             pattern,
+            filter,
             postfilter: match r.postfilter {
                 None => d.postfilter,
                 Some(PostFilterToml::None) => PostFilter::None,

@@ -1,6 +1,7 @@
 //! Antialiasing: where samples go inside a pixel (supersampling) and filters over the finished image
 //! (postfiltering).
 
+pub mod filter;
 mod postfilter;
 pub mod sequence;
 

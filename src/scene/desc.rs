@@ -96,6 +96,44 @@ impl Pattern {
     }
 }
 
+/// A reconstruction filter's profile.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum FilterKind {
+    /// Equal weight within the radius.
+    Box,
+    /// Falling linearly to 0 at the radius.
+    Tent,
+    /// A Gaussian of standard deviation radius/3, lowered to reach 0 at the radius.
+    Gaussian,
+    /// Mitchell–Netravali (B = C = 1/3), its [−2, 2] support stretched to the radius; negative lobes.
+    Mitchell,
+}
+
+/// A reconstruction filter applied to the samples: each sample counts in every pixel whose centre is within
+/// `radius` (pixels) on both axes, weighted by the profile.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Filter {
+    /// The profile.
+    pub kind: FilterKind,
+    /// Half the support's width, in pixels (positive).
+    pub radius: f32,
+}
+
+impl Filter {
+    /// The largest radius accepted, in pixels.
+    pub const MAX_RADIUS: f32 = 4.0;
+
+    /// The radius a profile gets when none is given: box 0.5 (the pixel), tent 1, Gaussian 1.5, Mitchell 2.
+    pub fn default_radius(kind: FilterKind) -> f32 {
+        match kind {
+            FilterKind::Box => 0.5,
+            FilterKind::Tent => 1.0,
+            FilterKind::Gaussian => 1.5,
+            FilterKind::Mitchell => 2.0,
+        }
+    }
+}
+
 /// A filter over the finished image.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum PostFilter {
@@ -135,6 +173,9 @@ pub struct RenderDesc {
     pub pattern: Pattern,
     /// Filter applied after sampling.
     pub postfilter: PostFilter,
+    /// Reconstruction filter over the samples; `None`: each pixel averages its own samples (a box of the
+    /// pixel's size).
+    pub filter: Option<Filter>,
     /// Longest chain of reflection/refraction bounces (0: ray casting only).
     pub max_depth: u32,
     /// Colour of rays that hit nothing.
@@ -150,6 +191,7 @@ impl Default for RenderDesc {
         Self {
             pattern: Pattern::Grid(1),
             postfilter: PostFilter::None,
+            filter: None,
             max_depth: 5,
             background: Rgb::new(0.0, 0.0, 0.0),
             ambient: Rgb::all(1.0),
