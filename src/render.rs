@@ -337,7 +337,8 @@ fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
 
 /// The pixels of one tile, row by row.
 fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
-    if let (Some(filter), false) = (scene.render.filter, scene.render.pattern == Pattern::HalfPixel) {
+    let own_reconstruction = matches!(scene.render.pattern, Pattern::HalfPixel | Pattern::Adaptive { .. });
+    if let (Some(filter), false) = (scene.render.filter, own_reconstruction) {
         return filtered_tile(scene, tracer, tile, filter);
     }
     let camera = &scene.camera_f64;
@@ -367,6 +368,9 @@ fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Ve
             count as usize
         }
         Pattern::HalfPixel => return half_pixel_tile(camera, tracer, tile),
+        Pattern::Adaptive { threshold, depth } => {
+            return adaptive_tile(camera, tracer, tile, threshold, depth)
+        }
     };
     let scale = 1.0 / count as f32;
     sum.into_iter().map(|s| s * scale).collect()
@@ -379,7 +383,9 @@ fn sample_offset(pattern: Pattern, grid: &[(f32, f32)], k: u32, x: u32, y: u32) 
         Pattern::Grid(_) => grid[k as usize],
         Pattern::Stratified(n) => sequence::stratified(n, x, y, k),
         Pattern::R2(_) => sequence::r2(x, y, k),
-        Pattern::HalfPixel => unreachable!("the half-pixel pattern has its own reconstruction"),
+        Pattern::HalfPixel | Pattern::Adaptive { .. } => {
+            unreachable!("the half-pixel and adaptive patterns have their own reconstruction")
+        }
     }
 }
 
@@ -470,6 +476,103 @@ fn half_pixel_tile<F: Lanes>(camera: &Camera<f64>, tracer: &mut Tracer<F>, tile:
         }
     }
     out
+}
+
+/// Whitted's adaptive supersampling over one tile ([`Pattern::Adaptive`]). Points live on a lattice of
+/// `2^depth` steps per pixel; the pixel corners are traced first (those on the tile's edges again by the
+/// neighbouring tile: the same bits), then level by level every square whose corners differ by more than
+/// `threshold` in a channel gets its edge midpoints and centre traced (each point once, shared by the
+/// squares that meet there, in lattice order) and is split. Every decision depends only on colours, which are
+/// the same bits at every width, so the image is too.
+fn adaptive_tile<F: Lanes>(
+    camera: &Camera<f64>,
+    tracer: &mut Tracer<F>,
+    tile: Tile,
+    threshold: f32,
+    depth: u32,
+) -> Vec<Rgb> {
+    let unit = 1u32 << depth;
+    let mut colour: std::collections::BTreeMap<(u32, u32), Rgb> = std::collections::BTreeMap::new();
+    // Lattice points relative to the tile's corner, in 1/unit pixel steps; traced K at a time.
+    let mut trace = |points: Vec<(u32, u32)>, colour: &mut std::collections::BTreeMap<(u32, u32), Rgb>| {
+        let step = 1.0 / unit as f32;
+        for chunk in points.chunks(F::K) {
+            let at = |i: usize, pick: fn((u32, u32)) -> u32, origin: u32| {
+                let p = chunk[i.min(chunk.len() - 1)];
+                origin as f32 + pick(p) as f32 * step
+            };
+            let sx = F::from_fn(|i| at(i, |p| p.0, tile.x0));
+            let sy = F::from_fn(|i| at(i, |p| p.1, tile.y0));
+            let ray = camera.rays(sx, sy);
+            let rays =
+                RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), F::lanes_below(chunk.len()));
+            let c = tracer.primary(&rays);
+            for (i, &p) in chunk.iter().enumerate() {
+                colour.insert(p, lane_rgb(&c, i));
+            }
+        }
+    };
+    let corners = (0..=tile.h).flat_map(|y| (0..=tile.w).map(move |x| (x * unit, y * unit))).collect();
+    trace(corners, &mut colour);
+    // Squares as (left, top, size) in lattice steps; `split` holds those divided, for the final averages.
+    let mut squares: Vec<(u32, u32, u32)> =
+        (0..tile.h).flat_map(|y| (0..tile.w).map(move |x| (x * unit, y * unit, unit))).collect();
+    let mut split = std::collections::BTreeSet::new();
+    let differ = |a: Rgb, b: Rgb| (a.x - b.x).abs().max((a.y - b.y).abs()).max((a.z - b.z).abs()) > threshold;
+    for _ in 0..depth {
+        let corners_of = |&(x, y, s): &(u32, u32, u32)| [(x, y), (x + s, y), (x, y + s), (x + s, y + s)];
+        let busy: Vec<(u32, u32, u32)> = squares
+            .iter()
+            .filter(|sq| {
+                let c = corners_of(sq).map(|p| colour[&p]);
+                (0..4).any(|i| (i + 1..4).any(|j| differ(c[i], c[j])))
+            })
+            .copied()
+            .collect();
+        let mut new = std::collections::BTreeSet::new();
+        for &(x, y, s) in &busy {
+            let h = s / 2;
+            for p in [(x + h, y), (x, y + h), (x + h, y + h), (x + s, y + h), (x + h, y + s)] {
+                if !colour.contains_key(&p) {
+                    new.insert(p);
+                }
+            }
+        }
+        trace(new.into_iter().collect(), &mut colour);
+        squares = busy
+            .iter()
+            .flat_map(|&(x, y, s)| {
+                split.insert((x, y, s));
+                let h = s / 2;
+                [(x, y, h), (x + h, y, h), (x, y + h, h), (x + h, y + h, h)]
+            })
+            .collect();
+        if squares.is_empty() {
+            break;
+        }
+    }
+    // A square's value: its quarters' mean when split, else its corners' mean.
+    fn value(
+        sq: (u32, u32, u32),
+        colour: &std::collections::BTreeMap<(u32, u32), Rgb>,
+        split: &std::collections::BTreeSet<(u32, u32, u32)>,
+    ) -> Rgb {
+        let (x, y, s) = sq;
+        let quarter = |sum: Rgb| sum * 0.25;
+        if split.contains(&sq) {
+            let h = s / 2;
+            let q =
+                [(x, y, h), (x + h, y, h), (x, y + h, h), (x + h, y + h, h)].map(|q| value(q, colour, split));
+            quarter(q[0] + q[1] + q[2] + q[3])
+        } else {
+            let c = [(x, y), (x + s, y), (x, y + s), (x + s, y + s)].map(|p| colour[&p]);
+            quarter(c[0] + c[1] + c[2] + c[3])
+        }
+    }
+    (0..tile.h)
+        .flat_map(|y| (0..tile.w).map(move |x| (x, y)))
+        .map(|(x, y)| value((x * unit, y * unit, unit), &colour, &split))
+        .collect()
 }
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.

@@ -610,16 +610,23 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("method,spp,seconds,rays,rmse,rmse_edges,psnr"));
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(String::from).collect()).collect();
-    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; lecture once.
-    assert_eq!(rows.len(), 3 + 3 + 5 + 1, "{text}");
-    let rmse = |method: &str, spp: &str| -> f64 {
-        rows.iter().find(|r| r[0] == method && r[1] == spp).map(|r| r[4].parse().unwrap()).unwrap()
+    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture once.
+    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 1, "{text}");
+    let rmse = |method: &str, spp: f64| -> f64 {
+        let at = |r: &&Vec<String>| r[0] == method && r[1].parse::<f64>().unwrap() == spp;
+        rows.iter().find(at).map(|r| r[4].parse().unwrap()).unwrap()
     };
+    let adaptive: Vec<(f64, f64)> = rows
+        .iter()
+        .filter(|r| r[0] == "adaptive")
+        .map(|r| (r[1].parse().unwrap(), r[4].parse().unwrap()))
+        .collect();
+    assert!(adaptive[4].0 > adaptive[0].0 && adaptive[4].1 < adaptive[0].1, "adaptive: {adaptive:?}");
     for method in ["grid", "stratified", "r2"] {
-        assert!(rmse(method, "16") < 0.6 * rmse(method, "1"), "{method}: {text}");
+        assert!(rmse(method, 16.0) < 0.6 * rmse(method, 1.0), "{method}: {text}");
     }
     let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 4);
+    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 5);
     assert!(stderr(&first).contains("stratified 8×8"), "{}", stderr(&first));
     let second = run(&[]);
     assert!(second.status.success() && stderr(&second).contains("(cached)"), "{}", stderr(&second));

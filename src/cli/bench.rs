@@ -309,6 +309,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
         (false, Pattern::Stratified(n)) => (Some(n * n), format!("stratified {n}x{n}")),
         (false, Pattern::R2(count)) => (Some(count), format!("r2 {count}")),
         (false, Pattern::HalfPixel) => (None, "half-pixel".to_owned()),
+        (false, Pattern::Adaptive { threshold, depth }) => {
+            (None, format!("adaptive {threshold} to depth {depth}"))
+        }
     };
     let max_depth = desc.render.max_depth;
     let parse_s = clock.elapsed().as_secs_f64();

@@ -46,7 +46,8 @@ pub struct RenderArgs {
     /// Sampling method and samples per pixel N, overriding the scene: `grid:N` (regular √N×√N grid of
     /// stratum centres), `stratified:N` (one jittered sample per stratum of a √N×√N grid), `r2:N` (N points
     /// of the R2 low-discrepancy sequence, rotated per pixel), `lecture` (the 9-point half-pixel grid shared
-    /// with the neighbours). Jitter and rotation are seeded by the pixel, so every width and thread count
+    /// with the neighbours), `adaptive[:THRESHOLD,DEPTH]` (Whitted: pixel corners shared, squares split where
+    /// their corners differ by more than THRESHOLD in a channel, down to DEPTH levels; default 0.1,2). Jitter and rotation are seeded by the pixel, so every width and thread count
     /// gives the same image.
     #[arg(long, value_parser = super::values::parse_aa)]
     pub aa: Option<Pattern>,
@@ -277,6 +278,9 @@ fn pattern_name(pattern: Pattern) -> String {
         }
         Pattern::HalfPixel => {
             "half-pixel pattern (9 samples per pixel shared with the neighbours)".to_owned()
+        }
+        Pattern::Adaptive { threshold, depth } => {
+            format!("adaptive: corners shared, squares split where they differ by > {threshold}, to depth {depth}")
         }
     }
 }

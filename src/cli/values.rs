@@ -47,9 +47,26 @@ pub fn parse_aa(s: &str) -> Result<Pattern, String> {
         "grid" => Ok(Pattern::Grid(side(samples()?)?)),
         "stratified" => Ok(Pattern::Stratified(side(samples()?)?)),
         "r2" => Ok(Pattern::R2(samples()?)),
+        "adaptive" => adaptive(count),
         "lecture" if count.is_none() => Ok(Pattern::HalfPixel),
         "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
-        _ => Err(format!("unknown method `{method}`: grid:N, stratified:N, r2:N or lecture")),
+        _ => Err(format!("unknown method `{method}`: grid:N, stratified:N, r2:N, adaptive[:T,D] or lecture")),
+    }
+}
+
+/// `adaptive[:THRESHOLD,DEPTH]`: a threshold above 0 (a channel difference of linear values) and a depth
+/// from 1 to 6; default 0.1 and 2.
+fn adaptive(args: Option<&str>) -> Result<Pattern, String> {
+    let Some(args) = args else { return Ok(Pattern::Adaptive { threshold: 0.1, depth: 2 }) };
+    let (t, d) =
+        args.split_once(',').ok_or_else(|| format!("adaptive takes THRESHOLD,DEPTH, got `{args}`"))?;
+    let threshold = match t.trim().parse::<f32>() {
+        Ok(v) if v > 0.0 && v.is_finite() => v,
+        _ => return Err(format!("adaptive's threshold is a channel difference above 0, got `{t}`")),
+    };
+    match d.trim().parse::<u32>() {
+        Ok(depth) if (1..=6).contains(&depth) => Ok(Pattern::Adaptive { threshold, depth }),
+        _ => Err(format!("adaptive's depth runs from 1 to 6, got `{d}`")),
     }
 }
 
@@ -143,7 +160,20 @@ mod tests {
         assert_eq!(parse_aa("stratified:9"), Ok(Pattern::Stratified(3)));
         assert_eq!(parse_aa("r2:5"), Ok(Pattern::R2(5)));
         assert_eq!(parse_aa("lecture"), Ok(Pattern::HalfPixel));
-        for bad in ["grid:5", "grid", "r2:0", "r2:x", "lecture:9", "sobol:4", ""] {
+        assert_eq!(parse_aa("adaptive"), Ok(Pattern::Adaptive { threshold: 0.1, depth: 2 }));
+        assert_eq!(parse_aa("adaptive:0.05,3"), Ok(Pattern::Adaptive { threshold: 0.05, depth: 3 }));
+        for bad in [
+            "grid:5",
+            "grid",
+            "r2:0",
+            "r2:x",
+            "lecture:9",
+            "sobol:4",
+            "",
+            "adaptive:0,2",
+            "adaptive:0.1,9",
+            "adaptive:0.1",
+        ] {
             assert!(parse_aa(bad).is_err(), "{bad}");
         }
         assert_eq!(parse_filter("tent"), Ok(Filter { kind: FilterKind::Tent, radius: 1.0 }));

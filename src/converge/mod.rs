@@ -14,10 +14,12 @@ use crate::scene::desc::Pattern;
 use metrics::{edge_mask, errors, Errors};
 
 /// The sampling methods a study can compare, by their `--aa` names.
-pub const METHODS: [&str; 4] = ["grid", "stratified", "r2", "lecture"];
+pub const METHODS: [&str; 5] = ["grid", "stratified", "r2", "adaptive", "lecture"];
 
 /// The patterns a method runs at, by increasing sample count up to `max_spp` samples per pixel: squares
-/// (1, 4, 16, 64, …) for the grids, powers of two for R2, the one half-pixel pattern for `lecture`.
+/// (1, 4, 16, 64, …) for the grids, powers of two for R2, the one half-pixel pattern for `lecture`, and for
+/// `adaptive` falling thresholds (0.4 to 0.025) at depth 3 (up to 81 points a pixel where every level
+/// splits, whatever `max_spp` says).
 pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
     let squares = || {
         (1..).map(|n: u32| n * n).take_while(move |&s| s <= max_spp.max(1)).filter(|s| s.is_power_of_two())
@@ -27,6 +29,9 @@ pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
         "stratified" => Ok(squares().map(|s| Pattern::Stratified(s.isqrt())).collect()),
         "r2" => Ok((0..).map(|e| 1u32 << e).take_while(|&s| s <= max_spp.max(1)).map(Pattern::R2).collect()),
         "lecture" => Ok(vec![Pattern::HalfPixel]),
+        "adaptive" => Ok([0.4, 0.2, 0.1, 0.05, 0.025]
+            .map(|threshold| Pattern::Adaptive { threshold, depth: 3 })
+            .to_vec()),
         _ => Err(format!("unknown method `{method}`: {}", METHODS.join(", "))),
     }
 }
@@ -36,7 +41,7 @@ pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
 pub struct Run {
     /// The method's name.
     pub method: String,
-    /// Camera rays per pixel ([`Pattern::rays_per_pixel`]).
+    /// Camera rays traced per pixel (counted: adaptive sampling decides its own).
     pub spp: f64,
     /// Wall-clock seconds of the render (tracing and filtering).
     pub seconds: f64,
@@ -94,9 +99,10 @@ pub fn study(
     for (name, patterns) in methods {
         for &pattern in patterns {
             let rendered = with_pattern(scene, pattern, |s| render_lanes(s, lanes, pool, &()));
+            let pixels = f64::from(scene.camera.width) * f64::from(scene.camera.height);
             runs.push(Run {
                 method: name.clone(),
-                spp: pattern.rays_per_pixel(),
+                spp: rendered.counts.primary as f64 / pixels.max(1.0),
                 seconds: rendered.seconds,
                 rays: rendered.counts.total(),
                 errors: errors(&rendered.image, &reference.image, &reference.edges),
@@ -113,7 +119,7 @@ pub fn csv(runs: &[Run]) -> String {
     for r in runs {
         let e = &r.errors;
         out += &format!(
-            "{},{},{:.6},{},{:.6e},{:.6e},{:.3}\n",
+            "{},{:.4},{:.6},{},{:.6e},{:.6e},{:.3}\n",
             r.method, r.spp, r.seconds, r.rays, e.rmse, e.rmse_edges, e.psnr
         );
     }

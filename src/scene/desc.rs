@@ -71,7 +71,7 @@ impl Default for CameraDesc {
 }
 
 /// Where the samples of one pixel go.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub enum Pattern {
     /// An n×n regular grid of stratum centres (n² samples, box filter).
     Grid(u32),
@@ -83,6 +83,16 @@ pub enum Pattern {
     Stratified(u32),
     /// N points of the R2 low-discrepancy sequence, rotated by a per-pixel random shift; box filter.
     R2(u32),
+    /// Whitted's adaptive supersampling: the pixel corners (shared with the neighbours) are traced, and a
+    /// square whose corners differ by more than `threshold` in some channel is split into four, down to
+    /// `depth` levels; a square's value is its corners' mean, or its quarters' mean when split. Flat
+    /// regions cost about one ray per pixel.
+    Adaptive {
+        /// The largest channel difference between two corners of a square left whole.
+        threshold: f32,
+        /// Levels of splitting below the pixel (a square at depth d is 2^−d pixels wide).
+        depth: u32,
+    },
 }
 
 impl Pattern {
@@ -92,6 +102,8 @@ impl Pattern {
             Pattern::Grid(n) | Pattern::Stratified(n) => f64::from(n * n),
             Pattern::R2(count) => f64::from(count),
             Pattern::HalfPixel => 4.0,
+            // At least the shared corners; how many more depends on the image.
+            Pattern::Adaptive { .. } => 1.0,
         }
     }
 }
