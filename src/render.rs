@@ -492,9 +492,9 @@ fn adaptive_tile<F: Lanes>(
     depth: u32,
 ) -> Vec<Rgb> {
     let unit = 1u32 << depth;
-    let mut colour: std::collections::BTreeMap<(u32, u32), Rgb> = std::collections::BTreeMap::new();
+    let mut colour = Lattice::new(tile.w * unit + 1, tile.h * unit + 1);
     // Lattice points relative to the tile's corner, in 1/unit pixel steps; traced K at a time.
-    let mut trace = |points: Vec<(u32, u32)>, colour: &mut std::collections::BTreeMap<(u32, u32), Rgb>| {
+    let mut trace = |points: Vec<(u32, u32)>, colour: &mut Lattice| {
         let step = 1.0 / unit as f32;
         for chunk in points.chunks(F::K) {
             let at = |i: usize, pick: fn((u32, u32)) -> u32, origin: u32| {
@@ -508,7 +508,7 @@ fn adaptive_tile<F: Lanes>(
                 RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), F::lanes_below(chunk.len()));
             let c = tracer.primary(&rays);
             for (i, &p) in chunk.iter().enumerate() {
-                colour.insert(p, lane_rgb(&c, i));
+                colour.set(p, lane_rgb(&c, i));
             }
         }
     };
@@ -524,7 +524,7 @@ fn adaptive_tile<F: Lanes>(
         let busy: Vec<(u32, u32, u32)> = squares
             .iter()
             .filter(|sq| {
-                let c = corners_of(sq).map(|p| colour[&p]);
+                let c = corners_of(sq).map(|p| colour.get(p));
                 (0..4).any(|i| (i + 1..4).any(|j| differ(c[i], c[j])))
             })
             .copied()
@@ -533,7 +533,7 @@ fn adaptive_tile<F: Lanes>(
         for &(x, y, s) in &busy {
             let h = s / 2;
             for p in [(x + h, y), (x, y + h), (x + h, y + h), (x + s, y + h), (x + h, y + s)] {
-                if !colour.contains_key(&p) {
+                if !colour.has(p) {
                     new.insert(p);
                 }
             }
@@ -554,7 +554,7 @@ fn adaptive_tile<F: Lanes>(
     // A square's value: its quarters' mean when split, else its corners' mean.
     fn value(
         sq: (u32, u32, u32),
-        colour: &std::collections::BTreeMap<(u32, u32), Rgb>,
+        colour: &Lattice,
         split: &std::collections::BTreeSet<(u32, u32, u32)>,
     ) -> Rgb {
         let (x, y, s) = sq;
@@ -565,7 +565,7 @@ fn adaptive_tile<F: Lanes>(
                 [(x, y, h), (x + h, y, h), (x, y + h, h), (x + h, y + h, h)].map(|q| value(q, colour, split));
             quarter(q[0] + q[1] + q[2] + q[3])
         } else {
-            let c = [(x, y), (x + s, y), (x, y + s), (x + s, y + s)].map(|p| colour[&p]);
+            let c = [(x, y), (x + s, y), (x, y + s), (x + s, y + s)].map(|p| colour.get(p));
             quarter(c[0] + c[1] + c[2] + c[3])
         }
     }
@@ -573,6 +573,31 @@ fn adaptive_tile<F: Lanes>(
         .flat_map(|y| (0..tile.w).map(move |x| (x, y)))
         .map(|(x, y)| value((x * unit, y * unit, unit), &colour, &split))
         .collect()
+}
+
+/// The colours of an adaptive tile's lattice points, traced or not yet.
+struct Lattice {
+    width: u32,
+    colour: Vec<Option<Rgb>>,
+}
+
+impl Lattice {
+    fn new(width: u32, height: u32) -> Self {
+        Lattice { width, colour: vec![None; (width * height) as usize] }
+    }
+    fn index(&self, (x, y): (u32, u32)) -> usize {
+        (y * self.width + x) as usize
+    }
+    fn has(&self, p: (u32, u32)) -> bool {
+        self.colour[self.index(p)].is_some()
+    }
+    fn get(&self, p: (u32, u32)) -> Rgb {
+        self.colour[self.index(p)].expect("a square's corners are traced before it is judged")
+    }
+    fn set(&mut self, p: (u32, u32), c: Rgb) {
+        let i = self.index(p);
+        self.colour[i] = Some(c);
+    }
 }
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.

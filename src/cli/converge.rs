@@ -113,7 +113,7 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
         let e = &r.errors;
         writeln!(
             out,
-            "{:<11} {:>7} {:>9.4} {:>12} {:>10.3e} {:>10.3e} {:>7.2}",
+            "{:<11} {:>7.2} {:>9.4} {:>12} {:>10.3e} {:>10.3e} {:>7.2}",
             r.method, r.spp, r.seconds, r.rays, e.rmse, e.rmse_edges, e.psnr
         )?;
     }
