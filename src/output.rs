@@ -1,7 +1,8 @@
-//! Images out: the format follows the file extension (PNG and PPM 8-bit, EXR linear float). 8-bit values
-//! follow the scene's [`Transfer`]: the sRGB curve, or the values as they are (clamped, ×255, rounded);
-//! EXR holds the values as they are, whatever the transfer. PNG records the transfer in a `tEXt` chunk,
-//! keyword `Transfer`, text `srgb` or `linear`; PPM's header stays minimal and says nothing.
+//! Images out: the format follows the file extension (PNG 8- or 16-bit, PPM 8-bit, EXR linear float, Radiance
+//! HDR linear RGBE). Integer values follow the scene's [`Transfer`]: the sRGB curve, or the values as they
+//! are (clamped, scaled, rounded); EXR and HDR hold the values as they are, whatever the transfer. PNG records
+//! the transfer in a `tEXt` chunk, keyword `Transfer`, text `srgb` or `linear`, and any further text the
+//! caller gives ([`WriteOptions::text`]: the renderer, scene, size, sampling); PPM's header stays minimal.
 //! The file is written under a temporary name in the same directory and renamed into place, so a failed
 //! run never leaves half a file and never destroys an existing one.
 
@@ -24,6 +25,29 @@ pub enum Format {
     Exr,
     /// 8-bit binary PPM (`P6`; sRGB or linear transfer, not recorded); `.pnm` names it too.
     Ppm,
+    /// Radiance HDR (`.hdr`): linear RGBE, 8-bit mantissas sharing an exponent, flat scanlines.
+    Hdr,
+}
+
+/// Bits per PNG channel.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
+pub enum BitDepth {
+    /// 8 bits (0–255).
+    #[default]
+    Eight,
+    /// 16 bits (0–65535), big-endian as PNG stores them.
+    Sixteen,
+}
+
+/// How [`write_image_with`] writes: the transfer of integer formats, PNG's bit depth, and PNG text chunks.
+#[derive(Clone, Debug, Default)]
+pub struct WriteOptions {
+    /// Linear values to integers.
+    pub transfer: Transfer,
+    /// PNG's bits per channel (other formats ignore it; the CLI refuses 16 for them).
+    pub bit_depth: BitDepth,
+    /// PNG `tEXt` chunks (keyword, text) written after `Transfer`, e.g. `Software`, `Source`.
+    pub text: Vec<(String, String)>,
 }
 
 /// Why an image could not be written.
@@ -61,6 +85,7 @@ impl Format {
             Some("png") => Ok(Format::Png),
             Some("exr") => Ok(Format::Exr),
             Some("ppm") | Some("pnm") => Ok(Format::Ppm),
+            Some("hdr") => Ok(Format::Hdr),
             _ => Err(OutputError::UnknownFormat { path: path.to_owned() }),
         }
     }
@@ -276,8 +301,13 @@ pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn write_image(img: &Image, path: &Path, transfer: Transfer) -> Result<(), OutputError> {
+    write_image_with(img, path, &WriteOptions { transfer, ..WriteOptions::default() })
+}
+
+/// [`write_image`] with a PNG bit depth and text chunks.
+pub fn write_image_with(img: &Image, path: &Path, options: &WriteOptions) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
-    write_atomic(path, |tmp| encode(img, format, transfer, tmp))
+    write_atomic(path, |tmp| encode(img, format, options, tmp))
         .map_err(|cause| OutputError::Write { path: path.to_owned(), cause })
 }
 
@@ -292,11 +322,14 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), BoxErro
     result
 }
 
-fn encode(img: &Image, format: Format, transfer: Transfer, tmp: &Path) -> Result<(), BoxError> {
+fn encode(img: &Image, format: Format, options: &WriteOptions, tmp: &Path) -> Result<(), BoxError> {
     let mut file = BufWriter::new(fs::File::create(tmp)?);
+    let transfer = options.transfer;
     match format {
-        Format::Png => write_png(&to_rgb8(img, transfer), transfer, &mut file)?,
+        Format::Png if options.bit_depth == BitDepth::Sixteen => write_png16(img, options, &mut file)?,
+        Format::Png => write_png(&to_rgb8(img, transfer), options, &mut file)?,
         Format::Ppm => write_ppm(&to_rgb8(img, transfer), &mut file)?,
+        Format::Hdr => write_hdr(img, &mut file)?,
         Format::Exr => {
             let raw = img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
             let buf =
@@ -312,16 +345,72 @@ fn encode(img: &Image, format: Format, transfer: Transfer, tmp: &Path) -> Result
 /// `image` crate's encoder writes no text chunks), with that encoder's settings here: fast deflate and Paeth
 /// on every row rather than the adaptive choice per row (on balls4 at 1024², 3.4 against 4.2 ms to encode
 /// and a smaller file; docs/perf-log/2026-11.md).
-fn write_png(img: &RgbImage, transfer: Transfer, out: impl Write) -> Result<(), BoxError> {
-    let mut encoder = png::Encoder::new(out, img.width(), img.height());
+fn write_png(img: &RgbImage, options: &WriteOptions, out: impl Write) -> Result<(), BoxError> {
+    png_with(img.width(), img.height(), png::BitDepth::Eight, options, img.as_raw(), out)
+}
+
+/// 16-bit RGB PNG: each value under the transfer at 16 bits (the sRGB curve in f64, or the value clamped),
+/// ×65535, rounded, stored big-endian.
+fn write_png16(img: &Image, options: &WriteOptions, out: impl Write) -> Result<(), BoxError> {
+    let encode = |v: f32| -> u16 {
+        let c = if v.is_nan() { 0.0 } else { f64::from(v).clamp(0.0, 1.0) };
+        let s = match options.transfer {
+            Transfer::Linear => c,
+            Transfer::Srgb if c <= 0.003_130_8 => 12.92 * c,
+            Transfer::Srgb => 1.055 * c.powf(1.0 / 2.4) - 0.055,
+        };
+        (s * 65535.0 + 0.5) as u16
+    };
+    let raw: Vec<u8> =
+        img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(|v| encode(v).to_be_bytes()).collect();
+    png_with(img.width, img.height, png::BitDepth::Sixteen, options, &raw, out)
+}
+
+/// An RGB PNG of `depth` from its raw bytes, with the `Transfer` chunk and the options' text chunks.
+fn png_with(
+    width: u32,
+    height: u32,
+    depth: png::BitDepth,
+    options: &WriteOptions,
+    raw: &[u8],
+    out: impl Write,
+) -> Result<(), BoxError> {
+    let mut encoder = png::Encoder::new(out, width, height);
     encoder.set_color(png::ColorType::Rgb);
-    encoder.set_depth(png::BitDepth::Eight);
+    encoder.set_depth(depth);
     encoder.set_compression(png::Compression::Fast);
     encoder.set_filter(png::Filter::Paeth);
-    encoder.add_text_chunk("Transfer".to_owned(), transfer.name().to_owned())?;
+    encoder.add_text_chunk("Transfer".to_owned(), options.transfer.name().to_owned())?;
+    for (keyword, text) in &options.text {
+        encoder.add_text_chunk(keyword.clone(), text.clone())?;
+    }
     let mut writer = encoder.write_header()?;
-    writer.write_image_data(img.as_raw())?;
+    writer.write_image_data(raw)?;
     writer.finish()?;
+    Ok(())
+}
+
+/// Radiance HDR: the header (`#?RADIANCE`, `FORMAT=32-bit_rle_rgbe`, the resolution line `-Y h +X w`: rows
+/// top to bottom), then each pixel as RGBE — three 8-bit mantissas and a shared exponent — in flat
+/// (uncompressed) scanlines, which every reader takes. Negative and NaN values are written as 0.
+fn write_hdr(img: &Image, out: &mut impl Write) -> std::io::Result<()> {
+    write!(out, "#?RADIANCE\nFORMAT=32-bit_rle_rgbe\n\n-Y {} +X {}\n", img.height, img.width)?;
+    let rgbe = |p: &crate::math::Rgb| -> [u8; 4] {
+        let clean = |v: f32| if v.is_nan() || v < 0.0 { 0.0 } else { v.min(f32::MAX) };
+        let (r, g, b) = (clean(p.x), clean(p.y), clean(p.z));
+        let m = r.max(g).max(b);
+        if m < 1e-32 {
+            return [0; 4];
+        }
+        // m = f·2^e with f in [0.5, 1): the mantissas are v·256/2^e, rounded (the largest clamped to 255).
+        let e = m.log2().floor() as i32 + 1;
+        let scale = 256.0 / 2f32.powi(e);
+        let q = |v: f32| (v * scale + 0.5).min(255.0) as u8;
+        [q(r), q(g), q(b), (e + 128).clamp(0, 255) as u8]
+    };
+    for p in &img.pixels {
+        out.write_all(&rgbe(p))?;
+    }
     Ok(())
 }
 
@@ -382,7 +471,7 @@ mod tests {
         let img = RgbImage::from_raw(2, 1, vec![1, 2, 3, 4, 5, 6]).unwrap();
         for transfer in [Transfer::Srgb, Transfer::Linear] {
             let mut out = Vec::new();
-            write_png(&img, transfer, &mut out).unwrap();
+            write_png(&img, &WriteOptions { transfer, ..WriteOptions::default() }, &mut out).unwrap();
             let reader = png::Decoder::new(std::io::Cursor::new(&out)).read_info().unwrap();
             let text = &reader.info().uncompressed_latin1_text;
             assert_eq!(text.len(), 1);

@@ -667,3 +667,55 @@ fn converge_precision_compares_the_three_paths() {
     assert!(p99 > 0.0 && p99 < 2e-6, "{text}");
     assert!(rows[2][2..].iter().all(|v| v.parse::<f64>().unwrap() == 0.0));
 }
+
+/// Formats beyond 8 bits: `--bit-depth 16` writes a 16-bit PNG whose values are the 8-bit PNG's to within
+/// rounding (256 codes per 8-bit step), `.hdr` writes Radiance RGBE that decodes to the EXR's linear values
+/// within RGBE's precision (a 1/256 mantissa step), a PNG records the renderer, scene and sampling in text
+/// chunks, and `--bit-depth 16` for a PPM is an argument error that writes nothing.
+#[test]
+fn sixteen_bit_png_and_radiance_hdr_match_the_other_formats() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/transforms.toml");
+    let out = |name: &str| dir.path().join(name);
+    let render = |path: &Path, extra: &[&str]| {
+        let mut args =
+            vec!["render", scene.to_str().unwrap(), "-o", path.to_str().unwrap(), "--width", "64", "-q"];
+        args.extend_from_slice(extra);
+        bareray(&args)
+    };
+    for (name, extra) in
+        [("a.png", &[][..]), ("b.png", &["--bit-depth", "16"][..]), ("c.exr", &[][..]), ("d.hdr", &[][..])]
+    {
+        let run = render(&out(name), extra);
+        assert!(run.status.success(), "{name}: {}", stderr(&run));
+    }
+    let png8 = image::open(out("a.png")).unwrap();
+    let png16 = image::open(out("b.png")).unwrap();
+    assert!(matches!(png16, image::DynamicImage::ImageRgb16(_)), "{:?}", png16.color());
+    let (p8, p16) = (png8.to_rgb8(), png16.to_rgb16());
+    let close = p8
+        .as_raw()
+        .iter()
+        .zip(p16.as_raw())
+        .all(|(&a, &b)| (f64::from(b) / 257.0 - f64::from(a)).abs() <= 0.5 + 1e-9);
+    assert!(close, "16-bit values round to the 8-bit ones");
+    assert!(p16.as_raw().iter().any(|&v| v % 257 != 0), "16 bits carry more than the 8-bit codes");
+    let exr = image::open(out("c.exr")).unwrap().to_rgb32f();
+    let hdr = image::open(out("d.hdr")).unwrap().to_rgb32f();
+    assert_eq!(exr.dimensions(), hdr.dimensions());
+    // RGBE shares one exponent per pixel: each channel is within half a step of 1/256 of the pixel's
+    // largest channel's power of two (a whole step where the largest is clamped to 255).
+    for (e, h) in exr.as_raw().chunks(3).zip(hdr.as_raw().chunks(3)) {
+        let largest = e.iter().fold(0.0f32, |m, v| m.max(v.abs()));
+        let step = 2f32.powi(largest.log2().floor() as i32 + 1) / 256.0;
+        for (a, b) in e.iter().zip(h) {
+            assert!((a - b).abs() <= step + 1e-6, "exr {e:?} hdr {h:?}");
+        }
+    }
+    let text = std::fs::read(out("a.png")).unwrap();
+    let has = |needle: &str| text.windows(needle.len()).any(|w| w == needle.as_bytes());
+    assert!(has("Software") && has("bareray ") && has("Source") && has("transforms.toml") && has("Comment"));
+    let bad = render(&out("e.ppm"), &["--bit-depth", "16"]);
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(!out("e.ppm").exists());
+}

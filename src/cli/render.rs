@@ -13,7 +13,7 @@ use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::compile::{CompileOptions, Scene};
 use crate::io::toml;
-use crate::output::{write_image, Format};
+use crate::output::{write_image_with, BitDepth, Format, WriteOptions};
 use crate::render::{render_lanes, Rendered, LANE_CHOICES};
 use crate::scene::desc::Pattern;
 use crate::scene::SceneDesc;
@@ -56,6 +56,9 @@ pub struct RenderArgs {
     /// pixel whose centre is within the radius; without a filter a pixel averages its own samples.
     #[arg(long, value_parser = super::values::parse_filter)]
     pub filter: Option<crate::scene::desc::Filter>,
+    /// Bits per channel of a PNG: 8 or 16 (16 keeps the shading's gradients without banding).
+    #[arg(long, default_value_t = 8, value_parser = parse_bit_depth)]
+    pub bit_depth: u8,
     /// Reflection/refraction depth limit; overrides the scene.
     #[arg(long)]
     pub depth: Option<u32>,
@@ -107,7 +110,13 @@ pub fn run(args: RenderArgs) -> Result<()> {
     };
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
     // Fail on an output that cannot be written now, not after the render.
-    Format::from_path(&output)?;
+    let format = Format::from_path(&output)?;
+    if args.bit_depth == 16 && format != Format::Png {
+        return Err(super::usage(format!(
+            "--bit-depth 16: {} is not a PNG (16 bits are for PNG)",
+            output.display()
+        )));
+    }
     apply_overrides(&mut desc, &args);
     let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
     for warning in scene_warnings(&desc) {
@@ -140,7 +149,25 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
     };
     let clock = Instant::now();
-    pool.install(|| write_image(&rendered.image, &output, scene.render.transfer))?;
+    let options = WriteOptions {
+        transfer: scene.render.transfer,
+        bit_depth: if args.bit_depth == 16 { BitDepth::Sixteen } else { BitDepth::Eight },
+        text: vec![
+            ("Software".to_owned(), format!("bareray {}", env!("CARGO_PKG_VERSION"))),
+            ("Source".to_owned(), scene_name.display().to_string()),
+            (
+                "Comment".to_owned(),
+                format!(
+                    "{}x{}, {}, depth {}",
+                    scene.camera.width,
+                    scene.camera.height,
+                    pattern_name(scene.render.pattern),
+                    scene.render.max_depth
+                ),
+            ),
+        ],
+    };
+    pool.install(|| write_image_with(&rendered.image, &output, &options))?;
     if let Some((img, which)) = aovs {
         let path = aov::aov_path(&output);
         aov::write_exr(&img, &which.0, scene.geometry.len(), &path)
@@ -315,6 +342,15 @@ pub(super) fn parse_spp(s: &str) -> Result<u32, String> {
         .map_err(|_| format!("expected a square number (1, 4, 9, 16, ...), got `{s}`"))?;
     toml::grid_side(spp)?;
     Ok(spp)
+}
+
+/// Parses `--bit-depth`: 8 or 16.
+fn parse_bit_depth(s: &str) -> Result<u8, String> {
+    match s.trim() {
+        "8" => Ok(8),
+        "16" => Ok(16),
+        _ => Err(format!("PNG takes 8 or 16 bits per channel, got `{s}`")),
+    }
 }
 
 /// Parses a thread count, 1 to 1024.
