@@ -337,11 +337,18 @@ fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
 
 /// The pixels of one tile, row by row.
 fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
-    let own_reconstruction = matches!(scene.render.pattern, Pattern::HalfPixel | Pattern::Adaptive { .. });
-    if let (Some(filter), false) = (scene.render.filter, own_reconstruction) {
+    let camera = &scene.camera_f64;
+    let pattern = scene.render.pattern;
+    match pattern {
+        Pattern::HalfPixel => return half_pixel_tile(camera, tracer, tile),
+        Pattern::Adaptive { threshold, depth } => {
+            return adaptive_tile(camera, tracer, tile, threshold, depth)
+        }
+        Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) => {}
+    }
+    if let Some(filter) = scene.render.filter {
         return filtered_tile(scene, tracer, tile, filter);
     }
-    let camera = &scene.camera_f64;
     let pyramids = scene.geometry.culls_by_pyramid();
     let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
     let mut pass = |offsets: &Offsets| {
@@ -353,31 +360,29 @@ fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Ve
             }
         });
     };
-    let count = match scene.render.pattern {
-        Pattern::Grid(n) => {
-            let offsets = grid_offsets(n);
-            offsets.iter().for_each(|&(dx, dy)| pass(&Offsets::Shared(dx, dy)));
-            offsets.len()
+    let grid = grid_of(pattern);
+    let count = pattern.rays_per_pixel() as u32;
+    for k in 0..count {
+        match pattern {
+            // The regular grid's offset is the same in every pixel: splatted, not computed per lane.
+            Pattern::Grid(_) => pass(&Offsets::Shared(grid[k as usize].0, grid[k as usize].1)),
+            _ => pass(&Offsets::PerPixel(&|x, y| sample_offset(pattern, &grid, k, x, y))),
         }
-        Pattern::Stratified(n) => {
-            (0..n * n).for_each(|k| pass(&Offsets::PerPixel(&|x, y| sequence::stratified(n, x, y, k))));
-            (n * n) as usize
-        }
-        Pattern::R2(count) => {
-            (0..count).for_each(|k| pass(&Offsets::PerPixel(&|x, y| sequence::r2(x, y, k))));
-            count as usize
-        }
-        Pattern::HalfPixel => return half_pixel_tile(camera, tracer, tile),
-        Pattern::Adaptive { threshold, depth } => {
-            return adaptive_tile(camera, tracer, tile, threshold, depth)
-        }
-    };
+    }
     let scale = 1.0 / count as f32;
     sum.into_iter().map(|s| s * scale).collect()
 }
 
+/// The regular grid's offsets for [`sample_offset`] (empty for the other patterns).
+fn grid_of(pattern: Pattern) -> Vec<(f32, f32)> {
+    match pattern {
+        Pattern::Grid(n) => grid_offsets(n),
+        _ => Vec::new(),
+    }
+}
+
 /// Sample `k`'s position in pixel `(x, y)` (image column and row) under a per-pixel or shared pattern, as
-/// [`trace_tile`] traces it, and the number of samples per pixel. Not for the half-pixel pattern.
+/// [`trace_tile`] traces it (`grid` from [`grid_of`]). Not for the half-pixel and adaptive patterns.
 fn sample_offset(pattern: Pattern, grid: &[(f32, f32)], k: u32, x: u32, y: u32) -> (f32, f32) {
     match pattern {
         Pattern::Grid(_) => grid[k as usize],
@@ -406,10 +411,7 @@ fn filtered_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile, fi
         h: (tile.y0 + tile.h + a).min(height) - y0,
     };
     let pattern = scene.render.pattern;
-    let grid = match pattern {
-        Pattern::Grid(n) => grid_offsets(n),
-        _ => Vec::new(),
-    };
+    let grid = grid_of(pattern);
     let count = pattern.rays_per_pixel() as u32;
     let area = (ext.w * ext.h) as usize;
     let mut samples = vec![Rgb::default(); area * count as usize];

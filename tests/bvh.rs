@@ -334,11 +334,16 @@ fn polygon_bvh_equals_brute_force_at_every_width() {
             h.prim as usize >= brute.geometry.polygon_base()
         });
         assert!(hits.count() > rays.len() / 5, "{n} polygons: too few rays hit a polygon");
-        check_kind::<f32>(&bvh, &brute, &rays);
-        check_kind::<f32x4>(&bvh, &brute, &rays);
-        check_kind::<f32x8>(&bvh, &brute, &rays);
-        check_kind::<f32x16>(&bvh, &brute, &rays);
+        check_kind_at_every_width(&bvh, &brute, &rays);
     }
+}
+
+/// [`check_kind`] at K = 1, 4, 8 and 16.
+fn check_kind_at_every_width(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
+    check_kind::<f32>(bvh, brute, rays);
+    check_kind::<f32x4>(bvh, brute, rays);
+    check_kind::<f32x8>(bvh, brute, rays);
+    check_kind::<f32x16>(bvh, brute, rays);
 }
 
 fn check_kind<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
@@ -423,10 +428,7 @@ fn shape_bvh_equals_brute_force_at_every_width() {
         });
         let hits = ellipsoid_hits.count();
         assert!(hits > rays.len() / 40, "{n} ellipsoids: only {hits} rays hit one");
-        check_kind::<f32>(&bvh, &brute, &rays);
-        check_kind::<f32x4>(&bvh, &brute, &rays);
-        check_kind::<f32x8>(&bvh, &brute, &rays);
-        check_kind::<f32x16>(&bvh, &brute, &rays);
+        check_kind_at_every_width(&bvh, &brute, &rays);
     }
 }
 
@@ -464,10 +466,7 @@ fn cone_bvh_equals_brute_force_at_every_width() {
         });
         let hits = cone_hits.count();
         assert!(hits > rays.len() / 40, "{n} cones: only {hits} rays hit one");
-        check_kind::<f32>(&bvh, &brute, &rays);
-        check_kind::<f32x4>(&bvh, &brute, &rays);
-        check_kind::<f32x8>(&bvh, &brute, &rays);
-        check_kind::<f32x16>(&bvh, &brute, &rays);
+        check_kind_at_every_width(&bvh, &brute, &rays);
     }
 }
 

@@ -308,12 +308,8 @@ impl Scene {
             self.build += stats;
         }
         if job.polygons {
-            let pad = Vec3A::splat(job.options.pad);
             let p = &g.polygons;
-            let item_box = |j: usize| {
-                let (lo, hi) = p.triangle_box(j);
-                Aabb { min: Vec3A::new(lo.x, lo.y, lo.z) - pad, max: Vec3A::new(hi.x, hi.y, hi.z) + pad }
-            };
+            let item_box = |j: usize| padded(p.triangle_box(j), job.options.pad);
             let (tree, polygons, stats) =
                 bvh::build(p.triangles(), item_box, job.options, |order| p.permuted(order));
             (g.polygons, g.polygon_bvh) = (polygons, Some(tree));
@@ -324,23 +320,27 @@ impl Scene {
             let item_box = |j: usize| Aabb { min: bounded[j].1.min - pad, max: bounded[j].1.max + pad };
             let permute = |order: &[u32]| order.iter().map(|&j| bounded[j as usize].0).collect::<Vec<u32>>();
             let (tree, order, stats) = bvh::build(bounded.len(), item_box, job.options, permute);
-            g.loose_shapes = (0..g.shapes.len() as u32).filter(|k| !order.contains(k)).collect();
+            // The shapes without a box: the planes.
+            g.loose_shapes =
+                (0..g.shapes.len() as u32).filter(|&k| !g.shapes[k as usize].kind.is_solid()).collect();
             (g.shape_order, g.shape_bvh) = (order, Some(tree));
             self.build += stats;
         }
         if job.cones {
-            let pad = Vec3A::splat(job.options.pad);
             let cones = &g.cones;
-            let item_box = |j: usize| {
-                let (lo, hi) = cones.bounds(j);
-                Aabb { min: Vec3A::new(lo.x, lo.y, lo.z) - pad, max: Vec3A::new(hi.x, hi.y, hi.z) + pad }
-            };
+            let item_box = |j: usize| padded(cones.bounds(j), job.options.pad);
             let order = |order: &[u32]| order.to_vec();
             let (tree, order, stats) = bvh::build(cones.len(), item_box, job.options, order);
             (g.cone_order, g.cone_bvh) = (order, Some(tree));
             self.build += stats;
         }
     }
+}
+
+/// The box `(lo, hi)` widened by `pad` on every side, for the BVH build.
+fn padded((lo, hi): (Vec3f, Vec3f), pad: f32) -> Aabb {
+    let pad = Vec3A::splat(pad);
+    Aabb { min: Vec3A::new(lo.x, lo.y, lo.z) - pad, max: Vec3A::new(hi.x, hi.y, hi.z) + pad }
 }
 
 /// The bounded shapes (ellipsoids) and their boxes in rendering space: the unit sphere's box under the shape's
