@@ -6,15 +6,12 @@
 
 use std::path::{Path, PathBuf};
 
-use exr::prelude::{
-    AnyChannel, AnyChannels, Encoding, FlatSamples, Image, Layer, LayerAttributes, SmallVec, WritableImage,
-};
 use rayon::prelude::*;
 
 use crate::compile::Scene;
 use crate::geometry::NO_PRIM;
-use crate::output::{write_atomic, BoxError};
-use crate::render::primary_hits_lanes;
+use crate::output::{self, exr::Channel, Frame, OutputError};
+use crate::render::{primary_window_lanes, Window};
 
 /// One kind of AOV.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -48,71 +45,88 @@ pub fn parse_list(list: &str) -> Result<AovList, String> {
     Ok(AovList(out))
 }
 
-/// Primary-ray results, row-major, row 0 at the top.
-#[derive(Clone, Debug, Default)]
-pub struct AovImage {
-    /// Columns.
-    pub width: u32,
-    /// Rows.
-    pub height: u32,
-    /// Hit distance, +inf on a miss.
-    pub depth: Vec<f32>,
-    /// Unit outward normal, zero on a miss.
-    pub normal: Vec<[f32; 3]>,
-    /// Primitive id, [`NO_PRIM`] on a miss.
-    pub id: Vec<u32>,
+/// The EXR channels of `which`, in that order: `Z`; `N.X`, `N.Y`, `N.Z`; `id` (float while every index of
+/// a scene of `prim_count` primitives is exact in an f32, else unsigned).
+pub fn channels(which: &[Aov], prim_count: usize) -> Vec<Channel> {
+    let mut out = Vec::new();
+    for aov in which {
+        match aov {
+            Aov::Depth => out.push(Channel { name: "Z", float: true }),
+            Aov::Normal => out.extend(["N.X", "N.Y", "N.Z"].map(|name| Channel { name, float: true })),
+            Aov::Id => out.push(Channel { name: "id", float: prim_count <= 1 << 24 }),
+        }
+    }
+    out
 }
 
-/// Traces one ray through every pixel centre in packets of `lanes`, and looks up the normals.
-pub fn render_aovs(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> AovImage {
-    let hits = primary_hits_lanes(scene, lanes, pool);
+/// The AOVs of `window`'s pixels (one camera ray per pixel centre, in packets of `lanes`), row-major, each
+/// pixel the little-endian 4-byte samples of [`channels`]`(which, …)` in order: the rows an EXR of them
+/// takes ([`output::write_channels`]).
+pub fn samples(
+    scene: &Scene,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    window: Window,
+    which: &[Aov],
+) -> Vec<u8> {
+    let hits = primary_window_lanes(scene, lanes, pool, window);
     let w = hits.width as usize;
-    let normal = pool.install(|| {
-        (0..hits.t.len())
-            .into_par_iter()
-            .map(|i| {
-                if hits.prim[i] == NO_PRIM {
+    let float_id = scene.geometry.len() <= 1 << 24;
+    let per_pixel = channels(which, scene.geometry.len()).len() * 4;
+    let mut out = vec![0u8; hits.t.len() * per_pixel];
+    pool.install(|| {
+        out.par_chunks_mut(per_pixel).enumerate().for_each(|(i, out)| {
+            let (t, prim) = (hits.t[i], hits.prim[i]);
+            let normal = || {
+                if prim == NO_PRIM {
                     return [0.0; 3];
                 }
-                let ray = scene.camera_f64.ray_f32((i % w) as f32 + 0.5, (i / w) as f32 + 0.5);
-                let n = scene.geometry.surface(&ray, hits.t[i], hits.prim[i]).normal;
+                let (x, y) = (window.x0 + (i % w) as u32, window.y0 + (i / w) as u32);
+                let ray = scene.camera_f64.ray_f32(x as f32 + 0.5, y as f32 + 0.5);
+                let n = scene.geometry.surface(&ray, t, prim).normal;
                 [n.x, n.y, n.z]
-            })
-            .collect()
+            };
+            // `file_id` leaves NO_PRIM (no primitive) as it is.
+            let id = scene.geometry.file_id(prim);
+            let mut values = Vec::with_capacity(5);
+            for aov in which {
+                match aov {
+                    Aov::Depth => values.push(t.to_bits()),
+                    Aov::Normal => values.extend(normal().map(f32::to_bits)),
+                    Aov::Id if float_id => {
+                        values.push(if id == NO_PRIM { -1.0f32 } else { id as f32 }.to_bits())
+                    }
+                    Aov::Id => values.push(id),
+                }
+            }
+            for (o, v) in out.chunks_exact_mut(4).zip(values) {
+                o.copy_from_slice(&v.to_le_bytes());
+            }
+        });
     });
-    // `file_id` leaves NO_PRIM (no primitive) as it is.
-    let id = hits.prim.iter().map(|&p| scene.geometry.file_id(p)).collect();
-    AovImage { width: hits.width, height: hits.height, depth: hits.t, normal, id }
+    out
+}
+
+/// Writes the AOVs `which` of the whole image to `path` as float EXR channels, in bands of rows.
+pub fn write(
+    scene: &Scene,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    which: &[Aov],
+    path: &Path,
+) -> Result<(), OutputError> {
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let band = crate::render::band_rows(width, 16 << 20);
+    let mut bands = (0..height).step_by(band as usize).map(|y| {
+        samples(scene, lanes, pool, Window { x0: 0, y0: y, x1: width, y1: (y + band).min(height) }, which)
+    });
+    let channels = channels(which, scene.geometry.len());
+    output::write_channels(path, Frame::whole(width, height), &channels, &[], &mut bands)
 }
 
 /// The AOV file for an image output: `out.png` → `out.aov.exr`.
 pub fn aov_path(output: &Path) -> PathBuf {
     output.with_extension("aov.exr")
-}
-
-/// Writes the chosen channels to an EXR file, atomically. `prim_count` decides the id channel's type.
-pub fn write_exr(img: &AovImage, which: &[Aov], prim_count: usize, path: &Path) -> Result<(), BoxError> {
-    let mut channels: SmallVec<[AnyChannel<FlatSamples>; 4]> = SmallVec::new();
-    for aov in which {
-        match aov {
-            Aov::Depth => channels.push(AnyChannel::new("Z", FlatSamples::F32(img.depth.clone()))),
-            Aov::Normal => {
-                for (axis, name) in ["N.X", "N.Y", "N.Z"].into_iter().enumerate() {
-                    let v = img.normal.iter().map(|n| n[axis]).collect();
-                    channels.push(AnyChannel::new(name, FlatSamples::F32(v)));
-                }
-            }
-            Aov::Id if prim_count <= 1 << 24 => {
-                let v = img.id.iter().map(|&i| if i == NO_PRIM { -1.0 } else { i as f32 }).collect();
-                channels.push(AnyChannel::new("id", FlatSamples::F32(v)));
-            }
-            Aov::Id => channels.push(AnyChannel::new("id", FlatSamples::U32(img.id.clone()))),
-        }
-    }
-    let size = (img.width as usize, img.height as usize);
-    let layer =
-        Layer::new(size, LayerAttributes::default(), Encoding::FAST_LOSSLESS, AnyChannels::sort(channels));
-    write_atomic(path, |tmp| Ok(Image::from_layer(layer).write().to_file(tmp)?))
 }
 
 #[cfg(test)]

@@ -76,3 +76,4 @@ pub mod sample;
 pub mod scene;
 pub mod shade;
 pub mod simd;
+pub mod still;

@@ -44,6 +44,8 @@ const LAYERS: &[(&str, u32)] = &[
     ("huge_pages", 9),
     // Run time against error, over the renderer and the accuracy twin.
     ("converge", 10),
+    // Stills of any size: bands streamed into files, pre-checks, regions and their merge.
+    ("still", 10),
     // The command line.
     ("cli", 11),
 ];

@@ -6,6 +6,7 @@ mod camera_args;
 mod converge;
 mod diff;
 mod gen;
+mod merge;
 mod render;
 mod values;
 
@@ -50,6 +51,8 @@ enum Command {
     /// Compare two images (PNG, EXR, PPM): size, RMSE, PSNR, max difference, differing pixels; exit 0 when
     /// identical, 1 when different, 2 on error.
     Diff(diff::DiffArgs),
+    /// Paste regions rendered apart (`render --region`) into one image, checking they tile it exactly.
+    Merge(merge::MergeArgs),
 }
 
 /// An argument error found after clap parsed the command line (a value clap cannot check alone, such as
@@ -87,6 +90,7 @@ pub fn main() -> ExitCode {
         Command::Bench(args) => bench::run(args),
         Command::Accuracy(args) => accuracy::run(args),
         Command::Converge(args) => converge::run(args),
+        Command::Merge(args) => merge::run(args),
         Command::Diff(args) => return diff::run(args),
     };
     match result {

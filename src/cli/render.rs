@@ -13,10 +13,11 @@ use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::compile::{CompileOptions, Scene};
 use crate::io::toml;
-use crate::output::{write_image_with, BitDepth, Format, WriteOptions};
-use crate::render::{render_lanes, Rendered, LANE_CHOICES};
+use crate::output::{BitDepth, Format, WriteOptions};
+use crate::render::{Traced, Window, LANE_CHOICES};
 use crate::scene::desc::Pattern;
 use crate::scene::SceneDesc;
+use crate::still::{self, Job};
 
 /// The demo scene rendered when no scene file is given.
 pub const DEMO_SCENE: &str = include_str!("../../scenes/whitted.toml");
@@ -75,7 +76,16 @@ pub struct RenderArgs {
     /// to OUT's name with `.aov.exr`: a comma list of depth (channel Z), normal (N.X, N.Y, N.Z), id.
     #[arg(long, value_parser = aov::parse_list)]
     pub aov: Option<AovList>,
-    /// Print a scene summary, rays by kind and the time split (parse, build, render, aov, write).
+    /// Render only the pixels X0..X1, Y0..Y1 of the full image (X1, Y1 exclusive), with the full image's
+    /// camera: regions rendered apart and pasted together (`bareray merge`) are the full image's bits. The
+    /// file records where it belongs (PNG `Region` text, EXR data window, PPM header comment).
+    #[arg(long, value_name = "X0,Y0,X1,Y1", value_parser = parse_region, conflicts_with = "crop")]
+    pub region: Option<[u32; 4]>,
+    /// Render a region given as fractions of the image, as pbrt's --cropwindow: columns from ⌈X0·width⌉ to
+    /// ⌈X1·width⌉, rows from ⌈Y0·height⌉ to ⌈Y1·height⌉.
+    #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = parse_crop)]
+    pub crop: Option<[f64; 4]>,
+    /// Print a scene summary, rays by kind and the time split (parse, build, render and write).
     #[arg(long)]
     pub stats: bool,
     /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16 (the default: fastest on every scene in
@@ -95,9 +105,8 @@ pub struct RenderArgs {
 struct Timings {
     parse: f64,
     build: f64,
+    /// Tracing, and the writing that overlaps it.
     render: f64,
-    aov: f64,
-    write: f64,
 }
 
 /// Runs `bareray render`.
@@ -118,6 +127,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
         )));
     }
     apply_overrides(&mut desc, &args);
+    let window = region(&args, desc.camera.width, desc.camera.height)?;
+    if window != Window::whole(desc.camera.width, desc.camera.height) && format == Format::Hdr {
+        return Err(super::usage("--region and --crop write PNG, EXR or PPM (HDR cannot record a region)"));
+    }
     let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
     for warning in scene_warnings(&desc) {
         eprintln!("warning: {}: {warning}", scene_name.display());
@@ -133,23 +146,32 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let scene = pool.install(|| Scene::compile_owned(desc, options)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
+    let job = Job {
+        write: write_options(&args, &scene, scene_name),
+        window,
+        lanes: args.lanes,
+        aov: args.aov.as_ref().map(|which| (which.0.clone(), aov::aov_path(&output))),
+        ..Job::whole(&scene, &output, WriteOptions::default())?
+    };
+    still::check(&scene, &job, pool.current_num_threads())?;
     crate::accel::set_counting(args.stats);
     let progress = progress_bar(args.quiet);
-    let rendered = render_lanes(&scene, args.lanes, &pool, &progress);
-    progress.finish_and_clear();
-    time.render = rendered.seconds;
-
-    let aovs = match &args.aov {
-        None => None,
-        Some(which) => {
-            let clock = Instant::now();
-            let img = aov::render_aovs(&scene, args.lanes, &pool);
-            time.aov = clock.elapsed().as_secs_f64();
-            Some((img, which))
-        }
-    };
     let clock = Instant::now();
-    let options = WriteOptions {
+    let traced = still::render(&scene, &pool, &progress, &job)?;
+    progress.finish_and_clear();
+    time.render = clock.elapsed().as_secs_f64();
+
+    if args.stats {
+        print_stats(&scene, &job, &traced, &time);
+    } else if !args.quiet {
+        print_summary(&output, &job, &traced, &time);
+    }
+    Ok(())
+}
+
+/// The file's transfer, bit depth and text: the renderer, the scene file, and the size and sampling.
+fn write_options(args: &RenderArgs, scene: &Scene, scene_name: &Path) -> WriteOptions {
+    WriteOptions {
         transfer: scene.render.transfer,
         bit_depth: if args.bit_depth == 16 { BitDepth::Sixteen } else { BitDepth::Eight },
         text: vec![
@@ -166,21 +188,27 @@ pub fn run(args: RenderArgs) -> Result<()> {
                 ),
             ),
         ],
-    };
-    pool.install(|| write_image_with(&rendered.image, &output, &options))?;
-    if let Some((img, which)) = aovs {
-        let path = aov::aov_path(&output);
-        aov::write_exr(&img, &which.0, scene.geometry.len(), &path)
-            .map_err(|e| anyhow::anyhow!("{}: {e}", path.display()))?;
     }
-    time.write = clock.elapsed().as_secs_f64();
+}
 
-    if args.stats {
-        print_stats(&scene, &rendered, &time);
-    } else if !args.quiet {
-        print_summary(&output, &scene, &rendered, &time);
+/// The pixels to render: `--region`, `--crop` (pbrt's rounding: ⌈fraction × size⌉ at both ends), or
+/// the whole `width × height` image. A region outside the image or empty is an argument error.
+fn region(args: &RenderArgs, width: u32, height: u32) -> Result<Window> {
+    let window = match (args.region, args.crop) {
+        (Some([x0, y0, x1, y1]), _) => Window { x0, y0, x1, y1 },
+        (None, Some([x0, x1, y0, y1])) => {
+            let at = |f: f64, size: u32| (f * f64::from(size)).ceil() as u32;
+            Window { x0: at(x0, width), y0: at(y0, height), x1: at(x1, width), y1: at(y1, height) }
+        }
+        (None, None) => return Ok(Window::whole(width, height)),
+    };
+    let Window { x0, y0, x1, y1 } = window;
+    if x0 >= x1 || y0 >= y1 || x1 > width || y1 > height {
+        return Err(super::usage(format!(
+            "the region {x0},{y0},{x1},{y1} is empty or reaches outside the {width}x{height} image"
+        )));
     }
-    Ok(())
+    Ok(window)
 }
 
 /// The render's tiles as the bar's length and position.
@@ -205,17 +233,17 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
-fn print_summary(output: &Path, scene: &Scene, r: &Rendered, time: &Timings) {
+fn print_summary(output: &Path, job: &Job, r: &Traced, time: &Timings) {
     let c = r.counts;
     println!(
-        "{}: {}x{} in {:.3} s (parse {:.3} s, write {:.3} s); {} rays ({} primary, {} shadow, {} reflection, \
+        "{}: {}x{} in {:.3} s (parse {:.3} s, build {:.3} s); {} rays ({} primary, {} shadow, {} reflection, \
          {} refraction), {:.2} Mrays/s",
         output.display(),
-        scene.camera.width,
-        scene.camera.height,
-        r.seconds,
+        job.window.width(),
+        job.window.height(),
+        time.render,
         time.parse,
-        time.write,
+        time.build,
         c.total(),
         c.primary,
         c.shadow,
@@ -225,7 +253,7 @@ fn print_summary(output: &Path, scene: &Scene, r: &Rendered, time: &Timings) {
     );
 }
 
-fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
+fn print_stats(scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
     let g = &scene.geometry;
     let features = crate::compile::features::Features::of(scene);
     let n = features.counts;
@@ -240,12 +268,22 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material")
     );
+    let w = job.window;
+    let region = if w == Window::whole(scene.camera.width, scene.camera.height) {
+        String::new()
+    } else {
+        format!(
+            " (region {},{},{},{} of {}x{})",
+            w.x0, w.y0, w.x1, w.y1, scene.camera.width, scene.camera.height
+        )
+    };
     println!(
-        "image: {}x{}, {}, {} transfer",
-        scene.camera.width,
-        scene.camera.height,
+        "image: {}x{}{region}, {}, {} transfer, in bands of {} rows",
+        w.width(),
+        w.height(),
         pattern_name(scene.render.pattern),
-        scene.render.transfer.name()
+        scene.render.transfer.name(),
+        job.band_rows()
     );
     println!("features: {features}");
     let search = |bvh: &Option<crate::accel::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
@@ -268,11 +306,11 @@ fn print_stats(scene: &Scene, r: &Rendered, time: &Timings) {
     );
     println!(
         "intersection tests: {} packet-primitive, {} packet-box, at {} rays per packet",
-        r.work.prim_tests, r.work.box_tests, r.lanes
+        r.work.prim_tests, r.work.box_tests, job.lanes
     );
     println!(
-        "time: parse {:.3} s, build {:.3} s (scene and BVH), render {:.3} s, aov {:.3} s, write {:.3} s",
-        time.parse, time.build, time.render, time.aov, time.write
+        "time: parse {:.3} s, build {:.3} s (scene and BVH), render and write {:.3} s (tracing {:.3} s)",
+        time.parse, time.build, time.render, r.seconds
     );
     println!("throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
 }
@@ -332,6 +370,30 @@ fn parse_output(s: &str) -> Result<PathBuf, String> {
     Format::from_extension(&path)
         .map_err(|_| "unknown image format (use .png, .exr, .ppm or .pnm)".to_owned())?;
     Ok(path)
+}
+
+/// Parses `--region X0,Y0,X1,Y1`: four pixel coordinates.
+fn parse_region(s: &str) -> Result<[u32; 4], String> {
+    let v: Option<Vec<u32>> = s.split(',').map(|p| p.trim().parse().ok()).collect();
+    match v.as_deref() {
+        Some(&[x0, y0, x1, y1]) if x0 < x1 && y0 < y1 => Ok([x0, y0, x1, y1]),
+        _ => {
+            Err(format!("expected X0,Y0,X1,Y1 with X0 < X1 and Y0 < Y1 (pixels, ends exclusive), got `{s}`"))
+        }
+    }
+}
+
+/// Parses `--crop X0,X1,Y0,Y1`: four fractions in [0, 1].
+fn parse_crop(s: &str) -> Result<[f64; 4], String> {
+    let v: Option<Vec<f64>> = s.split(',').map(|p| p.trim().parse().ok()).collect();
+    match v.as_deref() {
+        Some(&[x0, x1, y0, y1])
+            if [x0, x1, y0, y1].iter().all(|f| (0.0..=1.0).contains(f)) && x0 < x1 && y0 < y1 =>
+        {
+            Ok([x0, x1, y0, y1])
+        }
+        _ => Err(format!("expected X0,X1,Y0,Y1, fractions in [0, 1] with X0 < X1 and Y0 < Y1, got `{s}`")),
+    }
 }
 
 /// Parses `--spp`: a square number.

@@ -5,7 +5,7 @@ pub mod filter;
 mod postfilter;
 pub mod sequence;
 
-pub use postfilter::lecture_3x3;
+pub use postfilter::{lecture_3x3, lecture_3x3_pixel};
 
 /// Offsets in [0, 1)² of an n×n regular grid: the centres of the n² equal sub-squares, row by row.
 pub fn grid_offsets(n: u32) -> Vec<(f32, f32)> {

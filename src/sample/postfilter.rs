@@ -10,23 +10,29 @@ pub fn lecture_3x3(img: &Image) -> Image {
     let mut out = Image::new(img.width, img.height);
     for y in 0..h {
         for x in 0..w {
-            let mut sum = Rgb::default();
-            let mut weight = 0.0f32;
-            for dy in -1..=1 {
-                for dx in -1..=1 {
-                    let (nx, ny) = (x + dx, y + dy);
-                    if nx < 0 || ny < 0 || nx >= w || ny >= h {
-                        continue;
-                    }
-                    let k = if dx == 0 && dy == 0 { 0.5 } else { 1.0 / 16.0 };
-                    sum = sum + img.get(nx as u32, ny as u32) * k;
-                    weight += k;
-                }
-            }
-            out.set(x as u32, y as u32, sum * (1.0 / weight));
+            let inside = |nx: i64, ny: i64| {
+                (nx >= 0 && ny >= 0 && nx < w && ny < h).then(|| img.get(nx as u32, ny as u32))
+            };
+            out.set(x as u32, y as u32, lecture_3x3_pixel(x, y, inside));
         }
     }
     out
+}
+
+/// One pixel of [`lecture_3x3`]: `at(x, y)` gives a pixel's value, `None` outside the image. Every caller
+/// (the whole image, rows streamed band by band) sums the same terms in this order, so gets the same bits.
+pub fn lecture_3x3_pixel(x: i64, y: i64, at: impl Fn(i64, i64) -> Option<Rgb>) -> Rgb {
+    let mut sum = Rgb::default();
+    let mut weight = 0.0f32;
+    for dy in -1..=1 {
+        for dx in -1..=1 {
+            let Some(value) = at(x + dx, y + dy) else { continue };
+            let k = if dx == 0 && dy == 0 { 0.5 } else { 1.0 / 16.0 };
+            sum = sum + value * k;
+            weight += k;
+        }
+    }
+    sum * (1.0 / weight)
 }
 
 #[cfg(test)]

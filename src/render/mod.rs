@@ -1,0 +1,321 @@
+//! The render loop: the image is cut into tiles, tiles are traced in parallel (rayon), and inside a tile
+//! camera rays go out in packets of K over pixel blocks (2×2 for K = 4, 4×2 for 8, 4×4 for 16, one pixel
+//! for K = 1), one sample offset at a time. Each pixel's samples are summed in the same fixed order at every
+//! width and thread count, so the image is the same bits whatever K and the number of threads.
+
+use std::time::Instant;
+
+use wide::{f32x16, f32x4, f32x8};
+
+use crate::accel::Work;
+use crate::camera::Camera;
+use crate::compile::Scene;
+use crate::film::Image;
+use crate::geometry::RayPacket;
+use crate::math::{Rgb, V3};
+use crate::sample::lecture_3x3;
+use crate::scene::desc::PostFilter;
+use crate::shade::RayCounts;
+use crate::simd::Lanes;
+
+mod bands;
+mod primary;
+mod tile;
+
+pub use bands::{
+    band_rows, render_window, render_window_lanes, trace_band_lanes, Bands, RowStage, Traced, Window,
+};
+use bands::{trace_rows, TileCounter};
+
+pub(crate) use primary::fnv1a;
+pub use primary::{
+    primary_hits_lanes, primary_window_lanes, trace_primary, trace_primary_lanes, trace_primary_window,
+    PrimaryHits,
+};
+use tile::trace_tile;
+
+/// Tile edge in pixels: small enough to balance two threads on small images, large enough to amortise.
+const TILE: u32 = 16;
+
+/// The packet widths a render can run at.
+pub const LANE_CHOICES: [usize; 4] = [1, 4, 8, 16];
+
+/// A finished render.
+#[derive(Clone, Debug)]
+pub struct Rendered {
+    /// The filtered image.
+    pub image: Image,
+    /// Rays traced by kind.
+    pub counts: RayCounts,
+    /// Intersection tests done.
+    pub work: Work,
+    /// Rays per packet.
+    pub lanes: usize,
+    /// Wall-clock seconds spent tracing and filtering.
+    pub seconds: f64,
+}
+
+/// A rectangle of the image.
+#[derive(Clone, Copy, Debug)]
+pub struct Tile {
+    /// Left column.
+    pub x0: u32,
+    /// Top row.
+    pub y0: u32,
+    /// Width.
+    pub w: u32,
+    /// Height.
+    pub h: u32,
+}
+
+/// The image cut into tiles, row by row.
+pub fn tiles(width: u32, height: u32) -> Vec<Tile> {
+    let mut out = Vec::new();
+    for y0 in (0..height).step_by(TILE as usize) {
+        for x0 in (0..width).step_by(TILE as usize) {
+            out.push(Tile { x0, y0, w: TILE.min(width - x0), h: TILE.min(height - y0) });
+        }
+    }
+    out
+}
+
+/// A pool of `threads` workers (rayon's default when `None`). A run makes one and does all its parallel
+/// work there (build, render, output): `--threads` then holds even when the caller already runs inside
+/// rayon, and no second pool's threads are started.
+pub fn thread_pool(threads: Option<usize>) -> Result<rayon::ThreadPool, rayon::ThreadPoolBuildError> {
+    let mut builder = rayon::ThreadPoolBuilder::new();
+    if let Some(n) = threads {
+        builder = builder.num_threads(n);
+    }
+    builder.build()
+}
+
+/// Where a render reports how far it got: its work is cut into tiles, and it tells how many there are
+/// before tracing, then once per finished tile.
+///
+/// Implemented by `()` (reports go nowhere) and by every `Fn(u64, u64) + Sync` closure, which is called with
+/// `(done, total)`: `(0, total)` first, then once per tile with `done` from 1 to `total`. Tiles finish on
+/// the render's worker threads, so the calls come from them and concurrent ones may arrive out of order.
+///
+/// ```
+/// use std::path::Path;
+/// use std::sync::atomic::{AtomicU64, Ordering};
+///
+/// use bareray::{compile::Scene, io, render};
+///
+/// let mut desc = io::load(Path::new("scenes/whitted.toml"))?;
+/// (desc.camera.width, desc.camera.height) = (40, 30);
+/// let scene = Scene::compile(&desc)?;
+/// let pool = render::thread_pool(Some(2))?;
+///
+/// let finished = AtomicU64::new(0);
+/// let count = |done: u64, _total: u64| {
+///     finished.fetch_max(done, Ordering::Relaxed);
+/// };
+/// render::render_lanes(&scene, 8, &pool, &count);
+/// assert_eq!(finished.into_inner(), render::tiles(40, 30).len() as u64);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub trait Progress: Sync {
+    /// The render has `total` tiles; called once, before any tile is traced.
+    fn start(&self, total: u64);
+    /// One more tile is finished, `done` of `total` so far (each `done` from 1 to `total` comes once).
+    fn tile_done(&self, done: u64, total: u64);
+}
+
+impl Progress for () {
+    fn start(&self, _: u64) {}
+    fn tile_done(&self, _: u64, _: u64) {}
+}
+
+impl<F: Fn(u64, u64) + Sync> Progress for F {
+    fn start(&self, total: u64) {
+        self(0, total);
+    }
+    fn tile_done(&self, done: u64, total: u64) {
+        self(done, total);
+    }
+}
+
+/// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on the threads of `pool`, reporting each
+/// finished tile to `progress` (`&()` for no reports).
+///
+/// Every width and thread count gives the same image, bit for bit; 1 is the scalar reference path. Panics
+/// on a width not in [`LANE_CHOICES`].
+///
+/// ```
+/// use std::path::Path;
+///
+/// use bareray::{compile::Scene, io, render};
+///
+/// let mut desc = io::load(Path::new("scenes/whitted.toml"))?;
+/// (desc.camera.width, desc.camera.height) = (64, 48);
+/// let scene = Scene::compile(&desc)?;
+/// let pool = render::thread_pool(Some(2))?;
+///
+/// let scalar = render::render_lanes(&scene, 1, &pool, &());
+/// let packets = render::render_lanes(&scene, 8, &pool, &|done: u64, total: u64| {
+///     eprintln!("{done}/{total} tiles");
+/// });
+/// assert_eq!(scalar.image.pixels, packets.image.pixels);
+/// assert!(packets.counts.primary >= 64 * 48);
+/// # Ok::<(), Box<dyn std::error::Error>>(())
+/// ```
+pub fn render_lanes(
+    scene: &Scene,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    progress: &dyn Progress,
+) -> Rendered {
+    match lanes {
+        1 => render::<f32>(scene, pool, progress),
+        4 => render::<f32x4>(scene, pool, progress),
+        8 => render::<f32x8>(scene, pool, progress),
+        16 => render::<f32x16>(scene, pool, progress),
+        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
+    }
+}
+
+/// Renders `scene` with packets of `F::K` rays on the threads of `pool`, reporting each finished tile to
+/// `progress`: [`render_lanes`] with the width as a type (`f32`, or `wide`'s `f32x4`, `f32x8`, `f32x16`).
+pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &dyn Progress) -> Rendered {
+    let start = Instant::now();
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    let counter = TileCounter::new(progress, tiles(width, height).len() as u64);
+    let (pixels, counts, work) = trace_rows::<F>(scene, pool, 0..width, 0..height, &counter);
+    let mut image = Image { width, height, pixels };
+    if scene.render.postfilter == PostFilter::Lecture3x3 {
+        image = lecture_3x3(&image);
+    }
+    Rendered { image, counts, work, lanes: F::K, seconds: start.elapsed().as_secs_f64() }
+}
+
+/// Pixel-block shape of a packet: (columns, rows).
+pub fn block<F: Lanes>() -> (u32, u32) {
+    match F::K {
+        1 => (1, 1),
+        4 => (2, 2),
+        8 => (4, 2),
+        16 => (4, 4),
+        k => (k as u32, 1),
+    }
+}
+
+/// The pixels of one packet: a block of `w × h` pixels at column `x`, row `y` of its tile; lane `i` is the
+/// pixel `(i mod bw, i div bw)` of the block, `bw × bh` = [`block`] (`w`, `h` are smaller at a tile's edge).
+#[derive(Clone, Copy, Debug)]
+pub struct Block {
+    /// Left column in the tile.
+    pub x: u32,
+    /// Top row in the tile.
+    pub y: u32,
+    /// Columns covered.
+    pub w: u32,
+    /// Rows covered.
+    pub h: u32,
+    /// Columns of a whole block (lanes per row).
+    pub bw: u32,
+}
+
+impl Block {
+    /// `(lane, column, row)` in the tile for each pixel of the block.
+    pub fn pixels(self) -> impl Iterator<Item = (usize, u32, u32)> {
+        (0..self.h)
+            .flat_map(move |r| (0..self.w).map(move |c| ((r * self.bw + c) as usize, self.x + c, self.y + r)))
+    }
+}
+
+/// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
+/// `(dx, dy)` from its pixel's corner: the camera rays and the block of pixels they sample. With `pyramids`
+/// (the scene culls by them, [`crate::accel::Geometry::culls_by_pyramid`]) each packet carries its block's
+/// [`Camera::pyramid`].
+pub fn for_each_packet<F: Lanes>(
+    camera: &Camera<f64>,
+    tile: Tile,
+    (dx, dy): (f32, f32),
+    pyramids: bool,
+    visit: impl FnMut(&RayPacket<F>, Block),
+) {
+    for_each_packet_at(camera, tile, &Offsets::Shared(dx, dy), pyramids, visit);
+}
+
+/// Where a pass of samples lies in each pixel, from the pixel's corner.
+pub enum Offsets<'a> {
+    /// The same offset in every pixel.
+    Shared(f32, f32),
+    /// Each pixel's own offset, given its image column and row.
+    PerPixel(&'a (dyn Fn(u32, u32) -> (f32, f32) + Sync)),
+}
+
+/// [`for_each_packet`] with an offset per pixel: lane i's position is `(column + lane column) + dx_i`, the sums
+/// a one-lane packet of that pixel computes, so every width gives the same rays.
+pub fn for_each_packet_at<F: Lanes>(
+    camera: &Camera<f64>,
+    tile: Tile,
+    offsets: &Offsets,
+    pyramids: bool,
+    mut visit: impl FnMut(&RayPacket<F>, Block),
+) {
+    let (bw, bh) = block::<F>();
+    // Lane offsets inside a block, computed once: x = (column + lane column) + dx, the same sums as per lane.
+    let lane_x = F::from_fn(|i| (i as u32 % bw) as f32);
+    let lane_y = F::from_fn(|i| (i as u32 / bw) as f32);
+    for by in (0..tile.h).step_by(bh as usize) {
+        for bx in (0..tile.w).step_by(bw as usize) {
+            let b = Block { x: bx, y: by, w: bw.min(tile.w - bx), h: bh.min(tile.h - by), bw };
+            let (x0, y0) = (tile.x0 + bx, tile.y0 + by);
+            let (dx, dy) = match offsets {
+                Offsets::Shared(dx, dy) => (F::splat_f32(*dx), F::splat_f32(*dy)),
+                Offsets::PerPixel(at) => {
+                    let lane = |i: usize| at(x0 + i as u32 % bw, y0 + i as u32 / bw);
+                    (F::from_fn(|i| lane(i).0), F::from_fn(|i| lane(i).1))
+                }
+            };
+            let sx = (F::splat_f32(x0 as f32) + lane_x) + dx;
+            let sy = (F::splat_f32(y0 as f32) + lane_y) + dy;
+            let ray = camera.rays(sx, sy);
+            let active = if b.w == bw && b.h == bh {
+                F::mask_from_bits(u32::MAX)
+            } else {
+                F::mask_from_fn(|i| (i as u32 % bw) < b.w && (i as u32 / bw) < b.h)
+            };
+            // The block's first and last sample positions, taken from the lanes themselves.
+            let (last_column, last_row) = ((bw - 1) as usize, ((bh - 1) * bw) as usize);
+            let pyramid = (pyramids && F::K > 1)
+                .then(|| camera.pyramid([sx.lane(0), sx.lane(last_column)], [sy.lane(0), sy.lane(last_row)]))
+                .flatten();
+            let rays = RayPacket {
+                pyramid,
+                ..RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), active)
+            };
+            visit(&rays, b);
+        }
+    }
+}
+
+/// The image's pixels as one list of row slices per tile, in the order of `tiles`, which must be
+/// [`tiles`]`(width, height)` (row-major bands of TILE rows), so each tile's job writes its own pixels in
+/// place: returning each tile's pixels and merging them after the trace measured 1–5% slower on a 1024²
+/// sphereflake (the merge, and the first touch of 4096 live tile buffers; docs/perf-log/2026-11.md).
+fn tile_rows<'a>(pixels: &'a mut [Rgb], width: u32, tiles: &[Tile]) -> Vec<Vec<&'a mut [Rgb]>> {
+    let mut out: Vec<Vec<&mut [Rgb]>> = tiles.iter().map(|t| Vec::with_capacity(t.h as usize)).collect();
+    let per_band = width.div_ceil(TILE) as usize;
+    for (y, row) in pixels.chunks_mut(width.max(1) as usize).enumerate() {
+        let first = y / TILE as usize * per_band;
+        let (mut rest, mut x) = (row, 0);
+        for (tile, rows) in tiles[first..first + per_band].iter().zip(&mut out[first..first + per_band]) {
+            debug_assert_eq!((tile.x0, tile.y0 / TILE), (x, y as u32 / TILE), "tiles out of order");
+            x += tile.w;
+            let (mine, after) = std::mem::take(&mut rest).split_at_mut(tile.w as usize);
+            rows.push(mine);
+            rest = after;
+        }
+        debug_assert!(rest.is_empty(), "the band's tiles do not cover row {y}");
+    }
+    out
+}
+
+/// Lane `i` of a colour packet.
+fn lane_rgb<F: Lanes>(c: &V3<F>, i: usize) -> Rgb {
+    Rgb::new(c.x.lane(i), c.y.lane(i), c.z.lane(i))
+}

@@ -1,0 +1,161 @@
+//! Primary visibility only: the closest hit of one camera ray per pixel centre, for `bench`, the AOVs and
+//! the checksums shared with the peer harnesses.
+
+use std::time::Instant;
+
+use rayon::prelude::*;
+use wide::{f32x16, f32x4, f32x8};
+
+use crate::compile::Scene;
+use crate::simd::Lanes;
+
+use super::{for_each_packet, tiles, Tile, Window, LANE_CHOICES, TILE};
+
+/// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
+#[derive(Clone, Debug)]
+pub struct PrimaryHits {
+    /// Columns.
+    pub width: u32,
+    /// Rows.
+    pub height: u32,
+    /// Hit distance per pixel, row-major, `inf` on a miss.
+    pub t: Vec<f32>,
+    /// Primitive id per pixel in storage order ([`crate::accel::Geometry::file_id`] maps it to the scene
+    /// file's numbering), [`crate::geometry::NO_PRIM`] on a miss.
+    pub prim: Vec<u32>,
+    /// Wall-clock seconds of the tracing.
+    pub seconds: f64,
+}
+
+impl PrimaryHits {
+    /// FNV-1a 64 over the per-pixel scene-file ids as little-endian i32 (−1 on a miss), row-major: the
+    /// checksum bench-peers/ computes for Embree, so equal results give equal checksums across tracers.
+    pub fn checksum(&self, scene: &Scene) -> u64 {
+        let ids = self.prim.iter().map(|&p| {
+            if p == crate::geometry::NO_PRIM {
+                -1i32
+            } else {
+                scene.geometry.file_id(p) as i32
+            }
+        });
+        fnv1a(ids.flat_map(i32::to_le_bytes))
+    }
+}
+
+/// FNV-1a 64 of a byte stream (offset basis 0xcbf29ce484222325, prime 0x100000001b3).
+pub(crate) fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+    bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
+}
+
+impl PrimaryHits {
+    /// A frame of misses, to be filled by [`trace_primary`].
+    pub fn new(width: u32, height: u32) -> Self {
+        let n = width as usize * height as usize;
+        Self {
+            width,
+            height,
+            t: vec![f32::INFINITY; n],
+            prim: vec![crate::geometry::NO_PRIM; n],
+            seconds: 0.0,
+        }
+    }
+}
+
+/// Copies the first `dst.len()` values of `src` into `dst`: a whole 4-pixel row as one fixed-size copy (a
+/// `memmove` call per short row cost 2–3% of a small field's frame), a partial one as a slice.
+#[inline(always)]
+fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
+    match (<&mut [T; 4]>::try_from(&mut *dst), src.first_chunk::<4>()) {
+        (Ok(whole), Some(row)) => *whole = *row,
+        _ => dst.copy_from_slice(&src[..dst.len()]),
+    }
+}
+
+/// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on the threads
+/// of `pool` ([`trace_primary`]).
+pub fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> PrimaryHits {
+    let mut hits = PrimaryHits::new(scene.camera.width, scene.camera.height);
+    trace_primary_lanes(scene, lanes, pool, &mut hits);
+    hits
+}
+
+/// [`trace_primary`] at a packet width chosen at run time.
+pub fn trace_primary_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
+    match lanes {
+        1 => trace_primary::<f32>(scene, pool, hits),
+        4 => trace_primary::<f32x4>(scene, pool, hits),
+        8 => trace_primary::<f32x8>(scene, pool, hits),
+        16 => trace_primary::<f32x16>(scene, pool, hits),
+        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
+    }
+}
+
+/// Traces one camera ray per pixel centre in packets of `F::K` on `pool` and writes the closest hits into
+/// `hits` (sized to the camera), every pixel; `hits.seconds` is the wall-clock time of the tracing. Taking
+/// the frame and the pool from the caller lets repeated frames (`bench`) reuse both, as a peer harness
+/// reuses its frame buffers and threads.
+pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
+    let (width, height) = (scene.camera.width, scene.camera.height);
+    assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the camera's");
+    trace_primary_window::<F>(scene, pool, Window::whole(width, height), hits);
+}
+
+/// [`trace_primary`] over `window` of the image: `hits` is the window's size, its pixel (0, 0) the
+/// window's corner.
+pub fn trace_primary_window<F: Lanes>(
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+    window: Window,
+    hits: &mut PrimaryHits,
+) {
+    use crate::geometry::DeparturePacket;
+    let start = Instant::now();
+    let (width, height) = (window.width(), window.height());
+    assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the window's");
+    // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
+    let band = width as usize * TILE as usize;
+    let pyramids = scene.geometry.culls_by_pyramid();
+    pool.install(|| {
+        // One job per band, as for tiles in `render`.
+        let bands =
+            hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate().with_max_len(1);
+        bands.for_each(|(band, (t, prim))| {
+            let camera = &scene.camera_f64;
+            let y0 = band as u32 * TILE;
+            for tile in tiles(width, TILE.min(height - y0)) {
+                let tile = Tile { x0: window.x0 + tile.x0, y0: window.y0 + y0, ..tile };
+                for_each_packet::<F>(camera, tile, (0.5, 0.5), pyramids, |rays, b| {
+                    let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+                    let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
+                    // Row by row: each row of the block is a run of pixels in the frame's row.
+                    for r in 0..b.h as usize {
+                        let lane = r * b.bw as usize;
+                        let at = (b.y as usize + r) * width as usize + (tile.x0 - window.x0 + b.x) as usize;
+                        let n = b.w as usize;
+                        copy_row(&mut t[at..at + n], &ts.as_ref()[lane..]);
+                        copy_row(&mut prim[at..at + n], &ids.as_ref()[lane..]);
+                    }
+                });
+            }
+        });
+    });
+    hits.seconds = start.elapsed().as_secs_f64();
+}
+
+/// [`trace_primary_window`] into a new frame, at a packet width chosen at run time (1, 4, 8 or 16).
+pub fn primary_window_lanes(
+    scene: &Scene,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    window: Window,
+) -> PrimaryHits {
+    let mut hits = PrimaryHits::new(window.width(), window.height());
+    match lanes {
+        1 => trace_primary_window::<f32>(scene, pool, window, &mut hits),
+        4 => trace_primary_window::<f32x4>(scene, pool, window, &mut hits),
+        8 => trace_primary_window::<f32x8>(scene, pool, window, &mut hits),
+        16 => trace_primary_window::<f32x16>(scene, pool, window, &mut hits),
+        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
+    }
+    hits
+}

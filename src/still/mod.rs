@@ -1,0 +1,182 @@
+//! Stills of any size: the image (or a region of it) is rendered band by band and each finished band is
+//! encoded and let go while the next is traced, so memory is the scene plus a few bands whatever the
+//! image's height ([`render`]); before that, [`check`] refuses what cannot work — a size past a format's or
+//! bareray's limits, a render whose bands would not fit in memory, a file that would not fit on its disk —
+//! with the reason and what would fit. Regions written separately are pasted back together by [`merge`].
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc::{sync_channel, SyncSender};
+use std::sync::Mutex;
+
+use thiserror::Error;
+
+use crate::aov::{self, Aov};
+use crate::compile::Scene;
+use crate::math::Rgb;
+use crate::output::{self, Format, Frame, OutputError, WriteOptions};
+use crate::render::{render_window_lanes, Progress, Traced, Window};
+
+mod check;
+pub mod merge;
+
+pub use check::{check, Estimate, Limit};
+
+/// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.
+pub const BAND_BUDGET: usize = 32 << 20;
+
+/// One still to render: where it goes, how it is written, which part of the image.
+#[derive(Clone, Debug)]
+pub struct Job {
+    /// The image file.
+    pub output: PathBuf,
+    /// Its format (by its extension, [`Format::from_extension`]).
+    pub format: Format,
+    /// Transfer, bit depth, text chunks.
+    pub write: WriteOptions,
+    /// The part of the image to render (the whole image unless a region is asked for).
+    pub window: Window,
+    /// Rays per packet: 1, 4, 8 or 16.
+    pub lanes: usize,
+    /// AOVs to write beside the image, and their file.
+    pub aov: Option<(Vec<Aov>, PathBuf)>,
+    /// Bytes of linear RGB per band ([`BAND_BUDGET`] unless set).
+    pub band_budget: usize,
+}
+
+impl Job {
+    /// The whole image of `scene` into `output`, in the format its extension names.
+    pub fn whole(scene: &Scene, output: &Path, write: WriteOptions) -> Result<Self, OutputError> {
+        Ok(Self {
+            output: output.to_owned(),
+            format: Format::from_extension(output)?,
+            write,
+            window: Window::whole(scene.camera.width, scene.camera.height),
+            lanes: 16,
+            aov: None,
+            band_budget: BAND_BUDGET,
+        })
+    }
+
+    /// Where the file's pixels sit in the full image.
+    pub fn frame(&self, scene: &Scene) -> Frame {
+        let w = self.window;
+        Frame {
+            width: w.width(),
+            height: w.height(),
+            x0: w.x0,
+            y0: w.y0,
+            full_width: scene.camera.width,
+            full_height: scene.camera.height,
+        }
+    }
+
+    /// Rows per band.
+    pub fn band_rows(&self) -> u32 {
+        crate::render::band_rows(self.window.width(), self.band_budget)
+    }
+}
+
+/// Why a still was not rendered or written.
+#[derive(Debug, Error)]
+pub enum StillError {
+    /// Refused before tracing: the reason and what would fit.
+    #[error("{0}")]
+    Refused(String),
+    /// The image or AOV file could not be written (nothing is left at its path).
+    #[error(transparent)]
+    Output(#[from] OutputError),
+}
+
+/// Renders `job` on `pool`, reporting tiles to `progress`: bands of rows go through the postfilter, are
+/// turned into the format's bytes, and are handed to a writer thread (one more for the AOVs) through a
+/// channel that holds one band, so tracing, encoding and writing overlap and at most a few bands are alive.
+/// Each file is written atomically: on any failure neither is left half-written and an existing file of
+/// the same name is kept. The bytes are those [`output::write_image_with`] writes for the whole image that
+/// [`crate::render::render`] makes (cropped to the region for a region).
+pub fn render(
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+    progress: &dyn Progress,
+    job: &Job,
+) -> Result<Traced, StillError> {
+    write_bands(scene, pool, job, |emit| {
+        render_window_lanes(scene, job.lanes, pool, progress, job.window, job.band_rows(), emit)
+            .map_err(|Stop| None)
+    })
+}
+
+/// A writer has failed: the producer of rows should stop (the writer's error is what gets reported).
+#[derive(Clone, Copy, Debug)]
+pub struct Stop;
+
+/// Writes `job`'s files from the rows `produce` makes: it is called with `emit`, which takes the window's
+/// finished rows in order (one or more whole rows a call), turns them into the format's bytes (and makes
+/// the AOVs of the same rows), and queues them for the writer threads; `emit` returns [`Stop`] once a
+/// writer has failed. `produce` ends with its result, or with `Err(None)` when told to stop, or
+/// `Err(Some(e))` when it failed itself — then the files are abandoned (their temporary files removed,
+/// existing files kept) and `e` is returned. [`render`] produces the rows by tracing bands here; a
+/// distributed render receives them from elsewhere.
+pub fn write_bands<T>(
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+    job: &Job,
+    produce: impl FnOnce(&mut dyn FnMut(Vec<Rgb>) -> Result<(), Stop>) -> Result<T, Option<StillError>>,
+) -> Result<T, StillError> {
+    let frame = job.frame(scene);
+    let (format, window) = (job.format, job.window);
+    // The first writer to fail is the cause; the other then fails for want of rows.
+    let failure = Mutex::new(None);
+    let produced = std::thread::scope(|s| {
+        let (image_tx, image_rx) = sync_channel::<Vec<u8>>(1);
+        let failed = &failure;
+        s.spawn(move || {
+            let written =
+                output::write_rows(&job.output, format, &job.write, frame, &mut image_rx.into_iter());
+            keep_first(failed, written);
+        });
+        let aov_tx = job.aov.as_ref().map(|(which, path)| {
+            let (tx, rx) = sync_channel::<Vec<u8>>(1);
+            let channels = aov::channels(which, scene.geometry.len());
+            s.spawn(move || {
+                let written = output::write_channels(path, frame, &channels, &[], &mut rx.into_iter());
+                keep_first(failed, written);
+            });
+            (which, tx)
+        });
+        let mut y = window.y0;
+        let mut emit = |rows: Vec<Rgb>| -> Result<(), Stop> {
+            let n = (rows.len() / window.width() as usize) as u32;
+            let samples = pool.install(|| output::to_samples(&rows, window.width(), format, &job.write));
+            drop(rows);
+            send(&image_tx, samples)?;
+            if let Some((which, tx)) = &aov_tx {
+                let band = Window { y0: y, y1: y + n, ..window };
+                send(tx, aov::samples(scene, job.lanes, pool, band, which))?;
+            }
+            y += n;
+            Ok(())
+        };
+        let produced = produce(&mut emit);
+        // Dropping the senders ends the writers' rows: complete files, or (when the rows stopped short)
+        // failed writes that remove their temporary files.
+        drop((image_tx, aov_tx));
+        produced
+    });
+    // The scope has joined the writers.
+    match (produced, failure.into_inner().expect("no writer panics holding the lock")) {
+        (Err(Some(e)), _) => Err(e),
+        (_, Some(e)) => Err(e.into()),
+        (Ok(done), None) => Ok(done),
+        (Err(None), None) => unreachable!("rows stop only when a writer failed"),
+    }
+}
+
+fn keep_first(slot: &Mutex<Option<OutputError>>, result: Result<(), OutputError>) {
+    if let Err(e) = result {
+        slot.lock().expect("no writer panics holding the lock").get_or_insert(e);
+    }
+}
+
+fn send(to: &SyncSender<Vec<u8>>, rows: Vec<u8>) -> Result<(), Stop> {
+    to.send(rows).map_err(|_| Stop)
+}
