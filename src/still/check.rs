@@ -43,6 +43,17 @@ pub enum Limit {
 /// formats whose size is known in advance (PPM, HDR) the file against the free space of its disk. Returns
 /// the memory estimate, or the refusal with what would fit.
 pub fn check(scene: &Scene, job: &Job, threads: usize) -> Result<Estimate, StillError> {
+    check_with(scene, job, threads, available_memory(), free_space(&job.output))
+}
+
+/// [`check`] against the given available memory and free disk space (`None`: unknown, not checked).
+fn check_with(
+    scene: &Scene,
+    job: &Job,
+    threads: usize,
+    available: Option<u64>,
+    free_disk: Option<u64>,
+) -> Result<Estimate, StillError> {
     let (width, height) = (scene.camera.width, scene.camera.height);
     if width > MAX_SIDE || height > MAX_SIDE {
         return Err(refuse(format!(
@@ -55,8 +66,8 @@ pub fn check(scene: &Scene, job: &Job, threads: usize) -> Result<Estimate, Still
     if let Some((_, path)) = &job.aov {
         output::check_writable(path)?;
     }
-    let estimate = estimate(scene, job, threads);
-    if let Some(available) = estimate.available {
+    let estimate = Estimate { available, ..estimate(scene, job, threads) };
+    if let Some(available) = available {
         if estimate.total > available {
             let per_column = estimate.bands as f64 / f64::from(job.window.width());
             let widest = (available as f64 * 0.8 / per_column) as u64;
@@ -72,7 +83,7 @@ pub fn check(scene: &Scene, job: &Job, threads: usize) -> Result<Estimate, Still
             )));
         }
     }
-    check_disk(job, &job.output)?;
+    check_disk(job, free_disk)?;
     Ok(estimate)
 }
 
@@ -118,17 +129,17 @@ fn tile_bytes(pattern: Pattern, filter: Option<Filter>) -> u64 {
 
 /// Refuses a PPM or HDR file larger than its disk's free space (their sizes are known before writing;
 /// PNG's and EXR's depend on how well the image compresses).
-fn check_disk(job: &Job, path: &Path) -> Result<(), StillError> {
+fn check_disk(job: &Job, free: Option<u64>) -> Result<(), StillError> {
     if !matches!(job.format, Format::Ppm | Format::Hdr) {
         return Ok(());
     }
     let size = u64::from(job.window.width())
         * u64::from(job.window.height())
         * pixel_bytes(job.format, job.write.bit_depth) as u64;
-    match free_space(path) {
+    match free {
         Some(free) if size > free => Err(refuse(format!(
             "{}: the image takes {} and its disk has {} free",
-            path.display(),
+            job.output.display(),
             bytes(size),
             bytes(free)
         ))),
@@ -177,4 +188,40 @@ fn free_space(path: &Path) -> Option<u64> {
 #[cfg(not(target_os = "linux"))]
 fn free_space(_: &Path) -> Option<u64> {
     None
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::output::WriteOptions;
+
+    fn scene(width: u32, height: u32) -> Scene {
+        let mut desc =
+            crate::io::toml::parse(Path::new("t.toml"), "[[spheres]]\ncenter = [0, 0, -5]\nradius = 1\n")
+                .expect("scene parses");
+        (desc.camera.width, desc.camera.height) = (width, height);
+        Scene::compile(&desc).expect("scene compiles")
+    }
+
+    /// Memory for the bands beyond what is available is refused, with the width that would fit; so is a
+    /// PPM larger than the free disk space; both pass with room to spare.
+    #[test]
+    fn memory_and_disk_beyond_what_there_is_are_refused() {
+        let dir = std::env::temp_dir();
+        let scene = scene(4000, 3000);
+        let job = Job::whole(&scene, &dir.join("bareray-check.ppm"), WriteOptions::default()).unwrap();
+        let need = estimate(&scene, &job, 2).total;
+        assert!(need > 4000 * 16 * 36, "{need}");
+        let err = check_with(&scene, &job, 2, Some(need / 2), None).unwrap_err().to_string();
+        assert!(err.contains("needs about") && err.contains("pixels wide would fit"), "{err}");
+        let widest: u64 = err.split("at most ").nth(1).unwrap().split(' ').next().unwrap().parse().unwrap();
+        assert!(widest < 4000 / 2 && widest > 4000 / 4, "{err}");
+        let file = 4000 * 3000 * 3;
+        let err = check_with(&scene, &job, 2, Some(need * 2), Some(file - 1)).unwrap_err().to_string();
+        assert!(err.contains("the image takes 34.3 MiB"), "{err}");
+        assert!(check_with(&scene, &job, 2, Some(need * 2), Some(file + 1)).is_ok());
+        // PNG's size is not known before it is written: no disk check.
+        let png = Job::whole(&scene, &dir.join("bareray-check.png"), WriteOptions::default()).unwrap();
+        assert!(check_with(&scene, &png, 2, Some(need * 2), Some(1)).is_ok());
+    }
 }

@@ -1,0 +1,238 @@
+//! Stills in bands: the streamed files are the bytes of the whole-image path, regions merge back into the
+//! full image byte for byte, and what cannot work is refused before any tracing.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+
+use bareray::compile::Scene;
+use bareray::output::{write_image_with, write_rows, BitDepth, Format, Frame, WriteOptions};
+use bareray::render::{render_lanes, thread_pool, Window};
+use bareray::scene::desc::{Filter, FilterKind, Pattern, Transfer};
+use bareray::still::{self, Job};
+use common::{bareray, scene_files, stderr};
+
+fn scenes() -> Vec<PathBuf> {
+    scene_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes"))
+}
+
+/// `path`'s scene at `width × height` (odd sizes: partial tiles and blocks at the edges).
+fn scene_at(path: &Path, width: u32, height: u32, change: impl Fn(&mut bareray::scene::SceneDesc)) -> Scene {
+    let mut desc = bareray::io::load(path).expect("scene loads");
+    (desc.camera.width, desc.camera.height) = (width, height);
+    change(&mut desc);
+    Scene::compile(&desc).expect("scene compiles")
+}
+
+/// Every format, with the text a render writes.
+fn variants() -> Vec<(&'static str, WriteOptions)> {
+    let text =
+        vec![("Software".to_owned(), "bareray test".to_owned()), ("Comment".to_owned(), "× 1".to_owned())];
+    let with = |transfer, bit_depth| WriteOptions { transfer, bit_depth, text: text.clone() };
+    vec![
+        ("a.png", with(Transfer::Srgb, BitDepth::Eight)),
+        ("b.png", with(Transfer::Linear, BitDepth::Sixteen)),
+        ("c.exr", with(Transfer::Srgb, BitDepth::Eight)),
+        ("d.ppm", with(Transfer::Linear, BitDepth::Eight)),
+        ("e.hdr", with(Transfer::Srgb, BitDepth::Eight)),
+    ]
+}
+
+/// Bands of 16 rows (the smallest), so every image here streams through several bands.
+fn job(scene: &Scene, path: &Path, write: WriteOptions, window: Window) -> Job {
+    Job { window, band_budget: 1, lanes: 8, ..Job::whole(scene, path, write).unwrap() }
+}
+
+/// The streamed file of every scene in scenes/ — and of the whitted scene under a reconstruction filter,
+/// adaptive sampling and the lecture's half-pixel pattern — is byte for byte the file the whole-image path
+/// writes (render into one image, then encode), in every format.
+#[test]
+fn streamed_files_are_the_whole_image_paths_bytes() {
+    let dir = tempfile::tempdir().unwrap();
+    let pool = thread_pool(Some(2)).unwrap();
+    let whitted = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let mut cases: Vec<(String, Scene)> =
+        scenes().iter().map(|p| (p.display().to_string(), scene_at(p, 75, 53, |_| {}))).collect();
+    let filter = Filter { kind: FilterKind::Mitchell, radius: 2.0 };
+    cases.push(("whitted, mitchell".into(), scene_at(&whitted, 61, 47, |d| d.render.filter = Some(filter))));
+    let adaptive = Pattern::Adaptive { threshold: 0.05, depth: 2 };
+    cases.push(("whitted, adaptive".into(), scene_at(&whitted, 61, 47, |d| d.render.pattern = adaptive)));
+    cases.push((
+        "whitted, lecture".into(),
+        scene_at(&whitted, 61, 47, |d| d.render.pattern = Pattern::HalfPixel),
+    ));
+    for (name, scene) in &cases {
+        let image = render_lanes(scene, 8, &pool, &()).image;
+        for (file, options) in variants() {
+            let (whole, streamed) = (dir.path().join(format!("whole-{file}")), dir.path().join(file));
+            write_image_with(&image, &whole, &options).unwrap();
+            let window = Window::whole(scene.camera.width, scene.camera.height);
+            still::render(scene, &pool, &(), &job(scene, &streamed, options, window)).unwrap();
+            assert!(
+                std::fs::read(&whole).unwrap() == std::fs::read(&streamed).unwrap(),
+                "{name}: {file} differs from the whole-image path"
+            );
+        }
+    }
+}
+
+/// Regions cut across tiles and packet blocks, rendered apart (through the command line, with --region and
+/// --crop) and merged, are the full render's file byte for byte, for 8- and 16-bit PNG, EXR and PPM, on a
+/// scene with the lecture's 3×3 postfilter (whose neighbours cross the cuts) and one with a Mitchell filter.
+#[test]
+fn regions_merge_into_the_full_image_byte_for_byte() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    for (scene, extra) in
+        [("scenes/lecture.toml", &[][..]), ("scenes/whitted.toml", &["--filter", "mitchell"][..])]
+    {
+        let scene = root.join(scene);
+        for (ext, depth) in [("png", "8"), ("png", "16"), ("exr", "8"), ("ppm", "8")] {
+            let render = |out: &str, region: &[&str]| {
+                let mut args =
+                    vec!["render", scene.to_str().unwrap(), "-o", out, "--width", "97", "--height", "61"];
+                args.extend(["--bit-depth", depth, "-q"]);
+                args.extend(extra);
+                args.extend(region);
+                let run = bareray(&args);
+                assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+            };
+            let full = p(&format!("full.{ext}"));
+            render(&full, &[]);
+            // Three regions and a crop (rows ⌈0.5·61⌉ = 31 to 61): a left and a right part of the top half,
+            // split at a column inside a tile, and the bottom half.
+            let parts = [p(&format!("a.{ext}")), p(&format!("b.{ext}")), p(&format!("c.{ext}"))];
+            render(&parts[0], &["--region", "0,0,37,31"]);
+            render(&parts[1], &["--region", "37,0,97,31"]);
+            render(&parts[2], &["--crop", "0,1,0.5,1"]);
+            let merged = p(&format!("merged.{ext}"));
+            let run = bareray(&["merge", &parts[2], &parts[0], &parts[1], "-o", &merged, "-q"]);
+            assert!(run.status.success(), "{}", stderr(&run));
+            assert!(
+                std::fs::read(&full).unwrap() == std::fs::read(&merged).unwrap(),
+                "{}: {ext} at {depth} bits: merged regions differ from the full render",
+                scene.display()
+            );
+            // A part is a file of the region's size that other tools read.
+            if ext != "exr" {
+                let part = image::open(&parts[0]).unwrap();
+                assert_eq!((part.width(), part.height()), (37, 31));
+            }
+        }
+    }
+}
+
+/// `merge` refuses parts that leave a gap, overlap, mix formats or renders, or are not bareray's, with the
+/// part named, exit 1 and no output file.
+#[test]
+fn merge_refuses_gaps_overlaps_and_foreign_parts() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balls3.nff");
+    let render = |out: &str, more: &[&str]| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out, "-q"];
+        args.extend(more);
+        let run = bareray(&args);
+        assert!(run.status.success(), "{args:?}: {}", stderr(&run));
+    };
+    let size = ["--width", "40", "--height", "30"];
+    render(&p("top.png"), &[&size[..], &["--region", "0,0,40,15"]].concat());
+    render(&p("bottom.png"), &[&size[..], &["--region", "0,15,40,30"]].concat());
+    render(&p("bottom.ppm"), &[&size[..], &["--region", "0,15,40,30"]].concat());
+    render(&p("lower.png"), &[&size[..], &["--region", "0,10,40,30"]].concat());
+    render(&p("bottom-wide.png"), &["--width", "80", "--height", "60", "--region", "0,15,40,30"]);
+    render(&p("bottom-linear.png"), &[&size[..], &["--region", "0,15,40,30", "--transfer", "srgb"]].concat());
+    image::RgbImage::new(40, 15).save(p("foreign.png")).unwrap();
+    let cases: [(&[&str], &str); 6] = [
+        (&["top.png"], "cover 600 of the 40x30 image's 1200 pixels"),
+        (&["top.png", "lower.png"], "overlap"),
+        (&["top.png", "bottom.ppm"], "bottom.ppm: is PPM, the output is PNG"),
+        (&["top.png", "bottom-wide.png"], "not from the same render"),
+        (&["top.png", "bottom-linear.png"], "not from the same render"),
+        (&["foreign.png", "bottom.png"], "foreign.png: no Transfer text chunk"),
+    ];
+    for (parts, message) in cases {
+        let mut args = vec!["merge".to_owned()];
+        args.extend(parts.iter().map(|n| p(n)));
+        args.extend(["-o".to_owned(), p("out.png")]);
+        let run = bareray(&args.iter().map(String::as_str).collect::<Vec<_>>());
+        assert_eq!(run.status.code(), Some(1), "{parts:?}");
+        assert!(stderr(&run).contains(message), "{parts:?}: {}", stderr(&run));
+        assert!(!dir.path().join("out.png").exists(), "{parts:?} left an output");
+    }
+}
+
+/// A size past bareray's side limit, an unwritable path and a region outside the image are refused before
+/// any tracing, with a message, exit 1 (2 for the argument error), and nothing written.
+#[test]
+fn impossible_sizes_and_bad_targets_are_refused_before_tracing() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let huge = dir.path().join("huge.toml");
+    let whitted =
+        std::fs::read_to_string(Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml")).unwrap();
+    let mut huge_scene: toml::Table = whitted.parse().unwrap();
+    let camera = huge_scene["camera"].as_table_mut().unwrap();
+    camera.insert("width".into(), toml::Value::Integer(9_000_000));
+    camera.insert("height".into(), toml::Value::Integer(4));
+    std::fs::write(&huge, toml::to_string(&huge_scene).unwrap()).unwrap();
+    let run = bareray(&["render", huge.to_str().unwrap(), "-o", &p("huge.png"), "-q"]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains("up to 8388608 pixels a side"), "{}", stderr(&run));
+    assert!(!dir.path().join("huge.png").exists());
+
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balls3.nff");
+    let scene = scene.to_str().unwrap();
+    let run = bareray(&["render", scene, "-o", &p("no/such/dir/a.png"), "-q"]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains("does not exist"), "{}", stderr(&run));
+    let run = bareray(&[
+        "render",
+        scene,
+        "-o",
+        &p("a.png"),
+        "--width",
+        "40",
+        "--height",
+        "30",
+        "--region",
+        "0,0,41,10",
+    ]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(stderr(&run).contains("reaches outside the 40x30 image"), "{}", stderr(&run));
+    let run = bareray(&["render", scene, "-o", &p("a.hdr"), "--region", "0,0,10,10"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(!dir.path().join("a.png").exists() && !dir.path().join("a.hdr").exists());
+}
+
+/// A source that ends before the image does fails the write and leaves an existing file as it was, with
+/// no temporary file beside it.
+#[test]
+fn a_short_source_keeps_the_old_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("kept.png");
+    std::fs::write(&path, b"old").unwrap();
+    for format in [Format::Png, Format::Exr, Format::Ppm] {
+        let path = path.with_extension(match format {
+            Format::Png => "png",
+            Format::Exr => "exr",
+            _ => "ppm",
+        });
+        std::fs::write(&path, b"old").unwrap();
+        let frame = Frame::whole(4, 3);
+        let row = vec![0u8; 4 * bareray::output::pixel_bytes(format, BitDepth::Eight)];
+        let err = write_rows(
+            &path,
+            format,
+            &WriteOptions::default(),
+            frame,
+            &mut vec![row.clone(), row].into_iter(),
+        )
+        .unwrap_err();
+        assert!(err.to_string().contains("ended after 2 of 3 rows"), "{format:?}: {err}");
+        assert_eq!(std::fs::read(&path).unwrap(), b"old");
+    }
+    let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
+    assert_eq!(names.len(), 3, "temporary files left: {names:?}");
+}
