@@ -236,3 +236,72 @@ fn a_short_source_keeps_the_old_file() {
     let names: Vec<_> = std::fs::read_dir(dir.path()).unwrap().map(|e| e.unwrap().file_name()).collect();
     assert_eq!(names.len(), 3, "temporary files left: {names:?}");
 }
+
+/// A `--resume` render stopped by SIGINT exits 130, leaves no image and keeps its finished rows; the same
+/// command again traces the rest and writes the bytes of an uninterrupted render, and removes the side
+/// file. A side file of other settings is not used.
+#[cfg(unix)]
+#[test]
+fn an_interrupted_render_resumes_to_the_same_bytes() {
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balls3.nff");
+    let args = |out: &str, width: &str| -> Vec<String> {
+        let s = scene.to_str().unwrap();
+        [
+            "render",
+            s,
+            "-o",
+            out,
+            "--width",
+            width,
+            "--height",
+            "768",
+            "--spp",
+            "16",
+            "--band-rows",
+            "16",
+            "--resume",
+            "-q",
+        ]
+        .map(str::to_owned)
+        .to_vec()
+    };
+    let side = dir.path().join(".r.png.resume");
+    let interrupt = |width: &str| {
+        let started = std::time::SystemTime::now();
+        let child = Command::new(env!("CARGO_BIN_EXE_bareray"))
+            .args(args(&p("r.png"), width))
+            .stderr(Stdio::piped())
+            .spawn()
+            .unwrap();
+        // Wait for this run's first record beyond the side file's 24-byte header, then interrupt.
+        let written = |m: std::fs::Metadata| m.len() > 24 && m.modified().unwrap() > started;
+        while !std::fs::metadata(&side).is_ok_and(written) {
+            std::thread::sleep(std::time::Duration::from_millis(2));
+        }
+        Command::new("kill").args(["-INT", &child.id().to_string()]).status().unwrap();
+        let out = child.wait_with_output().unwrap();
+        assert_eq!(out.status.code(), Some(130), "{}", stderr(&out));
+        assert!(stderr(&out).contains("interrupted; the finished rows are kept in"), "{}", stderr(&out));
+        assert!(!dir.path().join("r.png").exists() && side.exists());
+    };
+    // A side file of another width, then the real one.
+    interrupt("600");
+    interrupt("1024");
+    let kept = std::fs::metadata(&side).unwrap().len();
+    let args = args(&p("r.png"), "1024");
+    let run = bareray(&args.iter().map(String::as_str).collect::<Vec<_>>());
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(!side.exists(), "the side file stays after the render");
+    let mut plain = args.clone();
+    plain[3] = p("plain.png");
+    plain.retain(|a| a != "--resume");
+    assert!(bareray(&plain.iter().map(String::as_str).collect::<Vec<_>>()).status.success());
+    assert!(kept > 24);
+    assert!(
+        std::fs::read(p("r.png")).unwrap() == std::fs::read(p("plain.png")).unwrap(),
+        "resumed image differs"
+    );
+}

@@ -102,6 +102,16 @@ pub fn main() -> ExitCode {
         {
             ExitCode::SUCCESS
         }
+        // Interrupted by a signal: the shell's convention for SIGINT.
+        Err(e)
+            if matches!(
+                e.downcast_ref::<crate::still::StillError>(),
+                Some(crate::still::StillError::Interrupted(_))
+            ) =>
+        {
+            eprintln!("error: {e:#}");
+            ExitCode::from(130)
+        }
         Err(e) if e.downcast_ref::<UsageError>().is_some() => {
             eprintln!("error: {e:#}\n\nFor more information, try '--help'.");
             ExitCode::from(2)

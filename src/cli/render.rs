@@ -85,6 +85,15 @@ pub struct RenderArgs {
     /// ⌈X1·width⌉, rows from ⌈Y0·height⌉ to ⌈Y1·height⌉.
     #[arg(long, value_name = "X0,X1,Y0,Y1", value_parser = parse_crop)]
     pub crop: Option<[f64; 4]>,
+    /// Keep the finished rows in a side file beside the output (`.NAME.resume`) as the render goes, and
+    /// use one an interrupted run of the same command left: only the rest is traced, and the image is the
+    /// bytes of an uninterrupted render. Ctrl-C stops such a render at the next band, keeping the side file.
+    #[arg(long)]
+    pub resume: bool,
+    /// Rows per band: the image is traced and written band by band, so memory holds a few bands of this
+    /// many rows (rounded up to whole 16-row tiles). Default: about 32 MiB of pixels per band.
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    pub band_rows: Option<u32>,
     /// Print a scene summary, rays by kind and the time split (parse, build, render and write).
     #[arg(long)]
     pub stats: bool,
@@ -128,6 +137,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     apply_overrides(&mut desc, &args);
     let window = region(&args, desc.camera.width, desc.camera.height)?;
+    let settings = args.resume.then(|| settings_hash(&args, &desc, window, &output));
     if window != Window::whole(desc.camera.width, desc.camera.height) && format == Format::Hdr {
         return Err(super::usage("--region and --crop write PNG, EXR or PPM (HDR cannot record a region)"));
     }
@@ -151,13 +161,26 @@ pub fn run(args: RenderArgs) -> Result<()> {
         window,
         lanes: args.lanes,
         aov: args.aov.as_ref().map(|which| (which.0.clone(), aov::aov_path(&output))),
+        resume: settings,
         ..Job::whole(&scene, &output, WriteOptions::default())?
+    };
+    let job = match args.band_rows {
+        // A budget that gives exactly the rows asked for (band_rows rounds down to whole tiles).
+        Some(rows) => {
+            Job { band_budget: rows.div_ceil(16) as usize * 16 * job.window.width() as usize * 12, ..job }
+        }
+        None => job,
     };
     still::check(&scene, &job, pool.current_num_threads())?;
     crate::accel::set_counting(args.stats);
     let progress = progress_bar(args.quiet);
     let clock = Instant::now();
-    let traced = still::render(&scene, &pool, &progress, &job)?;
+    still::catch_interrupts();
+    let traced = still::render(&scene, &pool, &progress, &job);
+    if let Err(still::StillError::Interrupted(_)) = &traced {
+        progress.abandon();
+    }
+    let traced = traced?;
     progress.finish_and_clear();
     time.render = clock.elapsed().as_secs_f64();
 
@@ -167,6 +190,34 @@ pub fn run(args: RenderArgs) -> Result<()> {
         print_summary(&output, &job, &traced, &time);
     }
     Ok(())
+}
+
+/// What decides the output's bytes, hashed: the version, the scene after the command line's overrides
+/// (every field, in Rust's exact float notation), the settings the file records and the part rendered.
+fn settings_hash(args: &RenderArgs, desc: &SceneDesc, window: Window, output: &Path) -> u64 {
+    struct Fnv(u64);
+    impl std::fmt::Write for Fnv {
+        fn write_str(&mut self, s: &str) -> std::fmt::Result {
+            self.0 = s.bytes().fold(self.0, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3));
+            Ok(())
+        }
+    }
+    let mut hash = Fnv(0xcbf2_9ce4_8422_2325);
+    let _ = std::fmt::Write::write_fmt(
+        &mut hash,
+        format_args!(
+            "bareray {} {:?} {:?} {} {:?} {:?} {:?} {:?}",
+            env!("CARGO_PKG_VERSION"),
+            desc,
+            window,
+            args.bit_depth,
+            args.scene,
+            output.extension(),
+            args.aov,
+            args.bvh_preset,
+        ),
+    );
+    hash.0
 }
 
 /// The file's transfer, bit depth and text: the renderer, the scene file, and the size and sampling.

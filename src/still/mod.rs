@@ -5,6 +5,7 @@
 //! with the reason and what would fit. Regions written separately are pasted back together by [`merge`].
 
 use std::path::{Path, PathBuf};
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::sync::mpsc::{sync_channel, SyncSender};
 use std::sync::Mutex;
 
@@ -18,8 +19,10 @@ use crate::render::{render_window_lanes, Progress, Traced, Window};
 
 mod check;
 pub mod merge;
+pub mod resume;
 
 pub use check::{check, Estimate, Limit};
+use resume::Resume;
 
 /// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.
 pub const BAND_BUDGET: usize = 32 << 20;
@@ -41,6 +44,9 @@ pub struct Job {
     pub aov: Option<(Vec<Aov>, PathBuf)>,
     /// Bytes of linear RGB per band ([`BAND_BUDGET`] unless set).
     pub band_budget: usize,
+    /// Resumable ([`resume`]): the hash of everything that decides the files' bytes (scene, settings,
+    /// window, format), which a side file must match to be used. `None`: no side file.
+    pub resume: Option<u64>,
 }
 
 impl Job {
@@ -54,6 +60,7 @@ impl Job {
             lanes: 16,
             aov: None,
             band_budget: BAND_BUDGET,
+            resume: None,
         })
     }
 
@@ -85,7 +92,46 @@ pub enum StillError {
     /// The image or AOV file could not be written (nothing is left at its path).
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// The render was interrupted ([`interrupt`]); nothing was written at the output's path.
+    #[error("interrupted{}", match .0 { Some(p) => format!("; the finished rows are kept in {}: run the same command again to go on", p.display()), None => String::new() })]
+    Interrupted(Option<PathBuf>),
+    /// The resume side file could not be read or written.
+    #[error("{path}: {cause}")]
+    Resume {
+        /// The side file.
+        path: PathBuf,
+        /// What went wrong.
+        cause: output::BoxError,
+    },
 }
+
+static INTERRUPTED: AtomicBool = AtomicBool::new(false);
+
+/// Asks running stills to stop at the next band: they end with [`StillError::Interrupted`], leave no
+/// output file, and keep their side file when resumable. Safe to call from a signal handler.
+pub fn interrupt() {
+    INTERRUPTED.store(true, Ordering::Relaxed);
+}
+
+/// Makes SIGINT and SIGTERM [`interrupt`] stills (Unix): a second signal ends the process at once.
+#[cfg(unix)]
+pub fn catch_interrupts() {
+    extern "C" fn on_signal(signal: libc::c_int) {
+        if INTERRUPTED.swap(true, Ordering::Relaxed) {
+            // SAFETY: _exit is async-signal-safe.
+            unsafe { libc::_exit(128 + signal) };
+        }
+    }
+    // SAFETY: the handler only touches an atomic and calls _exit, both async-signal-safe.
+    unsafe {
+        libc::signal(libc::SIGINT, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+        libc::signal(libc::SIGTERM, on_signal as extern "C" fn(libc::c_int) as libc::sighandler_t);
+    }
+}
+
+/// Signals stay as they are where there is no Unix signal API.
+#[cfg(not(unix))]
+pub fn catch_interrupts() {}
 
 /// Renders `job` on `pool`, reporting tiles to `progress`: bands of rows go through the postfilter, are
 /// turned into the format's bytes, and are handed to a writer thread (one more for the AOVs) through a
@@ -99,8 +145,13 @@ pub fn render(
     progress: &dyn Progress,
     job: &Job,
 ) -> Result<Traced, StillError> {
-    write_bands(scene, pool, job, |emit| {
-        render_window_lanes(scene, job.lanes, pool, progress, job.window, job.band_rows(), emit)
+    write_bands_resuming(scene, pool, job, |emit, first| {
+        if first == job.window.y1 {
+            // Every row came from the side file.
+            return Ok(Traced::default());
+        }
+        let window = Window { y0: first, ..job.window };
+        render_window_lanes(scene, job.lanes, pool, progress, window, job.band_rows(), emit)
             .map_err(|Stop| None)
     })
 }
@@ -115,18 +166,32 @@ pub struct Stop;
 /// writer has failed. `produce` ends with its result, or with `Err(None)` when told to stop, or
 /// `Err(Some(e))` when it failed itself — then the files are abandoned (their temporary files removed,
 /// existing files kept) and `e` is returned. [`render`] produces the rows by tracing bands here; a
-/// distributed render receives them from elsewhere.
+/// distributed render receives them from elsewhere. `job.resume` is not used here (see [`render`]).
 pub fn write_bands<T>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     job: &Job,
     produce: impl FnOnce(&mut dyn FnMut(Vec<Rgb>) -> Result<(), Stop>) -> Result<T, Option<StillError>>,
 ) -> Result<T, StillError> {
+    let job = Job { resume: None, ..job.clone() };
+    write_bands_resuming(scene, pool, &job, |emit, _| produce(emit))
+}
+
+/// [`write_bands`], resumable when `job.resume` is set: the side file's rows (if its hash matches) are
+/// replayed into the writers first, `produce` is told the first window row still to make, and every chunk
+/// of rows is recorded before it is written; the side file goes once the files are in place.
+fn write_bands_resuming<T>(
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+    job: &Job,
+    produce: impl FnOnce(&mut dyn FnMut(Vec<Rgb>) -> Result<(), Stop>, u32) -> Result<T, Option<StillError>>,
+) -> Result<T, StillError> {
     let frame = job.frame(scene);
     let (format, window) = (job.format, job.window);
     // The first writer to fail is the cause; the other then fails for want of rows.
     let failure = Mutex::new(None);
-    let produced = std::thread::scope(|s| {
+    let mut interrupted = false;
+    let (produced, resume) = std::thread::scope(|s| {
         let (image_tx, image_rx) = sync_channel::<Vec<u8>>(1);
         let failed = &failure;
         s.spawn(move || {
@@ -143,32 +208,80 @@ pub fn write_bands<T>(
             });
             (which, tx)
         });
-        let mut y = window.y0;
+        let mut resume = match job.resume.map(|hash| open_resume(job, hash, &image_tx, &aov_tx)) {
+            None => None,
+            Some(Ok(side)) => Some(side),
+            // Dropping the senders ends the writers' rows: they fail and remove their temporary files.
+            Some(Err(e)) => return (Err(Some(e)), None),
+        };
+        let first = window.y0 + resume.as_ref().map_or(0, |r| r.rows);
+        let mut y = first;
+        let mut record_failure = None;
         let mut emit = |rows: Vec<Rgb>| -> Result<(), Stop> {
+            if INTERRUPTED.load(Ordering::Relaxed) {
+                interrupted = true;
+                return Err(Stop);
+            }
             let n = (rows.len() / window.width() as usize) as u32;
             let samples = pool.install(|| output::to_samples(&rows, window.width(), format, &job.write));
             drop(rows);
-            send(&image_tx, samples)?;
-            if let Some((which, tx)) = &aov_tx {
+            let aov = aov_tx.as_ref().map(|(which, _)| {
                 let band = Window { y0: y, y1: y + n, ..window };
-                send(tx, aov::samples(scene, job.lanes, pool, band, which))?;
+                aov::samples(scene, job.lanes, pool, band, which)
+            });
+            if let Some(side) = &mut resume {
+                if let Err(cause) = side.record(n, &samples, aov.as_deref().unwrap_or(&[])) {
+                    record_failure = Some(StillError::Resume { path: side.path().to_owned(), cause });
+                    return Err(Stop);
+                }
+            }
+            send(&image_tx, samples)?;
+            if let (Some((_, tx)), Some(aov)) = (&aov_tx, aov) {
+                send(tx, aov)?;
             }
             y += n;
             Ok(())
         };
-        let produced = produce(&mut emit);
+        let produced = produce(&mut emit, first);
         // Dropping the senders ends the writers' rows: complete files, or (when the rows stopped short)
         // failed writes that remove their temporary files.
         drop((image_tx, aov_tx));
-        produced
+        (record_failure.map_or(produced, |e| Err(Some(e))), resume)
     });
     // The scope has joined the writers.
+    if interrupted {
+        return Err(StillError::Interrupted(resume.map(|r| r.path().to_owned())));
+    }
     match (produced, failure.into_inner().expect("no writer panics holding the lock")) {
         (Err(Some(e)), _) => Err(e),
         (_, Some(e)) => Err(e.into()),
-        (Ok(done), None) => Ok(done),
-        (Err(None), None) => unreachable!("rows stop only when a writer failed"),
+        (Ok(done), None) => {
+            if let Some(side) = resume {
+                // The output is complete; a side file that cannot be removed is only clutter.
+                let _ = side.finish();
+            }
+            Ok(done)
+        }
+        (Err(None), None) => unreachable!("rows stop only when a writer failed or on an interrupt"),
     }
+}
+
+/// Opens `job`'s side file for `hash`, replaying its finished rows into the writers.
+fn open_resume(
+    job: &Job,
+    hash: u64,
+    image: &SyncSender<Vec<u8>>,
+    aov: &Option<(&Vec<Aov>, SyncSender<Vec<u8>>)>,
+) -> Result<Resume, StillError> {
+    let replay = |rows: Vec<u8>, aov_rows: Vec<u8>| -> Result<(), output::BoxError> {
+        send(image, rows).map_err(|_| "the image writer stopped")?;
+        if let Some((_, tx)) = aov {
+            send(tx, aov_rows).map_err(|_| "the AOV writer stopped")?;
+        }
+        Ok(())
+    };
+    Resume::open(&job.output, hash, replay)
+        .map_err(|cause| StillError::Resume { path: resume::side_path(&job.output), cause })
 }
 
 fn keep_first(slot: &Mutex<Option<OutputError>>, result: Result<(), OutputError>) {
