@@ -13,7 +13,10 @@
 //!    thread shares: camera frame, spheres in SoA arrays, BVHs ([`accel::Geometry`]).
 //! 3. [`render::render_lanes`] traces it tile by tile on a thread pool, in packets of K camera rays shaded by
 //!    [`shade`], reporting finished tiles to a [`render::Progress`], into a [`film::Image`] of linear RGB.
-//! 4. [`output::write_image`] writes the image as PNG, PPM or EXR, chosen by the file's extension.
+//! 4. [`output::write_image`] writes the image as PNG, PPM, EXR or HDR, chosen by the file's extension.
+//!    For images of any size, [`still::render`] does 3 and 4 band by band, streaming each finished band
+//!    into the file (memory: the scene and a few bands), for the whole image or a region of it;
+//!    [`still::check`] first refuses what cannot work (sizes, memory, disk, paths).
 //!
 //! Rays can be traced without rendering: [`accel::Geometry::intersect`] for one ray,
 //! [`accel::Geometry::intersect_k`] for a [`geometry::RayPacket`] of K.

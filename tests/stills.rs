@@ -305,3 +305,36 @@ fn an_interrupted_render_resumes_to_the_same_bytes() {
         "resumed image differs"
     );
 }
+
+/// `render -` reads the scene from standard input in the format --format names (and asks for it), `-o -`
+/// writes PPM to standard output, the summary then going to standard error: the bytes of the file render.
+#[test]
+fn scenes_from_standard_input_and_ppm_to_standard_output() {
+    use std::io::Write;
+    use std::process::{Command, Stdio};
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balls3.nff");
+    let file = dir.path().join("f.ppm");
+    let size = ["--width", "64", "--height", "48"];
+    let run = bareray(
+        &[&["render", scene.to_str().unwrap(), "-o", file.to_str().unwrap(), "-q"][..], &size].concat(),
+    );
+    assert!(run.status.success());
+    let mut child = Command::new(env!("CARGO_BIN_EXE_bareray"))
+        .args([&["render", "-", "--format", "nff", "-o", "-"][..], &size].concat())
+        .stdin(Stdio::piped())
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .unwrap();
+    child.stdin.take().unwrap().write_all(&std::fs::read(&scene).unwrap()).unwrap();
+    let out = child.wait_with_output().unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    assert!(out.stdout == std::fs::read(&file).unwrap(), "standard output differs from the file");
+    assert!(stderr(&out).starts_with("<stdout>: 64x48"), "{}", stderr(&out));
+    let run = bareray(&["render", "-", "-o", "-"]);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(stderr(&run).contains("needs --format toml, nff or xyzr"), "{}", stderr(&run));
+    let run = bareray(&["render", scene.to_str().unwrap(), "-o", "-", "--resume"]);
+    assert_eq!(run.status.code(), Some(2));
+}

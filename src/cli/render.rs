@@ -33,10 +33,15 @@ Exit codes: 0 success; 2 argument errors (nothing rendered); 1 scene, render or 
 )]
 pub struct RenderArgs {
     /// Scene file: .toml (bareray's format), .nff (SPD's Neutral File Format) or .xyzr (`x y z r` per
-    /// line). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
+    /// line); `-` reads the scene from standard input (name its format with --format). Without it, the
+    /// built-in demo scene (scenes/whitted.toml) is rendered.
     pub scene: Option<PathBuf>,
+    /// The format of a scene read from standard input (`render -`): toml, nff or xyzr.
+    #[arg(long, value_parser = ["toml", "nff", "xyzr"])]
+    pub format: Option<String>,
     /// Output image; the extension picks the format: .png (8-bit), .exr (linear float RGB), .ppm or .pnm
-    /// (binary 8-bit PPM, P6). Default: the scene's name with .png, in the current directory.
+    /// (binary 8-bit PPM, P6), .hdr (Radiance); `-` writes PPM to standard output (the summary then goes
+    /// to standard error). Default: the scene's name with .png, in the current directory.
     #[arg(short, long, value_parser = parse_output)]
     pub output: Option<PathBuf>,
     #[command(flatten)]
@@ -123,10 +128,15 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut time = Timings::default();
     let clock = Instant::now();
     let (mut desc, name) = match &args.scene {
+        Some(path) if path == Path::new("-") => (read_stdin_scene(&args)?, "stdin".to_owned()),
         Some(path) => (load_scene(path)?, stem(path)),
         None => (toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?, "demo".to_owned()),
     };
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
+    let to_stdout = crate::output::is_stdout(&output);
+    if to_stdout && (args.aov.is_some() || args.resume) {
+        return Err(super::usage("-o - (standard output) takes neither --aov nor --resume: they need files"));
+    }
     // Fail on an output that cannot be written now, not after the render.
     let format = Format::from_path(&output)?;
     if args.bit_depth == 16 && format != Format::Png {
@@ -185,11 +195,31 @@ pub fn run(args: RenderArgs) -> Result<()> {
     time.render = clock.elapsed().as_secs_f64();
 
     if args.stats {
-        print_stats(&scene, &job, &traced, &time);
+        // With the image on standard output, the report goes to standard error.
+        let mut out: Box<dyn std::io::Write> =
+            if to_stdout { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout()) };
+        print_stats(&mut out, &scene, &job, &traced, &time);
     } else if !args.quiet {
-        print_summary(&output, &job, &traced, &time);
+        let line = summary(&output, &job, &traced, &time);
+        // With the image on standard output, the summary goes beside it, to standard error.
+        if to_stdout {
+            eprintln!("{line}");
+        } else {
+            println!("{line}");
+        }
     }
     Ok(())
+}
+
+/// The scene on standard input, in the format --format names.
+fn read_stdin_scene(args: &RenderArgs) -> Result<SceneDesc> {
+    let Some(format) = args.format.as_deref().and_then(crate::io::SceneFormat::from_name) else {
+        return Err(super::usage("a scene read from standard input (`-`) needs --format toml, nff or xyzr"));
+    };
+    let mut source = String::new();
+    std::io::Read::read_to_string(&mut std::io::stdin(), &mut source)
+        .context("<stdin>: the scene is not UTF-8 text")?;
+    Ok(crate::io::parse(format, Path::new("<stdin>"), &source)?)
 }
 
 /// What decides the output's bytes, hashed: the version, the scene after the command line's overrides
@@ -284,9 +314,10 @@ fn progress_bar(quiet: bool) -> ProgressBar {
     bar
 }
 
-fn print_summary(output: &Path, job: &Job, r: &Traced, time: &Timings) {
+fn summary(output: &Path, job: &Job, r: &Traced, time: &Timings) -> String {
     let c = r.counts;
-    println!(
+    let output = if crate::output::is_stdout(output) { Path::new("<stdout>") } else { output };
+    format!(
         "{}: {}x{} in {:.3} s (parse {:.3} s, build {:.3} s); {} rays ({} primary, {} shadow, {} reflection, \
          {} refraction), {:.2} Mrays/s",
         output.display(),
@@ -301,14 +332,15 @@ fn print_summary(output: &Path, job: &Job, r: &Traced, time: &Timings) {
         c.reflection,
         c.refraction,
         c.total() as f64 / r.seconds / 1e6
-    );
+    )
 }
 
-fn print_stats(scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
+fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
     let g = &scene.geometry;
     let features = crate::compile::features::Features::of(scene);
     let n = features.counts;
-    println!(
+    let _ = writeln!(
+        out,
         "scene: {} ({}, {}, {}, {}, {}), {}, {}",
         plural(g.len(), "primitive"),
         plural(n.spheres, "sphere"),
@@ -328,7 +360,8 @@ fn print_stats(scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
             w.x0, w.y0, w.x1, w.y1, scene.camera.width, scene.camera.height
         )
     };
-    println!(
+    let _ = writeln!(
+        out,
         "image: {}x{}{region}, {}, {} transfer, in bands of {} rows",
         w.width(),
         w.height(),
@@ -336,9 +369,10 @@ fn print_stats(scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
         scene.render.transfer.name(),
         job.band_rows()
     );
-    println!("features: {features}");
+    let _ = writeln!(out, "features: {features}");
     let search = |bvh: &Option<crate::accel::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
-    println!(
+    let _ = writeln!(
+        out,
         "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}, ellipsoids by {}, cones by {}",
         search(&g.sphere_bvh),
         scene.bytes_per_sphere(),
@@ -347,7 +381,8 @@ fn print_stats(scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
         search(&g.cone_bvh),
     );
     let c = r.counts;
-    println!(
+    let _ = writeln!(
+        out,
         "rays: {} total: {} primary, {} shadow, {} reflection, {} refraction",
         c.total(),
         c.primary,
@@ -355,15 +390,17 @@ fn print_stats(scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
         c.reflection,
         c.refraction
     );
-    println!(
+    let _ = writeln!(
+        out,
         "intersection tests: {} packet-primitive, {} packet-box, at {} rays per packet",
         r.work.prim_tests, r.work.box_tests, job.lanes
     );
-    println!(
+    let _ = writeln!(
+        out,
         "time: parse {:.3} s, build {:.3} s (scene and BVH), render and write {:.3} s (tracing {:.3} s)",
         time.parse, time.build, time.render, r.seconds
     );
-    println!("throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
+    let _ = writeln!(out, "throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
 }
 
 /// `n thing` or `n things`.
@@ -418,8 +455,10 @@ pub fn scene_warnings(desc: &SceneDesc) -> Vec<&'static str> {
 /// Parses `--output`: the extension must name an image format.
 fn parse_output(s: &str) -> Result<PathBuf, String> {
     let path = PathBuf::from(s);
-    Format::from_extension(&path)
-        .map_err(|_| "unknown image format (use .png, .exr, .ppm or .pnm)".to_owned())?;
+    Format::from_extension(&path).map_err(|_| {
+        "unknown image format (use .png, .exr, .ppm or .pnm, .hdr, or - for PPM to standard output)"
+            .to_owned()
+    })?;
     Ok(path)
 }
 

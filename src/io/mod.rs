@@ -11,6 +11,45 @@ pub use error::SceneError;
 
 use crate::scene::SceneDesc;
 
+/// A scene format bareray reads.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum SceneFormat {
+    /// bareray's TOML format.
+    Toml,
+    /// SPD's Neutral File Format.
+    Nff,
+    /// One sphere `x y z r` per line.
+    Xyzr,
+}
+
+impl SceneFormat {
+    /// The format a file's extension names (case-insensitive), if any.
+    pub fn from_extension(path: &std::path::Path) -> Option<Self> {
+        let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
+        Self::from_name(ext.as_deref()?)
+    }
+
+    /// The format named `toml`, `nff` or `xyzr`.
+    pub fn from_name(name: &str) -> Option<Self> {
+        match name {
+            "toml" => Some(Self::Toml),
+            "nff" => Some(Self::Nff),
+            "xyzr" => Some(Self::Xyzr),
+            _ => None,
+        }
+    }
+}
+
+/// Parses a scene held in memory (read from standard input, say) in `format`; errors name `name` as the
+/// file.
+pub fn parse(format: SceneFormat, name: &std::path::Path, source: &str) -> Result<SceneDesc, SceneError> {
+    match format {
+        SceneFormat::Toml => toml::parse(name, source),
+        SceneFormat::Nff => nff::parse(name, source),
+        SceneFormat::Xyzr => xyzr::parse(name, source),
+    }
+}
+
 /// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr` (a directory is an
 /// error saying so, whatever its name).
 ///
@@ -29,11 +68,12 @@ pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
     if path.is_dir() {
         return Err(SceneError::whole_file(path, "is a directory"));
     }
-    let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    match ext.as_deref() {
-        Some("toml") => toml::load(path),
-        Some("nff") => nff::load(path),
-        Some("xyzr") => xyzr::load(path),
-        _ => Err(SceneError::whole_file(path, "unknown scene format (expected a .toml, .nff or .xyzr file)")),
+    match SceneFormat::from_extension(path) {
+        Some(SceneFormat::Toml) => toml::load(path),
+        Some(SceneFormat::Nff) => nff::load(path),
+        Some(SceneFormat::Xyzr) => xyzr::load(path),
+        None => {
+            Err(SceneError::whole_file(path, "unknown scene format (expected a .toml, .nff or .xyzr file)"))
+        }
     }
 }

@@ -97,8 +97,12 @@ impl Format {
         }
     }
 
-    /// The format named by `path`'s extension (case-insensitive): `.png`, `.exr`, `.ppm` or `.pnm`.
+    /// The format named by `path`'s extension (case-insensitive): `.png`, `.exr`, `.ppm` or `.pnm`, `.hdr`;
+    /// PPM for `-` (standard output).
     pub fn from_extension(path: &Path) -> Result<Format, OutputError> {
+        if is_stdout(path) {
+            return Ok(Format::Ppm);
+        }
         let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
         match ext.as_deref() {
             Some("png") => Ok(Format::Png),
@@ -118,9 +122,18 @@ impl Format {
     }
 }
 
+/// Whether `path` names standard output: `-`.
+pub fn is_stdout(path: &Path) -> bool {
+    path == Path::new("-")
+}
+
 /// Whether a file can be written at `path` the way [`write_atomic`] writes it: `path` is not a directory,
-/// and a temporary file can be created (and is removed again) in its directory.
+/// and a temporary file can be created (and is removed again) in its directory. Standard output (`-`)
+/// always can.
 pub fn check_writable(path: &Path) -> Result<(), OutputError> {
+    if is_stdout(path) {
+        return Ok(());
+    }
     let fail = |reason: String| Err(OutputError::Unwritable { path: path.to_owned(), reason });
     if path.is_dir() {
         return fail("is a directory".to_owned());
@@ -310,6 +323,16 @@ pub fn write_rows(
     let fail = |cause| OutputError::Write { path: path.to_owned(), cause };
     if frame.is_region() && format == Format::Hdr {
         return Err(fail("regions are written as PNG, EXR or PPM (HDR has no place to record one)".into()));
+    }
+    if is_stdout(path) {
+        // A stream cannot be written atomically: a failure leaves what was written so far.
+        let mut out = std::io::BufWriter::with_capacity(1 << 20, std::io::stdout().lock());
+        let rows = Rows::new(rows, frame, pixel_bytes(format, options.bit_depth));
+        let written = match format {
+            Format::Ppm => netpbm::write_ppm(&mut out, frame, rows),
+            _ => Err(format!("standard output takes PPM, not {}", format.name()).into()),
+        };
+        return written.and_then(|()| Ok(std::io::Write::flush(&mut out)?)).map_err(fail);
     }
     write_atomic(path, |tmp| {
         let mut out = BufWriter::with_capacity(1 << 20, fs::File::create(tmp)?);

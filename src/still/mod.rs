@@ -77,9 +77,10 @@ impl Job {
         }
     }
 
-    /// Rows per band.
+    /// Rows per band (no more than the window's height, in whole tiles).
     pub fn band_rows(&self) -> u32 {
-        crate::render::band_rows(self.window.width(), self.band_budget)
+        let rows = crate::render::band_rows(self.window.width(), self.band_budget);
+        rows.min(self.window.height().div_ceil(16) * 16)
     }
 }
 
