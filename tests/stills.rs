@@ -338,3 +338,40 @@ fn scenes_from_standard_input_and_ppm_to_standard_output() {
     let run = bareray(&["render", scene.to_str().unwrap(), "-o", "-", "--resume"]);
     assert_eq!(run.status.code(), Some(2));
 }
+
+/// TIFF holds the PNG's values (8 and 16 bits), JPEG stays close to them (PSNR above 30 dB on the
+/// whitted scene), and a JPEG wider than its 16-bit size field is refused before tracing.
+#[test]
+fn tiff_and_jpeg_hold_the_pngs_values() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let render = |out: &str, more: &[&str]| {
+        let mut args =
+            vec!["render", scene.to_str().unwrap(), "-o", out, "--width", "80", "--height", "60", "-q"];
+        args.extend(more);
+        bareray(&args)
+    };
+    for (out, more) in [("a.png", &[][..]), ("b.tif", &[][..]), ("c.png", &["--bit-depth", "16"][..])] {
+        assert!(render(&p(out), more).status.success());
+    }
+    assert!(render(&p("d.tiff"), &["--bit-depth", "16"]).status.success());
+    assert!(render(&p("e.jpg"), &[]).status.success());
+    let png = image::open(p("a.png")).unwrap();
+    assert_eq!(image::open(p("b.tif")).unwrap().to_rgb8(), png.to_rgb8());
+    assert_eq!(image::open(p("d.tiff")).unwrap().to_rgb16(), image::open(p("c.png")).unwrap().to_rgb16());
+    let jpeg = image::open(p("e.jpg")).unwrap().to_rgb8();
+    let squares: f64 = jpeg
+        .as_raw()
+        .iter()
+        .zip(png.to_rgb8().as_raw())
+        .map(|(&a, &b)| (f64::from(a) - f64::from(b)).powi(2))
+        .sum();
+    let psnr = 20.0 * (255.0 / (squares / jpeg.as_raw().len() as f64).sqrt()).log10();
+    assert!(psnr > 30.0, "JPEG PSNR {psnr:.1} dB");
+    let run =
+        bareray(&["render", scene.to_str().unwrap(), "-o", &p("f.jpg"), "--width", "65536", "--height", "4"]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains("at most 65535 pixels a side"), "{}", stderr(&run));
+    assert!(!dir.path().join("f.jpg").exists());
+}

@@ -40,7 +40,8 @@ pub struct RenderArgs {
     #[arg(long, value_parser = ["toml", "nff", "xyzr"])]
     pub format: Option<String>,
     /// Output image; the extension picks the format: .png (8-bit), .exr (linear float RGB), .ppm or .pnm
-    /// (binary 8-bit PPM, P6), .hdr (Radiance); `-` writes PPM to standard output (the summary then goes
+    /// (binary 8-bit PPM, P6), .hdr (Radiance), .tif/.tiff (uncompressed RGB), .jpg/.jpeg (quality 92);
+    /// `-` writes PPM to standard output (the summary then goes
     /// to standard error). Default: the scene's name with .png, in the current directory.
     #[arg(short, long, value_parser = parse_output)]
     pub output: Option<PathBuf>,
@@ -62,7 +63,7 @@ pub struct RenderArgs {
     /// pixel whose centre is within the radius; without a filter a pixel averages its own samples.
     #[arg(long, value_parser = super::values::parse_filter)]
     pub filter: Option<crate::scene::desc::Filter>,
-    /// Bits per channel of a PNG: 8 or 16 (16 keeps the shading's gradients without banding).
+    /// Bits per channel of a PNG or TIFF: 8 or 16 (16 keeps the shading's gradients without banding).
     #[arg(long, default_value_t = 8, value_parser = parse_bit_depth)]
     pub bit_depth: u8,
     /// Reflection/refraction depth limit; overrides the scene.
@@ -139,17 +140,22 @@ pub fn run(args: RenderArgs) -> Result<()> {
     }
     // Fail on an output that cannot be written now, not after the render.
     let format = Format::from_path(&output)?;
-    if args.bit_depth == 16 && format != Format::Png {
+    if args.bit_depth == 16 && !matches!(format, Format::Png | Format::Tiff) {
         return Err(super::usage(format!(
-            "--bit-depth 16: {} is not a PNG (16 bits are for PNG)",
+            "--bit-depth 16: {} is not a PNG or TIFF (16 bits are for those)",
             output.display()
         )));
     }
     apply_overrides(&mut desc, &args);
     let window = region(&args, desc.camera.width, desc.camera.height)?;
     let settings = args.resume.then(|| settings_hash(&args, &desc, window, &output));
-    if window != Window::whole(desc.camera.width, desc.camera.height) && format == Format::Hdr {
-        return Err(super::usage("--region and --crop write PNG, EXR or PPM (HDR cannot record a region)"));
+    if window != Window::whole(desc.camera.width, desc.camera.height)
+        && !matches!(format, Format::Png | Format::Exr | Format::Ppm)
+    {
+        return Err(super::usage(format!(
+            "--region and --crop write PNG, EXR or PPM, which record where the region belongs; not {}",
+            format.name()
+        )));
     }
     let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
     for warning in scene_warnings(&desc) {

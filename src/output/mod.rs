@@ -1,5 +1,5 @@
 //! Images out: the format follows the file extension (PNG 8- or 16-bit, PPM 8-bit, EXR linear float, Radiance
-//! HDR linear RGBE). Integer values follow the scene's [`Transfer`]: the sRGB curve, or the values as they
+//! HDR linear RGBE, TIFF 8- or 16-bit, JPEG). Integer values follow the scene's [`Transfer`]: the sRGB curve, or the values as they
 //! are (clamped, scaled, rounded); EXR and HDR hold the values as they are, whatever the transfer. PNG records
 //! the transfer in a `tEXt` chunk, keyword `Transfer`, text `srgb` or `linear`, and any further text the
 //! caller gives ([`WriteOptions::text`]: the renderer, scene, size, sampling); PPM's header stays minimal.
@@ -17,6 +17,7 @@ use crate::math::Rgb;
 use crate::scene::desc::Transfer;
 
 pub mod exr;
+pub mod held;
 mod netpbm;
 mod png;
 mod radiance;
@@ -36,6 +37,10 @@ pub enum Format {
     Ppm,
     /// Radiance HDR (`.hdr`): linear RGBE, 8-bit mantissas sharing an exponent, flat scanlines.
     Hdr,
+    /// TIFF (`.tif`, `.tiff`): uncompressed 8- or 16-bit RGB, encoded whole at the end.
+    Tiff,
+    /// JPEG (`.jpg`, `.jpeg`): baseline 8-bit, quality 92, encoded whole at the end.
+    Jpeg,
 }
 
 /// Bits per PNG channel.
@@ -63,7 +68,7 @@ pub struct WriteOptions {
 #[derive(Debug, Error)]
 pub enum OutputError {
     /// Extension not recognised.
-    #[error("{path}: unknown image format (use .png, .exr or .ppm)")]
+    #[error("{path}: unknown image format (use .png, .exr, .ppm, .hdr, .tif or .jpg)")]
     UnknownFormat {
         /// The output path.
         path: PathBuf,
@@ -94,7 +99,14 @@ impl Format {
             Format::Exr => "EXR",
             Format::Ppm => "PPM",
             Format::Hdr => "HDR",
+            Format::Tiff => "TIFF",
+            Format::Jpeg => "JPEG",
         }
+    }
+
+    /// Whether the file is encoded whole at the end (its rows held in memory until then): TIFF and JPEG.
+    pub fn held_whole(self) -> bool {
+        matches!(self, Format::Tiff | Format::Jpeg)
     }
 
     /// The format named by `path`'s extension (case-insensitive): `.png`, `.exr`, `.ppm` or `.pnm`, `.hdr`;
@@ -109,6 +121,8 @@ impl Format {
             Some("exr") => Ok(Format::Exr),
             Some("ppm") | Some("pnm") => Ok(Format::Ppm),
             Some("hdr") => Ok(Format::Hdr),
+            Some("tif") | Some("tiff") => Ok(Format::Tiff),
+            Some("jpg") | Some("jpeg") => Ok(Format::Jpeg),
             _ => Err(OutputError::UnknownFormat { path: path.to_owned() }),
         }
     }
@@ -274,8 +288,8 @@ impl Frame {
 /// (R, G, B), 6 for 16-bit PNG (big-endian), 12 for EXR (R, G, B as little-endian f32), 4 for HDR (RGBE).
 pub fn pixel_bytes(format: Format, depth: BitDepth) -> usize {
     match (format, depth) {
-        (Format::Png, BitDepth::Sixteen) => 6,
-        (Format::Png | Format::Ppm, _) => 3,
+        (Format::Png | Format::Tiff, BitDepth::Sixteen) => 6,
+        (Format::Png | Format::Ppm | Format::Tiff | Format::Jpeg, _) => 3,
         (Format::Exr, _) => 12,
         (Format::Hdr, _) => 4,
     }
@@ -290,10 +304,9 @@ pub fn to_samples(pixels: &[Rgb], width: u32, format: Format, options: &WriteOpt
     let mut out = vec![0u8; pixels.len() * size];
     out.par_chunks_mut(width * size).zip(pixels.par_chunks(width)).for_each(|(out, row)| {
         match (format, options.bit_depth) {
-            (Format::Png | Format::Ppm, BitDepth::Eight) | (Format::Ppm, _) => {
-                srgb::encode8_row(row, options.transfer, out)
-            }
-            (Format::Png, BitDepth::Sixteen) => png::encode16_row(row, options.transfer, out),
+            (Format::Png | Format::Ppm | Format::Tiff | Format::Jpeg, BitDepth::Eight)
+            | (Format::Ppm | Format::Jpeg, _) => srgb::encode8_row(row, options.transfer, out),
+            (Format::Png | Format::Tiff, BitDepth::Sixteen) => png::encode16_row(row, options.transfer, out),
             (Format::Exr, _) => {
                 for (o, v) in out.chunks_exact_mut(4).zip(row.iter().flat_map(|p| [p.x, p.y, p.z])) {
                     o.copy_from_slice(&v.to_le_bytes());
@@ -321,8 +334,8 @@ pub fn write_rows(
     rows: &mut dyn Iterator<Item = Vec<u8>>,
 ) -> Result<(), OutputError> {
     let fail = |cause| OutputError::Write { path: path.to_owned(), cause };
-    if frame.is_region() && format == Format::Hdr {
-        return Err(fail("regions are written as PNG, EXR or PPM (HDR has no place to record one)".into()));
+    if frame.is_region() && matches!(format, Format::Hdr | Format::Tiff | Format::Jpeg) {
+        return Err(fail(format!("regions are written as PNG, EXR or PPM, not {}", format.name()).into()));
     }
     if is_stdout(path) {
         // A stream cannot be written atomically: a failure leaves what was written so far.
@@ -342,6 +355,7 @@ pub fn write_rows(
             Format::Exr => exr::write(&mut out, frame, &exr::rgb_channels(), &options.text, rows)?,
             Format::Ppm => netpbm::write_ppm(&mut out, frame, rows)?,
             Format::Hdr => radiance::write(&mut out, frame, rows)?,
+            Format::Tiff | Format::Jpeg => held::write(&mut out, format, options.bit_depth, frame, rows)?,
         }
         out.into_inner().map_err(|e| e.into_error())?.sync_all()?;
         Ok(())

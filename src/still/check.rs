@@ -5,7 +5,7 @@ use std::path::Path;
 
 use super::{Job, StillError};
 use crate::compile::Scene;
-use crate::output::{self, pixel_bytes, Format};
+use crate::output::{self, held, pixel_bytes, Format};
 use crate::scene::desc::{Filter, Pattern};
 
 /// The largest image side bareray renders: sample positions are f32 pixel coordinates, exact to the
@@ -16,7 +16,8 @@ pub const MAX_SIDE: u32 = 1 << 23;
 /// Memory a still's render will take beyond the compiled scene, in bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Estimate {
-    /// Bands alive at once: traced, held by the postfilter, finished, encoded and queued, being written.
+    /// Bands alive at once (traced, held by the postfilter, finished, encoded and queued, being written),
+    /// and for TIFF and JPEG, which encode the image whole, its stored bytes.
     pub bands: u64,
     /// Working memory of the tiles in flight, one per thread (supersampling, filter aprons, adaptive
     /// lattices).
@@ -62,6 +63,23 @@ fn check_with(
              or lower the resolution"
         )));
     }
+    let (w, h) = (u64::from(job.window.width()), u64::from(job.window.height()));
+    let stored = w * h * pixel_bytes(job.format, job.write.bit_depth) as u64;
+    let side = u64::from(held::JPEG_MAX_SIDE);
+    if job.format == Format::Jpeg && (w > side || h > side) {
+        return Err(refuse(format!(
+            "{}: JPEG stores sizes in 16 bits, at most {side} pixels a side, and the image is {w}x{h}; write \
+             PNG, EXR or PPM",
+            job.output.display()
+        )));
+    }
+    if job.format == Format::Tiff && stored > held::TIFF_MAX_BYTES {
+        return Err(refuse(format!(
+            "{}: the image takes {} and a classic TIFF holds at most 4 GiB; write PNG, EXR or PPM",
+            job.output.display(),
+            bytes(stored)
+        )));
+    }
     output::check_writable(&job.output)?;
     if let Some((_, path)) = &job.aov {
         output::check_writable(path)?;
@@ -102,7 +120,13 @@ pub fn estimate(scene: &Scene, job: &Job, threads: usize) -> Estimate {
         // Hits (t and id) and the samples made, queued and written.
         per_pixel += 8 + 3 * 4 * channels;
     }
-    let bands = band * per_pixel;
+    // TIFF and JPEG hold the whole image's stored bytes until they encode it.
+    let whole = if job.format.held_whole() {
+        u64::from(job.window.width()) * u64::from(job.window.height()) * stored
+    } else {
+        0
+    };
+    let bands = band * per_pixel + whole;
     let tiles = threads as u64 * tile_bytes(scene.render.pattern, scene.render.filter);
     let total = bands + tiles;
     Estimate { bands, tiles, total, available: available_memory() }

@@ -266,7 +266,9 @@ impl PartRows {
                     width: h.frame.width as usize,
                 }
             }
-            Format::Hdr => return Err("HDR parts are not merged".into()),
+            Format::Hdr | Format::Tiff | Format::Jpeg => {
+                return Err("only PNG, EXR and PPM parts are merged".into())
+            }
         })
     }
 
