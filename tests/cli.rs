@@ -172,7 +172,7 @@ fn bad_arguments_fail_before_rendering() {
         (&["render", "."], 1, ".: is a directory"),
         (&["render", "-o", "no/such/dir/out.png"], 1, "directory no/such/dir does not exist"),
         (&["render", "-o", "out.png"], 1, "out.png: is a directory"),
-        (&["render", "-o", "out.jpg"], 2, "unknown image format"),
+        (&["render", "-o", "out.gif"], 2, "unknown image format"),
         (&["render", "--spp", "5"], 2, "square number"),
         (&["render", "--hfov", "180"], 2, "(0, 180)"),
         (&["render", "--threads", "0"], 2, "--threads"),

@@ -205,7 +205,7 @@ pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
 ///     output::write_image(&img, &dir.join(name), Transfer::Srgb)?;
 /// #   std::fs::remove_file(dir.join(name))?;
 /// }
-/// assert!(output::write_image(&img, &dir.join("bareray-doc-write.jpg"), Transfer::Srgb).is_err());
+/// assert!(output::write_image(&img, &dir.join("bareray-doc-write.gif"), Transfer::Srgb).is_err());
 /// # Ok::<(), Box<dyn std::error::Error>>(())
 /// ```
 pub fn write_image(img: &Image, path: &Path, transfer: Transfer) -> Result<(), OutputError> {
