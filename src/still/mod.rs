@@ -18,6 +18,8 @@ use crate::render::{render_window_lanes, Progress, Traced, Window};
 
 mod check;
 pub mod merge;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 
 pub use check::{check, Estimate, Limit};
 
@@ -85,6 +87,15 @@ pub enum StillError {
     /// The image or AOV file could not be written (nothing is left at its path).
     #[error(transparent)]
     Output(#[from] OutputError),
+    /// A rank of a distributed render ([`mpi`]) failed: which, and its error.
+    #[cfg(feature = "mpi")]
+    #[error("rank {rank}: {message}")]
+    Rank {
+        /// The failing rank.
+        rank: i32,
+        /// Its error.
+        message: String,
+    },
 }
 
 /// Renders `job` on `pool`, reporting tiles to `progress`: bands of rows go through the postfilter, are
