@@ -109,9 +109,54 @@ struct Timings {
     render: f64,
 }
 
-/// Runs `bareray render`.
+/// Runs `bareray render`: on several MPI ranks when started by an MPI launcher (the `mpi` feature).
 pub fn run(args: RenderArgs) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    if let Some(ranks) = still::mpi::Ranks::start() {
+        return run_ranks(args, ranks);
+    }
     let mut time = Timings::default();
+    let (scene, pool, job) = prepare(&args, &mut time, true)?;
+    still::check(&scene, &job, pool.current_num_threads())?;
+    crate::accel::set_counting(args.stats);
+    let progress = progress_bar(args.quiet);
+    let clock = Instant::now();
+    let traced = still::render(&scene, &pool, &progress, &job)?;
+    progress.finish_and_clear();
+    time.render = clock.elapsed().as_secs_f64();
+    report(&args, &scene, &job, &traced, &time);
+    Ok(())
+}
+
+/// `run` on one rank of an MPI job (`still::mpi`): every rank prepares, rank 0 checks, all agree to go on
+/// or stop; rank 0 alone writes and prints.
+#[cfg(feature = "mpi")]
+fn run_ranks(args: RenderArgs, ranks: still::mpi::Ranks) -> Result<()> {
+    let root = ranks.is_root();
+    let mut time = Timings::default();
+    let ready = prepare(&args, &mut time, root).and_then(|(scene, pool, job)| {
+        if root {
+            still::check(&scene, &job, pool.current_num_threads())?;
+        }
+        Ok((scene, pool, job))
+    });
+    let exit_code = |e: &anyhow::Error| if e.downcast_ref::<super::UsageError>().is_some() { 2 } else { 1 };
+    let (scene, pool, job) = ranks.agree(ready, exit_code)?;
+    crate::accel::set_counting(args.stats);
+    let progress = progress_bar(args.quiet || !root);
+    let clock = Instant::now();
+    let traced = ranks.render(&scene, &pool, &progress, &job);
+    progress.finish_and_clear();
+    time.render = clock.elapsed().as_secs_f64();
+    if let Some(traced) = traced {
+        report(&args, &scene, &job, &traced, &time);
+    }
+    Ok(())
+}
+
+/// Reads the scene, applies the command line and compiles it: the scene, the render's threads and the job.
+/// Scene warnings are printed when `warn`.
+fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, rayon::ThreadPool, Job)> {
     let clock = Instant::now();
     let (mut desc, name) = match &args.scene {
         Some(path) => (load_scene(path)?, stem(path)),
@@ -126,14 +171,16 @@ pub fn run(args: RenderArgs) -> Result<()> {
             output.display()
         )));
     }
-    apply_overrides(&mut desc, &args);
-    let window = region(&args, desc.camera.width, desc.camera.height)?;
+    apply_overrides(&mut desc, args);
+    let window = region(args, desc.camera.width, desc.camera.height)?;
     if window != Window::whole(desc.camera.width, desc.camera.height) && format == Format::Hdr {
         return Err(super::usage("--region and --crop write PNG, EXR or PPM (HDR cannot record a region)"));
     }
     let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
-    for warning in scene_warnings(&desc) {
-        eprintln!("warning: {}: {warning}", scene_name.display());
+    if warn {
+        for warning in scene_warnings(&desc) {
+            eprintln!("warning: {}: {warning}", scene_name.display());
+        }
     }
     time.parse = clock.elapsed().as_secs_f64();
 
@@ -147,26 +194,22 @@ pub fn run(args: RenderArgs) -> Result<()> {
     time.build = clock.elapsed().as_secs_f64();
 
     let job = Job {
-        write: write_options(&args, &scene, scene_name),
+        write: write_options(args, &scene, scene_name),
         window,
         lanes: args.lanes,
         aov: args.aov.as_ref().map(|which| (which.0.clone(), aov::aov_path(&output))),
         ..Job::whole(&scene, &output, WriteOptions::default())?
     };
-    still::check(&scene, &job, pool.current_num_threads())?;
-    crate::accel::set_counting(args.stats);
-    let progress = progress_bar(args.quiet);
-    let clock = Instant::now();
-    let traced = still::render(&scene, &pool, &progress, &job)?;
-    progress.finish_and_clear();
-    time.render = clock.elapsed().as_secs_f64();
+    Ok((scene, pool, job))
+}
 
+/// The summary line, or the statistics with `--stats`; nothing with `--quiet`.
+fn report(args: &RenderArgs, scene: &Scene, job: &Job, traced: &Traced, time: &Timings) {
     if args.stats {
-        print_stats(&scene, &job, &traced, &time);
+        print_stats(scene, job, traced, time);
     } else if !args.quiet {
-        print_summary(&output, &job, &traced, &time);
+        print_summary(&job.output, job, traced, time);
     }
-    Ok(())
 }
 
 /// The file's transfer, bit depth and text: the renderer, the scene file, and the size and sampling.
