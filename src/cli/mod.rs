@@ -95,21 +95,29 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        // A reader that stops early (`bareray bench ... | head`) is not an error.
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            ExitCode::SUCCESS
-        }
-        Err(e) if e.downcast_ref::<UsageError>().is_some() => {
-            eprintln!("error: {e:#}\n\nFor more information, try '--help'.");
-            ExitCode::from(2)
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+        Err(e) => ExitCode::from(report(&e)),
+    }
+}
+
+/// Prints a command's error and gives its exit code: 2 for argument errors (clap's and [`UsageError`]), 1
+/// for the rest; 0, silently, for a reader that stopped early (`bareray bench ... | head`).
+pub(super) fn report(e: &anyhow::Error) -> u8 {
+    if e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) {
+        return 0;
+    }
+    match e.downcast_ref::<UsageError>() {
+        Some(_) => eprintln!("error: {e:#}\n\nFor more information, try '--help'."),
+        None => eprintln!("error: {e:#}"),
+    }
+    exit_code(e)
+}
+
+/// The exit code of an error that [`report`] prints: 2 for argument errors, 1 for the rest.
+pub(super) fn exit_code(e: &anyhow::Error) -> u8 {
+    if e.downcast_ref::<UsageError>().is_some() {
+        2
+    } else {
+        1
     }
 }
 

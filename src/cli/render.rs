@@ -140,8 +140,12 @@ fn run_ranks(args: RenderArgs, ranks: still::mpi::Ranks) -> Result<()> {
         }
         Ok((scene, pool, job))
     });
-    let exit_code = |e: &anyhow::Error| if e.downcast_ref::<super::UsageError>().is_some() { 2 } else { 1 };
-    let (scene, pool, job) = ranks.agree(ready, exit_code)?;
+    let (scene, pool, job) = match ranks.agree(ready, |e| super::exit_code(e).into()) {
+        Ok(setup) => setup,
+        // Printed before MPI is finalised: the other ranks exit once it is, and the launcher may then end
+        // this one.
+        Err(e) => ranks.exit(super::report(&e).into()),
+    };
     crate::accel::set_counting(args.stats);
     let progress = progress_bar(args.quiet || !root);
     let clock = Instant::now();

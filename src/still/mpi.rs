@@ -136,9 +136,10 @@ impl Ranks {
 
     /// Whether every rank is ready to render, every rank calling it with its setup's outcome `ready`
     /// (`code` gives an error's exit code). When all are ready, `ready` comes back. Otherwise every rank is
-    /// told to stop: rank 0 gets its own error back to report as one process would; when only another rank
+    /// told to stop: rank 0 gets its own error back, to print before it calls [`Ranks::exit`] (the other
+    /// ranks end as soon as MPI is finalised, and a launcher may end rank 0 then); when only another rank
     /// failed, rank 0 prints `error: rank R: ...` for the first of them and exits with its code; the other
-    /// ranks exit silently with rank 0's code. Those that exit here finalise MPI first.
+    /// ranks exit silently with rank 0's code.
     pub fn agree<T, E: Display>(&self, ready: Result<T, E>, code: impl Fn(&E) -> i32) -> Result<T, E> {
         let code = |e: &E| code(e).clamp(1, 255) as u8;
         let root = self.world.process_at_rank(0);
@@ -151,7 +152,7 @@ impl Ranks {
             let (verdict, _) = root.receive_vec_with_tag::<u8>(VERDICT);
             return match verdict.first() {
                 None => ready,
-                Some(&stop) => self.leave(stop.into()),
+                Some(&stop) => self.exit(stop.into()),
             };
         }
         let mut first = None;
@@ -169,7 +170,7 @@ impl Ranks {
         match (ready, first) {
             (Ok(_), Some((rank, code, message))) => {
                 eprintln!("error: rank {rank}: {message}");
-                self.leave(code.into())
+                self.exit(code.into())
             }
             (ready, _) => ready,
         }
@@ -391,13 +392,13 @@ impl Ranks {
             }
         }
         if failed {
-            self.leave(1);
+            self.exit(1);
         }
         (counts, work)
     }
 
     /// Finalises MPI and ends the process with exit code `code`.
-    fn leave(&self, code: i32) -> ! {
+    pub fn exit(&self, code: i32) -> ! {
         // SAFETY: MPI is initialised; the process ends right after, so nothing calls MPI again.
         unsafe {
             ::mpi::ffi::MPI_Finalize();
