@@ -21,7 +21,7 @@ pub mod merge;
 #[cfg(feature = "mpi")]
 pub mod mpi;
 
-pub use check::{check, Estimate, Limit};
+pub use check::{check, Estimate, Limit, MAX_SIDE};
 
 /// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.
 pub const BAND_BUDGET: usize = 32 << 20;
