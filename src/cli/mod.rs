@@ -95,31 +95,36 @@ pub fn main() -> ExitCode {
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
-        // A reader that stops early (`bareray bench ... | head`) is not an error.
-        Err(e)
-            if e.downcast_ref::<std::io::Error>()
-                .is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) =>
-        {
-            ExitCode::SUCCESS
-        }
-        // Interrupted by a signal: the shell's convention for SIGINT.
-        Err(e)
-            if matches!(
-                e.downcast_ref::<crate::still::StillError>(),
-                Some(crate::still::StillError::Interrupted(_))
-            ) =>
-        {
-            eprintln!("error: {e:#}");
-            ExitCode::from(130)
-        }
-        Err(e) if e.downcast_ref::<UsageError>().is_some() => {
-            eprintln!("error: {e:#}\n\nFor more information, try '--help'.");
-            ExitCode::from(2)
-        }
-        Err(e) => {
-            eprintln!("error: {e:#}");
-            ExitCode::FAILURE
-        }
+        Err(e) => ExitCode::from(report(&e)),
+    }
+}
+
+/// Prints a command's error and gives its exit code: 2 for argument errors (clap's and [`UsageError`]), 130
+/// for an interrupted render (the shell's code for SIGINT), 1 for the rest; 0, silently, for a reader that
+/// stopped early (`bareray bench ... | head`).
+pub(super) fn report(e: &anyhow::Error) -> u8 {
+    if e.downcast_ref::<std::io::Error>().is_some_and(|e| e.kind() == std::io::ErrorKind::BrokenPipe) {
+        return 0;
+    }
+    match e.downcast_ref::<UsageError>() {
+        Some(_) => eprintln!("error: {e:#}\n\nFor more information, try '--help'."),
+        None => eprintln!("error: {e:#}"),
+    }
+    exit_code(e)
+}
+
+/// The exit code of an error that [`report`] prints: 2 for argument errors, 130 for an interrupt, 1 for
+/// the rest.
+pub(super) fn exit_code(e: &anyhow::Error) -> u8 {
+    if e.downcast_ref::<UsageError>().is_some() {
+        2
+    } else if matches!(
+        e.downcast_ref::<crate::still::StillError>(),
+        Some(crate::still::StillError::Interrupted(_))
+    ) {
+        130
+    } else {
+        1
     }
 }
 

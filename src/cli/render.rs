@@ -124,12 +124,72 @@ struct Timings {
     render: f64,
 }
 
-/// Runs `bareray render`.
+/// Runs `bareray render`: on several MPI ranks when started by an MPI launcher (the `mpi` feature).
 pub fn run(args: RenderArgs) -> Result<()> {
+    #[cfg(feature = "mpi")]
+    if let Some(ranks) = still::mpi::Ranks::start() {
+        return run_ranks(args, ranks);
+    }
     let mut time = Timings::default();
+    let (scene, pool, job) = prepare(&args, &mut time, true)?;
+    still::check(&scene, &job, pool.current_num_threads())?;
+    crate::accel::set_counting(args.stats);
+    let progress = progress_bar(args.quiet);
+    let clock = Instant::now();
+    still::catch_interrupts();
+    let traced = still::render(&scene, &pool, &progress, &job);
+    if let Err(still::StillError::Interrupted(_)) = &traced {
+        progress.abandon();
+    }
+    let traced = traced?;
+    progress.finish_and_clear();
+    time.render = clock.elapsed().as_secs_f64();
+    report(&args, &scene, &job, &traced, &time);
+    Ok(())
+}
+
+/// `run` on one rank of an MPI job (`still::mpi`): every rank prepares, rank 0 checks, all agree to go on
+/// or stop; rank 0 alone writes and prints.
+#[cfg(feature = "mpi")]
+fn run_ranks(args: RenderArgs, ranks: still::mpi::Ranks) -> Result<()> {
+    let root = ranks.is_root();
+    let mut time = Timings::default();
+    let ready = if args.resume {
+        // The side file is written by one process; a distributed render would need every rank's rows in it.
+        Err(super::usage("--resume renders in one process, not under an MPI launcher"))
+    } else {
+        prepare(&args, &mut time, root)
+    };
+    let ready = ready.and_then(|(scene, pool, job)| {
+        if root {
+            still::check(&scene, &job, pool.current_num_threads())?;
+        }
+        Ok((scene, pool, job))
+    });
+    let (scene, pool, job) = match ranks.agree(ready, |e| super::exit_code(e).into()) {
+        Ok(setup) => setup,
+        // Printed before MPI is finalised: the other ranks exit once it is, and the launcher may then end
+        // this one.
+        Err(e) => ranks.exit(super::report(&e).into()),
+    };
+    crate::accel::set_counting(args.stats);
+    let progress = progress_bar(args.quiet || !root);
+    let clock = Instant::now();
+    let traced = ranks.render(&scene, &pool, &progress, &job);
+    progress.finish_and_clear();
+    time.render = clock.elapsed().as_secs_f64();
+    if let Some(traced) = traced {
+        report(&args, &scene, &job, &traced, &time);
+    }
+    Ok(())
+}
+
+/// Reads the scene, applies the command line and compiles it: the scene, the render's threads and the job.
+/// Scene warnings are printed when `warn`.
+fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, rayon::ThreadPool, Job)> {
     let clock = Instant::now();
     let (mut desc, name) = match &args.scene {
-        Some(path) if path == Path::new("-") => (read_stdin_scene(&args)?, "stdin".to_owned()),
+        Some(path) if path == Path::new("-") => (read_stdin_scene(args)?, "stdin".to_owned()),
         Some(path) => (load_scene(path)?, stem(path)),
         None => (toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?, "demo".to_owned()),
     };
@@ -146,9 +206,9 @@ pub fn run(args: RenderArgs) -> Result<()> {
             output.display()
         )));
     }
-    apply_overrides(&mut desc, &args);
-    let window = region(&args, desc.camera.width, desc.camera.height)?;
-    let settings = args.resume.then(|| settings_hash(&args, &desc, window, &output));
+    apply_overrides(&mut desc, args);
+    let window = region(args, desc.camera.width, desc.camera.height)?;
+    let settings = args.resume.then(|| settings_hash(args, &desc, window, &output));
     if window != Window::whole(desc.camera.width, desc.camera.height)
         && !matches!(format, Format::Png | Format::Exr | Format::Ppm)
     {
@@ -158,8 +218,10 @@ pub fn run(args: RenderArgs) -> Result<()> {
         )));
     }
     let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
-    for warning in scene_warnings(&desc) {
-        eprintln!("warning: {}: {warning}", scene_name.display());
+    if warn {
+        for warning in scene_warnings(&desc) {
+            eprintln!("warning: {}: {warning}", scene_name.display());
+        }
     }
     time.parse = clock.elapsed().as_secs_f64();
 
@@ -173,7 +235,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     time.build = clock.elapsed().as_secs_f64();
 
     let job = Job {
-        write: write_options(&args, &scene, scene_name),
+        write: write_options(args, &scene, scene_name),
         window,
         lanes: args.lanes,
         aov: args.aov.as_ref().map(|which| (which.0.clone(), aov::aov_path(&output))),
@@ -187,26 +249,19 @@ pub fn run(args: RenderArgs) -> Result<()> {
         }
         None => job,
     };
-    still::check(&scene, &job, pool.current_num_threads())?;
-    crate::accel::set_counting(args.stats);
-    let progress = progress_bar(args.quiet);
-    let clock = Instant::now();
-    still::catch_interrupts();
-    let traced = still::render(&scene, &pool, &progress, &job);
-    if let Err(still::StillError::Interrupted(_)) = &traced {
-        progress.abandon();
-    }
-    let traced = traced?;
-    progress.finish_and_clear();
-    time.render = clock.elapsed().as_secs_f64();
+    Ok((scene, pool, job))
+}
 
+/// The summary line, or the statistics with `--stats`; nothing with `--quiet`.
+fn report(args: &RenderArgs, scene: &Scene, job: &Job, traced: &Traced, time: &Timings) {
+    let to_stdout = crate::output::is_stdout(&job.output);
     if args.stats {
         // With the image on standard output, the report goes to standard error.
         let mut out: Box<dyn std::io::Write> =
             if to_stdout { Box::new(std::io::stderr()) } else { Box::new(std::io::stdout()) };
-        print_stats(&mut out, &scene, &job, &traced, &time);
+        print_stats(&mut out, scene, job, traced, time);
     } else if !args.quiet {
-        let line = summary(&output, &job, &traced, &time);
+        let line = summary(&job.output, job, traced, time);
         // With the image on standard output, the summary goes beside it, to standard error.
         if to_stdout {
             eprintln!("{line}");
@@ -214,7 +269,6 @@ pub fn run(args: RenderArgs) -> Result<()> {
             println!("{line}");
         }
     }
-    Ok(())
 }
 
 /// The scene on standard input, in the format --format names.

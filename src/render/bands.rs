@@ -177,6 +177,11 @@ impl Bands {
     pub fn tiles(&self) -> u64 {
         u64::from(self.traced.width().div_ceil(TILE)) * u64::from(self.traced.height().div_ceil(TILE))
     }
+    /// Tiles band `i` traces.
+    pub fn tiles_of(&self, i: u32) -> u64 {
+        let rows = self.rows_of(i);
+        u64::from(self.traced.width().div_ceil(TILE)) * u64::from((rows.end - rows.start).div_ceil(TILE))
+    }
     /// The stage that turns the bands, given in order, into the window's finished rows.
     pub fn stage(&self) -> RowStage {
         RowStage::new(self.window, self.traced, self.postfilter)

@@ -19,9 +19,11 @@ use crate::render::{render_window_lanes, Progress, Traced, Window};
 
 mod check;
 pub mod merge;
+#[cfg(feature = "mpi")]
+pub mod mpi;
 pub mod resume;
 
-pub use check::{check, Estimate, Limit};
+pub use check::{check, Estimate, Limit, MAX_SIDE};
 use resume::Resume;
 
 /// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.
@@ -103,6 +105,15 @@ pub enum StillError {
         path: PathBuf,
         /// What went wrong.
         cause: output::BoxError,
+    },
+    /// A rank of a distributed render ([`mpi`]) failed: which, and its error.
+    #[cfg(feature = "mpi")]
+    #[error("rank {rank}: {message}")]
+    Rank {
+        /// The failing rank.
+        rank: i32,
+        /// Its error.
+        message: String,
     },
 }
 
