@@ -341,3 +341,27 @@ fn adaptive_sampling_is_deterministic_and_splits_only_at_edges() {
         err(&reference.image)
     );
 }
+
+/// The per-pixel patterns on a scene with a sphere BVH, where camera packets carry their block's pyramid
+/// for frustum culling: the pyramid must enclose every lane's jittered position, not only the first and
+/// last lane's, or nodes a lane needs are culled and the image depends on the packet width.
+#[test]
+fn per_pixel_patterns_are_identical_at_every_width_with_frustum_culling() {
+    use bareray::scene::desc::Pattern;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/field.toml");
+    let mut desc = bareray::io::load(&path).unwrap();
+    (desc.camera.width, desc.camera.height) = (128, 72);
+    let bits =
+        |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
+    for pattern in [Pattern::Stratified(3), Pattern::R2(5)] {
+        desc.render.pattern = pattern;
+        let scene = Scene::compile(&desc).unwrap();
+        assert!(scene.geometry.culls_by_pyramid());
+        let pool = thread_pool(Some(2)).unwrap();
+        let reference = bits(&render_lanes(&scene, 1, &pool, &ProgressBar::hidden()).image);
+        for lanes in [4, 8, 16] {
+            let image = render_lanes(&scene, lanes, &pool, &ProgressBar::hidden()).image;
+            assert!(bits(&image) == reference, "{pattern:?} at {lanes} lanes");
+        }
+    }
+}
