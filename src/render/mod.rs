@@ -19,6 +19,7 @@ use crate::shade::RayCounts;
 use crate::simd::Lanes;
 
 mod bands;
+mod coverage;
 mod primary;
 mod tile;
 
@@ -26,6 +27,7 @@ pub use bands::{
     band_rows, render_window, render_window_lanes, trace_band_lanes, Bands, RowStage, Traced, Window,
 };
 use bands::{trace_rows, TileCounter};
+pub use coverage::{coverage_parts, CoveragePart};
 
 pub(crate) use primary::fnv1a;
 pub use primary::{
