@@ -232,7 +232,7 @@ fn edge_rmse(desc: &SceneDesc, pattern: Pattern, reference: &Image, edges: &[boo
 /// The test: on a sphere field without overlapping silhouettes, in flat colours (each sphere one
 /// colour, so the one ray per covered part is exactly its colour and only the areas matter), `coverage`
 /// matches the 32×32 stratified reference on the edge pixels to within 1/255 RMSE. Measured: 6.9e-4
-/// (0.18/255; one sample per pixel 8.6e-2, a 4×4 grid 1.1e-2), about the error of 1024 jittered samples
+/// (0.18/255; one sample per pixel 8.7e-2, a 4×4 grid 1.1e-2), about the error of 1024 jittered samples
 /// on an edge. Lit by a light and shaded (Lambert and Phong) the same pixels measure 1.7e-2 (one sample
 /// 4.4e-2, 4×4 grid 5.2e-3): spheres 2 to 4 pixels across are edge pixels nearly all over by the 3×3 rule,
 /// and the shading inside a part (highlights, the turn of a small sphere) gets one ray, as with one sample

@@ -12,10 +12,11 @@
 //!    quadratic form in the window coordinates (u, v), and pixel space is an affine image of the window. Its
 //!    exact area and centroid inside the pixel square come from [`Ellipse::clip`], in f64, for the sphere as
 //!    the renderer stores it (f32 centre and radius).
-//! 3. **Who is in front.** Where silhouettes overlap inside the pixel, an 8×8 grid of points in the pixel
-//!    decides: each point belongs to the sphere whose surface is nearest along its ray (depths in f64), and a
-//!    sphere's exact area is scaled by the share of its points it keeps (a sphere too thin to hold a point
-//!    keeps its area when the nearest sphere at its centroid is itself, else none).
+//! 3. **Who is in front.** Where more than one sphere reaches into the pixel, an 8×8 grid of points in the
+//!    pixel decides: each point belongs to the sphere whose surface is nearest along its ray (depths in f64),
+//!    and a sphere's exact area is scaled by the share of its points it keeps (a sphere too thin to hold a
+//!    point keeps its area when the nearest sphere at its centroid is itself, else none; a sphere that
+//!    keeps none of its points is dropped before its area is computed).
 //! 4. **Colours.** Each sphere left with a weight is shaded by one ray through its covered part's centroid
 //!    (through its visible point nearest the centroid when a nearer sphere hides the centroid), and the
 //!    uncovered remainder by one ray through the remainder's centroid, or, where that falls inside a
@@ -137,12 +138,23 @@ struct Ball {
     k: f64,
     /// `|C|`.
     dist: f64,
+    /// `|C|·cos(α + CLEARANCE)` (sin α = r/|C|): a direction `t` with `t·C ≤ |t|·rim` passes outside the
+    /// silhouette by at least [`CLEARANCE`]; −∞ for a sphere holding the eye.
+    rim: f64,
 }
 
 impl Ball {
     fn new(c: V, r: f64) -> Ball {
         let dist = dot(c, c).sqrt();
-        Ball { c, r, k: (dist - r) * (dist + r), dist }
+        let k = (dist - r) * (dist + r);
+        let (sin, cos) = CLEARANCE.sin_cos();
+        let rim = if k > 0.0 { k.sqrt() * cos - r * sin } else { f64::NEG_INFINITY };
+        Ball { c, r, k, dist, rim }
+    }
+
+    /// Whether `t` (of length `len`) passes outside the silhouette by at least [`CLEARANCE`].
+    fn clear_of(&self, t: V, len: f64) -> bool {
+        dot(t, self.c) <= len * self.rim
     }
 
     /// The distance (along the unit direction) to the surface the eye sees along `t`: the entry point, or
@@ -155,18 +167,6 @@ impl Ball {
         } else {
             Some((b + disc.max(0.0).sqrt()) / tt.sqrt())
         }
-    }
-
-    /// The angle (radians) by which `t` passes outside the silhouette; negative inside, −∞ for a sphere
-    /// holding the eye.
-    fn clearance(&self, t: V) -> f64 {
-        if self.k <= 0.0 {
-            return f64::NEG_INFINITY;
-        }
-        let c = self.c;
-        let cross = [t[1] * c[2] - t[2] * c[1], t[2] * c[0] - t[0] * c[2], t[0] * c[1] - t[1] * c[0]];
-        let theta = dot(cross, cross).sqrt().atan2(dot(t, c));
-        theta - (self.r / self.dist).asin()
     }
 
     /// The silhouette in pixel space when the sphere lies wholly in front of the eye's plane.
@@ -200,6 +200,10 @@ struct Found {
     centroid: [f64; 2],
     /// The grid points inside the silhouette, once computed.
     mask: Option<u64>,
+    /// The silhouette's bounding box in pixel space (unbounded without an ellipse): grid points outside
+    /// it are outside the silhouette.
+    lo: [f64; 2],
+    hi: [f64; 2],
 }
 
 /// The grid of one pixel: its points and their directions.
@@ -240,7 +244,7 @@ struct Pixel {
     grid_ready: bool,
     /// Per grid point, the nearest depth found so far and whose it is (`u8::MAX`: no one's).
     zbuf: [(f64, u8); POINTS],
-    /// Whether `zbuf` holds every sphere found (kept from the second sphere on).
+    /// Whether `zbuf` holds every sphere found (kept from the second sphere on; cleared then).
     zbuf_live: bool,
 }
 
@@ -260,7 +264,6 @@ impl Pixel {
         self.lo = lo;
         self.found.clear();
         self.grid_ready = false;
-        self.zbuf = [(f64::INFINITY, u8::MAX); POINTS];
         self.zbuf_live = false;
     }
 
@@ -274,14 +277,24 @@ impl Pixel {
 
     /// Enters sphere `j` into the per-point depth buffer (nearer wins; a tie keeps the one found first).
     fn enter(&mut self, view: &View, j: usize) {
-        let ball = self.found[j].ball;
+        let Found { ball, lo, hi, .. } = self.found[j];
         self.grid(view);
+        // The grid's columns and rows whose points may lie in the box (point k of a row at k + ½ of 1/SIDE).
+        let range = |lo: f64, hi: f64, origin: f64| {
+            let at = |v: f64| (v - origin) * SIDE as f64 - 0.5;
+            let first = at(lo).ceil().max(0.0).min(SIDE as f64) as usize;
+            let end = (at(hi).floor() + 1.0).max(0.0).min(SIDE as f64) as usize;
+            first..end.max(first)
+        };
+        let (cols, rows) = (range(lo[0], hi[0], self.lo[0]), range(lo[1], hi[1], self.lo[1]));
         let mut mask = 0u64;
-        for (i, t) in self.grid.dirs.iter().enumerate() {
-            if let Some(d) = ball.depth(*t) {
-                mask |= 1 << i;
-                if d < self.zbuf[i].0 {
-                    self.zbuf[i] = (d, j as u8);
+        for row in rows {
+            for i in cols.clone().map(|col| row * SIDE + col) {
+                if let Some(d) = ball.depth(self.grid.dirs[i]) {
+                    mask |= 1 << i;
+                    if d < self.zbuf[i].0 {
+                        self.zbuf[i] = (d, j as u8);
+                    }
                 }
             }
         }
@@ -296,18 +309,36 @@ pub(super) struct Coverage<'a> {
     walk: NearFirst,
     /// The spheres that meet the current tile's pyramid, nearest first (by `key`, then storage index).
     near: Vec<Near>,
+    /// The current tile.
+    tile: Tile,
+    /// Per pixel of the tile (row-major), the indices into `near` of the spheres whose silhouette's box
+    /// reaches it, in `near`'s order: pixel p's are `bins[starts[p]..starts[p + 1]]`.
+    bins: Vec<u32>,
+    starts: Vec<u32>,
     px: Pixel,
 }
 
 impl<'a> Coverage<'a> {
     pub(super) fn new(scene: &'a Scene) -> Self {
         let view = View::new(&scene.camera_f64);
-        Coverage { scene, view, walk: NearFirst::new(), near: Vec::new(), px: Pixel::new() }
+        let tile = Tile { x0: 0, y0: 0, w: 0, h: 0 };
+        let (bins, starts) = (Vec::new(), Vec::new());
+        Coverage {
+            scene,
+            view,
+            walk: NearFirst::new(),
+            near: Vec::new(),
+            tile,
+            bins,
+            starts,
+            px: Pixel::new(),
+        }
     }
 
     /// Finds the spheres that meet the pyramid of `tile` (the planes through the eye and the tile's edges):
     /// every sphere that reaches into one of its pixels, whichever tile the pixel is seen from.
     pub(super) fn tile(&mut self, tile: Tile) {
+        self.tile = tile;
         let Coverage { scene, view, walk, near, .. } = self;
         near.clear();
         if view.au == 0.0 || view.av == 0.0 {
@@ -357,11 +388,54 @@ impl<'a> Coverage<'a> {
             f64::INFINITY
         };
         walk.walk(scene.geometry.sphere_bvh.as_ref(), spheres.len(), box_key, item_key, visit);
+        self.bin();
+    }
+
+    /// Sorts the tile's spheres into its pixels by their silhouettes' boxes (a pixel is reached when the
+    /// box overlaps its square), keeping their order.
+    fn bin(&mut self) {
+        let t = self.tile;
+        // The tile's columns (or rows) a box [lo, hi] overlaps, as a range relative to `origin`.
+        let span = |lo: f64, hi: f64, origin: u32, len: u32| {
+            let first = (lo - f64::from(origin)).floor().max(0.0).min(f64::from(len)) as u32;
+            let end = (hi - f64::from(origin)).ceil().max(0.0).min(f64::from(len)) as u32;
+            first..end.max(first)
+        };
+        let spans: Vec<_> = self
+            .near
+            .iter()
+            .map(|n| (span(n.lo[0], n.hi[0], t.x0, t.w), span(n.lo[1], n.hi[1], t.y0, t.h)))
+            .collect();
+        let pixels = (t.w * t.h) as usize;
+        self.starts.clear();
+        self.starts.resize(pixels + 1, 0);
+        for (xs, ys) in &spans {
+            for y in ys.clone() {
+                for x in xs.clone() {
+                    self.starts[(y * t.w + x) as usize + 1] += 1;
+                }
+            }
+        }
+        for p in 0..pixels {
+            self.starts[p + 1] += self.starts[p];
+        }
+        self.bins.clear();
+        self.bins.resize(self.starts[pixels] as usize, 0);
+        let mut fill: Vec<u32> = self.starts[..pixels].to_vec();
+        for (i, (xs, ys)) in spans.iter().enumerate() {
+            for y in ys.clone() {
+                for x in xs.clone() {
+                    let p = (y * t.w + x) as usize;
+                    self.bins[fill[p] as usize] = i as u32;
+                    fill[p] += 1;
+                }
+            }
+        }
     }
 
     /// The rays of pixel (x, y), which lies in the tile last given to [`Coverage::tile`], appended to `out`.
     pub(super) fn pixel(&mut self, x: u32, y: u32, out: &mut Vec<CoveragePart>) {
-        let Coverage { view, near, px, .. } = self;
+        let Coverage { view, near, tile, bins, starts, px, .. } = self;
         let view = &*view;
         let (lo, hi) = ([f64::from(x), f64::from(y)], [f64::from(x) + 1.0, f64::from(y) + 1.0]);
         let centre = [lo[0] + 0.5, lo[1] + 0.5];
@@ -373,7 +447,11 @@ impl<'a> Coverage<'a> {
         px.start(lo);
         let corners = [lo, [hi[0], lo[1]], hi, [lo[0], hi[1]]].map(|p| view.dir(p));
         let mut cut = f64::INFINITY;
-        for n in near.iter() {
+        let p = ((y - tile.y0) * tile.w + (x - tile.x0)) as usize;
+        let mine =
+            bins.get(starts.get(p).map_or(0, |&s| s as usize)..starts.get(p + 1).map_or(0, |&s| s as usize));
+        for &i in mine.unwrap_or(&[]) {
+            let n = &near[i as usize];
             if n.key >= cut {
                 break;
             }
@@ -383,6 +461,28 @@ impl<'a> Coverage<'a> {
             let ball = n.ball;
             let holds = corners.map(|t| ball.depth(t));
             let whole = holds.iter().all(Option::is_some);
+            // From the second sphere on, the depth grid comes first: a sphere behind others at every grid
+            // point inside it gets no weight, so it is dropped before its area is computed.
+            let first = px.found.is_empty();
+            let mut owns = false;
+            if !first {
+                let (lo, hi) = (n.lo, n.hi);
+                px.found.push(Found { item: n.item, ball, area: 0.0, centroid: centre, mask: None, lo, hi });
+                let j = px.found.len() - 1;
+                if !px.zbuf_live {
+                    px.zbuf_live = true;
+                    px.zbuf = [(f64::INFINITY, u8::MAX); POINTS];
+                    for k in 0..j {
+                        px.enter(view, k);
+                    }
+                }
+                px.enter(view, j);
+                owns = px.zbuf.iter().any(|z| usize::from(z.1) == j);
+                if !owns && px.found[j].mask != Some(0) {
+                    px.found.pop();
+                    continue;
+                }
+            }
             let (area, centroid) = match (whole, &n.ellipse) {
                 (true, _) => (1.0, centre),
                 (false, Some(e)) => {
@@ -402,11 +502,19 @@ impl<'a> Coverage<'a> {
                     (count / POINTS as f64, centroid)
                 }
             };
-            if area <= 0.0 {
+            if first {
+                if area <= 0.0 {
+                    continue;
+                }
+                let (lo, hi) = (n.lo, n.hi);
+                px.found.push(Found { item: n.item, ball, area, centroid, mask: None, lo, hi });
+            } else if area <= 0.0 && !owns {
+                px.found.pop();
                 continue;
+            } else {
+                let f = px.found.last_mut().expect("pushed above");
+                (f.area, f.centroid) = (area.max(0.0), centroid);
             }
-            px.found.push(Found { item: n.item, ball, area, centroid, mask: None });
-            let j = px.found.len() - 1;
             if whole {
                 // Nearer than anything whose nearest point lies beyond the farthest of its corners (the
                 // depth grows with the angle from the centre's direction, largest at a corner).
@@ -416,15 +524,7 @@ impl<'a> Coverage<'a> {
                 };
                 cut = cut.min(far);
             }
-            if px.found.len() >= 2 {
-                if !px.zbuf_live {
-                    px.zbuf_live = true;
-                    for k in 0..px.found.len() {
-                        px.enter(view, k);
-                    }
-                } else {
-                    px.enter(view, j);
-                }
+            if px.zbuf_live {
                 let area_sum: f64 = px.found.iter().map(|f| f.area).sum();
                 if area_sum >= 1.0 && px.zbuf.iter().all(|z| z.1 != u8::MAX) {
                     cut = cut.min(px.zbuf.iter().fold(0.0f64, |m, z| m.max(z.0)));
@@ -537,33 +637,26 @@ fn closest(points: &[[f64; 2]; POINTS], mask: u64, p: [f64; 2]) -> Option<[f64; 
 }
 
 /// The point the remainder's ray goes through: `target` (rounded to f32, as the ray will be) when it lies
-/// outside every silhouette by [`CLEARANCE`], else the grid point nearest it that does, else the point of
-/// the two that lies farthest outside.
+/// outside every silhouette by [`CLEARANCE`], else the grid point nearest it that does among those no
+/// silhouette holds, else the nearest of those, else `target` (every grid point is covered: the remainder is
+/// what the grid cannot see).
 fn remainder_point(px: &mut Pixel, view: &View, target: [f64; 2]) -> [f64; 2] {
     let rounded = |p: [f64; 2]| [f64::from(p[0] as f32), f64::from(p[1] as f32)];
-    let clearance = |px: &Pixel, p: [f64; 2]| {
+    let clear = |px: &Pixel, p: [f64; 2]| {
         let t = view.dir(p);
-        px.found.iter().map(|f| f.ball.clearance(t)).fold(f64::INFINITY, f64::min)
+        let len = dot(t, t).sqrt();
+        px.found.iter().all(|f| f.ball.clear_of(t, len))
     };
     let target = rounded(target);
-    if clearance(px, target) >= CLEARANCE {
+    if clear(px, target) {
         return target;
     }
+    let covered = px.found.iter().fold(0u64, |m, f| m | f.mask.unwrap_or(0));
     let points = px.grid(view).points.map(rounded);
     let d = |q: [f64; 2]| (q[0] - target[0]).powi(2) + (q[1] - target[1]).powi(2);
-    let mut order: Vec<usize> = (0..POINTS).collect();
-    order.sort_by(|&a, &b| d(points[a]).total_cmp(&d(points[b])).then(a.cmp(&b)));
-    let mut best = (clearance(px, target), target);
-    for k in order {
-        let c = clearance(px, points[k]);
-        if c >= CLEARANCE {
-            return points[k];
-        }
-        if c > best.0 {
-            best = (c, points[k]);
-        }
-    }
-    best.1
+    let mut free: Vec<usize> = (0..POINTS).filter(|&k| covered >> k & 1 == 0).collect();
+    free.sort_unstable_by(|&a, &b| d(points[a]).total_cmp(&d(points[b])).then(a.cmp(&b)));
+    free.iter().find(|&&k| clear(px, points[k])).or(free.first()).map_or(target, |&k| points[k])
 }
 
 /// The parts of pixel (x, y) of `scene` under the coverage pattern: the rays its value is the weighted sum
