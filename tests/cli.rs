@@ -587,7 +587,8 @@ fn the_cpu_that_built_the_binary_passes_the_check() {
 }
 
 /// `converge` measures every method against a reference and writes the CSV (the columns, one line
-/// per run, errors falling as samples grow) and an SVG plot; a second run reuses the cached reference, and
+/// per run, errors falling as samples grow, coverage's single run below one sample's on the edges) and an
+/// SVG plot; a second run reuses the cached reference, and
 /// an unknown method is an argument error before anything renders.
 #[test]
 fn converge_writes_csv_and_plot_and_reuses_its_reference() {
@@ -610,8 +611,9 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("method,spp,seconds,rays,rmse,rmse_edges,psnr"));
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(String::from).collect()).collect();
-    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture once.
-    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 1, "{text}");
+    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture and coverage
+    // once.
+    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 1 + 1, "{text}");
     let rmse = |method: &str, spp: f64| -> f64 {
         let at = |r: &&Vec<String>| r[0] == method && r[1].parse::<f64>().unwrap() == spp;
         rows.iter().find(at).map(|r| r[4].parse().unwrap()).unwrap()
@@ -625,8 +627,13 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     for method in ["grid", "stratified", "r2"] {
         assert!(rmse(method, 16.0) < 0.6 * rmse(method, 1.0), "{method}: {text}");
     }
+    // Coverage has one setting, about one ray a pixel: on the edges it beats one sample per pixel.
+    let coverage = rows.iter().find(|r| r[0] == "coverage").unwrap();
+    let edges = |r: &Vec<String>| r[5].parse::<f64>().unwrap();
+    let one = rows.iter().find(|r| r[0] == "grid" && r[1].parse::<f64>().unwrap() == 1.0).unwrap();
+    assert!(edges(coverage) < edges(one), "{text}");
     let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 5);
+    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 6);
     assert!(stderr(&first).contains("stratified 8×8"), "{}", stderr(&first));
     let second = run(&[]);
     assert!(second.status.success() && stderr(&second).contains("(cached)"), "{}", stderr(&second));

@@ -341,3 +341,59 @@ fn adaptive_sampling_is_deterministic_and_splits_only_at_edges() {
         err(&reference.image)
     );
 }
+
+/// The coverage pattern gives the same bits and ray counts at every width and thread count on every scene
+/// in scenes/ and scenes/stress/ (spheres with polygons, planes, shapes and cones; ground spheres crossing
+/// the eye's plane; reflections and refractions): a pixel's parts depend only on the pixel, and each part's
+/// ray is traced with the bits of its one-lane trace.
+#[test]
+fn coverage_is_identical_at_every_width_and_thread_count() {
+    use bareray::scene::desc::Pattern;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes = scene_files(&root);
+    scenes.extend(scene_files(&root.join("stress")));
+    scenes.sort();
+    let bits =
+        |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
+    for path in &scenes {
+        let mut desc = bareray::io::load(path).unwrap();
+        (desc.camera.width, desc.camera.height) = (72, 40);
+        desc.render.pattern = Pattern::Coverage;
+        let scene = Scene::compile(&desc).unwrap();
+        let reference = render_lanes(&scene, 1, &thread_pool(Some(1)).unwrap(), &ProgressBar::hidden());
+        let pixels = 72 * 40;
+        assert!(reference.counts.primary >= pixels, "{path:?}: at least one ray a pixel");
+        for (lanes, threads) in [(1, 2), (4, 1), (8, 2), (16, 1), (16, 2)] {
+            let r = render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
+            assert_eq!(r.counts, reference.counts, "{path:?} counts at lanes {lanes}, threads {threads}");
+            assert!(
+                bits(&r.image) == bits(&reference.image),
+                "{path:?} differs at lanes {lanes}, threads {threads}"
+            );
+        }
+    }
+}
+
+/// The per-pixel patterns on a scene with a sphere BVH, where camera packets carry their block's pyramid
+/// for frustum culling: the pyramid must enclose every lane's jittered position, not only the first and
+/// last lane's, or nodes a lane needs are culled and the image depends on the packet width.
+#[test]
+fn per_pixel_patterns_are_identical_at_every_width_with_frustum_culling() {
+    use bareray::scene::desc::Pattern;
+    let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/field.toml");
+    let mut desc = bareray::io::load(&path).unwrap();
+    (desc.camera.width, desc.camera.height) = (128, 72);
+    let bits =
+        |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
+    for pattern in [Pattern::Stratified(3), Pattern::R2(5)] {
+        desc.render.pattern = pattern;
+        let scene = Scene::compile(&desc).unwrap();
+        assert!(scene.geometry.culls_by_pyramid());
+        let pool = thread_pool(Some(2)).unwrap();
+        let reference = bits(&render_lanes(&scene, 1, &pool, &ProgressBar::hidden()).image);
+        for lanes in [4, 8, 16] {
+            let image = render_lanes(&scene, lanes, &pool, &ProgressBar::hidden()).image;
+            assert!(bits(&image) == reference, "{pattern:?} at {lanes} lanes");
+        }
+    }
+}

@@ -312,6 +312,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         (false, Pattern::Adaptive { threshold, depth }) => {
             (None, format!("adaptive {threshold} to depth {depth}"))
         }
+        (false, Pattern::Coverage) => (None, "coverage".to_owned()),
     };
     let max_depth = desc.render.max_depth;
     let parse_s = clock.elapsed().as_secs_f64();

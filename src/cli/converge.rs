@@ -31,7 +31,7 @@ bareray converge scenes/balls3.nff --methods grid,r2 --max-spp 16"
 pub struct ConvergeArgs {
     /// Scene file (.toml, .nff or .xyzr).
     pub scene: PathBuf,
-    /// Methods to compare, comma-separated: grid, stratified, r2, lecture.
+    /// Methods to compare, comma-separated: grid, stratified, r2, adaptive, lecture, coverage.
     #[arg(long, value_delimiter = ',', default_values_t = METHODS.map(String::from), value_parser = parse_method)]
     pub methods: Vec<String>,
     /// Largest samples per pixel of a method's runs.

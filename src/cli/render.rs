@@ -54,7 +54,9 @@ pub struct RenderArgs {
     /// stratum centres), `stratified:N` (one jittered sample per stratum of a √N×√N grid), `r2:N` (N points
     /// of the R2 low-discrepancy sequence, rotated per pixel), `lecture` (the 9-point half-pixel grid shared
     /// with the neighbours), `adaptive[:THRESHOLD,DEPTH]` (Whitted: pixel corners shared, squares split where
-    /// their corners differ by more than THRESHOLD in a channel, down to DEPTH levels; default 0.1,2). Jitter and rotation are seeded by the pixel, so every width and thread count
+    /// their corners differ by more than THRESHOLD in a channel, down to DEPTH levels; default 0.1,2),
+    /// `coverage` (prefiltering: each sphere's exact covered area of the pixel, one ray per covered part and
+    /// one for the rest). Jitter and rotation are seeded by the pixel, so every width and thread count
     /// gives the same image.
     #[arg(long, value_parser = super::values::parse_aa)]
     pub aa: Option<Pattern>,
@@ -495,6 +497,7 @@ fn pattern_name(pattern: Pattern) -> String {
         Pattern::Adaptive { threshold, depth } => {
             format!("adaptive: corners shared, squares split where they differ by > {threshold}, to depth {depth}")
         }
+        Pattern::Coverage => "coverage: spheres' covered areas per pixel, one ray per part".to_owned(),
     }
 }
 

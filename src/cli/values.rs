@@ -24,7 +24,7 @@ impl From<TransferArg> for Transfer {
 }
 
 /// Parses `--aa METHOD[:N]`: `grid:N` and `stratified:N` (N a square number of samples per pixel), `r2:N`
-/// (any N from 1), `lecture` (the half-pixel pattern, no N).
+/// (any N from 1), `lecture` (the half-pixel pattern, no N), `adaptive[:T,D]`, `coverage` (no N).
 pub fn parse_aa(s: &str) -> Result<Pattern, String> {
     let (method, count) = match s.trim().split_once(':') {
         Some((m, n)) => (m, Some(n)),
@@ -50,7 +50,11 @@ pub fn parse_aa(s: &str) -> Result<Pattern, String> {
         "adaptive" => adaptive(count),
         "lecture" if count.is_none() => Ok(Pattern::HalfPixel),
         "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
-        _ => Err(format!("unknown method `{method}`: grid:N, stratified:N, r2:N, adaptive[:T,D] or lecture")),
+        "coverage" if count.is_none() => Ok(Pattern::Coverage),
+        "coverage" => Err("`coverage` computes each pixel's covered areas and takes no count".to_owned()),
+        _ => Err(format!(
+            "unknown method `{method}`: grid:N, stratified:N, r2:N, adaptive[:T,D], lecture or coverage"
+        )),
     }
 }
 
@@ -160,6 +164,8 @@ mod tests {
         assert_eq!(parse_aa("stratified:9"), Ok(Pattern::Stratified(3)));
         assert_eq!(parse_aa("r2:5"), Ok(Pattern::R2(5)));
         assert_eq!(parse_aa("lecture"), Ok(Pattern::HalfPixel));
+        assert_eq!(parse_aa("coverage"), Ok(Pattern::Coverage));
+        assert!(parse_aa("coverage:4").unwrap_err().contains("takes no count"));
         assert_eq!(parse_aa("adaptive"), Ok(Pattern::Adaptive { threshold: 0.1, depth: 2 }));
         assert_eq!(parse_aa("adaptive:0.05,3"), Ok(Pattern::Adaptive { threshold: 0.05, depth: 3 }));
         for bad in [

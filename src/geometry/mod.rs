@@ -2,6 +2,7 @@
 //! instance is the scalar reference path, the f64 instance the accuracy oracle.
 
 pub mod cone;
+mod ellipse;
 mod packet;
 mod plane;
 pub mod polygon;
@@ -11,6 +12,7 @@ mod sphere;
 mod spheres;
 
 pub use cone::{intersect_cone, rehit_cone, Cone, Cones};
+pub use ellipse::{Ellipse, Part};
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
 pub use polygon::{intersect_triangle, stays_off_plane};

@@ -85,6 +85,7 @@ enum PatternToml {
     HalfPixel,
     Stratified,
     R2,
+    Coverage,
 }
 
 #[derive(Deserialize, Clone, Copy)]
@@ -433,6 +434,10 @@ impl Reader<'_> {
                 return Err(self.err(s.span(), "the R2 pattern takes at least 1 sample per pixel"));
             }
             (PatternToml::R2, Some(s)) => Pattern::R2(*s.get_ref()),
+            (PatternToml::Coverage, Some(s)) => {
+                return Err(self.err(s.span(), "the coverage pattern computes areas and takes no samples"));
+            }
+            (PatternToml::Coverage, None) => Pattern::Coverage,
         };
         let filter = match (r.filter, &r.filter_radius) {
             (None, None) => None,
@@ -605,6 +610,15 @@ mod tests {
         assert_eq!((c.base, c.base_radius, c.apex, c.apex_radius), (DVec3::ZERO, 1.0, DVec3::Y * 2.0, 0.0));
         assert_eq!(d.materials[c.material as usize].color, Rgb::new(1.0, 0.0, 0.0));
         assert_eq!(d.cones[1].material, 0);
+    }
+
+    #[test]
+    fn the_coverage_pattern_takes_no_samples() {
+        let d = parse_str("[render]\npattern = \"coverage\"\n").unwrap();
+        assert_eq!(d.render.pattern, Pattern::Coverage);
+        let e = parse_str("[render]\npattern = \"coverage\"\nsamples = 4\n").unwrap_err();
+        assert_eq!((e.line, e.column), (3, 11), "{e}");
+        assert!(e.message.contains("takes no samples"), "{e}");
     }
 
     #[test]

@@ -19,6 +19,7 @@ use crate::shade::RayCounts;
 use crate::simd::Lanes;
 
 mod bands;
+mod coverage;
 mod primary;
 mod tile;
 
@@ -26,6 +27,7 @@ pub use bands::{
     band_rows, render_window, render_window_lanes, trace_band_lanes, Bands, RowStage, Traced, Window,
 };
 use bands::{trace_rows, TileCounter};
+pub use coverage::{coverage_parts, CoveragePart};
 
 pub(crate) use primary::fnv1a;
 pub use primary::{
@@ -279,10 +281,18 @@ pub fn for_each_packet_at<F: Lanes>(
             } else {
                 F::mask_from_fn(|i| (i as u32 % bw) < b.w && (i as u32 / bw) < b.h)
             };
-            // The block's first and last sample positions, taken from the lanes themselves.
+            // The block's extreme sample positions, taken from the lanes themselves: the first and last
+            // lanes for a shared offset, every lane for per-pixel offsets (a jittered lane 0 need not be the
+            // leftmost of its block).
             let (last_column, last_row) = ((bw - 1) as usize, ((bh - 1) * bw) as usize);
+            let range = |v: F, first: usize, last: usize| match offsets {
+                Offsets::Shared(..) => [v.lane(first), v.lane(last)],
+                Offsets::PerPixel(_) => (0..F::K)
+                    .map(|i| v.lane(i))
+                    .fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], c| [lo.min(c), hi.max(c)]),
+            };
             let pyramid = (pyramids && F::K > 1)
-                .then(|| camera.pyramid([sx.lane(0), sx.lane(last_column)], [sy.lane(0), sy.lane(last_row)]))
+                .then(|| camera.pyramid(range(sx, 0, last_column), range(sy, 0, last_row)))
                 .flatten();
             let rays = RayPacket {
                 pyramid,

@@ -1,6 +1,6 @@
 //! One tile's pixels under each sampling pattern: the shared-offset and per-pixel passes, the reconstruction
-//! filters (with an apron of neighbouring pixels traced again), the lecture's half-pixel grid and Whitted's
-//! adaptive subdivision. Every pixel's value depends only on its own samples (and, under a filter, its
+//! filters (with an apron of neighbouring pixels traced again), the lecture's half-pixel grid, Whitted's
+//! adaptive subdivision and the coverage pattern (`coverage.rs`). Every pixel's value depends only on its own samples (and, under a filter, its
 //! neighbours'), never on where the tile starts, so any cut of the image into tiles gives the same bits.
 
 use crate::camera::Camera;
@@ -23,6 +23,7 @@ pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: 
         Pattern::Adaptive { threshold, depth } => {
             return adaptive_tile(camera, tracer, tile, threshold, depth)
         }
+        Pattern::Coverage => return super::coverage::coverage_tile(scene, tracer, tile),
         Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) => {}
     }
     if let Some(filter) = scene.render.filter {
@@ -61,14 +62,15 @@ fn grid_of(pattern: Pattern) -> Vec<(f32, f32)> {
 }
 
 /// Sample `k`'s position in pixel `(x, y)` (image column and row) under a per-pixel or shared pattern, as
-/// [`trace_tile`] traces it (`grid` from [`grid_of`]). Not for the half-pixel and adaptive patterns.
+/// [`trace_tile`] traces it (`grid` from [`grid_of`]). Not for the half-pixel, adaptive and coverage
+/// patterns.
 fn sample_offset(pattern: Pattern, grid: &[(f32, f32)], k: u32, x: u32, y: u32) -> (f32, f32) {
     match pattern {
         Pattern::Grid(_) => grid[k as usize],
         Pattern::Stratified(n) => sequence::stratified(n, x, y, k),
         Pattern::R2(_) => sequence::r2(x, y, k),
-        Pattern::HalfPixel | Pattern::Adaptive { .. } => {
-            unreachable!("the half-pixel and adaptive patterns have their own reconstruction")
+        Pattern::HalfPixel | Pattern::Adaptive { .. } | Pattern::Coverage => {
+            unreachable!("the half-pixel, adaptive and coverage patterns have their own reconstruction")
         }
     }
 }

@@ -93,6 +93,12 @@ pub enum Pattern {
         /// Levels of splitting below the pixel (a square at depth d is 2^−d pixels wide).
         depth: u32,
     },
+    /// The lecture's prefiltering: the exact area of the pixel each sphere's silhouette covers (an ellipse
+    /// under perspective), the shares shaded by one ray each through their centroids and the uncovered rest
+    /// by one more. Exact for the weights where silhouettes do not overlap inside a pixel; overlaps, other
+    /// primitives, shading across a part and secondary rays are approximated (`render/coverage.rs` says
+    /// how). One ray in a pixel covered by one sphere or by none. Reconstruction filters do not apply.
+    Coverage,
 }
 
 impl Pattern {
@@ -102,8 +108,8 @@ impl Pattern {
             Pattern::Grid(n) | Pattern::Stratified(n) => f64::from(n * n),
             Pattern::R2(count) => f64::from(count),
             Pattern::HalfPixel => 4.0,
-            // At least the shared corners; how many more depends on the image.
-            Pattern::Adaptive { .. } => 1.0,
+            // At least the shared corners, or one ray a pixel; how many more depends on the image.
+            Pattern::Adaptive { .. } | Pattern::Coverage => 1.0,
         }
     }
 }

@@ -143,6 +143,12 @@ fn tile_bytes(pattern: Pattern, filter: Option<Filter>) -> u64 {
             return side * side * (rgb + 4) * 2;
         }
         Pattern::HalfPixel => (2 * tile + 1) * (2 * tile + 1),
+        // One ray a pixel, one more per sphere reaching into it (at most 64) and the remainder's: the list
+        // of parts, and their colours as they are summed.
+        Pattern::Coverage => {
+            let part = std::mem::size_of::<crate::render::CoveragePart>() as u64 + 8;
+            return tile * tile * 66 * part + (1 << 20);
+        }
         _ => {
             let side = tile + 2 * u64::from(filter.map_or(0, |f| f.apron()));
             side * side * pattern.rays_per_pixel() as u64
