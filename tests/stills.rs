@@ -78,15 +78,18 @@ fn streamed_files_are_the_whole_image_paths_bytes() {
 
 /// Regions cut across tiles and packet blocks, rendered apart (through the command line, with --region and
 /// --crop) and merged, are the full render's file byte for byte, for 8- and 16-bit PNG, EXR and PPM, on a
-/// scene with the lecture's 3×3 postfilter (whose neighbours cross the cuts) and one with a Mitchell filter.
+/// scene with the lecture's 3×3 postfilter (whose neighbours cross the cuts), one with a Mitchell filter,
+/// and a sphere field under the coverage pattern (whose per-tile sphere lists start elsewhere in a region).
 #[test]
 fn regions_merge_into_the_full_image_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
     let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
     let root = Path::new(env!("CARGO_MANIFEST_DIR"));
-    for (scene, extra) in
-        [("scenes/lecture.toml", &[][..]), ("scenes/whitted.toml", &["--filter", "mitchell"][..])]
-    {
+    for (scene, extra) in [
+        ("scenes/lecture.toml", &[][..]),
+        ("scenes/whitted.toml", &["--filter", "mitchell"][..]),
+        ("scenes/field.toml", &["--aa", "coverage"][..]),
+    ] {
         let scene = root.join(scene);
         for (ext, depth) in [("png", "8"), ("png", "16"), ("exr", "8"), ("ppm", "8")] {
             let render = |out: &str, region: &[&str]| {
