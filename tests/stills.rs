@@ -57,6 +57,11 @@ fn streamed_files_are_the_whole_image_paths_bytes() {
     cases.push(("whitted, mitchell".into(), scene_at(&whitted, 61, 47, |d| d.render.filter = Some(filter))));
     let adaptive = Pattern::Adaptive { threshold: 0.05, depth: 2 };
     cases.push(("whitted, adaptive".into(), scene_at(&whitted, 61, 47, |d| d.render.pattern = adaptive)));
+    let postfilter = bareray::scene::desc::PostFilter::Lecture3x3;
+    cases.push((
+        "whitted, postfilter".into(),
+        scene_at(&whitted, 61, 47, |d| d.render.postfilter = postfilter),
+    ));
     cases.push((
         "whitted, lecture".into(),
         scene_at(&whitted, 61, 47, |d| d.render.pattern = Pattern::HalfPixel),
@@ -377,4 +382,32 @@ fn tiff_and_jpeg_hold_the_pngs_values() {
     assert_eq!(run.status.code(), Some(1));
     assert!(stderr(&run).contains("at most 65535 pixels a side"), "{}", stderr(&run));
     assert!(!dir.path().join("f.jpg").exists());
+}
+
+/// `--postfilter lecture` renders what the scene key `postfilter = "lecture-3x3"` renders, and `--postfilter
+/// none` takes a scene's postfilter away (what the scene without the key renders).
+#[test]
+fn postfilter_flag_is_the_scene_key() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    let root = Path::new(env!("CARGO_MANIFEST_DIR"));
+    let whitted = std::fs::read_to_string(root.join("scenes/whitted.toml")).unwrap();
+    let mut keyed: toml::Table = whitted.parse().unwrap();
+    keyed["render"].as_table_mut().unwrap().insert("postfilter".into(), "lecture-3x3".into());
+    std::fs::write(p("keyed.toml"), toml::to_string(&keyed).unwrap()).unwrap();
+    let run = |scene: &str, out: &str, more: &[&str]| {
+        let args =
+            [&["render", scene, "-o", out, "--width", "48", "--height", "36", "-q"][..], more].concat();
+        assert!(bareray(&args).status.success(), "{args:?}");
+        // Pixels, not bytes: the PNG names its scene file, which differs.
+        image::open(out).unwrap().into_rgb8().into_raw()
+    };
+    let whitted = root.join("scenes/whitted.toml");
+    let flag = run(whitted.to_str().unwrap(), &p("flag.png"), &["--postfilter", "lecture"]);
+    let key = run(&p("keyed.toml"), &p("key.png"), &[]);
+    let plain = run(whitted.to_str().unwrap(), &p("plain.png"), &[]);
+    assert!(flag == key, "--postfilter lecture differs from the scene key");
+    assert!(flag != plain, "--postfilter lecture changed nothing");
+    let none = run(&p("keyed.toml"), &p("none.png"), &["--postfilter", "none"]);
+    assert!(none == plain, "--postfilter none left the scene's postfilter on");
 }

@@ -15,7 +15,7 @@ use crate::compile::{CompileOptions, Scene};
 use crate::io::toml;
 use crate::output::{BitDepth, Format, WriteOptions};
 use crate::render::{Traced, Window, LANE_CHOICES};
-use crate::scene::desc::Pattern;
+use crate::scene::desc::{Pattern, PostFilter};
 use crate::scene::SceneDesc;
 use crate::still::{self, Job};
 
@@ -65,6 +65,10 @@ pub struct RenderArgs {
     /// pixel whose centre is within the radius; without a filter a pixel averages its own samples.
     #[arg(long, value_parser = super::values::parse_filter)]
     pub filter: Option<crate::scene::desc::Filter>,
+    /// Postfilter over the finished image, overriding the scene: `lecture` or `lecture-3x3` (the lecture's 3×3 kernel, ½ at
+    /// the centre and 1/16 at each neighbour, renormalised at the border) or `none`.
+    #[arg(long, value_parser = ["none", "lecture", "lecture-3x3"])]
+    pub postfilter: Option<String>,
     /// Bits per channel of a PNG or TIFF: 8 or 16 (16 keeps the shading's gradients without banding).
     #[arg(long, default_value_t = 8, value_parser = parse_bit_depth)]
     pub bit_depth: u8,
@@ -603,6 +607,11 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
     }
     if let Some(filter) = args.filter {
         desc.render.filter = Some(filter);
+    }
+    match args.postfilter.as_deref() {
+        Some("lecture") => desc.render.postfilter = PostFilter::Lecture3x3,
+        Some(_) => desc.render.postfilter = PostFilter::None,
+        None => {}
     }
     if let Some(d) = args.depth {
         desc.render.max_depth = d;
