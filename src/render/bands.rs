@@ -10,7 +10,6 @@ use std::sync::atomic::{AtomicU64, Ordering};
 use std::time::Instant;
 
 use rayon::prelude::*;
-use wide::{f32x16, f32x4, f32x8};
 
 use crate::accel::{take_work, Work};
 use crate::compile::Scene;
@@ -21,7 +20,7 @@ use crate::scene::desc::PostFilter;
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
 
-use super::{tile_rows, tiles, trace_tile, Progress, Tile, LANE_CHOICES, TILE};
+use super::{tile_rows, tiles, trace_tile, Progress, Tile, TILE};
 
 /// A rectangle of the image in pixels: columns `x0..x1`, rows `y0..y1`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -201,13 +200,7 @@ pub fn trace_band_lanes(
     let each = EachTile(tile_done);
     let counter = TileCounter { progress: &each, done: AtomicU64::new(0), total: bands.tiles() };
     let (columns, rows) = (bands.traced.x0..bands.traced.x1, bands.rows_of(i));
-    match lanes {
-        1 => trace_rows::<f32>(scene, pool, columns, rows, &counter),
-        4 => trace_rows::<f32x4>(scene, pool, columns, rows, &counter),
-        8 => trace_rows::<f32x8>(scene, pool, columns, rows, &counter),
-        16 => trace_rows::<f32x16>(scene, pool, columns, rows, &counter),
-        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
-    }
+    with_lanes!(lanes, F => trace_rows::<F>(scene, pool, columns, rows, &counter))
 }
 
 /// A [`Progress`] that only counts: a call per finished tile.
@@ -230,13 +223,7 @@ pub fn render_window_lanes<E>(
     band: u32,
     emit: &mut dyn FnMut(Vec<Rgb>) -> Result<(), E>,
 ) -> Result<Traced, E> {
-    match lanes {
-        1 => render_window::<f32, E>(scene, pool, progress, window, band, emit),
-        4 => render_window::<f32x4, E>(scene, pool, progress, window, band, emit),
-        8 => render_window::<f32x8, E>(scene, pool, progress, window, band, emit),
-        16 => render_window::<f32x16, E>(scene, pool, progress, window, band, emit),
-        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
-    }
+    with_lanes!(lanes, F => render_window::<F, E>(scene, pool, progress, window, band, emit))
 }
 
 /// Renders `window` of the scene's image band by band (about `band` rows each, whole tile rows), handing

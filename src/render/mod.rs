@@ -5,8 +5,6 @@
 
 use std::time::Instant;
 
-use wide::{f32x16, f32x4, f32x8};
-
 use crate::accel::Work;
 use crate::camera::Camera;
 use crate::compile::Scene;
@@ -17,6 +15,33 @@ use crate::sample::lecture_3x3;
 use crate::scene::desc::PostFilter;
 use crate::shade::RayCounts;
 use crate::simd::Lanes;
+
+/// Evaluates `$call` with the type name `$F` bound to the lane type of the run-time packet width `$lanes`
+/// (1: `f32`, the scalar reference path; 4, 8, 16: `wide`'s `f32x4`, `f32x8`, `f32x16`); panics on another
+/// width. The one place a width chosen at run time becomes a type parameter.
+macro_rules! with_lanes {
+    ($lanes:expr, $F:ident => $call:expr) => {
+        match $lanes {
+            1 => {
+                type $F = f32;
+                $call
+            }
+            4 => {
+                type $F = wide::f32x4;
+                $call
+            }
+            8 => {
+                type $F = wide::f32x8;
+                $call
+            }
+            16 => {
+                type $F = wide::f32x16;
+                $call
+            }
+            k => panic!("unsupported packet width {k}: choose one of {:?}", $crate::render::LANE_CHOICES),
+        }
+    };
+}
 
 mod bands;
 mod coverage;
@@ -169,13 +194,7 @@ pub fn render_lanes(
     pool: &rayon::ThreadPool,
     progress: &dyn Progress,
 ) -> Rendered {
-    match lanes {
-        1 => render::<f32>(scene, pool, progress),
-        4 => render::<f32x4>(scene, pool, progress),
-        8 => render::<f32x8>(scene, pool, progress),
-        16 => render::<f32x16>(scene, pool, progress),
-        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
-    }
+    with_lanes!(lanes, F => render::<F>(scene, pool, progress))
 }
 
 /// Renders `scene` with packets of `F::K` rays on the threads of `pool`, reporting each finished tile to

@@ -4,12 +4,11 @@
 use std::time::Instant;
 
 use rayon::prelude::*;
-use wide::{f32x16, f32x4, f32x8};
 
 use crate::compile::Scene;
 use crate::simd::Lanes;
 
-use super::{for_each_packet, tiles, Tile, Window, LANE_CHOICES, TILE};
+use super::{for_each_packet, tiles, Tile, Window, TILE};
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
 #[derive(Clone, Debug)]
@@ -81,13 +80,7 @@ pub fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool)
 
 /// [`trace_primary`] at a packet width chosen at run time.
 pub fn trace_primary_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
-    match lanes {
-        1 => trace_primary::<f32>(scene, pool, hits),
-        4 => trace_primary::<f32x4>(scene, pool, hits),
-        8 => trace_primary::<f32x8>(scene, pool, hits),
-        16 => trace_primary::<f32x16>(scene, pool, hits),
-        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
-    }
+    with_lanes!(lanes, F => trace_primary::<F>(scene, pool, hits))
 }
 
 /// Traces one camera ray per pixel centre in packets of `F::K` on `pool` and writes the closest hits into
@@ -150,12 +143,6 @@ pub fn primary_window_lanes(
     window: Window,
 ) -> PrimaryHits {
     let mut hits = PrimaryHits::new(window.width(), window.height());
-    match lanes {
-        1 => trace_primary_window::<f32>(scene, pool, window, &mut hits),
-        4 => trace_primary_window::<f32x4>(scene, pool, window, &mut hits),
-        8 => trace_primary_window::<f32x8>(scene, pool, window, &mut hits),
-        16 => trace_primary_window::<f32x16>(scene, pool, window, &mut hits),
-        _ => panic!("unsupported packet width {lanes}: choose one of {LANE_CHOICES:?}"),
-    }
+    with_lanes!(lanes, F => trace_primary_window::<F>(scene, pool, window, &mut hits));
     hits
 }
