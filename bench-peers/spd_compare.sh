@@ -38,8 +38,12 @@
 #    height_field maps h onto y in [-3, 3] (libpr3.c). Its POV-Ray image is not a reference for the NFF.
 #    A scene that fails in either tracer gets status pov_failed / bareray_failed / both_failed and the first
 #    line of the error.
+#    NFF carries no ambient coefficient; SPD's generators pass one to their POV-Ray output. With SPD_AMBIENT=1
+#    bareray gets the generator's values through `--ambient` (spd_ambient below, read from each generator's
+#    lib_output_color calls, in the order of the NFF's `f` lines); without it, NFF's default 0.1. lattice
+#    mixes 0 and 0.1 over 81 fills and keeps the default.
 # env: SPD_DIR (required), SPD_S=2 (generator size factor, setup), SCENES="balls gears ..." (subset),
-#      THREADS=2, TOL=3, OUT=$SPD_DIR/out, NFF2POV=1
+#      THREADS=2, TOL=3, OUT=$SPD_DIR/out, NFF2POV=1, SPD_AMBIENT=0
 # Output: one line per scene on stdout and in $OUT/results.txt, the markdown table $OUT/results.md,
 #         images $OUT/NAME.pov.png, NAME.bareray.png, NAME.side.png, logs NAME.povray.log, NAME.bareray.log.
 set -euo pipefail
@@ -76,6 +80,16 @@ EOF
   exit 0
 fi
 
+# The ambient coefficients SPD's generators give their materials (0.1: jacks and sombrero; 0.2: balls' floor).
+spd_ambient() {
+  case "$1" in
+    balls) echo 0.2,0 ;;
+    jacks|sombrero) echo 0.1 ;;
+    lattice) ;;
+    *) echo 0 ;;
+  esac
+}
+
 bin="$(cd "$(dirname "$1")" && pwd)/$(basename "$1")"
 size="${2:-256}"; threads="${THREADS:-2}"; tol="${TOL:-3}"
 out="${OUT:-$SPD_DIR/out}"; mkdir -p "$out"
@@ -85,7 +99,7 @@ secs() { printf "%.3f" "$(echo "$2 - $1" | bc)"; }
 {
   echo "# $(date -u +%Y-%m-%dT%H:%M:%SZ)  nproc $(nproc)  $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
   echo "# bareray: $bin  size ${size}x$size  threads $threads  tolerance $tol  SPD_DIR $SPD_DIR"
-  echo "# povray +W$size +H$size -A +WT$threads -D +FN File_Gamma=1.0 Display_Gamma=1.0 on SPD's -r 4 output with #version 3.7 and assumed_gamma 1.0 in front; bareray render --spp 1 --depth 5"
+  echo "# povray +W$size +H$size -A +WT$threads -D +FN File_Gamma=1.0 Display_Gamma=1.0 on SPD's -r 4 output with #version 3.7 and assumed_gamma 1.0 in front; bareray render --spp 1 --depth 5, SPD_AMBIENT=${SPD_AMBIENT:-0}"
 } > "$res"
 cat "$res"
 for s in $scenes; do
@@ -96,6 +110,8 @@ for s in $scenes; do
   ents=$(awk '$1 ~ /^(s|p|pp|c)$/ { n[$1]++ } END { for (k in n) printf "%s:%d,", k, n[k] }' "$d/$s.nff")
   { printf '#version 3.7;\nglobal_settings { assumed_gamma 1.0 }\n'; cat "$d/$s.pov"; } > "$out/$s.pov"
   pov_err=""; br_err=""
+  amb=(); a="$(spd_ambient "$s")"
+  [ "${SPD_AMBIENT:-0}" = 1 ] && [ -n "$a" ] && amb=(--ambient "$a")
   t0=$(now)
   if ! povray +I"$out/$s.pov" +O"$out/$s.pov.png" +W"$size" +H"$size" -A +WT"$threads" -D +FN \
       File_Gamma=1.0 Display_Gamma=1.0 +L"$d" >"$out/$s.povray.log" 2>&1; then
@@ -103,7 +119,7 @@ for s in $scenes; do
   fi
   t1=$(now)
   if ! "$bin" render "$d/$s.nff" -o "$out/$s.bareray.png" --width "$size" --height "$size" --spp 1 --depth 5 \
-      --threads "$threads" -q >"$out/$s.bareray.log" 2>&1; then
+      --threads "$threads" "${amb[@]}" -q >"$out/$s.bareray.log" 2>&1; then
     br_err=$(grep -m1 -v '^\s*$' "$out/$s.bareray.log" || echo "exit status non-zero, no message")
   fi
   t2=$(now)

@@ -726,3 +726,53 @@ fn sixteen_bit_png_and_radiance_hdr_match_the_other_formats() {
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
     assert!(!out("e.ppm").exists());
 }
+
+/// `--ambient`: with no lights a pixel is ambient × colour, so the floor and the sphere of a two-fill NFF
+/// show the coefficient each got: one value sets every material, a list one per `f` line in file order;
+/// a list of the wrong length is an argument error that writes nothing; the PNG records the values.
+#[test]
+fn ambient_sets_the_materials_coefficients_in_file_order() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("two.nff");
+    std::fs::write(
+        &scene,
+        "v\nfrom 0 0 5\nat 0 0 0\nup 0 1 0\nangle 40\nhither 0.01\nresolution 9 9\nb 0 0 0\n\
+         f 1 1 1 1 0 0 0 1\np 4\n-10 -10 -1\n10 -10 -1\n10 10 -1\n-10 10 -1\n\
+         f 1 1 1 1 0 0 0 1\ns 0 0 0 0.8\n",
+    )
+    .unwrap();
+    let render = |ambient: Option<&str>, out: &Path| {
+        let mut args = vec!["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "-q"];
+        if let Some(a) = ambient {
+            args.extend(["--ambient", a]);
+        }
+        bareray(&args)
+    };
+    // (corner: the floor, centre: the sphere), 8-bit linear values.
+    let floor_and_sphere = |out: &Path| {
+        let img = image::open(out).unwrap().into_rgb8();
+        (img.get_pixel(0, 0)[0], img.get_pixel(4, 4)[0])
+    };
+    let out = dir.path().join("a.png");
+    for (ambient, expect) in
+        [(None, (26, 26)), (Some("0.5,0"), (128, 0)), (Some("0,1"), (0, 255)), (Some("0.25"), (64, 64))]
+    {
+        let run = render(ambient, &out);
+        assert!(run.status.success(), "{ambient:?}: {}", stderr(&run));
+        assert_eq!(floor_and_sphere(&out), expect, "--ambient {ambient:?}");
+    }
+    let text = std::fs::read(&out).unwrap();
+    assert!(text.windows(12).any(|w| w == b"ambient 0.25"), "the PNG records --ambient");
+    let missing = dir.path().join("b.png");
+    let run = render(Some("0.2,0,1"), &missing);
+    assert_eq!(run.status.code(), Some(2));
+    assert!(
+        stderr(&run).contains("--ambient gave 3 values; the scene defines 2 materials"),
+        "{}",
+        stderr(&run)
+    );
+    assert!(!missing.exists());
+    let run = render(Some("1.5"), &missing);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    assert!(!missing.exists());
+}

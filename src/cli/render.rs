@@ -81,6 +81,12 @@ pub struct RenderArgs {
     /// linear floats either way.
     #[arg(long, value_enum)]
     pub transfer: Option<TransferArg>,
+    /// Ambient coefficients of the scene's materials, overriding the scene: one value for every material,
+    /// or a comma list with one value per material: an NFF's `f` lines in file order, a TOML's `default`
+    /// material and then its named ones alphabetically. NFF has no ambient term and its materials get 0.1, as SPD's own NFF reader gives them; SPD's
+    /// POV-Ray output carries the generator's values (balls: `--ambient 0.2,0`, the floor and the spheres).
+    #[arg(long, value_name = "A[,A...]", value_parser = super::values::parse_ambient)]
+    pub ambient: Option<super::values::AmbientList>,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = clap::value_parser!(u64).range(1..=1024))]
     pub threads: Option<u64>,
@@ -212,7 +218,7 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
             output.display()
         )));
     }
-    apply_overrides(&mut desc, args);
+    apply_overrides(&mut desc, args)?;
     let window = region(args, desc.camera.width, desc.camera.height)?;
     let settings = args.resume.then(|| settings_hash(args, &desc, window, &output));
     if window != Window::whole(desc.camera.width, desc.camera.height)
@@ -327,11 +333,15 @@ fn write_options(args: &RenderArgs, scene: &Scene, scene_name: &Path) -> WriteOp
             (
                 "Comment".to_owned(),
                 format!(
-                    "{}x{}, {}, depth {}",
+                    "{}x{}, {}, depth {}{}",
                     scene.camera.width,
                     scene.camera.height,
                     pattern_name(scene.render.pattern),
-                    scene.render.max_depth
+                    scene.render.max_depth,
+                    args.ambient.as_ref().map_or_else(String::new, |a| {
+                        let list: Vec<String> = a.0.iter().map(f32::to_string).collect();
+                        format!(", ambient {}", list.join(","))
+                    })
                 ),
             ),
         ],
@@ -597,8 +607,11 @@ pub fn load_scene(path: &Path) -> Result<SceneDesc> {
     Ok(crate::io::load(path)?)
 }
 
-fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
+fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {
     args.camera.apply(desc);
+    if let Some(ambient) = &args.ambient {
+        set_ambient(desc, &ambient.0)?;
+    }
     if let Some(spp) = args.spp {
         desc.render.pattern = Pattern::Grid(toml::grid_side(spp).expect("--spp was checked"));
     }
@@ -619,4 +632,25 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) {
     if let Some(t) = args.transfer {
         desc.render.transfer = t.into();
     }
+    Ok(())
+}
+
+/// `--ambient`: one value for every material, or one per material in definition order.
+fn set_ambient(desc: &mut SceneDesc, ambient: &[f32]) -> Result<()> {
+    let materials = &mut desc.materials;
+    match ambient {
+        [a] => materials.iter_mut().for_each(|m| m.ambient = *a),
+        list if list.len() == materials.len() => {
+            materials.iter_mut().zip(list).for_each(|(m, a)| m.ambient = *a);
+        }
+        list => {
+            return Err(super::usage(format!(
+                "--ambient gave {} values; the scene defines {} material{} (one value sets them all)",
+                list.len(),
+                materials.len(),
+                if materials.len() == 1 { "" } else { "s" }
+            )))
+        }
+    }
+    Ok(())
 }

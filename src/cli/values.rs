@@ -100,6 +100,21 @@ pub fn parse_filter(s: &str) -> Result<Filter, String> {
     Ok(Filter { kind, radius })
 }
 
+/// `--ambient`: ambient coefficients, one for every material or one per material.
+#[derive(Clone, Debug, PartialEq)]
+pub struct AmbientList(pub Vec<f32>);
+
+/// Parses `--ambient`: a comma list of ambient coefficients, each in [0, 1].
+pub fn parse_ambient(s: &str) -> Result<AmbientList, String> {
+    s.split(',')
+        .map(|v| match v.trim().parse::<f32>() {
+            Ok(a) if (0.0..=1.0).contains(&a) => Ok(a),
+            _ => Err(format!("ambient coefficients are numbers from 0 to 1, separated by commas; got `{v}`")),
+        })
+        .collect::<Result<_, _>>()
+        .map(AmbientList)
+}
+
 /// The name a value has on the command line (what `--help` lists and the user types), for reports.
 pub fn name(value: impl clap::ValueEnum) -> String {
     value.to_possible_value().map_or_else(String::new, |v| v.get_name().to_owned())

@@ -25,8 +25,9 @@
 //!
 //! `f r g b Kd Ks shine T ior` becomes a [`Material`] with `diffuse = Kd`, `specular = Ks` (Phong exponent
 //! `shine`), `reflect = Ks` (NFF's Ks is also the mirror weight in Whitted use), `transmit = T`, `ior`. NFF has
-//! no ambient term; SPD's POV-Ray conversion gives the balls floor 0.2 and the spheres 0, so NFF materials get
-//! [`NFF_AMBIENT`], between the two, which keeps fully shadowed floor from going black. Lights without colour
+//! no ambient term; NFF materials get [`NFF_AMBIENT`], the value SPD's own NFF reader gives them, which keeps
+//! fully shadowed floor from going black. SPD's generators pass their own per-material values to their other
+//! outputs only (balls: floor 0.2, spheres 0); `render --ambient` sets them. Lights without colour
 //! each get intensity `1/sqrt(number of lights)`, as SPD's converters do for every renderer but NFF's own.
 //!
 //! # Colours
@@ -36,9 +37,8 @@
 //! no transfer curve. NFF scenes therefore get [`Transfer::Linear`]; encoding them with the sRGB curve, as
 //! TOML scenes are, washes them out: SPD `balls` (size 4) at 512² differs from POV-Ray's render of SPD's
 //! own POV-Ray output by 49 of 255 per channel on average with the curve, 20 without. The rest is the
-//! ambient term: that output gives the floor 0.2 and the spheres 0 where NFF materials get
-//! [`NFF_AMBIENT`]; with SPD's values the difference is 0.5. `render --transfer srgb` still chooses the
-//! curve.
+//! ambient term: with SPD's values (`--ambient 0.2,0`) the difference is 0.03. `render --transfer srgb`
+//! still chooses the curve.
 
 use std::path::Path;
 
