@@ -13,8 +13,9 @@ use super::values::{BvhPresetArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::compile::{CompileOptions, Scene};
 use crate::io::toml;
+use crate::math::Rgb;
 use crate::output::{BitDepth, Format, WriteOptions};
-use crate::render::{Traced, Window, LANE_CHOICES};
+use crate::render::{Traced, Window, LANE_CHOICES, TILE};
 use crate::scene::desc::{Pattern, PostFilter};
 use crate::scene::SceneDesc;
 use crate::still::{self, Job};
@@ -257,7 +258,8 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
     let job = match args.band_rows {
         // A budget that gives exactly the rows asked for (band_rows rounds down to whole tiles).
         Some(rows) => {
-            Job { band_budget: rows.div_ceil(16) as usize * 16 * job.window.width() as usize * 12, ..job }
+            let rows = rows.div_ceil(TILE) * TILE;
+            Job { band_budget: rows as usize * job.window.width() as usize * size_of::<Rgb>(), ..job }
         }
         None => job,
     };

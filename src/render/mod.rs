@@ -62,7 +62,7 @@ pub use primary::{
 use tile::trace_tile;
 
 /// Tile edge in pixels: small enough to balance two threads on small images, large enough to amortise.
-const TILE: u32 = 16;
+pub const TILE: u32 = 16;
 
 /// The packet widths a render can run at.
 pub const LANE_CHOICES: [usize; 4] = [1, 4, 8, 16];

@@ -134,7 +134,7 @@ pub fn estimate(scene: &Scene, job: &Job, threads: usize) -> Estimate {
 
 /// The largest working set one tile's trace takes, by the sampling pattern and filter.
 fn tile_bytes(pattern: Pattern, filter: Option<Filter>) -> u64 {
-    let tile = 16u64;
+    let tile = u64::from(crate::render::TILE);
     let rgb = std::mem::size_of::<crate::math::Rgb>() as u64;
     let samples = match pattern {
         Pattern::Adaptive { depth, .. } => {
