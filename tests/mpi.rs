@@ -169,6 +169,10 @@ fn an_unwritable_output_is_one_error_and_an_argument_error_exits_2() {
     let run = mpirun(3, &["render", &scene("balls3.nff"), "-o", path(&exr), "--bit-depth", "16"], &[]);
     assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
     assert_eq!(error_lines(&run).len(), 1, "{}", stderr(&run));
+    // An error clap finds while parsing, which every rank meets before MPI starts: printed by rank 0 only.
+    let run = mpirun(3, &["render", &scene("balls3.nff"), "-o", path(&exr), "--width", "0"], &[]);
+    assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
+    assert_eq!(error_lines(&run).len(), 1, "{}", stderr(&run));
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no file");
 }
 

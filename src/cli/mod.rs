@@ -136,8 +136,21 @@ fn parse_args() -> Cli {
         false => required.join(" "),
     };
     let version = format!("{}\ncompiled for: {isa}", env!("CARGO_PKG_VERSION"));
-    let matches = Cli::command().long_version(&*Box::leak(version.into_boxed_str())).get_matches();
-    Cli::from_arg_matches(&matches).unwrap_or_else(|e| e.exit())
+    let matches = Cli::command()
+        .long_version(&*Box::leak(version.into_boxed_str()))
+        .try_get_matches()
+        .unwrap_or_else(|e| exit_once(e));
+    Cli::from_arg_matches(&matches).unwrap_or_else(|e| exit_once(e))
+}
+
+/// Exits on a command-line error (or `--help`, `--version`), printing it on one rank only when a launcher
+/// started several: every rank parses the same command line.
+fn exit_once(e: clap::Error) -> ! {
+    #[cfg(feature = "mpi")]
+    if crate::still::mpi::launched_rank().is_some_and(|rank| rank != 0) {
+        std::process::exit(e.exit_code());
+    }
+    e.exit()
 }
 
 #[cfg(test)]

@@ -73,6 +73,18 @@ const FAIL_BAND: &str = "BAREARAY_MPI_FAIL_BAND";
 /// script itself, where `SLURM_NTASKS` is set without any other rank having been started).
 pub const SIZE_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS"];
 
+/// The variables that hold this process's rank, in the order of [`SIZE_VARIABLES`].
+const RANK_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "SLURM_PROCID"];
+
+/// This process's rank when a launcher started it as one of several ([`launched`]), read from the
+/// launcher's variables before MPI is initialised: for errors found while parsing the command line, which
+/// only rank 0 prints.
+pub fn launched_rank() -> Option<u32> {
+    let var = |name: &str| std::env::var(name).ok();
+    let (i, _) = SIZE_VARIABLES.iter().enumerate().find(|(_, name)| var(name).is_some())?;
+    launched_in(var).then(|| var(RANK_VARIABLES[i])?.trim().parse().ok()).flatten()
+}
+
 /// Whether a launcher started this process as one of several ranks: the first of [`SIZE_VARIABLES`]
 /// that is set holds a number above 1.
 pub fn launched() -> bool {
