@@ -176,14 +176,15 @@ fn an_unwritable_output_is_one_error_and_an_argument_error_exits_2() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0, "no file");
 }
 
-/// A render on three ranks where the rank tracing `band` fails: one error naming `rank`, a non-zero exit,
-/// the existing output untouched and no temporary file beside it.
-fn fails_cleanly(band: &str, rank: &str) {
+/// A render on three ranks where the rank tracing `band` fails (`hook`: the test hook's value, an error
+/// or `panic:` a panic): one error naming `rank` and the band, a non-zero exit, the existing output
+/// untouched and no temporary file beside it.
+fn fails_cleanly(hook: &str, band: &str, rank: &str) {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("keep.png");
     std::fs::write(&out, b"precious").unwrap();
     let args = ["render", &scene("lecture.toml"), "-o", path(&out), "--width", "200", "--height", "150"];
-    let run = mpirun(3, &args, &[("BAREARAY_MPI_FAIL_BAND", band)]);
+    let run = mpirun(3, &args, &[("BAREARAY_MPI_FAIL_BAND", hook)]);
     assert!(!run.status.success() && run.status.code() != Some(124), "{}", stderr(&run));
     let errors = error_lines(&run);
     assert_eq!(errors.len(), 1, "{}", stderr(&run));
@@ -199,8 +200,11 @@ fn a_rank_failing_mid_render_abandons_the_files() {
         return;
     }
     // Rank 1 is handed bands 0 and 1 first, rank 2 bands 2 and 3, and rank 0 traces band 4.
-    fails_cleanly("1", "rank 1");
-    fails_cleanly("4", "rank 0");
+    fails_cleanly("1", "1", "rank 1");
+    fails_cleanly("4", "4", "rank 0");
+    // A panic while tracing is the band's error too, on a worker and on rank 0.
+    fails_cleanly("panic:1", "1", "rank 1");
+    fails_cleanly("panic:4", "4", "rank 0");
 }
 
 #[test]

@@ -223,12 +223,44 @@ pub fn write_image_with(img: &Image, path: &Path, options: &WriteOptions) -> Res
 /// Runs `write` on a temporary file beside `path`, then renames it to `path`; on failure the temporary
 /// file is removed and `path` is left as it was.
 pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), BoxError>) -> Result<(), BoxError> {
-    let tmp = temp_path(path);
-    let result = write(&tmp).and_then(|()| fs::rename(&tmp, path).map_err(Into::into));
-    if result.is_err() {
-        let _ = fs::remove_file(&tmp);
+    let tmp = Pending::new(temp_path(path));
+    write(&tmp.0)?;
+    fs::rename(&tmp.0, path)?;
+    Ok(())
+}
+
+/// The temporary files being written, for [`remove_temporaries`].
+static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
+
+/// A temporary file being written: removed when dropped (an error or a panic unwinding past it; after the
+/// rename there is nothing left to remove) and listed in [`PENDING`] while it lives.
+struct Pending(PathBuf);
+
+impl Pending {
+    fn new(path: PathBuf) -> Self {
+        PENDING.lock().unwrap_or_else(|e| e.into_inner()).push(path.clone());
+        Pending(path)
     }
-    result
+}
+
+impl Drop for Pending {
+    fn drop(&mut self) {
+        let _ = fs::remove_file(&self.0);
+        let mut list = PENDING.lock().unwrap_or_else(|e| e.into_inner());
+        if let Some(i) = list.iter().position(|p| *p == self.0) {
+            list.swap_remove(i);
+        }
+    }
+}
+
+/// Removes the temporary files of writes still under way: for a panic hook that ends the process without
+/// unwinding (an MPI abort), so that no temporary file is left beside an output.
+pub fn remove_temporaries() {
+    if let Ok(list) = PENDING.try_lock() {
+        for path in list.iter() {
+            let _ = fs::remove_file(path);
+        }
+    }
 }
 
 /// Where an image file sits in the full image: it holds `width × height` pixels from column `x0`, row `y0`

@@ -15,15 +15,17 @@
 //! (its own first) and every rank exits with the same non-zero code, no file written. A failure while
 //! rendering (a rank's error, a write error on rank 0) makes rank 0 abandon the files, as [`write_bands`]
 //! does (temporary files removed, an existing file kept), print one `error: rank R: ...` line and abort
-//! the job with exit code 1. A panic on any rank aborts the job at once (a rank that died otherwise would
-//! leave the others waiting forever).
+//! the job with exit code 1. A panic while tracing a band is caught and becomes that band's error; a panic
+//! anywhere else aborts the job at once (a rank that died otherwise would leave the others waiting
+//! forever), rank 0 removing its temporary files first.
 //!
 //! Test hook: with `BAREARAY_MPI_FAIL_BAND=k` in the environment, the rank that traces band `k` (counted
-//! from 0 at the top) fails with an error instead; the tests inject a fault with it.
+//! from 0 at the top) fails with an error instead, and with `panic:k` it panics; the tests inject faults
+//! with it.
 
 use std::collections::BTreeMap;
 use std::fmt::Display;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::mpsc::{self, RecvTimeoutError};
 use std::time::{Duration, Instant};
 
@@ -105,7 +107,7 @@ pub fn launched_in(var: impl Fn(&str) -> Option<String>) -> bool {
 pub struct Ranks {
     world: SimpleCommunicator,
     /// The test hook's band.
-    fail_band: Option<u32>,
+    fail_band: Option<FailBand>,
     _universe: Universe,
 }
 
@@ -122,12 +124,16 @@ impl Ranks {
         let report = std::panic::take_hook();
         std::panic::set_hook(Box::new(move |info| {
             report(info);
+            if TRACING.load(Ordering::SeqCst) {
+                return; // `trace` catches it and reports it as the band's error.
+            }
+            crate::output::remove_temporaries();
             // SAFETY: MPI is initialised and stays so until the process ends; MPI_Abort does not return.
             unsafe {
                 ::mpi::ffi::MPI_Abort(::mpi::ffi::RSMPI_COMM_WORLD, 101);
             }
         }));
-        let fail_band = std::env::var(FAIL_BAND).ok().and_then(|k| k.trim().parse().ok());
+        let fail_band = std::env::var(FAIL_BAND).ok().and_then(|k| FailBand::parse(&k));
         Some(Self { world: universe.world(), fail_band, _universe: universe })
     }
 
@@ -419,20 +425,59 @@ impl Ranks {
     }
 }
 
-/// Band `i` traced, or the test hook's error.
+/// Set while this rank traces a band: a panic then unwinds to [`trace`], which turns it into the band's
+/// error (the path every other failure takes), instead of aborting the job from the panic hook: Open MPI's
+/// `mpirun` was seen to hang with the ranks left as zombies when a rank other than 0 called `MPI_Abort`.
+static TRACING: AtomicBool = AtomicBool::new(false);
+
+/// Band `i` traced, or its error: the test hook's, or a panic while tracing.
 fn trace(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     job: &Job,
     bands: &Bands,
     i: u32,
-    fail_band: Option<u32>,
+    fail_band: Option<FailBand>,
     tile_done: &(dyn Fn() + Sync),
 ) -> Result<(Vec<Rgb>, RayCounts, Work), String> {
-    if fail_band == Some(i) {
-        return Err(format!("band {i}: failed on purpose ({FAIL_BAND} is set)"));
+    TRACING.store(true, Ordering::SeqCst);
+    let traced = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| {
+        match fail_band {
+            Some(FailBand { band, panic: false }) if band == i => {
+                return Err(format!("band {i}: failed on purpose ({FAIL_BAND} is set)"))
+            }
+            Some(FailBand { band, panic: true }) if band == i => {
+                panic!("on purpose ({FAIL_BAND})")
+            }
+            _ => {}
+        }
+        Ok(trace_band_lanes(scene, job.lanes, pool, bands, i, tile_done))
+    }));
+    TRACING.store(false, Ordering::SeqCst);
+    traced.unwrap_or_else(|payload| {
+        let what = payload
+            .downcast_ref::<String>()
+            .map(String::as_str)
+            .or_else(|| payload.downcast_ref::<&str>().copied())
+            .unwrap_or("a panic");
+        Err(format!("band {i}: panicked: {what}"))
+    })
+}
+
+/// The test hook's fault: band `band` fails with an error, or panics.
+#[derive(Clone, Copy, Debug)]
+struct FailBand {
+    band: u32,
+    panic: bool,
+}
+
+impl FailBand {
+    /// `k` or `panic:k`.
+    fn parse(text: &str) -> Option<Self> {
+        let text = text.trim();
+        let (panic, band) = text.strip_prefix("panic:").map_or((false, text), |k| (true, k));
+        Some(Self { band: band.parse().ok()?, panic })
     }
-    Ok(trace_band_lanes(scene, job.lanes, pool, bands, i, tile_done))
 }
 
 /// Band `i`'s pixels as a [`BAND`] message.
