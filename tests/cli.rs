@@ -776,3 +776,17 @@ fn ambient_sets_the_materials_coefficients_in_file_order() {
     assert_eq!(run.status.code(), Some(2), "{}", stderr(&run));
     assert!(!missing.exists());
 }
+
+/// EXR attribute text is UTF-8, as OpenEXR's tools and bindings read it: the comment's `×` is the two
+/// bytes C3 97, not Latin-1's single D7 (which Python's OpenEXR module refuses to decode).
+#[test]
+fn exr_attribute_text_is_utf8() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("a.exr");
+    let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "16", "--spp", "1", "-q"]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    let bytes = std::fs::read(&out).unwrap();
+    let has = |needle: &[u8]| bytes.windows(needle.len()).any(|w| w == needle);
+    assert!(has("(1×1 grid)".as_bytes()), "the comment in UTF-8");
+    assert!(!has(b"(1\xd71 grid)"), "not in Latin-1");
+}

@@ -102,8 +102,14 @@ fn header(
             ChannelDescription::new(channels[i].name, kind, true)
         })
         .collect();
-    let to_text =
-        |s: &str| Text::new_or_none(s).ok_or_else(|| format!("EXR attribute text `{s}` is not Latin-1"));
+    // UTF-8 bytes, as OpenEXR's own tools and bindings read strings (the exr crate's checked
+    // constructor would store `×` as the single Latin-1 byte 0xD7, which they reject).
+    let to_text = |s: &str| -> Result<Text, String> {
+        if s.contains('\0') {
+            return Err(format!("EXR attribute text `{s}` holds a NUL character"));
+        }
+        Ok(Text::from_slice_unchecked(s.as_bytes()))
+    };
     let mut comments = Vec::new();
     let mut software = None;
     for (key, value) in text {

@@ -233,10 +233,10 @@ fn exr_header(path: &Path) -> Result<Header, BoxError> {
     };
     let mut text = Vec::new();
     if let Some(software) = &h.own_attributes.software_name {
-        text.push(("Software".to_owned(), software.to_string()));
+        text.push(("Software".to_owned(), String::from_utf8_lossy(software.bytes()).into_owned()));
     }
     if let Some(comments) = &h.own_attributes.comments {
-        text.push((String::new(), comments.to_string()));
+        text.push((String::new(), String::from_utf8_lossy(comments.bytes()).into_owned()));
     }
     Ok(Header { format: Format::Exr, frame, bit_depth: BitDepth::Eight, transfer: Transfer::Srgb, text })
 }
