@@ -711,3 +711,243 @@ fn invalid_utf8_files_are_errors_naming_file_and_line() {
         assert!(e.to_string().starts_with(&format!("{}:2:3: ", path.display())), "{e}");
     }
 }
+
+// ---------------------------------------------------------------------------------------------------- f32r
+
+/// The `.f32r` reader takes bytes, not text, so it has inputs of its own: generated fields of 1 to 300
+/// spheres, mutated one to eight times by byte edits (as above) and by edits of the format's parts (header
+/// words, whole records, single values). An independent decoding of the format says what every input must
+/// give: the exact values, or an error naming the file and (for a record) the first bad record and its byte.
+mod f32r_inputs {
+    use super::*;
+    use bareray::io::f32r;
+    use bareray::io::generate::FieldParams;
+
+    /// Floats a record may hold that the reader must reject or pass through exactly.
+    const ODD: &[f32] = &[
+        f32::NAN,
+        f32::INFINITY,
+        f32::NEG_INFINITY,
+        0.0,
+        -0.0,
+        -1.0,
+        1e-45,
+        -1e-45,
+        f32::MIN_POSITIVE,
+        f32::MAX,
+        f32::MIN,
+        1e30,
+        -1e30,
+    ];
+
+    fn seeds() -> Vec<Vec<u8>> {
+        [(1, 1), (3, 2), (50, 3), (300, 4)]
+            .iter()
+            .map(|&(count, seed)| {
+                let mut out = Vec::new();
+                FieldParams { count, seed, ..Default::default() }.write_f32r(&mut out).expect("field");
+                out
+            })
+            .collect()
+    }
+
+    /// One edit of `s`.
+    fn mutate(rng: &mut Rng, s: &mut Vec<u8>) {
+        let len = s.len();
+        let records = len.saturating_sub(16) / 16;
+        match rng.below(10) {
+            0 => s.truncate(rng.below(len + 1)),
+            1 if len > 0 => {
+                let i = rng.below(len);
+                s[i] ^= 1 << rng.below(8);
+            }
+            2 if len > 0 => {
+                let i = rng.below(len);
+                s[i] = rng.below(256) as u8;
+            }
+            3 => {
+                let i = rng.below(len + 1);
+                let most = if rng.chance(0.5) { 4 } else { 40 };
+                let n = 1 + rng.below(most);
+                let bytes: Vec<u8> = (0..n).map(|_| rng.below(256) as u8).collect();
+                s.splice(i..i, bytes);
+            }
+            4 if len > 0 => {
+                let i = rng.below(len);
+                let n = (1 + rng.below(20)).min(len - i);
+                s.drain(i..i + n);
+            }
+            // The version or the count: off by a little, zero, huge.
+            5 if len >= 16 => {
+                let at = *rng.pick(&[8usize, 12, 12, 12]);
+                let old = u32::from_le_bytes(s[at..at + 4].try_into().expect("4 bytes"));
+                let new = *rng.pick(&[
+                    0,
+                    1,
+                    2,
+                    old.wrapping_add(1),
+                    old.wrapping_sub(1),
+                    old.wrapping_mul(2),
+                    u32::MAX,
+                ]);
+                s[at..at + 4].copy_from_slice(&new.to_le_bytes());
+            }
+            // Whole records: duplicate, delete, swap.
+            6 | 7 if records > 0 => {
+                let a = 16 + 16 * rng.below(records);
+                let b = 16 + 16 * rng.below(records);
+                match rng.below(3) {
+                    0 => {
+                        let r = s[a..a + 16].to_vec();
+                        s.splice(a..a, r);
+                    }
+                    1 => {
+                        s.drain(a..a + 16);
+                    }
+                    _ => swap_ranges(s, (a, a + 16), (b, b + 16)),
+                }
+            }
+            // One value becomes an odd float.
+            _ if records > 0 => {
+                let at = 16 + 16 * rng.below(records) + 4 * rng.below(4);
+                s[at..at + 4].copy_from_slice(&rng.pick(ODD).to_le_bytes());
+            }
+            _ => {}
+        }
+    }
+
+    /// Input `index` for `seed`.
+    fn input(seeds: &[Vec<u8>], seed: u64, index: u64) -> Vec<u8> {
+        let mut rng = Rng(SplitMix64::new(seed ^ index.wrapping_mul(0x9E37_79B9_7F4A_7C15) ^ (4 << 56)));
+        let mut s = rng.pick(seeds).clone();
+        for _ in 0..1 + rng.below(8) {
+            mutate(&mut rng, &mut s);
+        }
+        s
+    }
+
+    /// What the format says `bytes` hold: the records, or what the error must contain.
+    fn expected(bytes: &[u8]) -> Result<Vec<[f32; 4]>, String> {
+        if bytes.len() < 16 || bytes[..8] != f32r::MAGIC {
+            let magic_ok = bytes.iter().zip(f32r::MAGIC).all(|(a, b)| *a == b);
+            return Err(if magic_ok {
+                "ends inside the 16-byte header".into()
+            } else {
+                "not an .f32r".into()
+            });
+        }
+        let word = |at: usize| u32::from_le_bytes(bytes[at..at + 4].try_into().expect("4 bytes"));
+        if word(8) != 1 {
+            return Err(format!("version {} is not", word(8)));
+        }
+        let count = word(12) as usize;
+        if count == 0 {
+            return Err("no spheres".into());
+        }
+        let body = bytes.len() - 16;
+        if body < 16 * count {
+            return Err(format!("ends inside record {} (byte {})", body / 16, 16 + body / 16 * 16));
+        }
+        if body > 16 * count {
+            return Err(format!("{} bytes follow", body - 16 * count));
+        }
+        let mut out = Vec::with_capacity(count);
+        for (i, r) in bytes[16..].chunks_exact(16).enumerate() {
+            let v: [f32; 4] =
+                std::array::from_fn(|k| f32::from_le_bytes(r[4 * k..4 * k + 4].try_into().unwrap()));
+            if v.iter().any(|x| !x.is_finite()) || v[3] <= 0.0 {
+                return Err(format!("record {i} (byte {}): ", 16 + 16 * i));
+            }
+            out.push(v);
+        }
+        Ok(out)
+    }
+
+    /// What is wrong with the reader's answer for `bytes`, if anything.
+    fn check(name: &str, bytes: &[u8], got: &Result<SceneDesc, SceneError>) -> Option<String> {
+        match (expected(bytes), got) {
+            (Ok(want), Ok(desc)) => {
+                let values: Vec<[u32; 4]> = desc
+                    .spheres
+                    .iter()
+                    .map(|s| [s.center.x, s.center.y, s.center.z, s.radius].map(|v| (v as f32).to_bits()))
+                    .collect();
+                let want: Vec<[u32; 4]> = want.iter().map(|v| v.map(f32::to_bits)).collect();
+                (values != want).then(|| "accepted with other values than the file's".to_owned())
+            }
+            (Ok(_), Err(e)) => Some(format!("a valid file was rejected: {e}")),
+            (Err(why), Ok(_)) => Some(format!("accepted, but the file is wrong: {why}")),
+            (Err(why), Err(e)) => {
+                let text = e.to_string();
+                let ok = text.starts_with(&format!("{name}: ")) && e.line == 0 && text.contains(&why);
+                (!ok).then(|| format!("error `{text}` should name the file and say `{why}`"))
+            }
+        }
+    }
+
+    /// Runs `default_count` inputs (or as the environment says, as for the text readers).
+    pub fn fuzz(default_count: u64) {
+        let env =
+            |key: &str| std::env::var(key).ok().map(|v| v.parse::<u64>().unwrap_or_else(|_| panic!("{key}")));
+        let count = env("BARERAY_FUZZ_INPUTS").unwrap_or(default_count);
+        let seed = env("BARERAY_FUZZ_SEED").unwrap_or(DEFAULT_SEED);
+        let start = env("BARERAY_FUZZ_START").unwrap_or(0);
+        let seeds = seeds();
+        let name = "fuzz-input.f32r";
+        let began = Instant::now();
+        let mut t = Tally::default();
+        for index in start..start + count {
+            let bytes = input(&seeds, seed, index);
+            let t0 = Instant::now();
+            let outcome = catch_unwind(AssertUnwindSafe(|| {
+                let result = f32r::parse(Path::new(name), &bytes);
+                let compiled = matches!(&result, Ok(desc) if index % 16 == 0 && Scene::compile(desc).is_ok());
+                (result, compiled)
+            }));
+            let took = t0.elapsed();
+            if took > t.slowest.0 {
+                t.slowest = (took, index);
+            }
+            let failure = match &outcome {
+                Err(_) => Some("panic".to_owned()),
+                Ok((result, compiled)) => {
+                    t.parsed += u64::from(result.is_ok());
+                    t.errors += u64::from(result.is_err());
+                    t.compiled += u64::from(*compiled);
+                    check(name, &bytes, result)
+                }
+            };
+            if let Some(why) = failure {
+                let file = std::env::temp_dir().join(format!("bareray-fuzz-{seed:x}-{index}.f32r"));
+                std::fs::write(&file, &bytes).expect("temporary directory is writable");
+                let report = format!("input {index} (seed {seed:#x}, saved as {}): {why}", file.display());
+                eprintln!("fuzz: f32r: {report}");
+                t.failures.push(report);
+            }
+        }
+        println!(
+            "fuzz: f32r: {count} inputs, {} parsed, {} errors, {} panics or bad answers ({} compiled; {:.1} s; \
+             slowest input {} took {:.1} ms; seed {seed:#x}, from index {start})",
+            t.parsed,
+            t.errors,
+            t.failures.len(),
+            t.compiled,
+            began.elapsed().as_secs_f64(),
+            t.slowest.1,
+            t.slowest.0.as_secs_f64() * 1e3,
+        );
+        assert!(t.failures.is_empty(), "{} failures:\n{}", t.failures.len(), t.failures.join("\n"));
+        assert!(count < 1000 || (t.parsed > count / 100 && t.errors > count / 100), "inputs too uniform");
+    }
+}
+
+#[test]
+fn f32r_reader_survives_generated_inputs() {
+    f32r_inputs::fuzz(CI_RUN);
+}
+
+#[test]
+#[ignore = "the full run: 1e6 inputs, minutes in release mode"]
+fn f32r_reader_survives_a_million_inputs() {
+    f32r_inputs::fuzz(FULL_RUN);
+}

@@ -1,4 +1,4 @@
-//! Scene readers (NFF, xyzr), generators (contract field, SPD sphereflake) and the polygon primitive, through
+//! Scene readers (NFF, xyzr, f32r), generators (contract field, SPD sphereflake) and the polygon primitive, through
 //! the library API.
 
 mod common;
@@ -10,7 +10,7 @@ use bareray::compile::Scene;
 use bareray::geometry::polygon::triangulate;
 use bareray::geometry::{intersect_triangle, Departure, Ray, NO_PRIM};
 use bareray::io::generate::{flake, flake_count, flake_nff, FieldParams};
-use bareray::io::{nff, xyzr, SceneError};
+use bareray::io::{f32r, nff, xyzr, SceneError, SceneFormat};
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{Aim, Field, PolygonDesc, SphereDesc, Sweep};
 use bareray::scene::SceneDesc;
@@ -243,6 +243,72 @@ fn long_xyzr_lists_keep_order_and_line_numbers() {
     assert_eq!(with_errors(&[180_001, 99_999]).line, 99_999);
 }
 
+// ---------------------------------------------------------------------------------------------------- f32r
+
+/// The generator's f32 values of a field, as the f32r reader gives them back.
+fn f32r_values(bytes: &[u8]) -> Vec<[f32; 4]> {
+    let d = f32r::parse(Path::new("t.f32r"), bytes).unwrap();
+    d.spheres.iter().map(|s| [s.center.x, s.center.y, s.center.z, s.radius].map(|v| v as f32)).collect()
+}
+
+/// An `.f32r` field holds the generator's f32 values bit for bit, and frames them as an `.xyzr` list does.
+#[test]
+fn f32r_fields_hold_the_generators_values_and_frame_like_xyzr() {
+    let p = FieldParams { count: 5000, ..Default::default() };
+    let mut bytes = Vec::new();
+    p.write_f32r(&mut bytes).unwrap();
+    assert_eq!(bytes.len(), 16 + 16 * 5000);
+    let want: Vec<[f32; 4]> = p.spheres().unwrap().collect();
+    let got = f32r_values(&bytes);
+    assert_eq!(
+        got.iter().map(|v| v.map(f32::to_bits)).collect::<Vec<_>>(),
+        want.iter().map(|v| v.map(f32::to_bits)).collect::<Vec<_>>()
+    );
+    // The same spheres written as text and read back (f64 values) round to the same f32s; the scene
+    // around them differs only by the text's decimals, far below what frames the camera.
+    let from_text = xyzr::parse(Path::new("t.xyzr"), &p.to_xyzr().unwrap()).unwrap();
+    let from_binary = f32r::parse(Path::new("t.f32r"), &bytes).unwrap();
+    assert_eq!((from_binary.materials.len(), from_binary.lights.len()), (1, 1));
+    assert!((from_binary.camera.eye - from_text.camera.eye).length() < 1e-6, "{:?}", from_binary.camera);
+    assert!(Scene::compile(&from_binary).is_ok());
+    // Read from memory as standard input is.
+    let again = bareray::io::parse(SceneFormat::F32r, Path::new("<stdin>"), bytes.clone()).unwrap();
+    assert_eq!(again, from_binary);
+}
+
+/// Each way a file can be wrong is an error naming the file and, for records, the record and its byte.
+#[test]
+fn f32r_errors_name_the_file_record_and_byte() {
+    let p = FieldParams { count: 100, ..Default::default() };
+    let mut good = Vec::new();
+    p.write_f32r(&mut good).unwrap();
+    let err = |b: &[u8]| f32r::parse(Path::new("t.f32r"), b).unwrap_err().to_string();
+    let mut flipped = good.clone();
+    flipped[0] ^= 0x80; // a 7-bit transfer
+    let mut crlf = good.clone();
+    crlf.remove(5); // a text-mode transfer turning CR LF into LF
+    let mut count = good.clone();
+    count[12] = 99;
+    let mut nan = good.clone();
+    nan[16 + 16 * 42 + 4..16 + 16 * 42 + 8].copy_from_slice(&f32::NAN.to_le_bytes());
+    let mut zero = good.clone();
+    zero[16 + 16 * 7 + 12..16 + 16 * 8].copy_from_slice(&0f32.to_le_bytes());
+    for (bytes, expected) in [
+        (&flipped[..], "t.f32r: not an .f32r sphere list: the first 8 bytes are not 89 46 33 32 52 0d 0a 1a"),
+        (&crlf[..], "t.f32r: not an .f32r sphere list"),
+        (&p.to_xyzr().unwrap().into_bytes()[..], "t.f32r: not an .f32r sphere list"),
+        (&good[..11], "t.f32r: the file ends inside the 16-byte header, after 11 bytes"),
+        (&good[..16 + 16 * 60 + 15], "t.f32r: the file ends inside record 60 (byte 976): the header's count is 100, which needs 1616 bytes, the file has 991"),
+        (&count[..], "t.f32r: 16 bytes follow the last of the header's 99 records"),
+        (&nan[..], "t.f32r: record 42 (byte 688): y is not finite (NaN)"),
+        (&zero[..], "t.f32r: record 7 (byte 128): radius must be positive, got 0"),
+    ] {
+        assert!(err(bytes).starts_with(expected), "{} does not start with {expected}", err(bytes));
+    }
+    let mut longer = good.clone();
+    longer.extend_from_slice(&[0; 16 * 3]);
+    assert!(err(&longer).starts_with("t.f32r: 48 bytes follow the last of the header's 100 records"));
+}
 // ---------------------------------------------------------------------------------------------------- field
 
 // Expected spheres were computed independently in Python 3.11 from the contract's text (bench-peers/README.md,
@@ -457,6 +523,78 @@ fn cli_generates_and_renders_fields_and_flakes() {
         let out = bareray(&["render", &path(scene), "--width", "32", "-q", "-o", &path(png)]);
         assert!(out.status.success(), "{scene}: {}", stderr(&out));
         assert!(std::fs::metadata(path(png)).unwrap().len() > 0);
+    }
+}
+
+/// `gen field -o f.f32r` writes the generator's binary file, `convert` turns the text list into the same
+/// bytes and back into a list of the same values, and `render` and `bench` read it; a broken file or a
+/// wrong input is an error naming the file.
+#[test]
+fn cli_writes_converts_and_reads_f32r_fields() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = |name: &str| dir.path().join(name).to_string_lossy().into_owned();
+    let ok = |args: &[&str]| {
+        let out = bareray(args);
+        assert!(out.status.success(), "{args:?}: {}", stderr(&out));
+    };
+    ok(&["gen", "field", "--count", "3000", "--seed", "5", "-o", &path("f.f32r")]);
+    ok(&["gen", "field", "--count", "3000", "--seed", "5", "-o", &path("f.xyzr")]);
+    let mut want = Vec::new();
+    FieldParams { count: 3000, seed: 5, ..Default::default() }.write_f32r(&mut want).unwrap();
+    assert_eq!(std::fs::read(path("f.f32r")).unwrap(), want);
+    ok(&["convert", &path("f.xyzr"), "-o", &path("c.f32r"), "--threads", "1"]);
+    assert_eq!(std::fs::read(path("c.f32r")).unwrap(), want);
+    ok(&["convert", &path("f.f32r"), "-o", &path("back.xyzr")]);
+    let back =
+        xyzr::parse(Path::new("back.xyzr"), &std::fs::read_to_string(path("back.xyzr")).unwrap()).unwrap();
+    let back: Vec<[f32; 4]> = back
+        .spheres
+        .iter()
+        .map(|s| [s.center.x, s.center.y, s.center.z, s.radius].map(|v| v as f32))
+        .collect();
+    assert_eq!(back, f32r_values(&want));
+    ok(&["render", &path("f.f32r"), "--width", "32", "-q", "-o", &path("f.png"), "--threads", "1"]);
+    let out = bareray(&[
+        "bench",
+        &path("f.f32r"),
+        "--primary-only",
+        "--width",
+        "32",
+        "--height",
+        "32",
+        "--reps",
+        "1",
+        "--threads",
+        "1",
+    ]);
+    assert!(
+        out.status.success() && String::from_utf8_lossy(&out.stdout).contains("3000 spheres"),
+        "{}",
+        stderr(&out)
+    );
+
+    std::fs::write(path("short.f32r"), &want[..want.len() - 1]).unwrap();
+    std::fs::write(path("text.f32r"), std::fs::read(path("f.xyzr")).unwrap()).unwrap();
+    for (file, message) in [
+        ("short.f32r", "short.f32r: the file ends inside record 2999 (byte 48000)"),
+        ("text.f32r", "text.f32r: not an .f32r sphere list"),
+    ] {
+        for (cmd, output) in [("render", "never.png"), ("convert", "never.xyzr")] {
+            let out = bareray(&[cmd, &path(file), "-o", &path(output)]);
+            assert_eq!(out.status.code(), Some(1), "{cmd} {file}: {}", stderr(&out));
+            assert!(stderr(&out).contains(message), "{cmd} {file}: {}", stderr(&out));
+        }
+    }
+    for args in [
+        &["convert", &path("f.xyzr"), "-o", &path("never.nff")][..],
+        &["convert", &path("b.nff"), "-o", &path("never.f32r")],
+        &["gen", "field", "--count", "5e9", "-o", &path("never.f32r")],
+    ] {
+        let out = bareray(args);
+        assert_eq!(out.status.code(), Some(2), "{args:?}: {}", stderr(&out));
+    }
+    for never in ["never.png", "never.xyzr", "never.f32r", "never.nff"] {
+        assert!(!dir.path().join(never).exists(), "{never}");
     }
 }
 

@@ -342,7 +342,7 @@ fn scenes_from_standard_input_and_ppm_to_standard_output() {
     assert!(stderr(&out).starts_with("<stdout>: 64x48"), "{}", stderr(&out));
     let run = bareray(&["render", "-", "-o", "-"]);
     assert_eq!(run.status.code(), Some(2));
-    assert!(stderr(&run).contains("needs --format toml, nff or xyzr"), "{}", stderr(&run));
+    assert!(stderr(&run).contains("needs --format toml, nff, xyzr or f32r"), "{}", stderr(&run));
     let run = bareray(&["render", scene.to_str().unwrap(), "-o", "-", "--resume"]);
     assert_eq!(run.status.code(), Some(2));
 }

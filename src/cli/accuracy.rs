@@ -36,7 +36,8 @@ pub struct AccuracyArgs {
 
 /// Runs `bareray accuracy`.
 pub fn run(args: AccuracyArgs) -> Result<()> {
-    let mut desc = load_scene(&args.scene)?;
+    // The comparison makes its own pool of `--threads`; reading takes as many.
+    let mut desc = load_scene(&args.scene, &crate::render::thread_pool(args.threads)?)?;
     args.camera.apply(&mut desc);
     let opts =
         Options { lanes: args.lanes, secondary: args.secondary, threads: args.threads, ..Options::default() };

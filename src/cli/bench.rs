@@ -285,8 +285,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
     // Read the old results first: a bad file fails before minutes of measuring.
     let old = args.compare.as_deref().map(Old::read).transpose()?;
     let host = Host::detect();
+    // Reading and the build run on as many threads as the largest setting measured, not on every core: a
+    // 1-thread bench reads and builds on one thread, as a 1-thread peer run does.
+    let build_pool = thread_pool(threads.iter().copied().max())?;
     let clock = Instant::now();
-    let mut desc = load_scene(&args.scene)?;
+    let mut desc = load_scene(&args.scene, &build_pool)?;
     args.camera.apply(&mut desc);
     if let Some(pattern) = args.aa {
         desc.render.pattern = pattern;
@@ -318,9 +321,6 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let parse_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     let accel = Accel::from(args.accel);
-    // The build runs on as many threads as the largest setting measured, not on every core: a 1-thread
-    // bench builds on one thread, as a 1-thread peer run does.
-    let build_threads = threads.iter().copied().max();
     let defaults = CompileOptions::default();
     let options = CompileOptions {
         accel,
@@ -328,7 +328,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
         frustum_culling: args.frustum_culling,
         single_ray_lanes: args.single_ray_lanes.unwrap_or(defaults.single_ray_lanes),
     };
-    let scene = crate::render::thread_pool(build_threads)?.install(|| Scene::compile_owned(desc, options))?;
+    let scene = build_pool.install(|| Scene::compile_owned(desc, options))?;
+    drop(build_pool);
     let compile_s = clock.elapsed().as_secs_f64();
     let g = &scene.geometry;
     let scene_name = args.scene.display().to_string();

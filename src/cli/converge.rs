@@ -72,9 +72,9 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
         crate::output::check_writable(out)?;
     }
     let source = std::fs::read(&args.scene).with_context(|| format!("{}", args.scene.display()))?;
-    let mut desc = load_scene(&args.scene)?;
-    args.camera.apply(&mut desc);
     let pool = crate::render::thread_pool(args.threads)?;
+    let mut desc = load_scene(&args.scene, &pool)?;
+    args.camera.apply(&mut desc);
     let mut scene = pool.install(|| Scene::compile(&desc)).context("camera")?;
     if args.precision {
         return run_precision(&args, &desc, &scene, &pool);

@@ -19,8 +19,9 @@ pub struct GenArgs {
 
 #[derive(Subcommand, Debug)]
 enum GenCommand {
-    /// The benchmark contract's random sphere field (splitmix64), as .xyzr.
-    #[command(after_help = "Example:\n  bareray gen field --count 1000000 -o field1m.xyzr")]
+    /// The benchmark contract's random sphere field (splitmix64), as .xyzr text or binary .f32r.
+    #[command(after_help = "Examples:\n  bareray gen field --count 1000000 -o field1m.xyzr\n  \
+                            bareray gen field --count 1e7 -o field10m.f32r")]
     Field(FieldArgs),
     /// SPD's sphereflake (`balls`) at a size factor, as NFF.
     #[command(after_help = "Example:\n  bareray gen flake --level 4 -o balls4.nff   # 7381 spheres")]
@@ -45,7 +46,8 @@ pub struct FieldArgs {
     /// Largest radius [default: 0.25·s].
     #[arg(long, allow_negative_numbers = true)]
     pub rmax: Option<f64>,
-    /// Output file; must end in .xyzr (the format written). Written atomically.
+    /// Output file; its extension picks the format written: .xyzr (text) or .f32r (binary). Written
+    /// atomically.
     #[arg(short, long)]
     pub output: PathBuf,
 }
@@ -77,9 +79,12 @@ fn field(a: FieldArgs) -> Result<()> {
         (params.lo, params.hi) = (lo, hi);
     }
     // Check first so that bad arguments say so instead of failing a half-written file.
-    check_extension(&a.output, "xyzr")?;
+    let binary = check_extension(&a.output, &["xyzr", "f32r"])? == "f32r";
     params.radii().map_err(|e| usage(e.to_string()))?;
-    write_atomic_with(&a.output, |w| params.write_xyzr(w))
+    if binary && u32::try_from(a.count).is_err() {
+        return Err(usage(format!("--count: an .f32r file holds at most {} spheres", u32::MAX)));
+    }
+    write_atomic_with(&a.output, |w| if binary { params.write_f32r(w) } else { params.write_xyzr(w) })
         .with_context(|| format!("{}: cannot write", a.output.display()))?;
     report(a.count, &a.output, start);
     Ok(())
@@ -87,24 +92,26 @@ fn field(a: FieldArgs) -> Result<()> {
 
 fn flake(a: FlakeArgs) -> Result<()> {
     let start = Instant::now();
-    check_extension(&a.output, "nff")?;
+    check_extension(&a.output, &["nff"])?;
     write_atomic_with(&a.output, |w| write_flake_nff(a.level, w))
         .with_context(|| format!("{}: cannot write", a.output.display()))?;
     report(flake_count(a.level), &a.output, start);
     Ok(())
 }
 
-/// The output must carry the extension of the format written: a scene named `.toml` but holding NFF
-/// would fail to load, or load as the wrong format, later. Case-insensitive, as the readers choose.
-fn check_extension(path: &Path, expected: &str) -> Result<()> {
+/// The output must carry the extension of a format written (one of `expected`, which is returned): a scene
+/// named `.toml` but holding NFF would fail to load, or load as the wrong format, later. Case-insensitive,
+/// as the readers choose.
+pub(super) fn check_extension(path: &Path, expected: &[&'static str]) -> Result<&'static str> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
-    if ext.as_deref() != Some(expected) {
-        return Err(usage(format!(
-            "{}: this command writes .{expected}; name the output with the .{expected} extension",
-            path.display()
-        )));
+    if let Some(&found) = expected.iter().find(|&&e| ext.as_deref() == Some(e)) {
+        return Ok(found);
     }
-    Ok(())
+    let names = expected.iter().map(|e| format!(".{e}")).collect::<Vec<_>>().join(" or ");
+    Err(usage(format!(
+        "{}: this command writes {names}; name the output with that extension",
+        path.display()
+    )))
 }
 
 /// A whole count written as digits or as `<mantissa>e<exponent>` (`1e6`, `2.5e5`).
@@ -145,12 +152,13 @@ mod tests {
 
     #[test]
     fn output_extension_must_be_the_format_written() {
-        assert!(check_extension(Path::new("a/f.xyzr"), "xyzr").is_ok());
-        assert!(check_extension(Path::new("F.NFF"), "nff").is_ok());
+        assert_eq!(check_extension(Path::new("a/f.xyzr"), &["xyzr", "f32r"]).unwrap(), "xyzr");
+        assert_eq!(check_extension(Path::new("a/f.F32R"), &["xyzr", "f32r"]).unwrap(), "f32r");
+        assert_eq!(check_extension(Path::new("F.NFF"), &["nff"]).unwrap(), "nff");
         for bad in ["f.nff", "f.toml", "f", "f.xyzr.tmp"] {
-            let e = check_extension(Path::new(bad), "xyzr").unwrap_err();
+            let e = check_extension(Path::new(bad), &["xyzr", "f32r"]).unwrap_err();
             assert!(e.downcast_ref::<super::super::UsageError>().is_some(), "{bad}");
-            assert!(e.to_string().contains(".xyzr"), "{e}");
+            assert!(e.to_string().contains("writes .xyzr or .f32r;"), "{e}");
         }
     }
 

@@ -4,6 +4,7 @@ mod accuracy;
 mod bench;
 mod camera_args;
 mod converge;
+mod convert;
 mod diff;
 mod gen;
 mod merge;
@@ -46,8 +47,12 @@ enum Command {
     /// Run time against error: each sampling method at increasing sample counts against a reference (CSV,
     /// SVG plot).
     Converge(converge::ConvergeArgs),
-    /// Generate a scene file: the benchmark sphere field (.xyzr) or SPD's sphereflake (.nff).
+    /// Generate a scene file: the benchmark sphere field (.xyzr or binary .f32r) or SPD's sphereflake
+    /// (.nff).
     Gen(gen::GenArgs),
+    /// Convert a sphere list between .xyzr (text) and .f32r (binary), the output's extension naming the
+    /// format.
+    Convert(convert::ConvertArgs),
     /// Compare two images (PNG, EXR, PPM): size, RMSE, PSNR, max difference, differing pixels; exit 0 when
     /// identical, 1 when different, 2 on error.
     Diff(diff::DiffArgs),
@@ -87,6 +92,7 @@ pub fn main() -> ExitCode {
     let result = match cli.command {
         Command::Render(args) => render::run(args),
         Command::Gen(args) => gen::run(args),
+        Command::Convert(args) => convert::run(args),
         Command::Bench(args) => bench::run(args),
         Command::Accuracy(args) => accuracy::run(args),
         Command::Converge(args) => converge::run(args),

@@ -33,12 +33,12 @@ bareray render scenes/field.toml --width 1920 --threads 2\n\n\
 Exit codes: 0 success; 2 argument errors (nothing rendered); 1 scene, render or write errors."
 )]
 pub struct RenderArgs {
-    /// Scene file: .toml (bareray's format), .nff (SPD's Neutral File Format) or .xyzr (`x y z r` per
-    /// line); `-` reads the scene from standard input (name its format with --format). Without it, the
-    /// built-in demo scene (scenes/whitted.toml) is rendered.
+    /// Scene file: .toml (bareray's format), .nff (SPD's Neutral File Format), .xyzr (`x y z r` per
+    /// line) or .f32r (binary x y z r records); `-` reads the scene from standard input (name its format
+    /// with --format). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
     pub scene: Option<PathBuf>,
-    /// The format of a scene read from standard input (`render -`): toml, nff or xyzr.
-    #[arg(long, value_parser = ["toml", "nff", "xyzr"])]
+    /// The format of a scene read from standard input (`render -`): toml, nff, xyzr or f32r.
+    #[arg(long, value_parser = ["toml", "nff", "xyzr", "f32r"])]
     pub format: Option<String>,
     /// Output image; the extension picks the format: .png (8-bit), .exr (linear float RGB), .ppm or .pnm
     /// (binary 8-bit PPM, P6), .hdr (Radiance), .tif/.tiff (uncompressed RGB), .jpg/.jpeg (quality 92);
@@ -200,10 +200,15 @@ fn run_ranks(args: RenderArgs, ranks: still::mpi::Ranks) -> Result<()> {
 /// Reads the scene, applies the command line and compiles it: the scene, the render's threads and the job.
 /// Scene warnings are printed when `warn`.
 fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, rayon::ThreadPool, Job)> {
+    let threads = args.threads.map(|t| t as usize);
+    // Reading and the build run on the render's threads too: `--threads 1` means one core throughout.
+    let pool = crate::render::thread_pool(threads)?;
     let clock = Instant::now();
     let (mut desc, name) = match &args.scene {
-        Some(path) if path == Path::new("-") => (read_stdin_scene(args)?, "stdin".to_owned()),
-        Some(path) => (load_scene(path)?, stem(path)),
+        Some(path) if path == Path::new("-") => {
+            (pool.install(|| read_stdin_scene(args))?, "stdin".to_owned())
+        }
+        Some(path) => (load_scene(path, &pool)?, stem(path)),
         None => (toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?, "demo".to_owned()),
     };
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
@@ -238,9 +243,6 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
     }
     time.parse = clock.elapsed().as_secs_f64();
 
-    let threads = args.threads.map(|t| t as usize);
-    // The build runs on the render's threads too: `--threads 1` means one core throughout.
-    let pool = crate::render::thread_pool(threads)?;
     // Build: the scene compiled for rendering, the BVH included (`scene.build.seconds` is the BVH's part).
     let clock = Instant::now();
     let options = CompileOptions { preset: args.bvh_preset.into(), ..CompileOptions::default() };
@@ -288,12 +290,14 @@ fn report(args: &RenderArgs, scene: &Scene, job: &Job, traced: &Traced, time: &T
 /// The scene on standard input, in the format --format names.
 fn read_stdin_scene(args: &RenderArgs) -> Result<SceneDesc> {
     let Some(format) = args.format.as_deref().and_then(crate::io::SceneFormat::from_name) else {
-        return Err(super::usage("a scene read from standard input (`-`) needs --format toml, nff or xyzr"));
+        return Err(super::usage(
+            "a scene read from standard input (`-`) needs --format toml, nff, xyzr or f32r",
+        ));
     };
-    let mut source = String::new();
-    std::io::Read::read_to_string(&mut std::io::stdin(), &mut source)
-        .context("<stdin>: the scene is not UTF-8 text")?;
-    Ok(crate::io::parse(format, Path::new("<stdin>"), &source)?)
+    let mut source = Vec::new();
+    std::io::Read::read_to_end(&mut std::io::stdin(), &mut source)
+        .context("<stdin>: cannot read the scene")?;
+    Ok(crate::io::parse(format, Path::new("<stdin>"), source)?)
 }
 
 /// What decides the output's bytes, hashed: the version, the scene after the command line's overrides
@@ -604,9 +608,10 @@ fn stem(path: &Path) -> String {
     path.file_stem().map_or_else(|| "out".to_owned(), |s| s.to_string_lossy().into_owned())
 }
 
-/// Reads a scene file, choosing the reader by extension.
-pub fn load_scene(path: &Path) -> Result<SceneDesc> {
-    Ok(crate::io::load(path)?)
+/// Reads a scene file, choosing the reader by extension, on `pool`'s threads (the sphere lists are read in
+/// parallel).
+pub fn load_scene(path: &Path, pool: &rayon::ThreadPool) -> Result<SceneDesc> {
+    Ok(pool.install(|| crate::io::load(path))?)
 }
 
 fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {

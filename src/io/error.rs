@@ -37,6 +37,11 @@ impl SceneError {
 pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
     let bytes =
         std::fs::read(path).map_err(|e| SceneError::whole_file(path, format!("cannot read {what}: {e}")))?;
+    text(path, bytes)
+}
+
+/// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start.
+pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
     String::from_utf8(bytes).map_err(|e| {
         let valid = e.utf8_error().valid_up_to();
         let before = std::str::from_utf8(&e.as_bytes()[..valid]).expect("valid up to there");

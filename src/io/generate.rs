@@ -1,5 +1,5 @@
 //! Scene generators: the benchmark contract's random sphere field (DESIGN.md, "Peer benchmark contract") and
-//! SPD's sphereflake (`balls`), written as `.xyzr` and `.nff` text.
+//! SPD's sphereflake (`balls`), written as `.xyzr` (or binary `.f32r`) and `.nff` text.
 
 use std::io::{self, Write};
 
@@ -90,6 +90,14 @@ impl FieldParams {
             writeln!(w, "{x} {y} {z} {r}")?;
         }
         Ok(())
+    }
+
+    /// Writes the field as `.f32r` ([`super::f32r`]): the f32 values [`Self::write_xyzr`] writes as text.
+    /// Invalid parameters (or more spheres than the format's u32 count holds) are an `InvalidInput` error
+    /// before anything is written.
+    pub fn write_f32r(&self, w: &mut impl Write) -> io::Result<()> {
+        let spheres = self.spheres().map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
+        super::f32r::write(w, self.count, spheres)
     }
 
     /// The `.xyzr` text in memory (for tests and small fields).

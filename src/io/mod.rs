@@ -1,7 +1,8 @@
-//! Scene readers (TOML, NFF, xyzr) and generators: files and parameters become a plain [`SceneDesc`], which
+//! Scene readers (TOML, NFF, xyzr, f32r) and generators: files and parameters become a plain [`SceneDesc`], which
 //! [`crate::compile`] turns into the runtime scene.
 
 pub mod error;
+pub mod f32r;
 pub mod generate;
 pub mod nff;
 pub mod toml;
@@ -20,6 +21,8 @@ pub enum SceneFormat {
     Nff,
     /// One sphere `x y z r` per line.
     Xyzr,
+    /// Binary sphere records `x y z r` (little-endian f32) after a header: [`f32r`].
+    F32r,
 }
 
 impl SceneFormat {
@@ -29,29 +32,32 @@ impl SceneFormat {
         Self::from_name(ext.as_deref()?)
     }
 
-    /// The format named `toml`, `nff` or `xyzr`.
+    /// The format named `toml`, `nff`, `xyzr` or `f32r`.
     pub fn from_name(name: &str) -> Option<Self> {
         match name {
             "toml" => Some(Self::Toml),
             "nff" => Some(Self::Nff),
             "xyzr" => Some(Self::Xyzr),
+            "f32r" => Some(Self::F32r),
             _ => None,
         }
     }
 }
 
 /// Parses a scene held in memory (read from standard input, say) in `format`; errors name `name` as the
-/// file.
-pub fn parse(format: SceneFormat, name: &std::path::Path, source: &str) -> Result<SceneDesc, SceneError> {
+/// file. The text formats must be UTF-8 (bytes that are not are an error at their line and column).
+pub fn parse(format: SceneFormat, name: &std::path::Path, source: Vec<u8>) -> Result<SceneDesc, SceneError> {
     match format {
-        SceneFormat::Toml => toml::parse(name, source),
-        SceneFormat::Nff => nff::parse(name, source),
-        SceneFormat::Xyzr => xyzr::parse(name, source),
+        SceneFormat::Toml => toml::parse(name, &error::text(name, source)?),
+        SceneFormat::Nff => nff::parse(name, &error::text(name, source)?),
+        SceneFormat::Xyzr => xyzr::parse(name, &error::text(name, source)?),
+        SceneFormat::F32r => f32r::parse(name, &source),
     }
 }
 
-/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff` or `.xyzr` (a directory is an
-/// error saying so, whatever its name).
+/// Reads a scene file, choosing the reader by its extension: `.toml`, `.nff`, `.xyzr` or `.f32r` (a
+/// directory is an error saying so, whatever its name). The sphere lists are read in parallel on the
+/// current rayon pool (the CLI's is the one of `--threads`).
 ///
 /// ```
 /// use std::path::Path;
@@ -72,8 +78,10 @@ pub fn load(path: &std::path::Path) -> Result<SceneDesc, SceneError> {
         Some(SceneFormat::Toml) => toml::load(path),
         Some(SceneFormat::Nff) => nff::load(path),
         Some(SceneFormat::Xyzr) => xyzr::load(path),
-        None => {
-            Err(SceneError::whole_file(path, "unknown scene format (expected a .toml, .nff or .xyzr file)"))
-        }
+        Some(SceneFormat::F32r) => f32r::load(path),
+        None => Err(SceneError::whole_file(
+            path,
+            "unknown scene format (expected a .toml, .nff, .xyzr or .f32r file)",
+        )),
     }
 }

@@ -9,6 +9,7 @@
 //! left of the eye so that shading shows the spheres' shape. The CLI overrides the camera. Values go to 8-bit
 //! images with [`Transfer::Linear`], as NFF's do (the benchmark's peers read sphere lists as NFF spheres).
 
+use std::io::{self, Write};
 use std::path::Path;
 
 use glam::DVec3;
@@ -29,7 +30,12 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 /// list is 460 MB of text) and joined in file order, so ids, and the first error reported, are those of a
 /// sequential read.
 pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
-    let chunks = line_chunks(source, CHUNK_BYTES);
+    parse_in_chunks(path, source, CHUNK_BYTES)
+}
+
+/// [`parse`] with chunks of about `chunk_bytes` (a whole line at least).
+fn parse_in_chunks(path: &Path, source: &str, chunk_bytes: usize) -> Result<SceneDesc, SceneError> {
+    let chunks = line_chunks(source, chunk_bytes);
     let parsed: Vec<_> = chunks.par_iter().map(|text| parse_lines(text)).collect();
     let mut spheres = Vec::with_capacity(parsed.iter().map(|r| r.as_ref().map_or(0, Vec::len)).sum());
     for (k, chunk) in parsed.into_iter().enumerate() {
@@ -57,7 +63,7 @@ fn line_chunks(source: &str, size: usize) -> Vec<&str> {
     let bytes = source.as_bytes();
     let (mut chunks, mut start) = (Vec::new(), 0);
     while start < bytes.len() {
-        let cut = (start + size).min(bytes.len());
+        let cut = start.saturating_add(size).min(bytes.len());
         let end = bytes[cut..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| cut + p + 1);
         // `end` follows a '\n' or is the end, so it is a char boundary.
         chunks.push(&source[start..end]);
@@ -97,6 +103,30 @@ fn sphere(text: &str) -> Result<SphereDesc, String> {
         return Err(format!("radius must be positive, got {}", v[3]));
     }
     Ok(SphereDesc { center: DVec3::new(v[0], v[1], v[2]), radius: v[3], material: 0 })
+}
+
+/// Writes `spheres` as `.xyzr` after the `#` line `comment`: `x y z r` per line, each value in the
+/// shortest text that reads back to it (as an f32 where the value is one, so f32 fields stay short).
+pub fn write(w: &mut impl Write, comment: &str, spheres: &[SphereDesc]) -> io::Result<()> {
+    writeln!(w, "# {comment}\n# x y z r")?;
+    for s in spheres {
+        let [x, y, z, r] = [s.center.x, s.center.y, s.center.z, s.radius].map(Shortest);
+        writeln!(w, "{x} {y} {z} {r}")?;
+    }
+    Ok(())
+}
+
+/// An f64 shown as its f32 when it is one exactly.
+struct Shortest(f64);
+
+impl std::fmt::Display for Shortest {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        let single = self.0 as f32;
+        match f64::from(single) == self.0 {
+            true => write!(f, "{single}"),
+            false => write!(f, "{}", self.0),
+        }
+    }
 }
 
 /// A scene showing `spheres`: default material, a camera framing their bounds, one light.
@@ -145,6 +175,54 @@ pub fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// Text of `n` lines: spheres in varied spellings, comments, blank lines, CRLF endings, no final newline.
+    fn list(n: usize) -> String {
+        let mut s = String::new();
+        for i in 0..n {
+            let v = (i as f64 * 0.37).sin();
+            s += &match i % 7 {
+                0 => "# comment 1 2 3\n".to_owned(),
+                1 => "\n".to_owned(),
+                2 => format!("{v} {} {:e} 0.{i}1\r\n", v * 3.0, -v),
+                _ => format!("  {v}\t{i}e-3 {} {}\n", 1.0 / (i as f64 + 1.0), i % 5 + 1),
+            };
+        }
+        s + "1 2 3 4"
+    }
+
+    /// Chunks of any size, down to a line each, read what one chunk (a sequential read) reads, bit for bit,
+    /// and report the same first error at the same line.
+    #[test]
+    fn chunked_reads_equal_the_sequential_read() {
+        let path = Path::new("t.xyzr");
+        let text = list(3000);
+        let whole = parse_in_chunks(path, &text, usize::MAX).unwrap();
+        // 429 comments and 429 blank lines among the 3000; the last line has no newline.
+        assert_eq!(whole.spheres.len(), 3000 - 2 * 429 + 1);
+        let bits = |d: &SceneDesc| -> Vec<[u64; 4]> {
+            d.spheres
+                .iter()
+                .map(|s| [s.center.x, s.center.y, s.center.z, s.radius].map(f64::to_bits))
+                .collect()
+        };
+        let mut bad = text.clone();
+        for (line, junk) in [(2900, "1 2 3 -4"), (1700, "1 2 x 4"), (2500, "1 2 3")] {
+            let at: usize = bad.split_inclusive('\n').take(line - 1).map(str::len).sum();
+            bad.insert_str(at, &format!("{junk}\n"));
+        }
+        let first = parse_in_chunks(path, &bad, usize::MAX).unwrap_err();
+        assert_eq!(
+            (first.line, first.message.as_str()),
+            (1700, "expected z (a finite number within f32 range), got `x`")
+        );
+        for size in [1, 2, 40, 100, 4096, 65_536] {
+            let chunked = parse_in_chunks(path, &text, size).unwrap();
+            assert_eq!(bits(&chunked), bits(&whole), "chunks of {size} bytes");
+            assert_eq!(chunked, whole, "chunks of {size} bytes");
+            assert_eq!(parse_in_chunks(path, &bad, size).unwrap_err(), first, "chunks of {size} bytes");
+        }
+    }
 
     #[test]
     fn camera_sees_the_whole_front_face() {
