@@ -6,7 +6,7 @@
 # usage: check_accuracy.sh [path/to/bareray]       env: COUNTS="1e3 1e5 1e6"
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-bareray="${1:-$here/../target/release/bareray}"
+bareray="${1:-$here/../target/native/release/bareray}"
 make -s -C "$here/embree"
 mkdir -p "$here/results" "$here/out"
 out="$here/results/accuracy-$(date -u +%Y-%m-%dT%H%M%SZ).txt"

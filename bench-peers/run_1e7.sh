@@ -7,7 +7,7 @@
 # usage: run_1e7.sh [path/to/bareray]       env: PAIRS=2 THREADS=2 API=8 REPS=3
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-bareray="${1:-$here/../target/release/bareray}"
+bareray="${1:-$here/../target/native/release/bareray}"
 make -s -C "$here/embree"
 mkdir -p "$here/results" "$here/out"
 f="$here/out/field-1e7.xyzr"

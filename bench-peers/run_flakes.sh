@@ -7,7 +7,7 @@
 # usage: run_flakes.sh [path/to/bareray]       env: LEVELS="4 5 6" REPS=3 THREADS=2 SIZE=1024 LANES=16
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-bareray="${1:-$here/../target/release/bareray}"
+bareray="${1:-$here/../target/native/release/bareray}"
 stamp="$(date -u +%Y-%m-%dT%H%M%SZ)"
 res="$here/results/flakes-$stamp"
 mkdir -p "$res" "$here/out"

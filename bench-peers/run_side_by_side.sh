@@ -13,7 +13,7 @@
 #        EMBREE_ARGS=""
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
-bareray="${1:-$here/../target/release/bareray}"
+bareray="${1:-$here/../target/native/release/bareray}"
 make -s -C "$here/embree"
 mkdir -p "$here/results" "$here/out"
 stamp="$(date -u +%Y-%m-%dT%H%M%SZ)"

@@ -1,10 +1,12 @@
-//! The startup check for portable binaries. `.cargo/config.toml` builds with `-C target-cpu=native`, so the
-//! binary may use every instruction set of the build machine anywhere (the kernels through `wide`: AVX-512,
-//! AVX2, FMA; any other code through the compiler's own vectorisation, and with LTO that includes the
-//! standard library's start-up code, which runs before `main`). On a CPU without one of them it would die
-//! with SIGILL, without a word. In the `bareray` binary [`check_or_exit`] runs as an ELF constructor, before
-//! Rust's runtime and clap, and turns that into an error naming what is missing and how to rebuild
-//! (elsewhere than Linux, [`check`] runs first thing in [`crate::cli::main`]).
+//! The startup check for portable binaries. `.cargo/config.toml` builds for x86-64-v3 (AVX2, FMA, BMI1/2,
+//! LZCNT, MOVBE, F16C), and its `cargo build-native` alias for the build machine's own CPU (AVX-512 where it
+//! has it): the binary may use every instruction set it was built for anywhere (the kernels through `wide`;
+//! any other code through the compiler's own vectorisation, and with LTO that includes the standard
+//! library's start-up code, which runs before `main`). On a CPU without one of them it would die with
+//! SIGILL, without a word: a default build on a CPU older than Haswell, a native build on any CPU that lacks
+//! one of the build machine's features. In the `bareray` binary [`check_or_exit`] runs as an ELF
+//! constructor, before Rust's runtime and clap, and turns that into an error naming what is missing and how
+//! to build for this CPU (elsewhere than Linux, [`check`] runs first thing in [`crate::cli::main`]).
 //!
 //! Detection reads CPUID (and XCR0, for whether the OS saves the AVX and AVX-512 registers) directly:
 //! `is_x86_feature_detected!` answers `true` for any feature the binary was compiled with, without asking
@@ -58,7 +60,7 @@ struct Feature {
 macro_rules! features {
     ($($name:tt: $reg:ident[$bit:literal] $state:ident,)*) => {
         /// The features the check knows: x86-64-v2 to v4 and the later AVX-512 and AVX extensions, i.e.
-        /// everything the compiler may emit unasked under `target-cpu=native` (SSE and SSE2 are x86-64's
+        /// everything the compiler may emit unasked under any `target-cpu` (SSE and SSE2 are x86-64's
         /// baseline; instructions reached only through explicit intrinsics, such as RDRAND, are left out).
         const FEATURES: &[Feature] = &[$(Feature {
             name: $name,
@@ -151,7 +153,7 @@ fn emit_message<'a>(
 ) {
     emit(
         "error: this CPU lacks instructions this bareray binary was compiled for, so it stops here \
-         instead of crashing with an illegal instruction.\n  missing: ",
+         instead of crashing with an illegal instruction.\n  missing:",
     );
     for name in missing {
         emit(" ");
@@ -163,10 +165,11 @@ fn emit_message<'a>(
         emit(name);
     }
     emit(
-        "\nThe build uses -C target-cpu=native (.cargo/config.toml): it runs only on CPUs with the build \
-         machine's instruction sets. Rebuild on this machine with `cargo build --release`, or build a \
-         portable binary for a baseline, e.g. RUSTFLAGS=\"-C target-cpu=x86-64-v3\" cargo build --release \
-         (AVX2 and FMA; x86-64-v2 or x86-64 for older CPUs).\n",
+        "\nThe default build, `cargo build --release` (.cargo/config.toml), is for x86-64-v3: AVX2, FMA and \
+         BMI2 (Intel Haswell, AMD Zen and later); `cargo build-native` builds for the CPU that runs the build \
+         and runs only on CPUs with all of its instruction sets. For a CPU without AVX2 and FMA, build for a \
+         lower baseline: RUSTFLAGS=\"-C target-cpu=x86-64-v2\" cargo build --release (SSE4.2; or x86-64 \
+         for any x86-64 CPU).\n",
     );
 }
 
@@ -359,11 +362,12 @@ mod tests {
     fn message_names_both_lists_and_the_fix() {
         let m = message(&["avx2", "avx512f", "fma"], &["avx512f"]);
         assert!(m.starts_with("error: "));
-        assert!(m.contains("missing:  avx512f\n"));
+        assert!(m.contains("missing: avx512f\n"));
         assert!(m.ends_with(".\n"));
         assert!(m.contains("required: avx2 avx512f fma\n"));
-        assert!(m.contains("`cargo build --release`"));
-        assert!(m.contains("RUSTFLAGS=\"-C target-cpu=x86-64-v3\""));
+        assert!(m.contains("`cargo build --release`") && m.contains("x86-64-v3"));
+        assert!(m.contains("`cargo build-native`"));
+        assert!(m.contains("RUSTFLAGS=\"-C target-cpu=x86-64-v2\" cargo build --release"));
     }
 
     /// The machine running the tests runs the binary it built: nothing compiled for is missing.

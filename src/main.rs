@@ -5,7 +5,7 @@
 static ALLOCATOR: bareray::huge_pages::HugePages = bareray::huge_pages::HugePages;
 
 /// The CPU check (`bareray::cpu`): an ELF constructor, so that it runs before Rust's runtime, whose start-up
-/// code LTO compiles with the build machine's instruction sets like the rest. Priority 90 puts it before
+/// code LTO compiles with the build's instruction sets like the rest. Priority 90 puts it before
 /// the standard library's own constructor (99, which records the arguments).
 #[cfg(all(target_os = "linux", any(target_arch = "x86", target_arch = "x86_64")))]
 #[used]

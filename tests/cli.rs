@@ -563,7 +563,8 @@ fn a_cpu_lacking_a_compiled_for_feature_stops_with_a_message() {
     assert_eq!(missing.split_whitespace().collect::<Vec<_>>(), lacks, "{err}");
     let listed = err.lines().find_map(|l| l.trim().strip_prefix("required:")).expect(&err);
     assert_eq!(listed.split_whitespace().collect::<Vec<_>>(), required, "{err}");
-    assert!(err.contains("cargo build --release") && err.contains("-C target-cpu=x86-64-v3"), "{err}");
+    assert!(err.contains("`cargo build --release`") && err.contains("x86-64-v3"), "{err}");
+    assert!(err.contains("`cargo build-native`") && err.contains("-C target-cpu=x86-64-v2"), "{err}");
 }
 
 /// Without the variable the check passes on the machine that built the binary: it renders as usual.

@@ -4,9 +4,14 @@
 //!
 //! Each input is a function of (reader, seed, index) alone, so a failure is reproduced by its seed and
 //! index: `BARERAY_FUZZ_SEED=S BARERAY_FUZZ_START=I BARERAY_FUZZ_INPUTS=1`. A failing input is also written
-//! to the system's temporary directory. `BARERAY_FUZZ_INPUTS` sets the number of inputs per reader of the
-//! default tests (kept small enough for CI's test profile); the ignored tests run 1 000 000 per reader:
-//! `cargo test --release --test fuzz_readers -- --ignored --nocapture`.
+//! to the system's temporary directory.
+//!
+//! The default tests, which `cargo test` and so CI run, take 20 000 inputs per reader ([`CI_RUN`]); the
+//! ignored tests are the full run, 1 000 000 per reader ([`FULL_RUN`]):
+//! `cargo test --release --test fuzz_readers -- --ignored --nocapture`. `BARERAY_FUZZ_INPUTS` replaces the
+//! count of either. Each test prints the count it ran and what came of it (`fuzz: toml: 1000000 inputs, …`,
+//! seen with `--nocapture`), and a run of [`PROGRESS`] inputs or more prints how far it got every
+//! [`PROGRESS`] inputs.
 //!
 //! What an error must say: `name:N` (and optionally `:column`) with 1 ≤ N ≤ (number of '\n') + 1; the
 //! last value is the line after a final newline, where an error about the end of the file lands (TOML
@@ -34,6 +39,8 @@ const FULL_RUN: u64 = 1_000_000;
 /// Inputs per reader of the default run, unless `BARERAY_FUZZ_INPUTS` says otherwise: a few seconds per
 /// reader in the test profile on a shared 2-core machine.
 const CI_RUN: u64 = 20_000;
+/// A run prints a progress line every this many inputs.
+const PROGRESS: u64 = 100_000;
 /// The default seed; every run with it sees the same inputs.
 const DEFAULT_SEED: u64 = 0xB4E4_F022_5EED_0001;
 /// A parse that makes no progress for this long is a hang.
@@ -618,6 +625,15 @@ fn fuzz(reader: Reader, default_count: u64) {
             let report = format!("input {index} (seed {seed:#x}, saved as {}): {why}", file.display());
             eprintln!("fuzz: {}: {report}", reader.name());
             t.failures.push(report);
+        }
+        let done = index - start + 1;
+        if done % PROGRESS == 0 && done < count {
+            println!(
+                "fuzz: {}: {done} of {count} inputs, {} panics or bad errors, {:.1} s",
+                reader.name(),
+                t.failures.len(),
+                began.elapsed().as_secs_f64()
+            );
         }
     }
     current.store(u64::MAX, Ordering::Relaxed);

@@ -22,7 +22,8 @@ use crate::scene::desc::Pattern;
 #[command(after_help = "Every row reports the minimum, median and maximum seconds of its timed runs, and \
 Mrays/s from the median. The table's header and every JSON object name the CPU model, the instruction set \
 the kernels were compiled for (and what 16 lanes are in it), the core count, the build profile and the \
-version.\n\n\
+version; the header notes when this CPU has AVX-512 that the build leaves unused (the default x86-64-v3 \
+build; `cargo build-native` builds for this CPU).\n\n\
 Examples:\n  bareray gen field --count 1000000 -o f.xyzr\n  \
 bareray bench f.xyzr --primary-only --eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080\n  \
 bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --json > old.json\n  \
@@ -148,6 +149,28 @@ fn isa() -> (&'static str, &'static str) {
     } else {
         ("none", "16 scalar values (no SIMD)")
     }
+}
+
+/// A line for the table's header when this CPU has a wider SIMD instruction set than the kernels were
+/// compiled for (a default x86-64-v3 build on an AVX-512 machine): the numbers are not this CPU's best.
+fn unused_isa_note() -> Option<&'static str> {
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    {
+        let cpu = crate::cpu::detect::Cpu::read();
+        if !cfg!(target_feature = "avx512f") && cpu.has("avx512f") {
+            return Some(
+                "note: this CPU has AVX-512, which this build leaves unused; `cargo build-native` builds \
+                 for it (PERF.md's numbers are native builds)",
+            );
+        }
+        if !cfg!(target_feature = "avx2") && cpu.has("avx2") {
+            return Some(
+                "note: this CPU has AVX2, which this build leaves unused; `cargo build --release` builds \
+                 for it, `cargo build-native` for all this CPU has",
+            );
+        }
+    }
+    None
 }
 
 /// The cores this process may run on (1 when unknown).
@@ -369,6 +392,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
             "host: {}, {} cores; kernels for {} (16 lanes = {}); {} build; bareray {}",
             host.cpu, host.cores, host.isa, host.lanes16, host.profile, host.version
         )?;
+        if let Some(note) = unused_isa_note() {
+            writeln!(out, "{note}")?;
+        }
         writeln!(out, "{} timed runs per row after one warm-up; Mrays/s from the median", args.reps)?;
         writeln!(
             out,
@@ -530,6 +556,19 @@ mod tests {
         assert_eq!(default_threads(1), vec![1]);
         assert_eq!(default_threads(2), vec![1, 2]);
         assert_eq!(default_threads(64), vec![1, 64]);
+    }
+
+    /// The note appears exactly when the CPU has AVX-512 (or AVX2) and the build does not use it.
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[test]
+    fn unused_isa_note_names_what_the_cpu_has_beyond_the_build() {
+        let cpu = crate::cpu::detect::Cpu::read();
+        let note = unused_isa_note();
+        let avx512_unused = cpu.has("avx512f") && !cfg!(target_feature = "avx512f");
+        let avx2_unused = cpu.has("avx2") && !cfg!(target_feature = "avx2");
+        assert_eq!(note.is_some(), avx512_unused || avx2_unused, "{note:?}");
+        assert_eq!(note.is_some_and(|n| n.contains("AVX-512")), avx512_unused, "{note:?}");
+        assert!(note.is_none_or(|n| n.contains("`cargo build-native`")));
     }
 
     #[test]

@@ -5,7 +5,8 @@
 //! # Why the lane instances are bit-identical to `f32`
 //!
 //! Checked in wide 1.7.1's source (`f32x{4,8,16}_.rs`, with safe_arch underneath), for x86-64 with SSE4.1,
-//! AVX and AVX-512F enabled (`target-cpu=native`):
+//! AVX and AVX-512F enabled (`target-cpu=native` on an AVX-512 machine; the default x86-64-v3 build takes
+//! the same operations' AVX forms, f32x16 as two f32x8):
 //!
 //! - `+ − × ÷` are `addps/subps/mulps/divps` (and the `v…256/512` forms); `sqrt` is `sqrtps`. All are IEEE
 //!   correctly rounded, exactly like the scalar `addss/…/sqrtss` the `f32` instance compiles to. Nothing here
