@@ -1,6 +1,7 @@
 //! Generated-input tests of the scene readers (TOML, NFF, xyzr): mutations of the real scenes in `scenes/`
 //! (and a generated sphereflake) are parsed, and every one must give a scene or an error naming the file and
-//! a line; none may panic or hang.
+//! a line; none may panic or hang. The binary f32r reader gets mutations of binary fields, checked against
+//! an independent decoding of the format (its tests at the end of the file).
 //!
 //! Each input is a function of (reader, seed, index) alone, so a failure is reproduced by its seed and
 //! index: `BARERAY_FUZZ_SEED=S BARERAY_FUZZ_START=I BARERAY_FUZZ_INPUTS=1`. A failing input is also written
