@@ -89,7 +89,8 @@ fn streamed_files_are_the_whole_image_paths_bytes() {
 /// Regions cut across tiles and packet blocks, rendered apart (through the command line, with --region and
 /// --crop) and merged, are the full render's file byte for byte, for 8- and 16-bit PNG, EXR and PPM, on a
 /// scene with the lecture's 3×3 postfilter (whose neighbours cross the cuts), one with a Mitchell filter,
-/// and a sphere field under the coverage pattern (whose per-tile sphere lists start elsewhere in a region).
+/// a sphere field under the coverage pattern (whose per-tile sphere lists start elsewhere in a region), and
+/// ambient occlusion under stratified sampling (whose directions must not depend on where tiles start).
 #[test]
 fn regions_merge_into_the_full_image_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
@@ -99,6 +100,7 @@ fn regions_merge_into_the_full_image_byte_for_byte() {
         ("scenes/lecture.toml", &[][..]),
         ("scenes/whitted.toml", &["--filter", "mitchell"][..]),
         ("scenes/field.toml", &["--aa", "coverage"][..]),
+        ("scenes/whitted.toml", &["--shade", "ao:4", "--aa", "stratified:4"][..]),
     ] {
         let scene = root.join(scene);
         for (ext, depth) in [("png", "8"), ("png", "16"), ("exr", "8"), ("ppm", "8")] {
