@@ -37,7 +37,8 @@ fn scene_file(name: &str, width: u32, height: u32) -> SceneDesc {
 
 /// AO renders are the same bits (and count the same rays) at 1, 4, 8 and 16 lanes and on 1 and 2 threads,
 /// under each sampling pattern (every antialiasing sample gets its own occlusion rays), on the Whitted scene
-/// (spheres over a plane, brute force) and on a sphere field (BVH walks, incoherent rays).
+/// (spheres over a plane, brute force; 5 directions: fewer than K but at K = 4) and on a sphere field (BVH
+/// walks; 21 directions, more than K).
 #[test]
 fn ao_is_the_same_bits_at_every_width_and_thread_count() {
     let adaptive = Pattern::Adaptive { threshold: 0.05, depth: 2 };
@@ -49,7 +50,7 @@ fn ao_is_the_same_bits_at_every_width_and_thread_count() {
         cases.push((format!("whitted {pattern:?}"), d));
     }
     let mut field = scene_file("scenes/field1k.xyzr", 48, 40);
-    field.render.shade = ao(6, None);
+    field.render.shade = ao(21, None);
     cases.push(("field1k".into(), field));
     for (name, desc) in &cases {
         let (reference, rays) = image(desc, 1, 1);
@@ -68,11 +69,15 @@ fn ao_is_the_same_bits_at_every_width_and_thread_count() {
 fn packet_lanes_are_the_scalar_tracer() {
     let mut desc = scene_file("scenes/field1k.xyzr", 32, 32);
     add_floor(&mut desc);
-    desc.render.shade = ao(7, None);
-    let scene = Scene::compile(&desc).unwrap();
-    check_lanes::<wide::f32x4>(&scene, 1);
-    check_lanes::<wide::f32x8>(&scene, 2);
-    check_lanes::<wide::f32x16>(&scene, 3);
+    // 7 directions: one per pixel's hit in each packet at K = 8 and 16, a hit's own packets at K = 4; 20:
+    // a hit's own packets at every K, the last one part full.
+    for samples in [7, 20] {
+        desc.render.shade = ao(samples, None);
+        let scene = Scene::compile(&desc).unwrap();
+        check_lanes::<wide::f32x4>(&scene, 1);
+        check_lanes::<wide::f32x8>(&scene, 2);
+        check_lanes::<wide::f32x16>(&scene, 3);
+    }
 }
 
 /// A plane under the field, so that rays also hit a primitive that is not a sphere.

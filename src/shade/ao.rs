@@ -2,6 +2,9 @@
 //! `samples` cosine-weighted directions over the hemisphere around the shading normal, each an occlusion
 //! packet (any hit, early exit) of length `distance` leaving the surface as shadow rays do (from the hit
 //! point, skipping the departure primitive); the colour is the surface's times the share that nothing blocks.
+//! With K or more samples a packet holds K directions of one hit (one origin: coherent walks); with fewer, it
+//! holds one direction of each of the K pixels' hits, so that packets run full. Each ray is the same in
+//! both, and each ray's answer is exact, so the counts are the same bits either way.
 //!
 //! The directions of a hit are a Fibonacci lattice over the unit square (`((k + ½)/n, k/φ)` mod 1, φ the
 //! golden ratio: evenly spread in both coordinates, so in radius and in azimuth) shifted by a random
@@ -11,12 +14,12 @@
 //! samples gets its own set. The seed and the directions in the tangent frame are scalar code per lane
 //! (`sin`, `cos`); the frame around the normal is lane arithmetic in the scalar operation order.
 
-use crate::geometry::{DeparturePacket, RayPacket};
+use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, SplitMix64, V3};
 use crate::scene::desc::Ao;
-use crate::simd::{set_bits, Lanes};
+use crate::simd::{set_bits, IdLanes, Lanes};
 
-use super::{lanes_set, splat_rgb, Tracer};
+use super::{splat_rgb, Surface, Tracer};
 
 impl<F: Lanes> Tracer<'_, F> {
     /// The ambient occlusion of each active camera ray's hit times the surface's colour; the background
@@ -30,13 +33,70 @@ impl<F: Lanes> Tracer<'_, F> {
             return background;
         }
         let s = self.surface(rays, &hit, found);
+        let distance = F::splat_f32(ao.distance.map_or(f32::INFINITY, |d| d as f32));
+        let open = if ao.samples as usize >= F::K {
+            self.open_by_hit(rays, &hit, &s, found, ao, distance)
+        } else {
+            self.open_by_pixel(rays, &hit, &s, found, ao, distance)
+        };
+        let share = open / F::splat_f32(ao.samples as f32);
+        V3::select(found, s.base * share, background)
+    }
+
+    /// How many of each found lane's `ao.samples` occlusion rays nothing blocks, traced K directions of one
+    /// hit at a time (one origin per packet): for sample counts of K and more.
+    fn open_by_hit(
+        &mut self,
+        rays: &RayPacket<F>,
+        hit: &HitPacket<F>,
+        s: &Surface<F>,
+        found: F::Mask,
+        ao: Ao,
+        distance: F,
+    ) -> F {
+        let mut open = [0u32; 16];
+        for i in set_bits(F::move_mask(found)) {
+            let shift = rotation(rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i));
+            let lane = |v: &V3<F>| F::splat_v3(V3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i)));
+            let (point, normal) = (lane(&s.point), lane(&s.normal));
+            let inward = F::mask_from_bits(if F::mask_lane(s.inside, i) { u32::MAX } else { 0 });
+            let from = DeparturePacket { prim: F::Ids::splat(hit.prim.lane(i)), inward };
+            for first in (0..ao.samples).step_by(F::K) {
+                let count = F::K.min((ao.samples - first) as usize);
+                let mut local = [F::splat_f32(0.0).to_array(); 3];
+                for j in 0..count {
+                    let d = tangent_direction(shift, first + j as u32, ao.samples);
+                    (local[0].as_mut()[j], local[1].as_mut()[j], local[2].as_mut()[j]) = (d.x, d.y, d.z);
+                }
+                let [x, y, z] = local.map(|c| F::from_lanes(c.as_ref()));
+                let live = F::lanes_below(count);
+                let probe = RayPacket::new(point, around(normal, V3::new(x, y, z)), distance, live);
+                self.counts.ao += count as u64;
+                let blocked = self.scene.geometry.occluded_hinted_k(&probe, &from, &mut self.ao_hint);
+                open[i] += F::move_mask(live & !blocked).count_ones();
+            }
+        }
+        F::from_fn(|i| open[i] as f32)
+    }
+
+    /// [`Tracer::open_by_hit`] traced one direction of every found lane at a time (lanes = pixels): for
+    /// fewer samples than K, where a hit's own packets would run part empty. Every ray is the same as there,
+    /// so the counts are the same bits.
+    fn open_by_pixel(
+        &mut self,
+        rays: &RayPacket<F>,
+        hit: &HitPacket<F>,
+        s: &Surface<F>,
+        found: F::Mask,
+        ao: Ao,
+        distance: F,
+    ) -> F {
         let from = DeparturePacket { prim: hit.prim, inward: s.inside };
         let bits = F::move_mask(found);
         let mut shift = [(0.0, 0.0); 16];
         for i in set_bits(bits) {
             shift[i] = rotation(rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i));
         }
-        let distance = F::splat_f32(ao.distance.map_or(f32::INFINITY, |d| d as f32));
         let one = F::splat_f32(1.0);
         let mut open = F::splat_f32(0.0);
         for k in 0..ao.samples {
@@ -45,16 +105,13 @@ impl<F: Lanes> Tracer<'_, F> {
                 let d = tangent_direction(shift[i], k, ao.samples);
                 (local[0].as_mut()[i], local[1].as_mut()[i], local[2].as_mut()[i]) = (d.x, d.y, d.z);
             }
-            let local = V3::new(F::from_lanes(local[0].as_ref()), F::from_lanes(local[1].as_ref()), {
-                F::from_lanes(local[2].as_ref())
-            });
-            let probe = RayPacket::new(s.point, around(s.normal, local), distance, found);
-            self.counts.ao += lanes_set::<F>(found);
+            let [x, y, z] = local.map(|c| F::from_lanes(c.as_ref()));
+            let probe = RayPacket::new(s.point, around(s.normal, V3::new(x, y, z)), distance, found);
+            self.counts.ao += u64::from(bits.count_ones());
             let blocked = self.scene.geometry.occluded_hinted_k(&probe, &from, &mut self.ao_hint);
             open = F::select(found & !blocked, open + one, open);
         }
-        let share = open / F::splat_f32(ao.samples as f32);
-        V3::select(found, s.base * share, background)
+        open
     }
 }
 
