@@ -1,10 +1,13 @@
 //! Whitted shading for packets of K rays: ambient + Lambert + Phong from coloured point lights, hard shadows
 //! by packet occlusion queries, mirror reflection and refraction (Snell, total internal reflection, optional
-//! Fresnel) as masked packets, to a depth limit. Generic over the lane type; K = 1 is the scalar reference.
+//! Fresnel) as masked packets, to a depth limit; or ambient occlusion (`ao.rs`). Generic over the lane type;
+//! K = 1 is the scalar reference.
 //!
 //! Work that differs per lane and has no exact SIMD form (surface lookup by primitive id, material fetch,
 //! checker `floor`, Phong's `powf`) is done lane by lane with the scalar code, so every width computes the
 //! same bits; everything else is lane arithmetic in the scalar path's operation order.
+
+mod ao;
 
 use std::marker::PhantomData;
 use std::ops::AddAssign;
@@ -12,7 +15,7 @@ use std::ops::AddAssign;
 use crate::compile::Scene;
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
-use crate::scene::desc::{Falloff, Material};
+use crate::scene::desc::{Falloff, Material, Shade};
 use crate::simd::{set_bits, IdLanes, Lanes};
 
 /// Secondary rays whose contribution to the pixel would be below this weight are not traced.
@@ -29,12 +32,14 @@ pub struct RayCounts {
     pub reflection: u64,
     /// Transmitted rays.
     pub refraction: u64,
+    /// Ambient occlusion rays.
+    pub ao: u64,
 }
 
 impl RayCounts {
     /// All rays.
     pub fn total(&self) -> u64 {
-        self.primary + self.shadow + self.reflection + self.refraction
+        self.primary + self.shadow + self.reflection + self.refraction + self.ao
     }
 }
 
@@ -44,6 +49,7 @@ impl AddAssign for RayCounts {
         self.shadow += o.shadow;
         self.reflection += o.reflection;
         self.refraction += o.refraction;
+        self.ao += o.ao;
     }
 }
 
@@ -120,6 +126,8 @@ pub struct Tracer<'a, F: Lanes> {
     /// Per light, a sphere that blocked the last shadow packet toward it: tested first for the next one
     /// (the shadow cache of Haines & Greenberg; it changes what is tested first, never the answer).
     shadow_hints: Vec<u32>,
+    /// A sphere that blocked the last ambient occlusion packet, tested first for the next one.
+    ao_hint: u32,
     /// The scalar tracer that secondary packets with few live lanes are handed to, lane by lane (`None`
     /// for K = 1).
     sparse: Option<Box<Tracer<'a, f32>>>,
@@ -131,13 +139,17 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     pub fn new(scene: &'a Scene) -> Self {
         let shadow_hints = vec![crate::geometry::NO_PRIM; scene.lights.len()];
         let sparse = (F::K > 1).then(|| Box::new(Tracer::<f32>::new(scene)));
-        Self { scene, counts: RayCounts::default(), shadow_hints, sparse, lanes: PhantomData }
+        let ao_hint = crate::geometry::NO_PRIM;
+        Self { scene, counts: RayCounts::default(), shadow_hints, ao_hint, sparse, lanes: PhantomData }
     }
 
-    /// Radiance along each active camera ray (zero in inactive lanes).
+    /// Radiance along each active camera ray (zero in inactive lanes), by the scene's shading mode.
     pub fn primary(&mut self, rays: &RayPacket<F>) -> V3<F> {
         self.counts.primary += lanes_set::<F>(rays.active);
-        self.trace(rays, &DeparturePacket::camera(), 0, F::splat_f32(1.0))
+        match self.scene.render.shade {
+            Shade::Whitted => self.trace(rays, &DeparturePacket::camera(), 0, F::splat_f32(1.0)),
+            Shade::Ao(ao) => self.ambient_occlusion(rays, ao),
+        }
     }
 
     fn trace(&mut self, rays: &RayPacket<F>, from: &DeparturePacket<F>, depth: u32, weight: F) -> V3<F> {

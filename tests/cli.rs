@@ -345,7 +345,7 @@ fn stats_report_scene_rays_and_times() {
     assert_eq!(text.matches("build").count(), 1, "{text}");
     for needle in [
         "3 primitives (2 spheres, 0 ellipsoids, 1 plane, 0 polygons, 0 cones), 2 lights",
-        "1 sample per pixel (1×1 grid), srgb transfer",
+        "1 sample per pixel (1×1 grid), whitted shading, srgb transfer",
         "skips: bvh, ellipsoids, polygons",
         "brute force",
         "primary",
@@ -790,4 +790,129 @@ fn exr_attribute_text_is_utf8() {
     let has = |needle: &[u8]| bytes.windows(needle.len()).any(|w| w == needle);
     assert!(has("(1×1 grid)".as_bytes()), "the comment in UTF-8");
     assert!(!has(b"(1\xd71 grid)"), "not in Latin-1");
+}
+
+/// A floor under a sphere seen from above: every pixel hits something, so every camera ray traces its
+/// occlusion rays.
+const FLOOR_UNDER_A_BALL: &str = r#"
+[camera]
+eye = [0.0, 4.0, -3.0]
+look_at = [0.0, 0.0, 0.0]
+hfov = 40
+[materials.floor]
+color = [0.9, 0.8, 0.7]
+[[planes]]
+point = [0.0, 0.0, 0.0]
+normal = [0.0, 1.0, 0.0]
+material = "floor"
+[[spheres]]
+center = [0.0, 0.8, 0.0]
+radius = 0.8
+"#;
+
+/// `converge --shade ao:N`: the reference and every run shade with ambient occlusion, the rays column counts
+/// N occlusion rays per camera ray, and the error falls as samples per pixel grow (each camera sample brings
+/// its own occlusion rays) and as N grows at one sample per pixel.
+#[test]
+fn converge_covers_ambient_occlusion() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("ball.toml");
+    std::fs::write(&scene, FLOOR_UNDER_A_BALL).unwrap();
+    let study = |shade: &str| -> Vec<(f64, u64, f64)> {
+        let csv = dir.path().join(format!("{shade}.csv").replace(':', "-"));
+        let run = bareray(&[
+            "converge",
+            scene.to_str().unwrap(),
+            "--shade",
+            shade,
+            "--methods",
+            "stratified,r2",
+            "--width",
+            "32",
+            "--height",
+            "24",
+            "--max-spp",
+            "16",
+            "--reference-spp",
+            "256",
+            "--csv",
+            csv.to_str().unwrap(),
+        ]);
+        assert!(run.status.success(), "{}", stderr(&run));
+        let text = std::fs::read_to_string(&csv).unwrap();
+        let rows: Vec<(f64, u64, f64)> = text
+            .lines()
+            .skip(1)
+            .filter(|l| l.starts_with("stratified"))
+            .map(|l| {
+                let f: Vec<&str> = l.split(',').collect();
+                (f[1].parse().unwrap(), f[3].parse().unwrap(), f[4].parse().unwrap())
+            })
+            .collect();
+        assert_eq!(rows.len(), 3, "{text}");
+        rows
+    };
+    let one = study("ao:1");
+    let eight = study("ao:8");
+    for (per_ray, rows) in [(1, &one), (8, &eight)] {
+        for &(spp, rays, _) in rows {
+            assert_eq!(rays, (spp as u64) * 32 * 24 * (1 + per_ray), "ao:{per_ray} at {spp} spp");
+        }
+        assert!(rows[2].2 < 0.5 * rows[0].2, "ao:{per_ray}: {rows:?}");
+    }
+    assert!(
+        eight[0].2 < 0.6 * one[0].2,
+        "8 occlusion rays against 1 at one sample per pixel: {eight:?} {one:?}"
+    );
+}
+
+/// A bad `--shade` is an argument error (exit 2) that names the flag and lists the valid forms, and nothing
+/// is written; a bad `shade` key in a scene file names its line and column.
+#[test]
+fn bad_shade_values_are_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("o.png");
+    for bad in ["ao:0", "ao:abc", "ao:4,-1", "ao:4,0", "phong", "whitted:2"] {
+        let run = bareray(&["render", "-o", out.to_str().unwrap(), "--width", "20", "--shade", bad]);
+        assert_eq!(run.status.code(), Some(2), "{bad}: {}", stderr(&run));
+        let e = stderr(&run);
+        assert!(
+            e.contains("--shade") && e.contains("whitted, ao, ao:SAMPLES or ao:SAMPLES,DISTANCE"),
+            "{bad}: {e}"
+        );
+        assert!(!out.exists(), "{bad}: an image was written");
+    }
+    let scene = dir.path().join("bad.toml");
+    std::fs::write(&scene, format!("{FLOOR_UNDER_A_BALL}\n[render]\nshade = \"ao:2,-3\"\n")).unwrap();
+    let run = bareray(&["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap()]);
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(stderr(&run).contains("bad.toml:17:9") && stderr(&run).contains("DISTANCE"), "{}", stderr(&run));
+    assert!(!out.exists());
+}
+
+/// `--stats` names the shading with its resolved distance and counts the occlusion rays in the total: one
+/// sample per pixel, every pixel a hit, 3 occlusion rays each.
+#[test]
+fn stats_count_ambient_occlusion_rays() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = dir.path().join("ball.toml");
+    std::fs::write(&scene, FLOOR_UNDER_A_BALL).unwrap();
+    let out = dir.path().join("ao.png");
+    let args =
+        ["render", scene.to_str().unwrap(), "-o", out.to_str().unwrap(), "--width", "40", "--height", "30"];
+    let run = bareray(&[&args[..], &["--stats", "--shade", "ao:3,0.5"]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(text.contains("ao:3,0.5 shading") && text.contains("ambient occlusion rays;"), "{text}");
+    assert!(
+        text.contains("rays: 4800 total: 1200 primary, 0 shadow, 0 reflection, 0 refraction, 3600 ao"),
+        "{text}"
+    );
+    // The default distance is a quarter of the sphere's box diagonal (1.6·√3).
+    let run = bareray(&[&args[..], &["--stats", "--shade", "ao"]].concat());
+    let text = String::from_utf8_lossy(&run.stdout);
+    let shown =
+        text.split("ao:16,").nth(1).and_then(|t| t.split(' ').next()).unwrap_or_else(|| panic!("{text}"));
+    let distance = 0.25 * 1.6 * 3f64.sqrt();
+    assert!((shown.parse::<f64>().unwrap() - distance).abs() < 1e-12, "{distance}: {text}");
 }

@@ -45,7 +45,7 @@ fn error_lines(run: &Output) -> Vec<String> {
     stderr(run).lines().filter(|l| l.starts_with("error:")).map(str::to_owned).collect()
 }
 
-/// The summary's ray counts: `N rays (a primary, b shadow, c reflection, d refraction)`.
+/// The summary's ray counts: `N rays (a primary, b shadow, c reflection, d refraction, e ao)`.
 fn rays(summary: &str) -> String {
     let rays = summary.split("; ").nth(1).and_then(|t| t.rsplit_once(", ")).map(|(rays, _)| rays);
     rays.unwrap_or_else(|| panic!("no ray counts in {summary:?}")).to_owned()

@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use bareray::compile::Scene;
 use bareray::output::{write_image_with, write_rows, BitDepth, Format, Frame, WriteOptions};
 use bareray::render::{render_lanes, thread_pool, Window};
-use bareray::scene::desc::{Filter, FilterKind, Pattern, Transfer};
+use bareray::scene::desc::{Ao, Filter, FilterKind, Pattern, Shade, Transfer};
 use bareray::still::{self, Job};
 use common::{bareray, scene_files, stderr};
 
@@ -44,7 +44,7 @@ fn job(scene: &Scene, path: &Path, write: WriteOptions, window: Window) -> Job {
 }
 
 /// The streamed file of every scene in scenes/ — and of the whitted scene under a reconstruction filter,
-/// adaptive sampling and the lecture's half-pixel pattern — is byte for byte the file the whole-image path
+/// adaptive sampling, the lecture's half-pixel pattern and ambient occlusion — is byte for byte the file the whole-image path
 /// writes (render into one image, then encode), in every format.
 #[test]
 fn streamed_files_are_the_whole_image_paths_bytes() {
@@ -66,6 +66,11 @@ fn streamed_files_are_the_whole_image_paths_bytes() {
         "whitted, lecture".into(),
         scene_at(&whitted, 61, 47, |d| d.render.pattern = Pattern::HalfPixel),
     ));
+    let ao = Shade::Ao(Ao { samples: 4, distance: None });
+    cases.push(("whitted, ao".into(), scene_at(&whitted, 61, 47, |d| d.render.shade = ao)));
+    let stratified =
+        |d: &mut bareray::scene::SceneDesc| (d.render.shade, d.render.pattern) = (ao, Pattern::Stratified(2));
+    cases.push(("whitted, ao, stratified".into(), scene_at(&whitted, 61, 47, stratified)));
     for (name, scene) in &cases {
         let image = render_lanes(scene, 8, &pool, &()).image;
         for (file, options) in variants() {
@@ -84,7 +89,8 @@ fn streamed_files_are_the_whole_image_paths_bytes() {
 /// Regions cut across tiles and packet blocks, rendered apart (through the command line, with --region and
 /// --crop) and merged, are the full render's file byte for byte, for 8- and 16-bit PNG, EXR and PPM, on a
 /// scene with the lecture's 3×3 postfilter (whose neighbours cross the cuts), one with a Mitchell filter,
-/// and a sphere field under the coverage pattern (whose per-tile sphere lists start elsewhere in a region).
+/// a sphere field under the coverage pattern (whose per-tile sphere lists start elsewhere in a region), and
+/// ambient occlusion under stratified sampling (whose directions must not depend on where tiles start).
 #[test]
 fn regions_merge_into_the_full_image_byte_for_byte() {
     let dir = tempfile::tempdir().unwrap();
@@ -94,6 +100,7 @@ fn regions_merge_into_the_full_image_byte_for_byte() {
         ("scenes/lecture.toml", &[][..]),
         ("scenes/whitted.toml", &["--filter", "mitchell"][..]),
         ("scenes/field.toml", &["--aa", "coverage"][..]),
+        ("scenes/whitted.toml", &["--shade", "ao:4", "--aa", "stratified:4"][..]),
     ] {
         let scene = root.join(scene);
         for (ext, depth) in [("png", "8"), ("png", "16"), ("exr", "8"), ("ppm", "8")] {

@@ -47,6 +47,9 @@ pub struct BenchArgs {
     /// Sampling method and samples per pixel, as `render --aa` takes it; overrides the scene.
     #[arg(long, value_parser = super::values::parse_aa, conflicts_with = "primary_only")]
     pub aa: Option<Pattern>,
+    /// Shading, as `render --shade` takes it (`whitted` or `ao[:SAMPLES[,DISTANCE]]`); overrides the scene.
+    #[arg(long, value_name = "MODE", value_parser = super::values::parse_shade, conflicts_with = "primary_only")]
+    pub shade: Option<crate::scene::desc::Shade>,
     /// Reflection/refraction depth limit; overrides the scene, as `render --depth` does.
     #[arg(long, conflicts_with = "primary_only")]
     pub depth: Option<u32>,
@@ -317,6 +320,9 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if let Some(pattern) = args.aa {
         desc.render.pattern = pattern;
     }
+    if let Some(shade) = args.shade {
+        desc.render.shade = shade;
+    }
     if let Some(spp) = args.spp {
         let n = toml::grid_side(spp).map_err(|m| anyhow!("--spp: {m}"))?;
         desc.render.pattern = Pattern::Grid(n);
@@ -341,6 +347,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         (false, Pattern::Coverage) => (None, "coverage".to_owned()),
     };
     let max_depth = desc.render.max_depth;
+    let desc_shade = desc.render.shade;
+    // The shading mode is part of what was measured: runs compared with --compare must agree on it.
+    let pattern = match desc_shade {
+        crate::scene::desc::Shade::Whitted => pattern,
+        shade => format!("{pattern}, {} shading", super::values::shade_name(shade)),
+    };
     let parse_s = clock.elapsed().as_secs_f64();
     let clock = Instant::now();
     let accel = Accel::from(args.accel);
@@ -384,7 +396,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
             if args.primary_only {
                 "primary rays only".to_owned()
             } else {
-                format!("full Whitted render, {pattern}, depth {max_depth}")
+                match desc_shade {
+                    crate::scene::desc::Shade::Whitted => {
+                        format!("full Whitted render, {pattern}, depth {max_depth}")
+                    }
+                    crate::scene::desc::Shade::Ao(_) => format!("full render, {pattern}"),
+                }
             }
         )?;
         writeln!(

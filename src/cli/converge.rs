@@ -51,6 +51,12 @@ pub struct ConvergeArgs {
     /// f32 single rays and the f64 twin, each timed, the f32 ones measured against the f64 one.
     #[arg(long)]
     pub precision: bool,
+    /// Shading of the reference and of every run, overriding the scene: `whitted` or
+    /// `ao[:SAMPLES[,DISTANCE]]` (as `render --shade`). Each camera sample gets its own SAMPLES occlusion
+    /// rays, so a run at N samples per pixel traces N×SAMPLES of them per pixel, and the reference
+    /// reference-spp×SAMPLES: the ambient occlusion's noise falls with the samples per pixel too.
+    #[arg(long, value_name = "MODE", value_parser = super::values::parse_shade)]
+    pub shade: Option<crate::scene::desc::Shade>,
     /// Rays per packet: 1, 4, 8 or 16.
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
@@ -75,6 +81,9 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
     let pool = crate::render::thread_pool(args.threads)?;
     let mut desc = load_scene(&args.scene, &pool)?;
     args.camera.apply(&mut desc);
+    if let Some(shade) = args.shade {
+        desc.render.shade = shade;
+    }
     let mut scene = pool.install(|| Scene::compile(&desc)).context("camera")?;
     if args.precision {
         return run_precision(&args, &desc, &scene, &pool);
@@ -122,7 +131,8 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
             .with_context(|| format!("{}", path.display()))?;
     }
     if let Some(path) = &args.plot {
-        let title = format!("{}: error against time", args.scene.display());
+        let shading = super::values::shade_name(desc.render.shade);
+        let title = format!("{}, {shading}: error against time", args.scene.display());
         let svg = plot::svg(&title, "RMSE against the reference", &curves(&runs));
         write_atomic_with(path, |w| w.write_all(svg.as_bytes()))
             .with_context(|| format!("{}", path.display()))?;

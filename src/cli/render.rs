@@ -61,6 +61,13 @@ pub struct RenderArgs {
     /// gives the same image.
     #[arg(long, value_parser = super::values::parse_aa)]
     pub aa: Option<Pattern>,
+    /// Shading, overriding the scene: `whitted` (lights, shadows, mirrors, refraction) or
+    /// `ao[:SAMPLES[,DISTANCE]]`, ambient occlusion: at each camera ray's hit SAMPLES (1 to 4096, default
+    /// 16) cosine-weighted occlusion rays of length DISTANCE (scene units; default a quarter of the
+    /// diagonal of the box around the bounded primitives); the pixel is the surface colour times the share
+    /// of them that nothing blocks. Every antialiasing sample gets its own set.
+    #[arg(long, value_name = "MODE", value_parser = super::values::parse_shade)]
+    pub shade: Option<crate::scene::desc::Shade>,
     /// Reconstruction filter over the samples, overriding the scene: `box`, `tent`, `gaussian` or `mitchell`,
     /// optionally with a radius in pixels (`tent:1.5`; defaults 0.5, 1, 1.5, 2). Each sample counts in every
     /// pixel whose centre is within the radius; without a filter a pixel averages its own samples.
@@ -401,7 +408,7 @@ fn summary(output: &Path, job: &Job, r: &Traced, time: &Timings) -> String {
     let output = if crate::output::is_stdout(output) { Path::new("<stdout>") } else { output };
     format!(
         "{}: {}x{} in {:.3} s (parse {:.3} s, build {:.3} s); {} rays ({} primary, {} shadow, {} reflection, \
-         {} refraction), {:.2} Mrays/s",
+         {} refraction, {} ao), {:.2} Mrays/s",
         output.display(),
         job.window.width(),
         job.window.height(),
@@ -413,6 +420,7 @@ fn summary(output: &Path, job: &Job, r: &Traced, time: &Timings) -> String {
         c.shadow,
         c.reflection,
         c.refraction,
+        c.ao,
         c.total() as f64 / r.seconds / 1e6
     )
 }
@@ -444,10 +452,11 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     };
     let _ = writeln!(
         out,
-        "image: {}x{}{region}, {}, {} transfer, in bands of {} rows",
+        "image: {}x{}{region}, {}, {} shading, {} transfer, in bands of {} rows",
         w.width(),
         w.height(),
         pattern_name(scene.render.pattern),
+        super::values::shade_name(scene.render.shade),
         scene.render.transfer.name(),
         job.band_rows()
     );
@@ -465,12 +474,13 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     let c = r.counts;
     let _ = writeln!(
         out,
-        "rays: {} total: {} primary, {} shadow, {} reflection, {} refraction",
+        "rays: {} total: {} primary, {} shadow, {} reflection, {} refraction, {} ao",
         c.total(),
         c.primary,
         c.shadow,
         c.reflection,
-        c.refraction
+        c.refraction,
+        c.ao
     );
     let _ = writeln!(
         out,
@@ -627,6 +637,9 @@ fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {
     }
     if let Some(filter) = args.filter {
         desc.render.filter = Some(filter);
+    }
+    if let Some(shade) = args.shade {
+        desc.render.shade = shade;
     }
     match args.postfilter.as_deref() {
         Some("lecture") => desc.render.postfilter = PostFilter::Lecture3x3,

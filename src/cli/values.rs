@@ -2,7 +2,7 @@
 //! each enum converts to the library's type.
 
 use crate::compile::{Accel, BvhPreset};
-use crate::scene::desc::{Filter, FilterKind, Pattern, Transfer};
+use crate::scene::desc::{Filter, FilterKind, Pattern, Shade, Transfer};
 
 /// `--transfer`: [`Transfer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
@@ -115,6 +115,23 @@ pub fn parse_ambient(s: &str) -> Result<AmbientList, String> {
         .map(AmbientList)
 }
 
+/// Parses `--shade whitted|ao[:SAMPLES[,DISTANCE]]`: [`Shade::parse`].
+pub fn parse_shade(s: &str) -> Result<Shade, String> {
+    Shade::parse(s)
+}
+
+/// The name of a shading mode as `--shade` spells it, with its settings (`ao:16,0.5`; a default distance,
+/// not yet resolved by compiling, is left out).
+pub fn shade_name(shade: Shade) -> String {
+    match shade {
+        Shade::Whitted => "whitted".to_owned(),
+        Shade::Ao(ao) => match ao.distance {
+            Some(d) => format!("ao:{},{d}", ao.samples),
+            None => format!("ao:{}", ao.samples),
+        },
+    }
+}
+
 /// The name a value has on the command line (what `--help` lists and the user types), for reports.
 pub fn name(value: impl clap::ValueEnum) -> String {
     value.to_possible_value().map_or_else(String::new, |v| v.get_name().to_owned())
@@ -208,6 +225,25 @@ mod tests {
             "{e}"
         );
     }
+    #[test]
+    fn shade_modes_parse_and_bad_ones_list_the_forms() {
+        use crate::scene::desc::Ao;
+        assert_eq!(parse_shade("whitted"), Ok(Shade::Whitted));
+        assert_eq!(parse_shade("ao"), Ok(Shade::Ao(Ao { samples: 16, distance: None })));
+        assert_eq!(parse_shade("ao:4"), Ok(Shade::Ao(Ao { samples: 4, distance: None })));
+        assert_eq!(parse_shade(" ao:4, 0.5 "), Ok(Shade::Ao(Ao { samples: 4, distance: Some(0.5) })));
+        for bad in
+            ["ao:0", "ao:abc", "ao:4,-1", "ao:4,0", "ao:4,inf", "ao:4,x", "ao:5000", "whitted:2", "", "path"]
+        {
+            let e = parse_shade(bad).unwrap_err();
+            assert!(e.contains("whitted, ao, ao:SAMPLES or ao:SAMPLES,DISTANCE"), "{bad}: {e}");
+        }
+        assert!(parse_shade("ao:0").unwrap_err().contains("SAMPLES runs from 1"));
+        assert!(parse_shade("ao:2,-1").unwrap_err().contains("DISTANCE is a length above 0"));
+        assert!(parse_shade("toon").unwrap_err().contains("unknown shading `toon`"));
+        assert_eq!(shade_name(parse_shade("ao:8,1.5").unwrap()), "ao:8,1.5");
+    }
+
     use clap::ValueEnum;
 
     #[test]

@@ -4,7 +4,7 @@ use std::fmt;
 
 use super::Scene;
 use crate::geometry::ShapeKind;
-use crate::scene::desc::{Material, Pattern, PostFilter};
+use crate::scene::desc::{Material, Pattern, PostFilter, Shade};
 
 /// How many primitives of each kind a scene has.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
@@ -36,6 +36,8 @@ pub struct Features {
     pub refraction: bool,
     /// More than one sample per pixel or a postfilter.
     pub antialiasing: bool,
+    /// Ambient occlusion shading (which replaces the lights and the bounces).
+    pub ao: bool,
 }
 
 impl Features {
@@ -44,7 +46,8 @@ impl Features {
         let g = &scene.geometry;
         let kind = |k: ShapeKind| g.shapes.iter().filter(|s| s.kind == k).count();
         let m = &scene.materials;
-        let deep = scene.render.max_depth > 0;
+        let ao = matches!(scene.render.shade, Shade::Ao(_));
+        let deep = scene.render.max_depth > 0 && !ao;
         Features {
             counts: Counts {
                 spheres: g.spheres.len(),
@@ -54,15 +57,16 @@ impl Features {
                 cones: g.cones.len(),
             },
             bvh: g.bvhs().next().is_some(),
-            direct: lights_shade(!scene.lights.is_empty(), m),
-            reflection: bounces(scene.render.max_depth, m),
+            direct: !ao && lights_shade(!scene.lights.is_empty(), m),
+            reflection: !ao && bounces(scene.render.max_depth, m),
             refraction: deep && m.iter().any(|m| m.transmit > 0.0),
             antialiasing: scene.render.pattern != Pattern::Grid(1)
                 || scene.render.postfilter != PostFilter::None,
+            ao,
         }
     }
 
-    fn list(&self) -> [(&'static str, bool); 10] {
+    fn list(&self) -> [(&'static str, bool); 11] {
         [
             ("spheres", self.counts.spheres > 0),
             ("bvh", self.bvh),
@@ -74,6 +78,7 @@ impl Features {
             ("reflection", self.reflection),
             ("refraction", self.refraction),
             ("antialiasing", self.antialiasing),
+            ("ambient occlusion rays", self.ao),
         ]
     }
 }

@@ -21,7 +21,7 @@ use glam::{DAffine3, Vec3A};
 use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 
-use crate::scene::desc::{Falloff, Material, PolygonDesc, RenderDesc, SceneDesc};
+use crate::scene::desc::{Ao, Falloff, Material, PolygonDesc, RenderDesc, SceneDesc, Shade};
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -261,10 +261,11 @@ impl Scene {
             options: BuildOptions {
                 pad: bvh::padding(reach(desc)),
                 params: preset.params(),
-                // The 8-wide single-ray trees serve the scalar tracer's secondary rays: only scenes that
-                // trace them pay for their build.
+                // The 8-wide single-ray trees serve the scalar tracer's secondary and ambient occlusion
+                // rays: only scenes that trace them pay for their build.
                 single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
-                    || features::bounces(desc.render.max_depth, &materials),
+                    || features::bounces(desc.render.max_depth, &materials)
+                    || matches!(desc.render.shade, Shade::Ao(_)),
                 frustum_culling,
                 single_ray_lanes,
             },
@@ -282,7 +283,7 @@ impl Scene {
             camera: camera_f64.to_f32(),
             camera_f64,
             origin,
-            render: desc.render,
+            render: RenderDesc { shade: resolved_shade(desc), ..desc.render },
             geometry,
             materials,
             lights,
@@ -334,6 +335,45 @@ impl Scene {
             (g.cone_order, g.cone_bvh) = (order, Some(tree));
             self.build += stats;
         }
+    }
+}
+
+/// The scene's shading mode with ambient occlusion's default distance filled in: [`Ao::DEFAULT_REACH`] times
+/// the diagonal of the box around every bounded primitive (spheres, ellipsoids, polygons, cones; planes
+/// are unbounded), or unlimited when there is none.
+fn resolved_shade(desc: &SceneDesc) -> Shade {
+    match desc.render.shade {
+        Shade::Ao(Ao { samples, distance: None }) => {
+            let reach = bounded_diagonal(desc) * Ao::DEFAULT_REACH;
+            let distance = if reach > 0.0 { reach } else { f64::INFINITY };
+            Shade::Ao(Ao { samples, distance: Some(distance) })
+        }
+        shade => shade,
+    }
+}
+
+/// The diagonal of the box around every bounded primitive (0 without any), in f64.
+fn bounded_diagonal(desc: &SceneDesc) -> f64 {
+    use glam::DVec3;
+    let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
+    let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
+    let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
+    let cones = desc
+        .cones
+        .iter()
+        .flat_map(|c| ball(c.base, c.base_radius).into_iter().chain(ball(c.apex, c.apex_radius)));
+    // Shape boxes are in rendering space: moved back by the eye.
+    let eye = desc.camera.eye;
+    let shapes = shape_boxes(desc).into_iter().flat_map(|(_, b)| [b.min, b.max].map(|p| p.as_dvec3() + eye));
+    let (lo, hi) = spheres
+        .chain(vertices)
+        .chain(cones)
+        .chain(shapes)
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    if lo.cmple(hi).all() {
+        (hi - lo).length()
+    } else {
+        0.0
     }
 }
 

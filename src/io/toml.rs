@@ -66,6 +66,7 @@ struct RenderToml {
     filter: Option<FilterToml>,
     filter_radius: Option<Spanned<f64>>,
     max_depth: Option<u32>,
+    shade: Option<Spanned<String>>,
     background: Option<Spanned<Vec3>>,
     ambient: Option<Spanned<Vec3>>,
     transfer: Option<TransferToml>,
@@ -473,6 +474,12 @@ impl Reader<'_> {
                 Some(PostFilterToml::Lecture3x3) => PostFilter::Lecture3x3,
             },
             max_depth: r.max_depth.unwrap_or(d.max_depth),
+            shade: match &r.shade {
+                None => d.shade,
+                Some(m) => {
+                    Shade::parse(m.get_ref()).map_err(|e| self.err(m.span(), format!("shade: {e}")))?
+                }
+            },
             background: r.background.as_ref().map_or(Ok(d.background), |c| self.color(c, "background"))?,
             ambient: r.ambient.as_ref().map_or(Ok(d.ambient), |c| self.color(c, "ambient"))?,
             transfer: match r.transfer {
@@ -619,6 +626,20 @@ mod tests {
         let e = parse_str("[render]\npattern = \"coverage\"\nsamples = 4\n").unwrap_err();
         assert_eq!((e.line, e.column), (3, 11), "{e}");
         assert!(e.message.contains("takes no samples"), "{e}");
+    }
+
+    #[test]
+    fn shade_reads_whitted_and_ambient_occlusion() {
+        assert_eq!(parse_str("[render]\n").unwrap().render.shade, Shade::Whitted);
+        let d = parse_str("[render]\nshade = \"ao:8,2.5\"\n").unwrap();
+        assert_eq!(d.render.shade, Shade::Ao(Ao { samples: 8, distance: Some(2.5) }));
+        let d = parse_str("[render]\nshade = \"ao\"\n").unwrap();
+        assert_eq!(d.render.shade, Shade::Ao(Ao { samples: Ao::DEFAULT_SAMPLES, distance: None }));
+        for (text, says) in [("ao:0", "SAMPLES"), ("ao:4,-1", "DISTANCE"), ("phong", "unknown shading")] {
+            let e = parse_str(&format!("[render]\nmax_depth = 2\nshade = \"{text}\"\n")).unwrap_err();
+            assert_eq!((e.line, e.column), (3, 9), "{e}");
+            assert!(e.message.contains(says) && e.message.contains("ao:SAMPLES,DISTANCE"), "{e}");
+        }
     }
 
     #[test]

@@ -228,6 +228,7 @@ impl Ranks {
             counts.shadow,
             counts.reflection,
             counts.refraction,
+            counts.ao,
             work.prim_tests,
             work.box_tests,
         ];
@@ -236,11 +237,11 @@ impl Ranks {
             root.reduce_into(&mine[..], SystemOperation::sum());
             return None;
         }
-        let mut all = [0u64; 6];
+        let mut all = [0u64; 7];
         root.reduce_into_root(&mine[..], &mut all[..], SystemOperation::sum());
-        let [primary, shadow, reflection, refraction, prim_tests, box_tests] = all;
+        let [primary, shadow, reflection, refraction, ao, prim_tests, box_tests] = all;
         Some(Traced {
-            counts: RayCounts { primary, shadow, reflection, refraction },
+            counts: RayCounts { primary, shadow, reflection, refraction, ao },
             work: Work { prim_tests, box_tests },
             seconds,
         })
