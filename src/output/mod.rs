@@ -305,7 +305,8 @@ impl Frame {
         let (w, h) = full.split_once('x')?;
         let (full_width, full_height) = (w.trim().parse().ok()?, h.trim().parse().ok()?);
         let [x0, y0, x1, y1] = c[..] else { return None };
-        (x0 < x1 && y0 < y1 && x1 <= full_width && y1 <= full_height).then_some(Self {
+        // `then`, not `then_some`: the differences are only taken once the corners are in order.
+        (x0 < x1 && y0 < y1 && x1 <= full_width && y1 <= full_height).then(|| Self {
             width: x1 - x0,
             height: y1 - y0,
             x0,
