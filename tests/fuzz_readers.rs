@@ -44,8 +44,9 @@ const CI_RUN: u64 = 20_000;
 const PROGRESS: u64 = 100_000;
 /// The default seed; every run with it sees the same inputs.
 const DEFAULT_SEED: u64 = 0xB4E4_F022_5EED_0001;
-/// A parse that makes no progress for this long is a hang.
-const HANG: Duration = Duration::from_secs(30);
+/// A parse that makes no progress for this long is a hang. The slowest input of the full run (a 39 MB
+/// TOML file of repeated nesting lines, a located error) took 13–25 s on a loaded 2-core host.
+const HANG: Duration = Duration::from_secs(120);
 /// Seed files larger than this are cut to their head plus a random window of lines, which keeps inputs
 /// (and so parse times) small while every construct of the file still turns up in some window.
 const WINDOW_BYTES: usize = 4096;
