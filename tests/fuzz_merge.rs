@@ -69,6 +69,10 @@ fn below(rng: &mut SplitMix64, n: usize) -> usize {
 
 /// One mutation of `part`; positions lean towards the header, where the reader decides most.
 fn mutate(rng: &mut SplitMix64, part: &mut Vec<u8>) {
+    if part.is_empty() {
+        part.push(below(rng, 256) as u8);
+        return;
+    }
     let len = part.len();
     let at = |rng: &mut SplitMix64| if rng.unit() < 0.7 { below(rng, len.min(160)) } else { below(rng, len) };
     match below(rng, 6) {
