@@ -160,10 +160,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 return color;
             }
         }
-        let hit = self.scene.geometry.intersect_k(rays, from);
-        let found = hit.found() & rays.active;
-        let zero = V3::all(F::splat_f32(0.0));
-        let background = V3::select(rays.active & !found, splat_rgb::<F>(self.scene.render.background), zero);
+        let (hit, found, background) = self.hit_or_background(rays, from);
         if !found.any() {
             return background;
         }
@@ -185,6 +182,20 @@ impl<'a, F: Lanes> Tracer<'a, F> {
 
     /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
     /// of one plain material (most packets), else lane by lane with the scalar code.
+    /// The closest hits of `rays` leaving `from`, the active lanes that found one, and the background colour
+    /// in the active lanes that did not (zero in the rest).
+    fn hit_or_background(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+    ) -> (HitPacket<F>, F::Mask, V3<F>) {
+        let hit = self.scene.geometry.intersect_k(rays, from);
+        let found = hit.found() & rays.active;
+        let zero = V3::all(F::splat_f32(0.0));
+        let background = V3::select(rays.active & !found, splat_rgb::<F>(self.scene.render.background), zero);
+        (hit, found, background)
+    }
+
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
         self.sphere_surface(rays, hit, found).unwrap_or_else(|| self.surface_by_lane(rays, hit, found))
     }

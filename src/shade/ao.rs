@@ -19,16 +19,13 @@ use crate::math::{Mask, Real, SplitMix64, V3};
 use crate::scene::desc::Ao;
 use crate::simd::{set_bits, IdLanes, Lanes};
 
-use super::{splat_rgb, Surface, Tracer};
+use super::{Surface, Tracer};
 
 impl<F: Lanes> Tracer<'_, F> {
     /// The ambient occlusion of each active camera ray's hit times the surface's colour; the background
     /// where a ray hits nothing, zero in inactive lanes.
     pub(super) fn ambient_occlusion(&mut self, rays: &RayPacket<F>, ao: Ao) -> V3<F> {
-        let hit = self.scene.geometry.intersect_k(rays, &DeparturePacket::camera());
-        let found = hit.found() & rays.active;
-        let zero = V3::all(F::splat_f32(0.0));
-        let background = V3::select(rays.active & !found, splat_rgb::<F>(self.scene.render.background), zero);
+        let (hit, found, background) = self.hit_or_background(rays, &DeparturePacket::camera());
         if !found.any() {
             return background;
         }
@@ -63,14 +60,10 @@ impl<F: Lanes> Tracer<'_, F> {
             let from = DeparturePacket { prim: F::Ids::splat(hit.prim.lane(i)), inward };
             for first in (0..ao.samples).step_by(F::K) {
                 let count = F::K.min((ao.samples - first) as usize);
-                let mut local = [F::splat_f32(0.0).to_array(); 3];
-                for j in 0..count {
-                    let d = tangent_direction(shift, first + j as u32, ao.samples);
-                    (local[0].as_mut()[j], local[1].as_mut()[j], local[2].as_mut()[j]) = (d.x, d.y, d.z);
-                }
-                let [x, y, z] = local.map(|c| F::from_lanes(c.as_ref()));
+                let local =
+                    local_directions::<F>((0..count).map(|j| (j, shift, first + j as u32)), ao.samples);
                 let live = F::lanes_below(count);
-                let probe = RayPacket::new(point, around(normal, V3::new(x, y, z)), distance, live);
+                let probe = RayPacket::new(point, around(normal, local), distance, live);
                 self.counts.ao += count as u64;
                 let blocked = self.scene.geometry.occluded_hinted_k(&probe, &from, &mut self.ao_hint);
                 open[i] += F::move_mask(live & !blocked).count_ones();
@@ -100,19 +93,26 @@ impl<F: Lanes> Tracer<'_, F> {
         let one = F::splat_f32(1.0);
         let mut open = F::splat_f32(0.0);
         for k in 0..ao.samples {
-            let mut local = [F::splat_f32(0.0).to_array(); 3];
-            for i in set_bits(bits) {
-                let d = tangent_direction(shift[i], k, ao.samples);
-                (local[0].as_mut()[i], local[1].as_mut()[i], local[2].as_mut()[i]) = (d.x, d.y, d.z);
-            }
-            let [x, y, z] = local.map(|c| F::from_lanes(c.as_ref()));
-            let probe = RayPacket::new(s.point, around(s.normal, V3::new(x, y, z)), distance, found);
+            let local = local_directions::<F>(set_bits(bits).map(|i| (i, shift[i], k)), ao.samples);
+            let probe = RayPacket::new(s.point, around(s.normal, local), distance, found);
             self.counts.ao += u64::from(bits.count_ones());
             let blocked = self.scene.geometry.occluded_hinted_k(&probe, &from, &mut self.ao_hint);
             open = F::select(found & !blocked, open + one, open);
         }
         open
     }
+}
+
+/// The packet of local directions whose lane `i` is direction `k` of `n` in the set shifted by `shift`
+/// ([`tangent_direction`]), for each `(i, shift, k)` given; the other lanes hold 0.
+fn local_directions<F: Lanes>(lanes: impl Iterator<Item = (usize, (f64, f64), u32)>, n: u32) -> V3<F> {
+    let mut local = [F::splat_f32(0.0).to_array(); 3];
+    for (i, shift, k) in lanes {
+        let d = tangent_direction(shift, k, n);
+        (local[0].as_mut()[i], local[1].as_mut()[i], local[2].as_mut()[i]) = (d.x, d.y, d.z);
+    }
+    let [x, y, z] = local.map(|c| F::from_lanes(c.as_ref()));
+    V3::new(x, y, z)
 }
 
 /// 1/φ, φ the golden ratio: the azimuth step of the lattice, the irrational with the evenest multiples mod 1.
