@@ -20,7 +20,7 @@ use std::time::{Duration, Instant};
 
 use bareray::math::SplitMix64;
 use bareray::still::merge::{merge, MergeError};
-use common::{bareray, stderr};
+use common::{bareray, stderr, watchdog};
 
 /// Inputs per format in the ignored full run.
 const FULL_RUN: u64 = 1_000_000;
@@ -175,25 +175,9 @@ fn fuzz(ext: &str, default_count: u64) {
 
     let current = Arc::new(AtomicU64::new(start));
     let watchdog = {
-        let current = current.clone();
         let ext = ext.to_owned();
-        std::thread::spawn(move || {
-            let mut last = (u64::MAX - 1, Instant::now());
-            loop {
-                std::thread::sleep(Duration::from_millis(200));
-                let now = current.load(Ordering::Relaxed);
-                if now == u64::MAX {
-                    return;
-                }
-                if now != last.0 {
-                    last = (now, Instant::now());
-                } else if last.1.elapsed() > HANG {
-                    eprintln!(
-                        "fuzz: merge {ext}: input {now} (seed {seed:#x}) has not finished in {HANG:?}: hang"
-                    );
-                    std::process::exit(101);
-                }
-            }
+        watchdog::watch(current.clone(), HANG, move |now| {
+            eprintln!("fuzz: merge {ext}: input {now} (seed {seed:#x}) has not finished in {HANG:?}: hang");
         })
     };
     let began = Instant::now();
@@ -233,7 +217,7 @@ fn fuzz(ext: &str, default_count: u64) {
             println!("fuzz: merge {ext}: {done} of {count} inputs, {} failures", failures.len());
         }
     }
-    current.store(u64::MAX, Ordering::Relaxed);
+    current.store(watchdog::DONE, Ordering::Relaxed);
     watchdog.join().expect("watchdog");
     println!(
         "fuzz: merge {ext}: {count} inputs, {merged} merged, {errors} errors, {} panics or bad outcomes \

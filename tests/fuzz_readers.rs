@@ -25,6 +25,8 @@
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
+mod common;
+
 use std::sync::atomic::{AtomicU64, Ordering};
 use std::sync::Arc;
 use std::time::{Duration, Instant};
@@ -34,6 +36,7 @@ use bareray::io::generate::flake_nff;
 use bareray::io::{nff, toml, xyzr, SceneError};
 use bareray::math::SplitMix64;
 use bareray::scene::SceneDesc;
+use common::watchdog;
 
 /// Inputs per reader of the ignored full run.
 const FULL_RUN: u64 = 1_000_000;
@@ -562,27 +565,14 @@ fn fuzz(reader: Reader, default_count: u64) {
     // The index being parsed, u64::MAX when done; the watchdog compares it over time.
     let current = Arc::new(AtomicU64::new(start));
     let watchdog = {
-        let (current, seeds) = (current.clone(), seeds.clone());
-        std::thread::spawn(move || {
-            let mut last = (u64::MAX - 1, Instant::now());
-            loop {
-                std::thread::sleep(Duration::from_millis(200));
-                let now = current.load(Ordering::Relaxed);
-                if now == u64::MAX {
-                    return;
-                }
-                if now != last.0 {
-                    last = (now, Instant::now());
-                } else if last.1.elapsed() > HANG {
-                    let file = save(reader, seed, now, &input(reader, &seeds, seed, now));
-                    eprintln!(
-                        "fuzz: {}: input {now} (seed {seed:#x}) has not finished in {HANG:?}: hang; input in {}",
-                        reader.name(),
-                        file.display()
-                    );
-                    std::process::exit(101);
-                }
-            }
+        let seeds = seeds.clone();
+        watchdog::watch(current.clone(), HANG, move |now| {
+            let file = save(reader, seed, now, &input(reader, &seeds, seed, now));
+            eprintln!(
+                "fuzz: {}: input {now} (seed {seed:#x}) has not finished in {HANG:?}: hang; input in {}",
+                reader.name(),
+                file.display()
+            );
         })
     };
 
@@ -638,7 +628,7 @@ fn fuzz(reader: Reader, default_count: u64) {
             );
         }
     }
-    current.store(u64::MAX, Ordering::Relaxed);
+    current.store(watchdog::DONE, Ordering::Relaxed);
     watchdog.join().expect("watchdog");
     println!(
         "fuzz: {}: {count} inputs, {} parsed, {} errors, {} panics or bad errors ({} compiled; {:.1} s; \

@@ -1,12 +1,14 @@
 //! Helpers shared by the integration tests: scene builders, the one call of the renderer and of the binary,
 //! scene-file listing, seeded random numbers ([`rng`]), exact f32 → f64 widening ([`wide`]) and the f64
-//! oracle the stress tests measure the f32 kernels against ([`oracle`]).
+//! oracle the stress tests measure the f32 kernels against ([`oracle`]) and the generated-input runs'
+//! hang watchdog ([`watchdog`]).
 
 // Each test binary compiles this module on its own and uses only part of it.
 #![allow(dead_code)]
 
 pub mod oracle;
 pub mod rng;
+pub mod watchdog;
 pub mod wide;
 
 use std::path::{Path, PathBuf};
