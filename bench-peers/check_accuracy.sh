@@ -12,7 +12,7 @@ mkdir -p "$here/results" "$here/out"
 out="$here/results/accuracy-$(date -u +%Y-%m-%dT%H%M%SZ).txt"
 cam=(--eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080)
 run() { echo "\$ $*" | sed "s#$here/##g" >> "$out"; "$@" >> "$out" 2>&1; }
-echo "# $(date -u +%Y-%m-%dT%H:%M:%SZ), $("$bareray" --version), contract camera 1920x1080" > "$out"
+echo "# $(date -u +%Y-%m-%dT%H:%M:%SZ), $("$bareray" --version | tr "\n" " "), contract camera 1920x1080" > "$out"
 for n in ${COUNTS:-1e3 1e5 1e6}; do
   f="$here/out/field-$n.xyzr"
   [ -f "$f" ] || "$bareray" gen field --count "$n" -o "$f" >&2

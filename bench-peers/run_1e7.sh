@@ -18,7 +18,7 @@ reps="${REPS:-3}"
 cam=(--eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080)
 {
   echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ) nproc: $(nproc) cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2-)" \
-    "load: $(cut -d' ' -f1-3 /proc/loadavg) bareray: $("$bareray" --version)"
+    "load: $(cut -d' ' -f1-3 /proc/loadavg) bareray: $("$bareray" --version | tr "\n" " ")"
   for pair in $(seq 1 "${PAIRS:-2}"); do
     echo "## pair $pair"
     echo "\$ bareray bench field-1e7.xyzr --primary-only ${cam[*]} --reps $reps --lanes 16 --threads $threads"

@@ -16,7 +16,7 @@ size="${SIZE:-1024}"; threads="${THREADS:-2}"; reps="${REPS:-3}"; lanes="${LANES
   echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ)  host: $(uname -srm)  nproc: $(nproc)"
   echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
   echo "# povray: $(povray --version 2>&1 | head -1)  tachyon: $(dpkg-query -W -f='${Version}' tachyon-bin-nox 2>/dev/null)"
-  echo "# bareray: $("$bareray" --version); render FLAKE -o out/FLAKE.bareray.png --width $size --height $size --spp 1 --depth 5 --threads $threads --lanes $lanes -q"
+  echo "# bareray: $("$bareray" --version | tr "\n" " "); render FLAKE -o out/FLAKE.bareray.png --width $size --height $size --spp 1 --depth 5 --threads $threads --lanes $lanes -q"
   echo "# peers: SIZE=$size THREADS=$threads DEPTH=5 REPS=$reps run_pov_tachyon.sh FLAKE out"
 } > "$res/times.txt"
 for level in ${LEVELS:-4 5 6}; do

@@ -23,7 +23,7 @@ reps="${REPS:-7}"
 {
   echo "# date: $(date -u +%Y-%m-%dT%H:%M:%SZ)  host: $(uname -srm)  nproc: $(nproc)"
   echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
-  echo "# embree: $(dpkg-query -W -f='${Version}' libembree3-3 2>/dev/null || echo unknown)  bareray: $("$bareray" --version)"
+  echo "# embree: $(dpkg-query -W -f='${Version}' libembree3-3 2>/dev/null || echo unknown)  bareray: $("$bareray" --version | tr "\n" " ")"
   echo "# embree: embree_bench --xyzr F --geometry user --api A --threads T --reps $reps ${EMBREE_ARGS:-} (A in ${EMBREE_APIS:-8 16})"
   echo "# bareray: bareray bench F --primary-only ${cam[*]} --lanes 16 --threads T --reps $reps --json --bvh-preset P (P in ${PRESETS:-fast very-fast})"
 } > "$out"
