@@ -145,10 +145,17 @@ impl<'a, F: Lanes> Tracer<'a, F> {
 
     /// Radiance along each active camera ray (zero in inactive lanes), by the scene's shading mode.
     pub fn primary(&mut self, rays: &RayPacket<F>) -> V3<F> {
+        let hit = self.scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+        self.primary_from(rays, hit)
+    }
+
+    /// [`Tracer::primary`] for camera rays whose closest hits `hit` are known: from
+    /// [`crate::accel::Geometry::intersect_tile`], which finds a tile's camera hits as one large packet.
+    pub fn primary_from(&mut self, rays: &RayPacket<F>, hit: HitPacket<F>) -> V3<F> {
         self.counts.primary += lanes_set::<F>(rays.active);
         match self.scene.render.shade {
-            Shade::Whitted => self.trace(rays, &DeparturePacket::camera(), 0, F::splat_f32(1.0)),
-            Shade::Ao(ao) => self.ambient_occlusion(rays, ao),
+            Shade::Whitted => self.shade(rays, &hit, 0, F::splat_f32(1.0)),
+            Shade::Ao(ao) => self.ambient_occlusion(rays, &hit, ao),
         }
     }
 
@@ -160,11 +167,18 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 return color;
             }
         }
-        let (hit, found, background) = self.hit_or_background(rays, from);
+        let hit = self.scene.geometry.intersect_k(rays, from);
+        self.shade(rays, &hit, depth, weight)
+    }
+
+    /// Radiance along `rays` whose closest hits are `hit`: the background where they
+    /// found nothing, else the surface's shading and, below the depth limit, its reflection and refraction.
+    fn shade(&mut self, rays: &RayPacket<F>, hit: &HitPacket<F>, depth: u32, weight: F) -> V3<F> {
+        let (found, background) = self.found_or_background(rays, hit);
         if !found.any() {
             return background;
         }
-        let s = self.surface(rays, &hit, found);
+        let s = self.surface(rays, hit, found);
         let view = -rays.dir;
         let mut color = s.base.mul_elem(splat_rgb::<F>(self.scene.render.ambient)) * s.ambient;
         let zero_f = F::splat_f32(0.0);
@@ -180,22 +194,17 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         V3::select(found, color, background)
     }
 
-    /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
-    /// of one plain material (most packets), else lane by lane with the scalar code.
-    /// The closest hits of `rays` leaving `from`, the active lanes that found one, and the background colour
-    /// in the active lanes that did not (zero in the rest).
-    fn hit_or_background(
-        &self,
-        rays: &RayPacket<F>,
-        from: &DeparturePacket<F>,
-    ) -> (HitPacket<F>, F::Mask, V3<F>) {
-        let hit = self.scene.geometry.intersect_k(rays, from);
+    /// The active lanes of `rays` that found a hit in `hit`, and the background colour in the active lanes
+    /// that did not (zero in the rest).
+    fn found_or_background(&self, rays: &RayPacket<F>, hit: &HitPacket<F>) -> (F::Mask, V3<F>) {
         let found = hit.found() & rays.active;
         let zero = V3::all(F::splat_f32(0.0));
         let background = V3::select(rays.active & !found, splat_rgb::<F>(self.scene.render.background), zero);
-        (hit, found, background)
+        (found, background)
     }
 
+    /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
+    /// of one plain material (most packets), else lane by lane with the scalar code.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
         self.sphere_surface(rays, hit, found).unwrap_or_else(|| self.surface_by_lane(rays, hit, found))
     }

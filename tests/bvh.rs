@@ -261,8 +261,10 @@ fn single_ray_switch_keeps_the_brute_force_answer() {
 }
 
 /// Camera packets bring their own pyramid (`Camera::pyramid`, normals up to |n| ≈ 1 + |U| on wide views),
-/// which culls boxes and leaf spheres: every pixel's hit equals brute force's with scalar rays (no pyramid),
-/// on wide and narrow views from inside and outside the field.
+/// which culls boxes and leaf spheres, and walk the tree as large packets (a tile of packets with the tile's
+/// pyramid, culled by distance from the eye): every pixel's hit equals brute force's with scalar rays (no
+/// pyramid), at every packet width, on wide and narrow views from inside and outside the field, with tiles
+/// cut short at the image's edges (203×157).
 #[test]
 fn camera_pyramids_keep_the_brute_force_answer() {
     use bareray::scene::desc::{Aim, Field};
@@ -280,15 +282,83 @@ fn camera_pyramids_keep_the_brute_force_answer() {
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
         let pool = |threads| bareray::render::thread_pool(Some(threads)).unwrap();
         let want = bareray::render::primary_hits_lanes(&brute, 1, &pool(1));
-        let got = bareray::render::primary_hits_lanes(&bvh, 16, &pool(2));
-        let bits = |t: &[f32]| t.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
-        assert_eq!(bits(&got.t), bits(&want.t), "t differs, eye {eye}, θ {theta}");
-        let (hits, prims) = (want.prim.iter().filter(|&&p| p != u32::MAX).count(), got.prim.len());
+        let (hits, prims) = (want.prim.iter().filter(|&&p| p != u32::MAX).count(), want.prim.len());
         assert!(hits > prims / 50, "only {hits} of {prims} pixels hit something");
-        // Ids: brute force stores spheres in file order, the BVH in leaf order.
-        let file_ids: Vec<u32> = got.prim.iter().map(|&p| bvh.geometry.file_id(p)).collect();
-        assert_eq!(file_ids, want.prim, "ids differ, eye {eye}, θ {theta}");
+        for lanes in [4, 8, 16] {
+            let got = bareray::render::primary_hits_lanes(&bvh, lanes, &pool(2));
+            let bits = |t: &[f32]| t.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+            assert_eq!(bits(&got.t), bits(&want.t), "t differs, eye {eye}, θ {theta}, K = {lanes}");
+            // Ids: brute force stores spheres in file order, the BVH in leaf order.
+            let file_ids: Vec<u32> = got.prim.iter().map(|&p| bvh.geometry.file_id(p)).collect();
+            assert_eq!(file_ids, want.prim, "ids differ, eye {eye}, θ {theta}, K = {lanes}");
+        }
     }
+}
+
+/// Large packets with other kinds in the scene: the tile's spheres come from the large walk, the polygons
+/// from each packet's own walk, and every pixel is brute force's answer over both.
+#[test]
+fn large_packets_merge_the_other_kinds() {
+    use bareray::scene::desc::{Aim, Field};
+    let mut desc = polygon_field(400, 23);
+    desc.camera.eye = DVec3::new(0.2, 0.3, -3.5);
+    desc.camera.aim = Aim::LookAt(DVec3::ZERO);
+    desc.camera.field = Field::HorizontalAngle(50.0);
+    (desc.camera.width, desc.camera.height) = (131, 97);
+    let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+    let pool = bareray::render::thread_pool(Some(2)).unwrap();
+    let want = bareray::render::primary_hits_lanes(&brute, 1, &pool);
+    let kinds = |hits: &bareray::render::PrimaryHits, scene: &Scene| {
+        let spheres = scene.geometry.spheres.len() as u32;
+        let on = |p: &&u32| **p != u32::MAX;
+        (
+            hits.prim.iter().filter(|p| on(p) && **p < spheres).count(),
+            hits.prim.iter().filter(|p| on(p) && **p >= spheres).count(),
+        )
+    };
+    let (spheres, others) = kinds(&want, &brute);
+    assert!(spheres > 500 && others > 500, "{spheres} sphere and {others} polygon pixels");
+    for lanes in [4, 8, 16] {
+        let got = bareray::render::primary_hits_lanes(&bvh, lanes, &pool);
+        let bits = |t: &[f32]| t.iter().map(|t| t.to_bits()).collect::<Vec<_>>();
+        assert_eq!(bits(&got.t), bits(&want.t), "t differs at K = {lanes}");
+        let file_ids: Vec<u32> = got.prim.iter().map(|&p| bvh.geometry.file_id(p)).collect();
+        let want_ids: Vec<u32> = want.prim.iter().map(|&p| brute.geometry.file_id(p)).collect();
+        assert_eq!(file_ids, want_ids, "ids differ at K = {lanes}");
+    }
+}
+
+/// A tile of packets walking together tests fewer boxes than its packets walking one by one: the tree's
+/// upper levels are visited once per tile. (Counts, not time: the work counters of one thread.)
+#[test]
+fn large_packets_share_the_walk() {
+    let mut desc = field(20000, 25);
+    desc.camera = common::camera(DVec3::new(0.0, 0.0, -4.0), DVec3::ZERO, DVec3::Y, 45.0, 256, 192);
+    let scene = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    let pool = bareray::render::thread_pool(Some(1)).unwrap();
+    bareray::accel::set_counting(true);
+    let tile = pool.install(|| {
+        let _ = bareray::accel::take_work();
+        bareray::render::primary_hits_lanes(&scene, 16, &pool);
+        bareray::accel::take_work()
+    });
+    let separate = pool.install(|| {
+        let from = bareray::geometry::DeparturePacket::camera();
+        let camera = &scene.camera_f64;
+        for tile in bareray::render::tiles(256, 192) {
+            bareray::render::for_each_packet::<f32x16>(camera, tile, (0.5, 0.5), true, |rays, _| {
+                scene.geometry.intersect_k(rays, &from);
+            });
+        }
+        bareray::accel::take_work()
+    });
+    assert!(
+        tile.box_tests * 10 < separate.box_tests * 8,
+        "large packets: {} box tests, separate packets: {}",
+        tile.box_tests,
+        separate.box_tests
+    );
 }
 
 /// Random planar polygons (triangles and quads, some with vertex normals) among the spheres of a field.

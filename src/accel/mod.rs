@@ -27,7 +27,7 @@ pub use triangle_query::{TriangleQuery, Triangles};
 use bvh::{Bvh, LeafQuery};
 
 use crate::geometry::{
-    Cones, Departure, DeparturePacket, Hit, HitPacket, Ray, RayPacket, Shape, Spheres, NO_PRIM,
+    Cones, Departure, DeparturePacket, Hit, HitPacket, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
 };
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
@@ -214,30 +214,80 @@ impl Geometry {
             let q = self.sphere_query(rays, from);
             intersect_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), rays.active, &mut best);
         }
+        self.intersect_other_kinds(rays, from, &mut best);
+        let (exits, t) = self.departure_exits_k(rays, from);
+        best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
+        best
+    }
+
+    /// [`Geometry::intersect_k`] for each packet of a tile of camera rays (origin at the eye, departing from
+    /// no surface) into `hits`, bit for bit: with a sphere BVH and `pyramid` (enclosing every active ray of
+    /// the tile), the packets walk the sphere tree together as one large packet; at most
+    /// [`bvh::MAX_PACKETS`] packets then.
+    pub fn intersect_tile<F: Lanes>(
+        &self,
+        packets: &[RayPacket<F>],
+        pyramid: Option<&Pyramid>,
+        hits: &mut [HitPacket<F>],
+    ) {
+        let camera = DeparturePacket::camera();
+        let (Some(bvh), Some(pyramid), true) = (&self.sphere_bvh, pyramid, F::K > 1) else {
+            for (rays, hit) in packets.iter().zip(hits) {
+                *hit = self.intersect_k(rays, &camera);
+            }
+            return;
+        };
+        let count = packets.len();
+        assert!(count <= bvh::MAX_PACKETS && count == hits.len(), "{count} packets for a large packet");
+        // Fixed arrays, not vectors: an allocation per tile measured as 10% of a frame of misses. Slots past
+        // `count` repeat the first packet with no live lanes and are never walked.
+        let queries = std::array::from_fn::<_, { bvh::MAX_PACKETS }, _>(|p| {
+            self.sphere_query(&packets[p.min(count - 1)], &camera)
+        });
+        let live: [F::Mask; bvh::MAX_PACKETS] =
+            std::array::from_fn(|p| packets.get(p).map_or(F::mask_from_bits(0), |rays| rays.active));
+        hits.fill(HitPacket::miss());
+        bvh.intersect_large(&queries[..count], &live[..count], pyramid, hits);
+        if self.has_other_kinds() {
+            for (rays, hit) in packets.iter().zip(hits).filter(|(rays, _)| rays.active.any()) {
+                self.intersect_other_kinds(rays, &camera, hit);
+            }
+        }
+    }
+
+    /// Whether the scene has primitives other than spheres.
+    fn has_other_kinds(&self) -> bool {
+        !(self.polygons.is_empty() && self.shapes.is_empty() && self.cones.is_empty())
+    }
+
+    /// The closest hits of every kind but spheres, merged into `best`.
+    fn intersect_other_kinds<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+        best: &mut HitPacket<F>,
+    ) {
         if !self.polygons.is_empty() {
             let q = self.triangle_query(rays, from);
-            intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, &mut best);
+            intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, best);
         }
         if !self.shapes.is_empty() {
             let (tree, loose) = self.shape_queries(rays, from);
             if let Some(bvh) = &self.shape_bvh {
-                bvh.intersect_k(&tree, rays.active, &mut best);
+                bvh.intersect_k(&tree, rays.active, best);
             }
             intersect_items(
                 None,
                 &loose,
                 loose.items.order.map_or(self.shapes.len(), <[u32]>::len),
                 rays.active,
-                &mut best,
+                best,
             );
         }
         if !self.cones.is_empty() {
             let q = self.cone_query(rays, from);
-            intersect_items(self.cone_bvh.as_ref(), &q, self.cones.len(), rays.active, &mut best);
+            intersect_items(self.cone_bvh.as_ref(), &q, self.cones.len(), rays.active, best);
         }
-        let (exits, t) = self.departure_exits_k(rays, from);
-        best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
-        best
     }
 
     /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side

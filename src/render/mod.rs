@@ -9,7 +9,7 @@ use crate::accel::Work;
 use crate::camera::Camera;
 use crate::compile::Scene;
 use crate::film::Image;
-use crate::geometry::RayPacket;
+use crate::geometry::{HitPacket, Pyramid, RayPacket};
 use crate::math::{Rgb, V3};
 use crate::sample::lecture_3x3;
 use crate::scene::desc::PostFilter;
@@ -258,6 +258,79 @@ pub fn for_each_packet<F: Lanes>(
     visit: impl FnMut(&RayPacket<F>, Block),
 ) {
     for_each_packet_at(camera, tile, &Offsets::Shared(dx, dy), pyramids, visit);
+}
+
+/// `tile` cut into the pieces one large packet covers ([`crate::accel::bvh::MAX_PACKETS`] packets of
+/// [`block`]`::<F>()` pixels: 16×16 pixels at K = 16, 16×8 at K = 8, 8×8 at K = 4), row by row, in image
+/// coordinates.
+pub fn large_packets<F: Lanes>(tile: Tile) -> impl Iterator<Item = Tile> {
+    let (bw, bh) = block::<F>();
+    let (w, h) = (bw * 4, bh * crate::accel::bvh::MAX_PACKETS as u32 / 4);
+    (0..tile.h).step_by(h as usize).flat_map(move |y0| {
+        (0..tile.w).step_by(w as usize).map(move |x0| Tile {
+            x0: tile.x0 + x0,
+            y0: tile.y0 + y0,
+            w: w.min(tile.w - x0),
+            h: h.min(tile.h - y0),
+        })
+    })
+}
+
+/// The [`Camera::pyramid`] of every camera ray through `tile`'s pixels, each offset by `(dx, dy)` from its
+/// pixel's corner (the sums [`for_each_packet`] computes for its edge lanes).
+pub fn tile_pyramid(camera: &Camera<f64>, tile: Tile, (dx, dy): (f32, f32)) -> Option<Pyramid> {
+    let edge = |first: u32, count: u32, d: f32| [first as f32 + d, (first + count - 1) as f32 + d];
+    camera.pyramid(edge(tile.x0, tile.w, dx), edge(tile.y0, tile.h, dy))
+}
+
+/// Reusable buffers for [`for_each_camera_hit`]: one large packet's rays, blocks and hits.
+pub struct LargePacket<F: Lanes> {
+    packets: Vec<RayPacket<F>>,
+    blocks: Vec<Block>,
+    hits: Vec<HitPacket<F>>,
+}
+
+impl<F: Lanes> Default for LargePacket<F> {
+    fn default() -> Self {
+        let n = crate::accel::bvh::MAX_PACKETS;
+        Self { packets: Vec::with_capacity(n), blocks: Vec::with_capacity(n), hits: Vec::with_capacity(n) }
+    }
+}
+
+/// [`for_each_packet_at`] with each packet's closest camera hits: the packets of each piece of `tile` that
+/// [`large_packets`] cuts are traced together ([`crate::accel::Geometry::intersect_tile`], with the piece's
+/// pyramid), then `visit` gets each packet, its hits and its block (in `tile`'s coordinates). Offsets must
+/// lie in the pixel (`[0, 1]`), as every sampling pattern's do.
+pub fn for_each_camera_hit<F: Lanes>(
+    scene: &Scene,
+    tile: Tile,
+    offsets: &Offsets,
+    large: &mut LargePacket<F>,
+    mut visit: impl FnMut(&RayPacket<F>, HitPacket<F>, Block),
+) {
+    let camera = &scene.camera_f64;
+    let pyramids = scene.geometry.culls_by_pyramid();
+    for piece in large_packets::<F>(tile) {
+        large.packets.clear();
+        large.blocks.clear();
+        for_each_packet_at(camera, piece, offsets, pyramids, |rays, b| {
+            large.packets.push(*rays);
+            large.blocks.push(Block { x: b.x + piece.x0 - tile.x0, y: b.y + piece.y0 - tile.y0, ..b });
+        });
+        let pyramid = match offsets {
+            _ if !pyramids => None,
+            Offsets::Shared(dx, dy) => tile_pyramid(camera, piece, (*dx, *dy)),
+            Offsets::PerPixel(_) => {
+                let edge = |first: u32, count: u32| [first as f32, (first + count) as f32];
+                camera.pyramid(edge(piece.x0, piece.w), edge(piece.y0, piece.h))
+            }
+        };
+        large.hits.resize(large.packets.len(), HitPacket::miss());
+        scene.geometry.intersect_tile(&large.packets, pyramid.as_ref(), &mut large.hits);
+        for ((rays, hit), b) in large.packets.iter().zip(&large.hits).zip(&large.blocks) {
+            visit(rays, *hit, *b);
+        }
+    }
 }
 
 /// Where a pass of samples lies in each pixel, from the pixel's corner.

@@ -8,7 +8,7 @@ use rayon::prelude::*;
 use crate::compile::Scene;
 use crate::simd::Lanes;
 
-use super::{for_each_packet, tiles, Tile, Window, TILE};
+use super::{for_each_camera_hit, tiles, LargePacket, Offsets, Tile, Window, TILE};
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
 #[derive(Clone, Debug)]
@@ -101,24 +101,21 @@ pub fn trace_primary_window<F: Lanes>(
     window: Window,
     hits: &mut PrimaryHits,
 ) {
-    use crate::geometry::DeparturePacket;
     let start = Instant::now();
     let (width, height) = (window.width(), window.height());
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the window's");
     // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
     let band = width as usize * TILE as usize;
-    let pyramids = scene.geometry.culls_by_pyramid();
     pool.install(|| {
         // One job per band, as for tiles in `render`.
         let bands =
             hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate().with_max_len(1);
         bands.for_each(|(band, (t, prim))| {
-            let camera = &scene.camera_f64;
             let y0 = band as u32 * TILE;
+            let mut large = LargePacket::default();
             for tile in tiles(width, TILE.min(height - y0)) {
                 let tile = Tile { x0: window.x0 + tile.x0, y0: window.y0 + y0, ..tile };
-                for_each_packet::<F>(camera, tile, (0.5, 0.5), pyramids, |rays, b| {
-                    let hit = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+                for_each_camera_hit::<F>(scene, tile, &Offsets::Shared(0.5, 0.5), &mut large, |_, hit, b| {
                     let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
                     // Row by row: each row of the block is a run of pixels in the frame's row.
                     for r in 0..b.h as usize {

@@ -12,7 +12,7 @@ use crate::scene::desc::{Filter, Pattern};
 use crate::shade::Tracer;
 use crate::simd::Lanes;
 
-use super::{for_each_packet_at, lane_rgb, Offsets, Tile};
+use super::{for_each_camera_hit, for_each_packet_at, lane_rgb, LargePacket, Offsets, Tile};
 
 /// The pixels of one tile, row by row.
 pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
@@ -29,11 +29,11 @@ pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: 
     if let Some(filter) = scene.render.filter {
         return filtered_tile(scene, tracer, tile, filter);
     }
-    let pyramids = scene.geometry.culls_by_pyramid();
     let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
+    let mut large = LargePacket::default();
     let mut pass = |offsets: &Offsets| {
-        for_each_packet_at(camera, tile, offsets, pyramids, |rays, block| {
-            let c = tracer.primary(rays);
+        for_each_camera_hit(scene, tile, offsets, &mut large, |rays, hit, block| {
+            let c = tracer.primary_from(rays, hit);
             for (i, x, y) in block.pixels() {
                 let p = (y * tile.w + x) as usize;
                 sum[p] = sum[p] + lane_rgb(&c, i);

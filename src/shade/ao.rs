@@ -24,17 +24,17 @@ use super::{Surface, Tracer};
 impl<F: Lanes> Tracer<'_, F> {
     /// The ambient occlusion of each active camera ray's hit times the surface's colour; the background
     /// where a ray hits nothing, zero in inactive lanes.
-    pub(super) fn ambient_occlusion(&mut self, rays: &RayPacket<F>, ao: Ao) -> V3<F> {
-        let (hit, found, background) = self.hit_or_background(rays, &DeparturePacket::camera());
+    pub(super) fn ambient_occlusion(&mut self, rays: &RayPacket<F>, hit: &HitPacket<F>, ao: Ao) -> V3<F> {
+        let (found, background) = self.found_or_background(rays, hit);
         if !found.any() {
             return background;
         }
-        let s = self.surface(rays, &hit, found);
+        let s = self.surface(rays, hit, found);
         let distance = F::splat_f32(ao.distance.map_or(f32::INFINITY, |d| d as f32));
         let open = if ao.samples as usize >= F::K {
-            self.open_by_hit(rays, &hit, &s, found, ao, distance)
+            self.open_by_hit(rays, hit, &s, found, ao, distance)
         } else {
-            self.open_by_pixel(rays, &hit, &s, found, ao, distance)
+            self.open_by_pixel(rays, hit, &s, found, ao, distance)
         };
         let share = open / F::splat_f32(ao.samples as f32);
         V3::select(found, s.base * share, background)

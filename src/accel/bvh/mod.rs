@@ -21,6 +21,7 @@
 mod binary;
 pub mod build;
 mod collapse;
+mod large;
 pub mod node;
 mod packet;
 mod piles;
@@ -29,6 +30,7 @@ mod slab;
 pub mod wide_node;
 
 pub use build::{build, BuildOptions};
+pub use large::MAX_PACKETS;
 pub use node::{Node, N};
 pub use wide_node::{WideNode, WIDE_N};
 

@@ -21,21 +21,21 @@ use crate::math::{Mask, Real, V3};
 use crate::simd::Lanes;
 
 /// A ray packet prepared for slab tests.
-struct SlabRays<F: Lanes> {
+pub(super) struct SlabRays<F: Lanes> {
     slab: SlabRay<F>,
     /// The octant of the first live lane's direction, which orders the children.
-    octant: usize,
+    pub(super) octant: usize,
     /// Per axis, the side of the near plane ([`near_side`]), when every live lane's is the same.
     near: Option<[usize; 3]>,
     /// The whole-packet pyramid, when asked for and the live lanes share an origin.
-    frustum: Option<Frustum>,
+    pub(super) frustum: Option<Frustum>,
 }
 
 impl<F: Lanes> SlabRays<F> {
     /// `extent` bounds the boxes' coordinates when frustum culling is wanted; the query's own pyramid is
     /// used when it carries one, else one is fitted to the live lanes.
     #[inline(always)]
-    fn new<Q: LeafQuery<F>>(q: &Q, live: F::Mask, extent: Option<f32>) -> Self {
+    pub(super) fn new<Q: LeafQuery<F>>(q: &Q, live: F::Mask, extent: Option<f32>) -> Self {
         let ray = q.ray();
         let slab = SlabRay::new(ray);
         let first = (F::move_mask(live).trailing_zeros() as usize).min(F::K - 1);
@@ -64,7 +64,7 @@ impl<F: Lanes> SlabRays<F> {
     /// Entry distance of each lane into child `c` of `n`, `inf` where the lane misses it or enters beyond
     /// `limit`.
     #[inline(always)]
-    fn enter(&self, n: &Node, c: usize, limit: F) -> F {
+    pub(super) fn enter(&self, n: &Node, c: usize, limit: F) -> F {
         let corner = |v: &[[f32; N]; 3]| [0, 1, 2].map(|a| F::splat_f32(v[a][c]));
         match self.near {
             Some(near) => {
@@ -79,12 +79,12 @@ impl<F: Lanes> SlabRays<F> {
 /// One side of a [`Frustum`]: a plane through the shared origin that every live ray lies on the positive side
 /// of, with the box corner that is farthest along its normal picked per axis.
 #[derive(Clone, Copy)]
-struct Side {
-    normal: [f32; 3],
+pub(super) struct Side {
+    pub(super) normal: [f32; 3],
     /// Per axis, the box side (0 lower, 1 upper) farthest along the normal.
     far_side: [usize; 3],
     /// `normal · origin − tolerance`: a box whose farthest corner is below this is outside.
-    offset: f32,
+    pub(super) offset: f32,
 }
 
 /// The packet as a pyramid: its live lanes share an origin, and four planes through it enclose every live
@@ -93,7 +93,7 @@ struct Side {
 /// their construction and of the box test, so the test never rules out a box an exact ray enters.
 #[derive(Clone, Copy)]
 pub(super) struct Frustum {
-    sides: [Side; 4],
+    pub(super) sides: [Side; 4],
     /// The four sides again, one per lane, for the sphere test: normal components, `|n|` rounded up, and
     /// the offsets.
     nx: f32x4,
@@ -107,7 +107,7 @@ impl Frustum {
     /// The box test's sides from `p`, with slack for the test's own rounding: it sums 3 products and the
     /// offset, all within |n|₁·reach, so 16ε of that is ample.
     #[inline(always)]
-    fn new(p: &Pyramid, extent: f32) -> Self {
+    pub(super) fn new(p: &Pyramid, extent: f32) -> Self {
         let o = glam::Vec3::from(p.apex);
         let reach = extent.max(o.abs().max_element());
         let sides = p.normals.map(|n| {
@@ -134,7 +134,7 @@ impl Frustum {
     /// its centre within `reach`, so the slack in the offsets covers this test's rounding as it does the
     /// box test's (the extra term `r·|n|` adds one rounding of a value below |n|₁·reach).
     #[inline(always)]
-    fn may_meet(&self, c: V3<f32>, r: f32) -> bool {
+    pub(super) fn may_meet(&self, c: V3<f32>, r: f32) -> bool {
         let s = self.nz.mul_add(
             f32x4::splat(c.z),
             self.ny
@@ -145,7 +145,7 @@ impl Frustum {
 
     /// Bit `c` set for each child of `n` that some lane may enter.
     #[inline(always)]
-    fn maybe_entered(&self, n: &Node) -> u32 {
+    pub(super) fn maybe_entered(&self, n: &Node) -> u32 {
         let mut outside = 0;
         for side in &self.sides {
             // `& 1` lets the compiler drop the bounds check (far_side is 0 or 1).
