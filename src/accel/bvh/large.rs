@@ -1,108 +1,101 @@
-//! Large packets: up to [`MAX_PACKETS`] packets of K rays that share an origin (a tile of camera rays) walk
-//! the tree together. Per node the tile pays once what the K-ray walk pays per packet:
+//! Large packets: up to [`MAX_PACKETS`] packets of K rays that share an origin (a tile of camera rays), each
+//! with its pyramid, walk the tree together. The walk is over the members' frusta, never their lanes:
 //!
 //! - the tile's [`Frustum`] rules out the children no ray of the tile can enter (one 4-wide pass);
-//! - a child whose box lies farther from the shared origin than every ray's best hit so far is skipped;
-//! - a child is entered with the index of the first packet that enters it (Wald et al.'s "first active
-//!   ray", here a first active packet): packets before it missed the child, so its subtree never tests them.
+//! - each member's frustum, tested for all members at once (one member per lane of a 16-wide test), says
+//!   which members may reach a child; a child inherits its parent's members, so a subtree never looks at a
+//!   member that missed an ancestor;
+//! - a member whose every live lane has a hit nearer than a box's distance from the shared origin is done
+//!   with that box (a lower bound on the distance, shrunk past its rounding).
 //!
-//! Only leaves test each packet from the first active one on, by its own slab test and frustum, with the same
-//! K-lane sphere kernel as the K-ray walk, so every lane gets the bits [`Bvh::intersect_k`] gives it
-//! (leaf items are merged in (t, id) order, whatever the order of visits).
+//! Leaves test each sphere against the members' frusta at once, then run each member's K-lane sphere
+//! kernel on the spheres its frustum may meet — the kernel and the (t, id) merge of the K-ray walk, so every
+//! lane gets the bits [`Bvh::intersect_k`] gives it (culling is conservative, and merging is independent
+//! of the order of visits).
 
 use wide::{f32x16, f32x4};
 
 use super::super::count_work;
 use super::node::Node;
-use super::packet::{Frustum, SlabRays};
+use super::packet::{Frustum, Side};
 use super::slab::Stack;
 use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Pyramid};
-use crate::math::{Mask, Real};
+use crate::math::{Mask, Real, Vec3f};
 use crate::simd::{set_bits, Lanes};
 
 /// The most packets a large packet holds: a 16×16-pixel tile of 4×4-ray packets.
 pub const MAX_PACKETS: usize = 16;
 
-/// A child waiting on the stack: slot `slot` of node `parent`, first entered by packet `first`, no nearer
-/// than `near` to the shared origin.
+/// A child waiting on the stack: slot `slot` of node `parent`, which the members of `members` (bit p for
+/// member p) may reach, no nearer than `near` to the shared origin.
 #[derive(Clone, Copy)]
 struct Pending {
     parent: u32,
     slot: u8,
-    first: u8,
+    members: u16,
     near: f32,
 }
 
-/// One packet of the tile and what its walk keeps.
-struct Member<'q, F: Lanes, Q> {
-    q: &'q Q,
-    live: F::Mask,
-    rays: SlabRays<F>,
-}
-
-impl<F: Lanes, Q: LeafQuery<F>> Member<'_, F, Q> {
-    /// Each live lane's entry distance limit: its best hit so far (or its end), `-inf` for dead lanes.
-    #[inline(always)]
-    fn limit(&self, best: &HitPacket<F>) -> F {
-        F::select(self.live, best.t.min_of(self.q.t_max()), F::splat_f32(f32::NEG_INFINITY))
-    }
-
-    /// The lanes that enter child `c` of `n` before their best hit.
-    #[inline(always)]
-    fn entering(&self, n: &Node, c: usize, best: &HitPacket<F>) -> F::Mask {
-        self.rays.enter(n, c, self.limit(best)).lt(F::splat_f32(f32::INFINITY))
-    }
-}
-
-/// The largest best-hit distance among the live lanes (`-inf` with none): no lane looks beyond it.
-#[inline(always)]
-fn reach<F: Lanes>(live: F::Mask, best: &HitPacket<F>) -> f32 {
-    let t = F::select(live, best.t, F::splat_f32(f32::NEG_INFINITY)).to_array();
-    t.as_ref().iter().copied().fold(f32::NEG_INFINITY, f32::max)
-}
-
-/// Every member's frustum at once, one member per lane: the test that tells which members may reach a box,
-/// before any member's K-lane slab test. Members without a frustum always may.
+/// Every member's four frustum sides, one member per lane: which members may reach a box or a ball.
+/// Members without a pyramid always may.
 struct MemberSides {
     /// Per side, the normals' components.
     normal: [[f32x16; 3]; 4],
-    /// Per side, the offsets ([`Frustum`]'s, with its slack); `-inf` for members without a frustum.
+    /// Per side, `|n|` rounded up, for balls.
+    norm: [f32x16; 4],
+    /// Per side, the offsets (with [`Side::all`]'s slack); `-inf` for members without a pyramid.
     offset: [f32x16; 4],
-    /// Bit p set for each member with a live lane.
-    alive: u32,
 }
 
 impl MemberSides {
-    fn new<F: Lanes, Q>(members: &[Member<F, Q>]) -> Self {
-        let lane = |f: &dyn Fn(&Frustum) -> f32, none: f32| {
+    fn new(pyramids: &[Option<Pyramid>], extent: f32) -> Self {
+        let sides: [Option<[Side; 4]>; MAX_PACKETS] = std::array::from_fn(|p| {
+            pyramids.get(p).copied().flatten().map(|pyramid| Side::all(&pyramid, extent))
+        });
+        let lanes = |f: &dyn Fn(&Side) -> f32, none: f32, s: usize| {
             f32x16::from(std::array::from_fn::<f32, MAX_PACKETS, _>(|p| {
-                members.get(p).and_then(|m| m.rays.frustum.as_ref()).map_or(none, f)
+                sides[p].as_ref().map_or(none, |m| f(&m[s]))
             }))
         };
         Self {
-            normal: std::array::from_fn(|s| std::array::from_fn(|a| lane(&|f| f.sides[s].normal[a], 0.0))),
-            offset: std::array::from_fn(|s| lane(&|f| f.sides[s].offset, f32::NEG_INFINITY)),
-            alive: members.iter().enumerate().fold(0, |bits, (p, m)| bits | u32::from(m.live.any()) << p),
+            normal: std::array::from_fn(|s| std::array::from_fn(|a| lanes(&|side| side.normal[a], 0.0, s))),
+            norm: std::array::from_fn(|s| lanes(&Side::norm, 0.0, s)),
+            offset: std::array::from_fn(|s| lanes(&|side| side.offset, f32::NEG_INFINITY, s)),
         }
     }
 
     /// Bit p set where member p's frustum may reach child `c` of `n`: the box's corner farthest along each
-    /// side's normal (per lane) is not below the side. The same corner and sums as [`Frustum`]'s box test.
+    /// side's normal (per lane) is not below the side, as in [`Frustum`]'s box test.
     #[inline(always)]
-    fn reaching(&self, n: &Node, c: usize) -> u32 {
+    fn reaching_box(&self, n: &Node, c: usize) -> u32 {
         let zero = f32x16::splat(0.0);
-        let corner = |a: usize, normal: f32x16| {
-            let (lo, hi) = (f32x16::splat(n.lo()[a][c]), f32x16::splat(n.hi()[a][c]));
-            Real::select(zero.le(normal), hi, lo)
-        };
         let mut outside = 0;
         for (normal, offset) in self.normal.iter().zip(&self.offset) {
-            let w = |a: usize| corner(a, normal[a]);
-            let s = w(2).mul_add(normal[2], w(1).mul_add(normal[1], w(0).mul_add(normal[0], -*offset)));
+            let corner = |a: usize| {
+                let (lo, hi) = (f32x16::splat(n.lo()[a][c]), f32x16::splat(n.hi()[a][c]));
+                Real::select(zero.le(normal[a]), hi, lo)
+            };
+            let s = corner(2)
+                .mul_add(normal[2], corner(1).mul_add(normal[1], corner(0).mul_add(normal[0], -*offset)));
             outside |= f32x16::move_mask(s.lt(zero));
         }
-        !outside & self.alive
+        !outside
+    }
+
+    /// Bit p set where member p's frustum may meet the ball of radius `r` around `centre`, as in
+    /// [`Frustum`]'s sphere test.
+    #[inline(always)]
+    fn reaching_ball(&self, centre: Vec3f, r: f32) -> u32 {
+        let (zero, r) = (f32x16::splat(0.0), f32x16::splat(r));
+        let (x, y, z) = (f32x16::splat(centre.x), f32x16::splat(centre.y), f32x16::splat(centre.z));
+        let mut outside = 0;
+        for ((normal, norm), offset) in self.normal.iter().zip(&self.norm).zip(&self.offset) {
+            let s =
+                normal[2].mul_add(z, normal[1].mul_add(y, normal[0].mul_add(x, norm.mul_add(r, -*offset))));
+            outside |= f32x16::move_mask(s.lt(zero));
+        }
+        !outside
     }
 }
 
@@ -114,18 +107,16 @@ fn box_distance(n: &Node, origin: [f32; 3]) -> [f32; 4] {
     let mut d2 = zero;
     for (a, &o) in origin.iter().enumerate() {
         let o = f32x4::splat(o);
-        let below = f32x4::from(n.lo()[a]) - o;
-        let above = o - f32x4::from(n.hi()[a]);
-        let gap = below.fast_max(above).fast_max(zero);
+        let gap = (f32x4::from(n.lo()[a]) - o).fast_max(o - f32x4::from(n.hi()[a])).fast_max(zero);
         d2 = gap.mul_add(gap, d2);
     }
     (d2.sqrt() * f32x4::splat(1.0 - 16.0 * f32::EPSILON)).to_array()
 }
 
 impl Bvh {
-    /// Closest hits of the leaf items for a tile of packets that share an origin (`qs[p]` with its lanes
-    /// `live[p]`, merged into `best[p]`), walking the tree once for all of them; `pyramid` encloses every
-    /// live ray of the tile. Each lane gets the bits [`Bvh::intersect_k`] gives it.
+    /// Closest hits of the leaf items for a tile of packets that share an origin, each with its pyramid
+    /// (`qs[p]` with its lanes `live[p]`, merged into `best[p]`), walking the tree once for all of them;
+    /// `pyramid` encloses every live ray of the tile. Each lane gets the bits [`Bvh::intersect_k`] gives it.
     pub fn intersect_large<F: Lanes, Q: LeafQuery<F>>(
         &self,
         qs: &[Q],
@@ -134,109 +125,118 @@ impl Bvh {
         best: &mut [HitPacket<F>],
     ) {
         assert!(qs.len() <= MAX_PACKETS && qs.len() == live.len() && qs.len() == best.len());
-        let extent = self.frustum_culling.then_some(self.extent);
-        let Some(lead) = live.iter().position(|m| m.any()) else { return };
-        let member = |p: usize| {
-            let (q, live) = (&qs[p.min(qs.len() - 1)], live.get(p).copied().unwrap_or(F::mask_from_bits(0)));
-            Member { q, live, rays: SlabRays::new(q, live, extent) }
+        let alive = live.iter().enumerate().fold(0u32, |bits, (p, m)| bits | u32::from(m.any()) << p);
+        if alive == 0 {
+            return;
+        }
+        let pyramids: [Option<Pyramid>; MAX_PACKETS] =
+            std::array::from_fn(|p| qs.get(p).and_then(Q::pyramid));
+        let lead = &qs[alive.trailing_zeros() as usize].ray().dir;
+        let first = (F::move_mask(live[alive.trailing_zeros() as usize])).trailing_zeros() as usize;
+        let negative = |d: F| usize::from(d.lane(first) < 0.0);
+        let walk = Walk {
+            bvh: self,
+            qs,
+            live,
+            sides: MemberSides::new(&pyramids[..qs.len()], self.extent),
+            tile: Frustum::new(pyramid, self.extent),
+            octant: negative(lead.x) | negative(lead.y) << 1 | negative(lead.z) << 2,
+            origin: pyramid.apex,
         };
-        let members: [Member<F, Q>; MAX_PACKETS] = std::array::from_fn(member);
-        let tile = Frustum::new(pyramid, self.extent);
-        let octant = members[lead].rays.octant;
-        let members = &members[..qs.len()];
-        let sides = MemberSides::new(members);
-        let mut walk = Walk { bvh: self, members, sides, tile, octant, origin: pyramid.apex, boxes: 0 };
-        walk.run(lead, best);
+        walk.run(alive, best);
     }
 }
 
 /// One large packet's walk.
-struct Walk<'a, 'q, F: Lanes, Q> {
+struct Walk<'a, F: Lanes, Q> {
     bvh: &'a Bvh,
-    members: &'a [Member<'q, F, Q>],
+    qs: &'a [Q],
+    live: &'a [F::Mask],
     sides: MemberSides,
     tile: Frustum,
     octant: usize,
     origin: [f32; 3],
-    boxes: usize,
 }
 
-impl<F: Lanes, Q: LeafQuery<F>> Walk<'_, '_, F, Q> {
-    fn run(&mut self, lead: usize, best: &mut [HitPacket<F>]) {
-        let mut far: [f32; MAX_PACKETS] = [f32::INFINITY; MAX_PACKETS];
-        let mut tile_far = f32::INFINITY;
+impl<F: Lanes, Q: LeafQuery<F>> Walk<'_, F, Q> {
+    fn run(&self, alive: u32, best: &mut [HitPacket<F>]) {
+        // Per member, the farthest best hit of its live lanes (inf while one has none): it looks no farther.
+        let mut far = f32x16::splat(f32::INFINITY);
         let mut stack = Stack::<Pending>::new();
-        let mut prims = 0;
-        self.push_children(0, lead, tile_far, best, &mut stack);
+        let (mut boxes, mut prims) = (0, 0);
+        boxes += self.push_children(0, alive, far, &mut stack);
         while let Some(e) = stack.pop() {
-            if e.near > tile_far {
+            // Members that found nearer hits since the push are done with this box.
+            let members = u32::from(e.members) & !f32x16::move_mask(far.lt(f32x16::splat(e.near)));
+            if members == 0 {
                 continue;
             }
             let n = &self.bvh.nodes[e.parent as usize];
-            let (slot, first) = (usize::from(e.slot), usize::from(e.first));
+            let slot = usize::from(e.slot);
             let (child, count) = (n.child[slot], n.count[slot]);
             if count == 0 {
-                self.push_children(child, first, tile_far, best, &mut stack);
+                boxes += self.push_children(child, members, far, &mut stack);
                 continue;
             }
-            let items = child as usize..child as usize + usize::from(count);
-            for p in set_bits(self.sides.reaching(n, slot) >> first << first) {
-                let m = &self.members[p];
-                self.boxes += 1;
-                let lanes = m.entering(n, slot, &best[p]) & m.live;
-                if !lanes.any() {
-                    continue;
-                }
-                prims += items.len();
-                self.intersect_leaf(m, items.clone(), lanes, &mut best[p]);
-                far[p] = reach(m.live, &best[p]);
-            }
-            tile_far = far[..self.members.len()].iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            let first = child as usize;
+            prims += self.intersect_leaf(first..first + usize::from(count), members, best, &mut far);
         }
-        count_work(prims, self.boxes);
+        count_work(prims, boxes);
     }
 
-    /// Member `m`'s closest hits among `items` for `lanes`, its frustum ruling out single items first.
+    /// Each of `members`' closest hits among `items`, each member testing the items its frustum may meet;
+    /// updates the members' `far`. Returns the member–item tests made.
     #[inline(always)]
     fn intersect_leaf(
         &self,
-        m: &Member<F, Q>,
         items: std::ops::Range<usize>,
-        lanes: F::Mask,
-        best: &mut HitPacket<F>,
-    ) {
-        let pad = self.bvh.pad;
-        match &m.rays.frustum {
-            Some(f) => {
-                let items = items.filter(|&i| m.q.ball(i).is_none_or(|(c, r)| f.may_meet(c, r + pad)));
-                m.q.intersect(items, lanes, best)
+        members: u32,
+        best: &mut [HitPacket<F>],
+        far: &mut f32x16,
+    ) -> usize {
+        let mut tests = 0;
+        let mut updated = far.to_array();
+        // Leaves hold at most 8 spheres under obvhs's presets; longer ones go 16 at a time.
+        for start in items.clone().step_by(16) {
+            let chunk = start..(start + 16).min(items.end);
+            let mut reach = [0u32; 16];
+            let mut any = 0;
+            for i in chunk.clone() {
+                let ball = self.qs[0].ball(i);
+                let m =
+                    ball.map_or(members, |(c, r)| self.sides.reaching_ball(c, r + self.bvh.pad) & members);
+                reach[i - start] = m;
+                any |= m;
             }
-            None => m.q.intersect(items, lanes, best),
+            for p in set_bits(any) {
+                let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
+                tests += mine.clone().count();
+                self.qs[p].intersect(mine, self.live[p], &mut best[p]);
+                let t = F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)).to_array();
+                updated[p] = t.as_ref().iter().copied().fold(f32::NEG_INFINITY, f32::max);
+            }
         }
+        *far = f32x16::from(updated);
+        tests
     }
 
-    /// Pushes the children of node `at` that some member from `first` on enters before its best hit, farthest
-    /// first, each with the first member that enters it.
+    /// Pushes the children of node `at` that some of `members` may reach before its best hits, farthest
+    /// first, each with the members that may. Returns the box tests made.
     #[inline(always)]
-    fn push_children(
-        &mut self,
-        at: u32,
-        first: usize,
-        tile_far: f32,
-        best: &[HitPacket<F>],
-        stack: &mut Stack<Pending>,
-    ) {
+    fn push_children(&self, at: u32, members: u32, far: f32x16, stack: &mut Stack<Pending>) -> usize {
         let n = &self.bvh.nodes[at as usize];
         let maybe = self.tile.maybe_entered(n);
         let near = box_distance(n, self.origin);
-        for c in n.slots_far_to_near(self.octant).filter(|&c| maybe >> c & 1 == 1 && near[c] <= tile_far) {
-            let entered = set_bits(self.sides.reaching(n, c) >> first << first).find(|&p| {
-                self.boxes += 1;
-                self.members[p].entering(n, c, &best[p]).any()
-            });
-            if let Some(p) = entered {
-                stack.push(Pending { parent: at, slot: c as u8, first: p as u8, near: near[c] });
-            }
+        let mut tests = 0;
+        for c in n.slots_far_to_near(self.octant).filter(|&c| maybe >> c & 1 == 1) {
+            tests += 1;
+            let done = f32x16::move_mask(far.lt(f32x16::splat(near[c])));
+            let reach = self.sides.reaching_box(n, c) & members & !done;
+            stack.push_if(
+                Pending { parent: at, slot: c as u8, members: reach as u16, near: near[c] },
+                reach != 0,
+            );
         }
+        tests
     }
 }

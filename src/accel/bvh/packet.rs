@@ -87,6 +87,28 @@ pub(super) struct Side {
     pub(super) offset: f32,
 }
 
+impl Side {
+    /// The sides of `p`, with slack for the box and sphere tests' own rounding: the box test sums 3
+    /// products and the offset, all within |n|₁·reach, so 16ε of that is ample.
+    pub(super) fn all(p: &Pyramid, extent: f32) -> [Side; 4] {
+        let o = glam::Vec3::from(p.apex);
+        let reach = extent.max(o.abs().max_element());
+        p.normals.map(|n| {
+            let n = glam::Vec3::from(n);
+            Side {
+                normal: n.to_array(),
+                far_side: n.to_array().map(|x| usize::from(x >= 0.0)),
+                offset: n.dot(o) - 16.0 * f32::EPSILON * n.abs().element_sum() * reach,
+            }
+        })
+    }
+
+    /// `|n|` rounded up, for the sphere test.
+    pub(super) fn norm(&self) -> f32 {
+        glam::Vec3::from(self.normal).length() * (1.0 + 4.0 * f32::EPSILON)
+    }
+}
+
 /// The packet as a pyramid: its live lanes share an origin, and four planes through it enclose every live
 /// direction. A box wholly outside one plane is missed by every lane, so the node's K-lane slab tests run
 /// only on the children the pyramid may reach. The planes are widened by margins that cover the rounding of
@@ -104,26 +126,16 @@ pub(super) struct Frustum {
 }
 
 impl Frustum {
-    /// The box test's sides from `p`, with slack for the test's own rounding: it sums 3 products and the
-    /// offset, all within |n|₁·reach, so 16ε of that is ample.
+    /// The box and sphere tests of `p` ([`Side::all`]).
     #[inline(always)]
     pub(super) fn new(p: &Pyramid, extent: f32) -> Self {
-        let o = glam::Vec3::from(p.apex);
-        let reach = extent.max(o.abs().max_element());
-        let sides = p.normals.map(|n| {
-            let n = glam::Vec3::from(n);
-            Side {
-                normal: n.to_array(),
-                far_side: n.to_array().map(|x| usize::from(x >= 0.0)),
-                offset: n.dot(o) - 16.0 * f32::EPSILON * n.abs().element_sum() * reach,
-            }
-        });
+        let sides = Side::all(p, extent);
         let lanes = |f: &dyn Fn(&Side) -> f32| f32x4::from(sides.each_ref().map(f));
         Self {
             nx: lanes(&|s| s.normal[0]),
             ny: lanes(&|s| s.normal[1]),
             nz: lanes(&|s| s.normal[2]),
-            norm: lanes(&|s| glam::Vec3::from(s.normal).length() * (1.0 + 4.0 * f32::EPSILON)),
+            norm: lanes(&Side::norm),
             offset: lanes(&|s| s.offset),
             sides,
         }
