@@ -237,17 +237,8 @@ impl Geometry {
             }
             return;
         };
-        let count = packets.len();
-        assert!(count <= bvh::MAX_PACKETS && count == hits.len(), "{count} packets for a large packet");
-        // Fixed arrays, not vectors: an allocation per tile measured as 10% of a frame of misses. Slots past
-        // `count` repeat the first packet with no live lanes and are never walked.
-        let queries = std::array::from_fn::<_, { bvh::MAX_PACKETS }, _>(|p| {
-            self.sphere_query(&packets[p.min(count - 1)], &camera)
-        });
-        let live: [F::Mask; bvh::MAX_PACKETS] =
-            std::array::from_fn(|p| packets.get(p).map_or(F::mask_from_bits(0), |rays| rays.active));
         hits.fill(HitPacket::miss());
-        bvh.intersect_large(&queries[..count], &live[..count], pyramid, hits);
+        bvh.intersect_large(packets, |p| self.sphere_query(&packets[p], &camera), pyramid, hits);
         if self.has_other_kinds() {
             for (rays, hit) in packets.iter().zip(hits).filter(|(rays, _)| rays.active.any()) {
                 self.intersect_other_kinds(rays, &camera, hit);

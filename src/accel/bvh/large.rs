@@ -20,7 +20,7 @@ use super::node::Node;
 use super::packet::{Frustum, Side};
 use super::slab::Stack;
 use super::{Bvh, LeafQuery};
-use crate::geometry::{HitPacket, Pyramid};
+use crate::geometry::{HitPacket, Pyramid, RayPacket};
 use crate::math::{Mask, Real, Vec3f};
 use crate::simd::{set_bits, Lanes};
 
@@ -49,20 +49,40 @@ struct MemberSides {
 }
 
 impl MemberSides {
-    fn new(pyramids: &[Option<Pyramid>], extent: f32) -> Self {
-        let sides: [Option<[Side; 4]>; MAX_PACKETS] = std::array::from_fn(|p| {
-            pyramids.get(p).copied().flatten().map(|pyramid| Side::all(&pyramid, extent))
-        });
-        let lanes = |f: &dyn Fn(&Side) -> f32, none: f32, s: usize| {
+    /// The sides of `packets`' pyramids, which share the apex `apex`, by [`Side::all`]'s arithmetic (its
+    /// slack) in 16 lanes.
+    fn new<F: Lanes>(packets: &[RayPacket<F>], apex: [f32; 3], extent: f32) -> Self {
+        let pyramid = |p: usize| packets.get(p).and_then(|rays| rays.pyramid);
+        let pyramids: [Option<Pyramid>; MAX_PACKETS] = std::array::from_fn(pyramid);
+        let lanes = |s: usize, a: usize| {
             f32x16::from(std::array::from_fn::<f32, MAX_PACKETS, _>(|p| {
-                sides[p].as_ref().map_or(none, |m| f(&m[s]))
+                pyramids[p].map_or(0.0, |m| m.normals[s][a])
             }))
         };
-        Self {
-            normal: std::array::from_fn(|s| std::array::from_fn(|a| lanes(&|side| side.normal[a], 0.0, s))),
-            norm: std::array::from_fn(|s| lanes(&Side::norm, 0.0, s)),
-            offset: std::array::from_fn(|s| lanes(&|side| side.offset, f32::NEG_INFINITY, s)),
-        }
+        let without = f32x16::from(std::array::from_fn::<f32, MAX_PACKETS, _>(|p| match pyramids[p] {
+            Some(m) => {
+                if m.apex == apex {
+                    0.0
+                } else {
+                    f32::NAN
+                }
+            }
+            None => f32::NEG_INFINITY,
+        }));
+        let normal: [[f32x16; 3]; 4] = std::array::from_fn(|s| std::array::from_fn(|a| lanes(s, a)));
+        let o = apex.map(f32x16::splat);
+        let reach = f32x16::splat(Side::reach(apex, extent));
+        let slack = f32x16::splat(Side::SLACK);
+        let offset = normal.map(|n| {
+            let dot = n[2].mul_add(o[2], n[1].mul_add(o[1], n[0] * o[0]));
+            let l1 = n[0].abs() + n[1].abs() + n[2].abs();
+            // `without` is 0 for members with a pyramid, −inf for members without one.
+            (dot - slack * l1 * reach) + without
+        });
+        let norm = normal.map(|n| {
+            (n[2].mul_add(n[2], n[1].mul_add(n[1], n[0] * n[0]))).sqrt() * f32x16::splat(Side::NORM_UP)
+        });
+        Self { normal, norm, offset }
     }
 
     /// Bit p set where member p's frustum may reach child `c` of `n`: the box's corner farthest along each
@@ -99,6 +119,12 @@ impl MemberSides {
     }
 }
 
+/// Member `p`'s query, made on first use.
+#[inline(always)]
+fn made<'m, Q>(made: &'m mut [Option<Q>; MAX_PACKETS], query: &impl Fn(usize) -> Q, p: usize) -> &'m Q {
+    made[p].get_or_insert_with(|| query(p))
+}
+
 /// A lower bound on the distance from `origin` to each child box of `n`, shrunk past its own rounding: no
 /// ray from `origin` with a unit direction (within an ulp) enters a child at a smaller t.
 #[inline(always)]
@@ -115,32 +141,35 @@ fn box_distance(n: &Node, origin: [f32; 3]) -> [f32; 4] {
 
 impl Bvh {
     /// Closest hits of the leaf items for a tile of packets that share an origin, each with its pyramid
-    /// (`qs[p]` with its lanes `live[p]`, merged into `best[p]`), walking the tree once for all of them;
-    /// `pyramid` encloses every live ray of the tile. Each lane gets the bits [`Bvh::intersect_k`] gives it.
+    /// (`packets[p]`, merged into `best[p]`), walking the tree once for all of them; `pyramid` encloses every
+    /// active ray of the tile. `query(p)` makes packet p's leaf query, called only for packets that reach a
+    /// leaf. Each lane gets the bits [`Bvh::intersect_k`] gives it with that query.
     pub fn intersect_large<F: Lanes, Q: LeafQuery<F>>(
         &self,
-        qs: &[Q],
-        live: &[F::Mask],
+        packets: &[RayPacket<F>],
+        query: impl Fn(usize) -> Q,
         pyramid: &Pyramid,
         best: &mut [HitPacket<F>],
     ) {
-        assert!(qs.len() <= MAX_PACKETS && qs.len() == live.len() && qs.len() == best.len());
+        let count = packets.len();
+        assert!(count <= MAX_PACKETS && count == best.len(), "{count} packets for a large packet");
+        let live: [F::Mask; MAX_PACKETS] =
+            std::array::from_fn(|p| packets.get(p).map_or(F::mask_from_bits(0), |rays| rays.active));
         let alive = live.iter().enumerate().fold(0u32, |bits, (p, m)| bits | u32::from(m.any()) << p);
         if alive == 0 {
             return;
         }
-        let pyramids: [Option<Pyramid>; MAX_PACKETS] =
-            std::array::from_fn(|p| qs.get(p).and_then(Q::pyramid));
-        let lead = &qs[alive.trailing_zeros() as usize].ray().dir;
-        let first = (F::move_mask(live[alive.trailing_zeros() as usize])).trailing_zeros() as usize;
+        let lead = &packets[alive.trailing_zeros() as usize];
+        let first = F::move_mask(lead.active).trailing_zeros() as usize;
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
-        let walk = Walk {
+        let mut walk = Walk {
             bvh: self,
-            qs,
+            query,
+            made: [const { None }; MAX_PACKETS],
             live,
-            sides: MemberSides::new(&pyramids[..qs.len()], self.extent),
+            sides: MemberSides::new(packets, pyramid.apex, self.extent),
             tile: Frustum::new(pyramid, self.extent),
-            octant: negative(lead.x) | negative(lead.y) << 1 | negative(lead.z) << 2,
+            octant: negative(lead.dir.x) | negative(lead.dir.y) << 1 | negative(lead.dir.z) << 2,
             origin: pyramid.apex,
         };
         walk.run(alive, best);
@@ -148,18 +177,21 @@ impl Bvh {
 }
 
 /// One large packet's walk.
-struct Walk<'a, F: Lanes, Q> {
+struct Walk<'a, F: Lanes, Q, M> {
     bvh: &'a Bvh,
-    qs: &'a [Q],
-    live: &'a [F::Mask],
+    /// Makes a member's leaf query.
+    query: M,
+    /// The queries made so far.
+    made: [Option<Q>; MAX_PACKETS],
+    live: [F::Mask; MAX_PACKETS],
     sides: MemberSides,
     tile: Frustum,
     octant: usize,
     origin: [f32; 3],
 }
 
-impl<F: Lanes, Q: LeafQuery<F>> Walk<'_, F, Q> {
-    fn run(&self, alive: u32, best: &mut [HitPacket<F>]) {
+impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
+    fn run(&mut self, alive: u32, best: &mut [HitPacket<F>]) {
         // Per member, the farthest best hit of its live lanes (inf while one has none): it looks no farther.
         let mut far = f32x16::splat(f32::INFINITY);
         let mut stack = Stack::<Pending>::new();
@@ -188,7 +220,7 @@ impl<F: Lanes, Q: LeafQuery<F>> Walk<'_, F, Q> {
     /// updates the members' `far`. Returns the member–item tests made.
     #[inline(always)]
     fn intersect_leaf(
-        &self,
+        &mut self,
         items: std::ops::Range<usize>,
         members: u32,
         best: &mut [HitPacket<F>],
@@ -201,8 +233,9 @@ impl<F: Lanes, Q: LeafQuery<F>> Walk<'_, F, Q> {
             let chunk = start..(start + 16).min(items.end);
             let mut reach = [0u32; 16];
             let mut any = 0;
+            let q = made(&mut self.made, &self.query, members.trailing_zeros() as usize);
             for i in chunk.clone() {
-                let ball = self.qs[0].ball(i);
+                let ball = q.ball(i);
                 let m =
                     ball.map_or(members, |(c, r)| self.sides.reaching_ball(c, r + self.bvh.pad) & members);
                 reach[i - start] = m;
@@ -211,7 +244,7 @@ impl<F: Lanes, Q: LeafQuery<F>> Walk<'_, F, Q> {
             for p in set_bits(any) {
                 let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
                 tests += mine.clone().count();
-                self.qs[p].intersect(mine, self.live[p], &mut best[p]);
+                made(&mut self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
                 let t = F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)).to_array();
                 updated[p] = t.as_ref().iter().copied().fold(f32::NEG_INFINITY, f32::max);
             }

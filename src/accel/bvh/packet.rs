@@ -92,20 +92,31 @@ impl Side {
     /// products and the offset, all within |n|₁·reach, so 16ε of that is ample.
     pub(super) fn all(p: &Pyramid, extent: f32) -> [Side; 4] {
         let o = glam::Vec3::from(p.apex);
-        let reach = extent.max(o.abs().max_element());
+        let reach = Self::reach(p.apex, extent);
         p.normals.map(|n| {
             let n = glam::Vec3::from(n);
             Side {
                 normal: n.to_array(),
                 far_side: n.to_array().map(|x| usize::from(x >= 0.0)),
-                offset: n.dot(o) - 16.0 * f32::EPSILON * n.abs().element_sum() * reach,
+                offset: n.dot(o) - Self::SLACK * n.abs().element_sum() * reach,
             }
         })
     }
 
+    /// The offsets' slack per unit of `|n|₁·reach`.
+    pub(super) const SLACK: f32 = 16.0 * f32::EPSILON;
+
+    /// `|n|` is rounded up by this factor for the sphere test.
+    pub(super) const NORM_UP: f32 = 1.0 + 4.0 * f32::EPSILON;
+
+    /// The largest coordinate magnitude the tests meet: the boxes' `extent` or the apex's.
+    pub(super) fn reach(apex: [f32; 3], extent: f32) -> f32 {
+        extent.max(glam::Vec3::from(apex).abs().max_element())
+    }
+
     /// `|n|` rounded up, for the sphere test.
     pub(super) fn norm(&self) -> f32 {
-        glam::Vec3::from(self.normal).length() * (1.0 + 4.0 * f32::EPSILON)
+        glam::Vec3::from(self.normal).length() * Self::NORM_UP
     }
 }
 
