@@ -221,9 +221,10 @@ impl Geometry {
     }
 
     /// [`Geometry::intersect_k`] for each packet of a tile of camera rays (origin at the eye, departing from
-    /// no surface) into `hits`, bit for bit: with a sphere BVH and `pyramid` (enclosing every active ray of
-    /// the tile), the packets walk the sphere tree together as one large packet; at most
-    /// [`bvh::MAX_PACKETS`] packets then.
+    /// no surface) into `hits`, bit for bit: with a sphere BVH that culls by frusta
+    /// ([`Bvh::frustum_culling`]) and `pyramid` (enclosing every active ray of the tile), the packets walk
+    /// the sphere tree together as one large packet; at most [`bvh::MAX_PACKETS`] packets then. The large
+    /// walk culls by frusta alone, so with frustum culling off every packet walks on its own.
     pub fn intersect_tile<F: Lanes>(
         &self,
         packets: &[RayPacket<F>],
@@ -231,7 +232,8 @@ impl Geometry {
         hits: &mut [HitPacket<F>],
     ) {
         let camera = DeparturePacket::camera();
-        let (Some(bvh), Some(pyramid), true) = (&self.sphere_bvh, pyramid, F::K > 1) else {
+        let bvh = self.sphere_bvh.as_ref().filter(|bvh| bvh.frustum_culling);
+        let (Some(bvh), Some(pyramid), true) = (bvh, pyramid, F::K > 1) else {
             for (rays, hit) in packets.iter().zip(hits) {
                 *hit = self.intersect_k(rays, &camera);
             }

@@ -61,7 +61,8 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = BvhPresetArg::Fast)]
     pub bvh_preset: BvhPresetArg,
     /// Test each BVH node's children, and each leaf's spheres, against a shared-origin packet's frustum
-    /// before its lanes (default: on, measured faster on large fields; docs/perf-log/2026-11.md). `false` to measure without.
+    /// before its lanes, and walk camera tiles as large packets (default: on, measured faster on large
+    /// fields; docs/perf-log/2026-11.md). `false` to measure without.
     #[arg(long, value_name = "BOOL", default_value_t = true, action = clap::ArgAction::Set)]
     pub frustum_culling: bool,
     /// BVH subtrees that a packet enters with at most this many live lanes are walked one ray at a time
