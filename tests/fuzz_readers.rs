@@ -567,7 +567,7 @@ fn fuzz(reader: Reader, default_count: u64) {
     let watchdog = {
         let seeds = seeds.clone();
         watchdog::watch(current.clone(), HANG, move |now| {
-            let file = save(reader, seed, now, &input(reader, &seeds, seed, now));
+            let file = save(reader.name(), seed, now, input(reader, &seeds, seed, now).as_bytes());
             eprintln!(
                 "fuzz: {}: input {now} (seed {seed:#x}) has not finished in {HANG:?}: hang; input in {}",
                 reader.name(),
@@ -613,7 +613,7 @@ fn fuzz(reader: Reader, default_count: u64) {
             }
         };
         if let Some(why) = failure {
-            let file = save(reader, seed, index, &source);
+            let file = save(reader.name(), seed, index, source.as_bytes());
             let report = format!("input {index} (seed {seed:#x}, saved as {}): {why}", file.display());
             eprintln!("fuzz: {}: {report}", reader.name());
             t.failures.push(report);
@@ -630,25 +630,31 @@ fn fuzz(reader: Reader, default_count: u64) {
     }
     current.store(watchdog::DONE, Ordering::Relaxed);
     watchdog.join().expect("watchdog");
-    println!(
-        "fuzz: {}: {count} inputs, {} parsed, {} errors, {} panics or bad errors ({} compiled; {:.1} s; \
-         slowest input {} took {:.1} ms; seed {seed:#x}, from index {start})",
-        reader.name(),
-        t.parsed,
-        t.errors,
-        t.failures.len(),
-        t.compiled,
-        began.elapsed().as_secs_f64(),
-        t.slowest.1,
-        t.slowest.0.as_secs_f64() * 1e3,
-    );
-    assert!(t.failures.is_empty(), "{} failures:\n{}", t.failures.len(), t.failures.join("\n"));
+    t.finish(reader.name(), count, began, seed, start);
 }
 
-/// Writes a failing input where it can be read back for reproduction.
-fn save(reader: Reader, seed: u64, index: u64, source: &str) -> PathBuf {
-    let file = std::env::temp_dir().join(format!("bareray-fuzz-{seed:x}-{index}.{}", reader.name()));
-    std::fs::write(&file, source).expect("temporary directory is writable");
+impl Tally {
+    /// Prints the run's counts and fails the test on any failure.
+    fn finish(&self, name: &str, count: u64, began: Instant, seed: u64, start: u64) {
+        println!(
+            "fuzz: {name}: {count} inputs, {} parsed, {} errors, {} panics or bad errors ({} compiled; {:.1} s; \
+             slowest input {} took {:.1} ms; seed {seed:#x}, from index {start})",
+            self.parsed,
+            self.errors,
+            self.failures.len(),
+            self.compiled,
+            began.elapsed().as_secs_f64(),
+            self.slowest.1,
+            self.slowest.0.as_secs_f64() * 1e3,
+        );
+        assert!(self.failures.is_empty(), "{} failures:\n{}", self.failures.len(), self.failures.join("\n"));
+    }
+}
+
+/// Writes a failing input where it can be read back for reproduction (`extension` names its format).
+fn save(extension: &str, seed: u64, index: u64, input: &[u8]) -> PathBuf {
+    let file = std::env::temp_dir().join(format!("bareray-fuzz-{seed:x}-{index}.{extension}"));
+    std::fs::write(&file, input).expect("temporary directory is writable");
     file
 }
 
@@ -926,25 +932,13 @@ mod f32r_inputs {
                 }
             };
             if let Some(why) = failure {
-                let file = std::env::temp_dir().join(format!("bareray-fuzz-{seed:x}-{index}.f32r"));
-                std::fs::write(&file, &bytes).expect("temporary directory is writable");
+                let file = super::save("f32r", seed, index, &bytes);
                 let report = format!("input {index} (seed {seed:#x}, saved as {}): {why}", file.display());
                 eprintln!("fuzz: f32r: {report}");
                 t.failures.push(report);
             }
         }
-        println!(
-            "fuzz: f32r: {count} inputs, {} parsed, {} errors, {} panics or bad answers ({} compiled; {:.1} s; \
-             slowest input {} took {:.1} ms; seed {seed:#x}, from index {start})",
-            t.parsed,
-            t.errors,
-            t.failures.len(),
-            t.compiled,
-            began.elapsed().as_secs_f64(),
-            t.slowest.1,
-            t.slowest.0.as_secs_f64() * 1e3,
-        );
-        assert!(t.failures.is_empty(), "{} failures:\n{}", t.failures.len(), t.failures.join("\n"));
+        t.finish("f32r", count, began, seed, start);
         assert!(count < 1000 || (t.parsed > count / 100 && t.errors > count / 100), "inputs too uniform");
     }
 }
