@@ -59,14 +59,11 @@ impl MemberSides {
                 pyramids[p].map_or(0.0, |m| m.normals[s][a])
             }))
         };
+        // Added to the offsets: 0 for a member's own planes; −inf (nothing is outside) for a member without a
+        // pyramid; NaN (no comparison holds, so nothing is outside) for one whose apex is not the tile's.
         let without = f32x16::from(std::array::from_fn::<f32, MAX_PACKETS, _>(|p| match pyramids[p] {
-            Some(m) => {
-                if m.apex == apex {
-                    0.0
-                } else {
-                    f32::NAN
-                }
-            }
+            Some(m) if m.apex == apex => 0.0,
+            Some(_) => f32::NAN,
             None => f32::NEG_INFINITY,
         }));
         let normal: [[f32x16; 3]; 4] = std::array::from_fn(|s| std::array::from_fn(|a| lanes(s, a)));
@@ -76,7 +73,6 @@ impl MemberSides {
         let offset = normal.map(|n| {
             let dot = n[2].mul_add(o[2], n[1].mul_add(o[1], n[0] * o[0]));
             let l1 = n[0].abs() + n[1].abs() + n[2].abs();
-            // `without` is 0 for members with a pyramid, −inf for members without one.
             (dot - slack * l1 * reach) + without
         });
         let norm = normal.map(|n| {
@@ -142,8 +138,10 @@ fn box_distance(n: &Node, origin: [f32; 3]) -> [f32; 4] {
 impl Bvh {
     /// Closest hits of the leaf items for a tile of packets that share an origin, each with its pyramid
     /// (`packets[p]`, merged into `best[p]`), walking the tree once for all of them; `pyramid` encloses every
-    /// active ray of the tile. `query(p)` makes packet p's leaf query, called only for packets that reach a
-    /// leaf. Each lane gets the bits [`Bvh::intersect_k`] gives it with that query.
+    /// active ray of the tile. The directions must be unit length (camera rays are): the walk culls boxes
+    /// by their distance from the origin against the rays' t. `query(p)` makes packet p's leaf query,
+    /// called only for packets that reach a leaf. Each lane gets the bits [`Bvh::intersect_k`] gives it
+    /// with that query.
     pub fn intersect_large<F: Lanes, Q: LeafQuery<F>>(
         &self,
         packets: &[RayPacket<F>],
@@ -159,6 +157,7 @@ impl Bvh {
         if alive == 0 {
             return;
         }
+        debug_assert!(packets.iter().all(|rays| unit_directions(rays)), "large packets need unit directions");
         let lead = &packets[alive.trailing_zeros() as usize];
         let first = F::move_mask(lead.active).trailing_zeros() as usize;
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
@@ -174,6 +173,15 @@ impl Bvh {
         };
         walk.run(alive, best);
     }
+}
+
+/// Whether every active lane's direction is unit length to within its rounding (the distance cull's
+/// premise).
+fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
+    (0..F::K).filter(|&i| F::mask_lane(rays.active, i)).all(|i| {
+        let d = [rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i)].map(f64::from);
+        ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1.0).abs() <= 8.0 * f64::from(f32::EPSILON)
+    })
 }
 
 /// One large packet's walk.
