@@ -151,10 +151,18 @@ fn parse_args() -> Cli {
 
 /// Exits on a command-line error (or `--help`, `--version`), printing it on one rank only when a launcher
 /// started several: every rank parses the same command line.
+///
+/// The other ranks leave rank 0 time to print and exit first. A launcher aborts the job when the first
+/// rank exits with an error; were that another rank, rank 0 could be killed before its message is out.
+/// Rank 0 meets the same error at once, so the wait ends when the launcher kills the waiting ranks; only
+/// a rank whose command line rank 0 accepted waits it out, and then prints its error itself.
 fn exit_once(e: clap::Error) -> ! {
     #[cfg(feature = "mpi")]
     if crate::still::mpi::launched_rank().is_some_and(|rank| rank != 0) {
-        std::process::exit(e.exit_code());
+        if e.exit_code() == 0 {
+            std::process::exit(0);
+        }
+        std::thread::sleep(std::time::Duration::from_secs(5));
     }
     e.exit()
 }
