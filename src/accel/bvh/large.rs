@@ -161,10 +161,13 @@ impl Bvh {
         let lead = &packets[alive.trailing_zeros() as usize];
         let first = F::move_mask(lead.active).trailing_zeros() as usize;
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
+        // Outside the walk's state, which is then built in place: moving a state that held the queries
+        // (about 1 KB each at K = 16) copied them all once per tile.
+        let mut made = [const { None }; MAX_PACKETS];
         let mut walk = Walk {
             bvh: self,
             query,
-            made: [const { None }; MAX_PACKETS],
+            made: &mut made,
             live,
             sides: MemberSides::new(packets, pyramid.apex, self.extent),
             tile: Frustum::new(pyramid, self.extent),
@@ -190,7 +193,7 @@ struct Walk<'a, F: Lanes, Q, M> {
     /// Makes a member's leaf query.
     query: M,
     /// The queries made so far.
-    made: [Option<Q>; MAX_PACKETS],
+    made: &'a mut [Option<Q>; MAX_PACKETS],
     live: [F::Mask; MAX_PACKETS],
     sides: MemberSides,
     tile: Frustum,
@@ -241,7 +244,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             let chunk = start..(start + 16).min(items.end);
             let mut reach = [0u32; 16];
             let mut any = 0;
-            let q = made(&mut self.made, &self.query, members.trailing_zeros() as usize);
+            let q = made(self.made, &self.query, members.trailing_zeros() as usize);
             for i in chunk.clone() {
                 let ball = q.ball(i);
                 let m =
@@ -252,7 +255,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             for p in set_bits(any) {
                 let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
                 tests += mine.clone().count();
-                made(&mut self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
+                made(self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
                 let t = F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)).to_array();
                 updated[p] = t.as_ref().iter().copied().fold(f32::NEG_INFINITY, f32::max);
             }
