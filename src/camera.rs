@@ -158,21 +158,24 @@ impl Camera<f64> {
     /// operations in the same order (IEEE, no fusing), so each lane's ray is bit for bit the scalar one.
     #[inline]
     pub fn rays<F: Lanes>(&self, sx: F, sy: F) -> Ray<F> {
-        let (x, y) = (sx.to_array(), sy.to_array());
-        let (x, y) = (x.as_ref(), y.as_ref());
-        // Room for the widest lane type (K ≤ 16).
+        // Padded to the widest lane type (K ≤ 16) so that every group of four is whole: fixed-size copies
+        // and conversions the compiler keeps in vector registers (`f32 → f64 → f32` rounding is the same
+        // in a vector instruction as in a scalar one).
+        let padded = |v: F| {
+            let mut out = [0.0f32; 16];
+            out[..F::K].copy_from_slice(v.to_array().as_ref());
+            out
+        };
+        let (x, y) = (padded(sx), padded(sy));
         let mut dir = [[0.0f32; 16]; 3];
-        for first in (0..F::K).step_by(4) {
-            let four =
-                |v: &[f32]| f64x4::new(std::array::from_fn(|i| v.get(first + i).map_or(0.0, |&c| c.into())));
-            let d = self.directions4(four(x), four(y));
-            for (axis, out) in dir.iter_mut().enumerate() {
-                for (i, &c) in d[axis].iter().enumerate().take(F::K - first) {
-                    out[first + i] = c as f32;
-                }
+        for first in (0..F::K.max(4)).step_by(4) {
+            let four = |v: &[f32; 16]| f64x4::new(std::array::from_fn(|i| f64::from(v[first + i])));
+            let d = self.directions4(four(&x), four(&y));
+            for (out, d) in dir.iter_mut().zip(d) {
+                out[first..first + 4].copy_from_slice(&d.map(|c| c as f32));
             }
         }
-        let lanes = |v: &[f32; 16]| F::from_fn(|i| v[i]);
+        let lanes = |v: &[f32; 16]| F::load(v, 0);
         Ray::new(F::splat_v3(self.eye.to_f32()), V3::new(lanes(&dir[0]), lanes(&dir[1]), lanes(&dir[2])))
     }
 

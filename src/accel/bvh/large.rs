@@ -52,21 +52,21 @@ impl MemberSides {
     /// The sides of `packets`' pyramids, which share the apex `apex`, by [`Side::all`]'s arithmetic (its
     /// slack) in 16 lanes.
     fn new<F: Lanes>(packets: &[RayPacket<F>], apex: [f32; 3], extent: f32) -> Self {
-        let pyramid = |p: usize| packets.get(p).and_then(|rays| rays.pyramid);
-        let pyramids: [Option<Pyramid>; MAX_PACKETS] = std::array::from_fn(pyramid);
-        let lanes = |s: usize, a: usize| {
-            f32x16::from(std::array::from_fn::<f32, MAX_PACKETS, _>(|p| {
-                pyramids[p].map_or(0.0, |m| m.normals[s][a])
-            }))
-        };
-        // Added to the offsets: 0 for a member's own planes; −inf (nothing is outside) for a member without a
-        // pyramid; NaN (no comparison holds, so nothing is outside) for one whose apex is not the tile's.
-        let without = f32x16::from(std::array::from_fn::<f32, MAX_PACKETS, _>(|p| match pyramids[p] {
-            Some(m) if m.apex == apex => 0.0,
-            Some(_) => f32::NAN,
-            None => f32::NEG_INFINITY,
-        }));
-        let normal: [[f32x16; 3]; 4] = std::array::from_fn(|s| std::array::from_fn(|a| lanes(s, a)));
+        // One pass over the members, transposing their normals into lanes. Added to the offsets: 0 for a
+        // member's own planes; −inf (nothing is outside) for a member without a pyramid; NaN (no comparison
+        // holds, so nothing is outside) for one whose apex is not the tile's.
+        let mut lanes = [[[0.0f32; MAX_PACKETS]; 3]; 4];
+        let mut without = [f32::NEG_INFINITY; MAX_PACKETS];
+        for (p, m) in packets.iter().enumerate().filter_map(|(p, rays)| Some((p, rays.pyramid?))) {
+            for (side, n) in lanes.iter_mut().zip(&m.normals) {
+                for (axis, c) in side.iter_mut().zip(n) {
+                    axis[p] = *c;
+                }
+            }
+            without[p] = if m.apex == apex { 0.0 } else { f32::NAN };
+        }
+        let without = f32x16::from(without);
+        let normal = lanes.map(|side| side.map(f32x16::from));
         let o = apex.map(f32x16::splat);
         let reach = f32x16::splat(Side::reach(apex, extent));
         let slack = f32x16::splat(Side::SLACK);
