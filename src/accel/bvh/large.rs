@@ -257,8 +257,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
                 let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
                 tests += mine.clone().count();
                 made(self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
-                let t = F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)).to_array();
-                updated[p] = t.as_ref().iter().copied().fold(f32::NEG_INFINITY, f32::max);
+                updated[p] = F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)).reduce_max();
             }
         }
         *far = f32x16::from(updated);
