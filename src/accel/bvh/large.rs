@@ -179,6 +179,24 @@ impl Bvh {
     }
 }
 
+/// The largest of `t`'s lanes, none of them NaN (hit distances, inf or −inf), by halves of a 16-wide array:
+/// without [`f32::max`]'s NaN rule the compiler keeps the halving in vector registers, where
+/// [`Lanes::reduce_max`] runs lane by lane.
+#[inline(always)]
+fn farthest<F: Lanes>(t: F) -> f32 {
+    let mut a = [f32::NEG_INFINITY; MAX_PACKETS];
+    a[..F::K].copy_from_slice(t.to_array().as_ref());
+    debug_assert!(!a.iter().any(|v| v.is_nan()), "a NaN hit distance");
+    let mut w = MAX_PACKETS / 2;
+    while w > 0 {
+        for i in 0..w {
+            a[i] = if a[i + w] > a[i] { a[i + w] } else { a[i] };
+        }
+        w /= 2;
+    }
+    a[0]
+}
+
 /// Whether every active lane's direction is unit length to within its rounding (the distance cull's
 /// premise).
 fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
@@ -257,7 +275,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
                 let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
                 tests += mine.clone().count();
                 made(self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
-                updated[p] = F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)).reduce_max();
+                updated[p] = farthest(F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)));
             }
         }
         *far = f32x16::from(updated);
