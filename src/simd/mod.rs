@@ -99,16 +99,6 @@ pub trait Lanes: Real {
     fn lane(self, i: usize) -> f32 {
         self.to_array().as_ref()[i]
     }
-    /// The largest lane (NaN lanes ignored), by a tree of pairwise maxima.
-    #[inline(always)]
-    fn reduce_max(self) -> f32 {
-        reduce(self.to_array(), f32::max)
-    }
-    /// The smallest lane (NaN lanes ignored), by a tree of pairwise minima.
-    #[inline(always)]
-    fn reduce_min(self) -> f32 {
-        reduce(self.to_array(), f32::min)
-    }
     /// Lanes from exactly K values (panics on any other length).
     #[inline(always)]
     fn from_lanes(values: &[f32]) -> Self {
@@ -168,19 +158,4 @@ pub fn set_bits(mut bits: u32) -> impl Iterator<Item = usize> {
         bits &= bits.wrapping_sub(1);
         (j < 32).then_some(j)
     })
-}
-
-/// Folds K lanes (a power of two) by halves: K − 1 operations in log₂ K dependent steps, which the compiler
-/// turns into shuffles.
-#[inline(always)]
-fn reduce<A: AsMut<[f32]>>(mut lanes: A, op: fn(f32, f32) -> f32) -> f32 {
-    let a = lanes.as_mut();
-    let mut w = a.len() / 2;
-    while w > 0 {
-        for i in 0..w {
-            a[i] = op(a[i], a[i + w]);
-        }
-        w /= 2;
-    }
-    a[0]
 }

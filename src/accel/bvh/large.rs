@@ -180,8 +180,8 @@ impl Bvh {
 }
 
 /// The largest of `t`'s lanes, none of them NaN (hit distances, inf or −inf), by halves of a 16-wide array:
-/// without [`f32::max`]'s NaN rule the compiler keeps the halving in vector registers, where
-/// [`Lanes::reduce_max`] runs lane by lane.
+/// without [`f32::max`]'s NaN rule the compiler keeps the halving in vector registers (with it, lane by
+/// lane).
 #[inline(always)]
 fn farthest<F: Lanes>(t: F) -> f32 {
     let mut a = [f32::NEG_INFINITY; MAX_PACKETS];
