@@ -226,7 +226,9 @@ impl Camera<f64> {
             [n.x as f32, n.y as f32, n.z as f32]
         });
         let eye = self.eye.to_f32();
-        Some(Pyramid { apex: [eye.x, eye.y, eye.z], normals })
+        // Z·d ≥ 1/L − 2⁻²⁴ ≥ 10⁻³ − 2⁻²⁴ for the exact Z; rounding Z to f32 moves Z·d by about 2⁻²⁴.
+        let axis = [z.x as f32, z.y as f32, z.z as f32];
+        Some(Pyramid { apex: [eye.x, eye.y, eye.z], normals, axis })
     }
 
     /// Rounds the frame to f32 once; f32 rays are generated from these values.

@@ -338,29 +338,56 @@ fn large_packets_share_the_walk() {
     let mut desc = field(20000, 25);
     desc.camera = common::camera(DVec3::new(0.0, 0.0, -4.0), DVec3::ZERO, DVec3::Y, 45.0, 256, 192);
     let scene = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-    let pool = bareray::render::thread_pool(Some(1)).unwrap();
-    bareray::accel::set_counting(true);
-    let tile = pool.install(|| {
-        let _ = bareray::accel::take_work();
-        bareray::render::primary_hits_lanes(&scene, 16, &pool);
-        bareray::accel::take_work()
-    });
-    let separate = pool.install(|| {
-        let from = bareray::geometry::DeparturePacket::camera();
-        let camera = &scene.camera_f64;
-        for tile in bareray::render::tiles(256, 192) {
-            bareray::render::for_each_packet::<f32x16>(camera, tile, (0.5, 0.5), true, |rays, _| {
-                scene.geometry.intersect_k(rays, &from);
-            });
-        }
-        bareray::accel::take_work()
-    });
+    let (tile, separate) = (camera_work(&scene, true), camera_work(&scene, false));
     assert!(
         tile.box_tests * 10 < separate.box_tests * 8,
         "large packets: {} box tests, separate packets: {}",
         tile.box_tests,
         separate.box_tests
     );
+}
+
+/// The box and sphere tests of a camera's primary rays, large packets (`large`) or packet by packet, on one
+/// thread.
+fn camera_work(scene: &Scene, large: bool) -> bareray::accel::Work {
+    let pool = bareray::render::thread_pool(Some(1)).unwrap();
+    bareray::accel::set_counting(true);
+    pool.install(|| {
+        let _ = bareray::accel::take_work();
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        if large {
+            bareray::render::primary_hits_lanes(scene, 16, &pool);
+        } else {
+            let from = bareray::geometry::DeparturePacket::camera();
+            for tile in bareray::render::tiles(w, h) {
+                bareray::render::for_each_packet::<f32x16>(
+                    &scene.camera_f64,
+                    tile,
+                    (0.5, 0.5),
+                    true,
+                    |rays, _| {
+                        scene.geometry.intersect_k(rays, &from);
+                    },
+                );
+            }
+        }
+        bareray::accel::take_work()
+    })
+}
+
+/// A camera looking away from a field tests none of its boxes: each side of the frustum alone has some
+/// corner of a large box behind the eye on its inner side, so only the plane across the frustum's axis
+/// rules those boxes out.
+#[test]
+fn a_view_away_from_the_field_tests_no_box() {
+    let mut desc = field(20000, 26);
+    desc.camera =
+        common::camera(DVec3::new(0.0, 0.0, -4.0), DVec3::new(0.0, 0.0, -8.0), DVec3::Y, 60.0, 256, 192);
+    let scene = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    for large in [true, false] {
+        let work = camera_work(&scene, large);
+        assert_eq!((work.box_tests, work.prim_tests), (0, 0), "large packets {large}");
+    }
 }
 
 /// Random planar polygons (triangles and quads, some with vertex normals) among the spheres of a field.

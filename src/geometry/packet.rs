@@ -36,15 +36,20 @@ pub struct RayPacket<F: Lanes> {
     pub pyramid: Option<Pyramid>,
 }
 
-/// Four planes through a point that enclose a packet's rays: every active lane's origin is `apex`, and its
-/// direction `d` satisfies `n · d ≥ 0` for each normal `n`, evaluated exactly on the stored f32 values
-/// (whoever builds one widens it past the rounding of the rays and of the normals).
+/// Four planes through a point that enclose a packet's rays, and an axis the rays run along: every active
+/// lane's origin is `apex`, and its direction `d` satisfies `n · d ≥ 0` for each normal `n` and
+/// `axis · d > 0`, evaluated exactly on the stored f32 values (whoever builds one widens it past the rounding
+/// of the rays and of the normals).
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pyramid {
     /// The rays' shared origin.
     pub apex: [f32; 3],
     /// Inward normals of the four sides.
     pub normals: [[f32; 3]; 4],
+    /// A direction within 90° of every ray, with room far above rounding: the plane through the apex normal
+    /// to it has every ray in front. The four sides are tested one by one against a box's corner farthest
+    /// along each, so a large box behind the apex passes all four; this plane rules it out.
+    pub axis: [f32; 3],
 }
 
 impl<F: Lanes> RayPacket<F> {

@@ -88,12 +88,13 @@ pub(super) struct Side {
 }
 
 impl Side {
-    /// The sides of `p`, with slack for the box and sphere tests' own rounding: the box test sums 3
-    /// products and the offset, all within |n|₁·reach, so 16ε of that is ample.
-    pub(super) fn all(p: &Pyramid, extent: f32) -> [Side; 4] {
+    /// The four sides of `p` and the plane normal to its axis, with slack for the box and sphere tests' own
+    /// rounding: the box test sums 3 products and the offset, all within |n|₁·reach, so 16ε of that is ample.
+    pub(super) fn all(p: &Pyramid, extent: f32) -> [Side; 5] {
         let o = glam::Vec3::from(p.apex);
         let reach = Self::reach(p.apex, extent);
-        p.normals.map(|n| {
+        let [a, b, c, d] = p.normals;
+        [a, b, c, d, p.axis].map(|n| {
             let n = glam::Vec3::from(n);
             Side {
                 normal: n.to_array(),
@@ -121,14 +122,15 @@ impl Side {
 }
 
 /// The packet as a pyramid: its live lanes share an origin, and four planes through it enclose every live
-/// direction. A box wholly outside one plane is missed by every lane, so the node's K-lane slab tests run
-/// only on the children the pyramid may reach. The planes are widened by margins that cover the rounding of
-/// their construction and of the box test, so the test never rules out a box an exact ray enters.
+/// direction; a fifth, normal to the pyramid's axis, has them all in front. A box wholly outside one plane
+/// is missed by every lane, so the node's K-lane slab tests run only on the children the pyramid may reach.
+/// The planes are widened by margins that cover the rounding of their construction and of the box test, so
+/// the test never rules out a box an exact ray enters.
 #[derive(Clone, Copy)]
 pub(super) struct Frustum {
-    pub(super) sides: [Side; 4],
+    pub(super) sides: [Side; 5],
     /// The four sides again, one per lane, for the sphere test: normal components, `|n|` rounded up, and
-    /// the offsets.
+    /// the offsets. (A sphere behind the apex is in a box the fifth plane ruled out.)
     nx: f32x4,
     ny: f32x4,
     nz: f32x4,
@@ -141,7 +143,8 @@ impl Frustum {
     #[inline(always)]
     pub(super) fn new(p: &Pyramid, extent: f32) -> Self {
         let sides = Side::all(p, extent);
-        let lanes = |f: &dyn Fn(&Side) -> f32| f32x4::from(sides.each_ref().map(f));
+        let [a, b, c, d, _] = &sides;
+        let lanes = |f: &dyn Fn(&Side) -> f32| f32x4::from([a, b, c, d].map(f));
         Self {
             nx: lanes(&|s| s.normal[0]),
             ny: lanes(&|s| s.normal[1]),
@@ -227,7 +230,8 @@ fn fit_pyramid<F: Lanes>(origin: &V3<F>, dir: &V3<F>, live: F::Mask) -> Option<P
     let margin = 64.0 * f32::EPSILON * kappa * (1.0 + r_max);
     let normals =
         [u - (u0 - margin) * c, (u1 + margin) * c - u, v - (v0 - margin) * c, (v1 + margin) * c - v];
-    Some(Pyramid { apex: o, normals: normals.map(|n| n.to_array()) })
+    // Every live dc is above |d|/√129 (r_max ≤ 8), far above its rounding: c is a valid axis.
+    Some(Pyramid { apex: o, normals: normals.map(|n| n.to_array()), axis: c.to_array() })
 }
 
 /// Whether every live lane starts at the apex and lies on the inner side of every plane, evaluated in f64
@@ -237,7 +241,7 @@ fn encloses<F: Lanes>(p: &Pyramid, ray: &Ray<F>, live: F::Mask) -> bool {
         let o = [ray.origin.x.lane(i), ray.origin.y.lane(i), ray.origin.z.lane(i)];
         let d = [ray.dir.x.lane(i), ray.dir.y.lane(i), ray.dir.z.lane(i)];
         let dot = |n: &[f32; 3]| (0..3).map(|a| f64::from(n[a]) * f64::from(d[a])).sum::<f64>();
-        o == p.apex && p.normals.iter().all(|n| dot(n) >= 0.0)
+        o == p.apex && p.normals.iter().all(|n| dot(n) >= 0.0) && dot(&p.axis) > 0.0
     })
 }
 
