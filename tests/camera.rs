@@ -256,6 +256,7 @@ fn block_pyramids_enclose_their_rays_and_exclude_the_next_pixels() {
                     for n in &p.normals {
                         prop_assert!(side(n, &ray.dir) >= 0.0, "ray ({i}, {j}) outside {n:?}");
                     }
+                    prop_assert!(side(&p.axis, &ray.dir) > 0.0, "ray ({i}, {j}) behind {:?}", p.axis);
                 }
                 // Tight: the next pixel beyond each side is outside it, wherever a pixel is at least four
                 // times wider than the widening (Camera::pyramid's bound, over windows a little past the
