@@ -525,29 +525,39 @@ fn default_threads(cores: usize) -> Vec<usize> {
     }
 }
 
-/// Minimum, median and maximum of `reps` timed runs after one warm-up.
+/// Minimum, median and maximum of `reps` timed runs after one warm-up. The checksum is taken from the
+/// warm-up and from the last run, which must agree (every path is deterministic); the runs between skip
+/// it, since hashing a frame byte by byte cost about as long as tracing a small field's.
 fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
     let mut times = Vec::with_capacity(args.reps as usize);
-    let (mut rays, mut checksum) = (0, 0);
+    let (mut rays, mut checksum) = (0, None);
     // One thread pool for every repetition, and for primary rays one frame, as the peer harnesses do.
     let pool = thread_pool(Some(threads))?;
     let mut frame = args.primary_only.then(|| PrimaryHits::new(scene.camera.width, scene.camera.height));
     for rep in 0..=args.reps {
-        let seconds = if let Some(hits) = &mut frame {
+        let hashed = rep == 0 || rep == args.reps;
+        let (seconds, sum) = if let Some(hits) = &mut frame {
             trace_primary_lanes(scene, lanes, &pool, hits);
             rays = hits.t.len() as u64;
-            checksum = hits.checksum(scene);
-            hits.seconds
+            (hits.seconds, hashed.then(|| hits.checksum(scene)))
         } else {
             let r = render_lanes(scene, lanes, &pool, &());
             rays = r.counts.total();
-            checksum = image_checksum(&r.image);
-            r.seconds
+            (r.seconds, hashed.then(|| image_checksum(&r.image)))
         };
+        match (checksum, sum) {
+            (Some(first), Some(last)) if first != last => anyhow::bail!(
+                "{lanes} lanes, {threads} threads: the last run's checksum {last:016x} differs from the \
+                 warm-up's {first:016x}"
+            ),
+            (None, sum) => checksum = sum,
+            _ => {}
+        }
         if rep > 0 {
             times.push(seconds);
         }
     }
+    let checksum = checksum.expect("the warm-up run is hashed");
     times.sort_by(f64::total_cmp);
     Ok(Row {
         lanes,
