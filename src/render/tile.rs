@@ -12,7 +12,7 @@ use crate::scene::desc::{Filter, Pattern};
 use crate::shade::Tracer;
 use crate::simd::Lanes;
 
-use super::{for_each_camera_hit, for_each_packet_at, lane_rgb, LargePacket, Offsets, Tile};
+use super::{for_each_camera_hit, lane_rgb, LargePacket, Offsets, Tile};
 
 /// The pixels of one tile, row by row.
 pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
@@ -96,12 +96,12 @@ fn filtered_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile, fi
     let count = pattern.rays_per_pixel() as u32;
     let area = (ext.w * ext.h) as usize;
     let mut samples = vec![Rgb::default(); area * count as usize];
-    let pyramids = scene.geometry.culls_by_pyramid();
+    let mut large = LargePacket::default();
     for k in 0..count {
         let at = |x: u32, y: u32| sample_offset(pattern, &grid, k, x, y);
         let plane = &mut samples[k as usize * area..][..area];
-        for_each_packet_at(&scene.camera_f64, ext, &Offsets::PerPixel(&at), pyramids, |rays, block| {
-            let c = tracer.primary(rays);
+        for_each_camera_hit(scene, ext, &Offsets::PerPixel(&at), &mut large, |rays, hit, block| {
+            let c = tracer.primary_from(rays, hit);
             for (i, x, y) in block.pixels() {
                 plane[(y * ext.w + x) as usize] = lane_rgb(&c, i);
             }
