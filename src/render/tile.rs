@@ -19,7 +19,7 @@ pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: 
     let camera = &scene.camera_f64;
     let pattern = scene.render.pattern;
     match pattern {
-        Pattern::HalfPixel => return half_pixel_tile(camera, tracer, tile),
+        Pattern::HalfPixel => return half_pixel_tile(scene, tracer, tile),
         Pattern::Adaptive { threshold, depth } => {
             return adaptive_tile(camera, tracer, tile, threshold, depth)
         }
@@ -130,21 +130,24 @@ fn filtered_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile, fi
 }
 
 /// The 9-sample half-pixel grid: a (2w+1)×(2h+1) lattice at half-pixel spacing over the tile, each interior
-/// sample shared by up to four pixels, combined with the trapezoid weights. Lattice points go out K at a
-/// time along its rows.
-fn half_pixel_tile<F: Lanes>(camera: &Camera<f64>, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
+/// sample shared by up to four pixels, combined with the trapezoid weights. The lattice is four grids of
+/// whole-pixel spacing, offset by 0 or ½ in each direction, each traced as camera blocks with one shared
+/// offset (large packets where the scene has them); a point's position `(x0 + m) + ½` is the `x0 + i·½` of
+/// the lattice exactly, so the rays are the lattice's.
+fn half_pixel_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
     let (lw, lh) = (2 * tile.w + 1, 2 * tile.h + 1);
-    let n = (lw * lh) as usize;
-    let mut lattice = Vec::with_capacity(n);
-    for first in (0..n).step_by(F::K) {
-        let point = |i: usize| ((first + i) % lw as usize, (first + i) / lw as usize);
-        let sx = F::from_fn(|i| tile.x0 as f32 + point(i).0 as f32 * 0.5);
-        let sy = F::from_fn(|i| tile.y0 as f32 + point(i).1 as f32 * 0.5);
-        let ray = camera.rays(sx, sy);
-        let active = F::lanes_below(n - first);
-        let rays = RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), active);
-        let c = tracer.primary(&rays);
-        lattice.extend((0..F::K.min(n - first)).map(|i| lane_rgb(&c, i)));
+    let mut lattice = vec![Rgb::default(); (lw * lh) as usize];
+    let mut large = LargePacket::default();
+    for (px, py) in [(0, 0), (1, 0), (0, 1), (1, 1)] {
+        // Even lattice columns sit on pixel corners (w + 1 of them), odd ones on pixel centres (w).
+        let grid = Tile { w: tile.w + 1 - px, h: tile.h + 1 - py, ..tile };
+        let offset = Offsets::Shared(px as f32 * 0.5, py as f32 * 0.5);
+        for_each_camera_hit(scene, grid, &offset, &mut large, |rays, hit, block| {
+            let c = tracer.primary_from(rays, hit);
+            for (i, x, y) in block.pixels() {
+                lattice[((2 * y + py) * lw + 2 * x + px) as usize] = lane_rgb(&c, i);
+            }
+        });
     }
     let mut out = Vec::with_capacity((tile.w * tile.h) as usize);
     for y in 0..tile.h {
