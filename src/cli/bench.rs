@@ -527,7 +527,7 @@ fn default_threads(cores: usize) -> Vec<usize> {
 
 /// Minimum, median and maximum of `reps` timed runs after one warm-up. The checksum is taken from the
 /// warm-up and from the last run, which must agree (every path is deterministic); the runs between skip
-/// it, since hashing a frame byte by byte cost about as long as tracing a small field's.
+/// it, since hashing a frame byte by byte costs about as long as tracing a small field's.
 fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
     let mut times = Vec::with_capacity(args.reps as usize);
     let (mut rays, mut checksum) = (0, None);

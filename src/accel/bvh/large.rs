@@ -161,9 +161,9 @@ impl Bvh {
         let lead = &packets[alive.trailing_zeros() as usize];
         let first = F::move_mask(lead.active).trailing_zeros() as usize;
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
-        // Outside the walk's state, which is then built in place: moving a state that held the queries
-        // (about 1.6 KB each at K = 16) copied them all once per tile. `from_fn` writes only the `None`s'
-        // tags, where an array expression copied a whole constant for each.
+        // Outside the walk's state, which is then built in place: a state holding the queries (about 1.6 KB
+        // each at K = 16) would copy them all whenever it moves. `from_fn` writes only the `None`s' tags,
+        // where an array expression compiles to copying a whole constant for each.
         let mut made: [Option<Q>; MAX_PACKETS] = std::array::from_fn(|_| None);
         let mut walk = Walk {
             bvh: self,
