@@ -179,15 +179,15 @@ impl Bvh {
     }
 }
 
-/// The largest of `t`'s lanes, none of them NaN (hit distances, inf or −inf), by halves of a 16-wide array:
-/// without [`f32::max`]'s NaN rule the compiler keeps the halving in vector registers (with it, lane by
-/// lane).
+/// The largest of `t`'s lanes, none of them NaN (hit distances, inf or −inf), by halves of an array with
+/// room for the widest lane type (K ≤ 16): without [`f32::max`]'s NaN rule the compiler keeps the halving in
+/// vector registers (with it, lane by lane).
 #[inline(always)]
 fn farthest<F: Lanes>(t: F) -> f32 {
-    let mut a = [f32::NEG_INFINITY; MAX_PACKETS];
+    let mut a = [f32::NEG_INFINITY; 16];
     a[..F::K].copy_from_slice(t.to_array().as_ref());
     debug_assert!(!a.iter().any(|v| v.is_nan()), "a NaN hit distance");
-    let mut w = MAX_PACKETS / 2;
+    let mut w = a.len() / 2;
     while w > 0 {
         for i in 0..w {
             a[i] = if a[i + w] > a[i] { a[i + w] } else { a[i] };
