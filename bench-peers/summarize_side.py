@@ -40,7 +40,7 @@ for (n, threads), rounds in sorted(runs.items()):
     print(f'| {n:.0e} | {threads} | {statistics.median(embree):.1f} | ' + ' | '.join(cells) + f' | {used} |')
 
 print()
-print('Build seconds (median over rounds; Embree medium quality, bareray obvhs preset + collapse + reorder):')
+print('Build seconds (median over rounds; Embree medium quality, bareray tree build + collapse + reorder):')
 print()
 print('| N | threads | Embree | ' + ' | '.join(tracers) + ' |')
 print('| ---: | ---: | ---: | ' + ' | '.join('---:' for _ in tracers) + ' |')

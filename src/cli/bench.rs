@@ -58,7 +58,7 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
     pub accel: AccelArg,
     /// obvhs build preset for the BVH (`very-fast` builds quickest and traces uniform fields fastest).
-    #[arg(long, value_enum, default_value_t = BvhPresetArg::Fast)]
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
     pub bvh_preset: BvhPresetArg,
     /// Test each BVH node's children, and each leaf's spheres, against a shared-origin packet's frustum
     /// before its lanes, and walk camera tiles as large packets (default: on, measured faster on large

@@ -128,7 +128,7 @@ pub struct RenderArgs {
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
     /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; docs/perf-log/2026-11.md compares them).
-    #[arg(long, value_enum, default_value_t = BvhPresetArg::Fast)]
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
     pub bvh_preset: BvhPresetArg,
     /// No progress bar and no summary line.
     #[arg(short, long)]

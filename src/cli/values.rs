@@ -161,12 +161,14 @@ impl From<AccelArg> for Accel {
 /// `--bvh-preset`: [`BvhPreset`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum BvhPresetArg {
+    /// bareray's binned SAH builder, the default: the least memory and the quickest build.
+    Sah,
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,
     /// obvhs `very_fast_build`: the quickest build; on uniform random fields it also traces faster than
     /// `fast`, on sphereflakes 8–10% slower (docs/perf-log/2026-11.md).
     VeryFast,
-    /// obvhs `fast_build`, the default: the best traced speed on structured scenes.
+    /// obvhs `fast_build`.
     Fast,
     /// obvhs `medium_build`.
     Medium,
@@ -177,6 +179,7 @@ pub enum BvhPresetArg {
 impl From<BvhPresetArg> for BvhPreset {
     fn from(p: BvhPresetArg) -> Self {
         match p {
+            BvhPresetArg::Sah => BvhPreset::Sah,
             BvhPresetArg::Fastest => BvhPreset::Fastest,
             BvhPresetArg::VeryFast => BvhPreset::VeryFast,
             BvhPresetArg::Fast => BvhPreset::Fast,

@@ -11,7 +11,7 @@
 
 pub mod features;
 
-use crate::accel::bvh::{self, BuildOptions, BuildStats, Bvh, SINGLE_RAY_MAX_LANES};
+use crate::accel::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::accel::{Geometry, Polygons};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
@@ -95,16 +95,19 @@ pub enum Accel {
     Brute,
 }
 
-/// The obvhs build preset for the BVH over the spheres (its `BvhBuildParams` presets).
+/// How the BVHs are built: bareray's binned SAH builder, or obvhs with one of its `BvhBuildParams` presets.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum BvhPreset {
+    /// bareray's binned SAH builder, the default: the least memory and the quickest build (PERF.md, "Tree
+    /// builder").
+    #[default]
+    Sah,
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,
     /// obvhs `very_fast_build`: the quickest build; on uniform random fields it also traces faster than
     /// `fast`, on sphereflakes 8–10% slower (docs/perf-log/2026-11.md).
     VeryFast,
-    /// obvhs `fast_build`, the default: the best traced speed on structured scenes.
-    #[default]
+    /// obvhs `fast_build`.
     Fast,
     /// obvhs `medium_build`.
     Medium,
@@ -113,15 +116,17 @@ pub enum BvhPreset {
 }
 
 impl BvhPreset {
-    /// The obvhs parameters.
-    pub fn params(self) -> BvhBuildParams {
-        match self {
+    /// The builder.
+    pub fn builder(self) -> Builder {
+        let params = match self {
+            BvhPreset::Sah => return Builder::Sah,
             BvhPreset::Fastest => BvhBuildParams::fastest_build(),
             BvhPreset::VeryFast => BvhBuildParams::very_fast_build(),
             BvhPreset::Fast => BvhBuildParams::fast_build(),
             BvhPreset::Medium => BvhBuildParams::medium_build(),
             BvhPreset::Slow => BvhBuildParams::slow_build(),
-        }
+        };
+        Builder::Obvhs(params)
     }
 }
 
@@ -260,7 +265,7 @@ impl Scene {
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
             options: BuildOptions {
                 pad: bvh::padding(reach(desc)),
-                params: preset.params(),
+                builder: preset.builder(),
                 // The 8-wide single-ray trees serve the scalar tracer's secondary and ambient occlusion
                 // rays: only scenes that trace them pay for their build.
                 single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)

@@ -1,6 +1,7 @@
-//! Building a tree: obvhs's binary tree over the item boxes (or the fallbacks for piles of equal boxes and for
-//! trees too deep to walk), collapsed into the 4-wide packet nodes and, when asked, the 8-wide single-ray nodes.
+//! Building a tree: a binary tree over the item boxes, bareray's binned SAH or obvhs's PLOC (with the fallbacks
+//! for piles of equal boxes and for trees too deep to walk), collapsed into the 4-wide packet nodes and, when asked, the 8-wide single-ray nodes.
 
+use std::sync::OnceLock;
 use std::time::Instant;
 
 use obvhs::aabb::Aabb;
@@ -12,15 +13,24 @@ use super::collapse::collapse;
 use super::node::Node;
 use super::slab::STACK;
 use super::wide_node::WideNode;
-use super::{binary, piles, BuildStats, Bvh};
+use super::{binary, piles, sah, BuildStats, Bvh};
+
+/// Which builder makes the binary tree that is collapsed into the wide nodes.
+#[derive(Clone, Copy, Debug)]
+pub enum Builder {
+    /// bareray's binned SAH ([`super::sah`]): the least memory and the quickest build.
+    Sah,
+    /// obvhs's PLOC with these settings.
+    Obvhs(BvhBuildParams),
+}
 
 /// How to build a tree.
 #[derive(Clone, Copy, Debug)]
 pub struct BuildOptions {
     /// The padding the item boxes carry ([`super::padding`]), kept for the packet walk's frustum test of single items.
     pub pad: f32,
-    /// obvhs's settings.
-    pub params: BvhBuildParams,
+    /// The binary tree's builder.
+    pub builder: Builder,
     /// Whether to build the 8-wide single-ray tree too (scenes that trace secondary rays).
     pub single_ray_tree: bool,
     /// [`Bvh::frustum_culling`].
@@ -38,15 +48,19 @@ pub fn build<T: Send>(
     options: BuildOptions,
     permute: impl Fn(&[u32]) -> T + Sync,
 ) -> (Bvh, T, BuildStats) {
-    let BuildOptions { pad, params, single_ray_tree, frustum_culling, single_ray_lanes } = options;
+    let BuildOptions { pad, builder, single_ray_tree, frustum_culling, single_ray_lanes } = options;
     let start = Instant::now();
-    let boxes: Vec<Aabb> = (0..n).into_par_iter().map(item_box).collect();
-    let over_piles = piles::has_piles(&boxes);
-    let binary = match over_piles {
-        true => piles::build_over_piles(&boxes, params),
-        false => {
-            let bvh2 = binary::build_binary(&boxes, params);
-            (bvh2.nodes, bvh2.primitive_indices)
+    // The item boxes as one array: obvhs's input, and the fallbacks'. The SAH builder keeps its own copy.
+    let boxes = OnceLock::new();
+    let boxes = || boxes.get_or_init(|| (0..n).into_par_iter().map(&item_box).collect::<Vec<Aabb>>());
+    let (binary, fallbacks): (_, &[Fallback]) = match builder {
+        Builder::Sah => (sah::build_sah(n, &item_box), &[Fallback::Balanced]),
+        Builder::Obvhs(params) if piles::has_piles(boxes()) => {
+            (piles::build_over_piles(boxes(), params), &[Fallback::Balanced])
+        }
+        Builder::Obvhs(params) => {
+            let bvh2 = binary::build_binary(boxes(), params);
+            ((bvh2.nodes, bvh2.primitive_indices), &[Fallback::Piles(params), Fallback::Balanced])
         }
     };
     let trees = |(tree, order): &(Vec<Bvh2Node>, Vec<u32>)| {
@@ -59,24 +73,35 @@ pub fn build<T: Send>(
         *need <= STACK && wide.as_ref().is_none_or(|(_, need)| *need <= STACK)
     };
     let (mut permuted, (mut packet_tree, mut wide)) = trees(&binary);
+    drop(binary);
     // Coincident items can make obvhs's tree a chain as long as their number: too deep for the traversal
     // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). A pile the sample
-    // missed is then built over one box per distinct item (unless that was the first build); anything still
-    // too deep gets the balanced tree.
-    let fallbacks: [&dyn Fn() -> _; 2] = [&|| piles::build_over_piles(&boxes, params), &|| balanced(&boxes)];
-    for fallback in fallbacks.into_iter().skip(usize::from(over_piles)) {
+    // missed is then built over one box per distinct item; anything still too deep gets the balanced tree.
+    for fallback in fallbacks {
         if fits(&packet_tree, &wide) {
             break;
         }
-        (permuted, (packet_tree, wide)) = trees(&fallback());
+        let binary = match *fallback {
+            Fallback::Piles(params) => piles::build_over_piles(boxes(), params),
+            Fallback::Balanced => balanced(boxes()),
+        };
+        (permuted, (packet_tree, wide)) = trees(&binary);
     }
-    assert!(fits(&packet_tree, &wide), "a balanced tree of {} items fits the traversal stacks", boxes.len());
+    assert!(fits(&packet_tree, &wide), "a balanced tree of {n} items fits the traversal stacks");
     let (nodes, wide) = (packet_tree.0, wide.map(|(w, _)| w));
     let wide_bytes = wide.as_ref().map_or(0, |w: &Vec<WideNode>| w.len() * size_of::<WideNode>());
     let node_bytes = nodes.len() * size_of::<Node>() + wide_bytes;
     let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes };
     let extent = extent(&nodes[0]);
     (Bvh { nodes, single_ray_lanes, frustum_culling, extent, pad, wide }, permuted, stats)
+}
+
+/// A tree built when the first is too deep for the walks' stacks.
+enum Fallback {
+    /// obvhs over one box per distinct box ([`piles`]).
+    Piles(BvhBuildParams),
+    /// [`balanced`].
+    Balanced,
 }
 
 /// The largest coordinate magnitude of the root's occupied child boxes.

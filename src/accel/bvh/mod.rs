@@ -25,11 +25,12 @@ mod large;
 pub mod node;
 mod packet;
 mod piles;
+mod sah;
 mod single;
 mod slab;
 pub mod wide_node;
 
-pub use build::{build, BuildOptions};
+pub use build::{build, BuildOptions, Builder};
 pub use large::MAX_PACKETS;
 pub use node::{Node, N};
 pub use wide_node::{WideNode, WIDE_N};

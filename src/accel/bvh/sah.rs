@@ -1,0 +1,477 @@
+//! bareray's own tree builder: top-down binned surface-area-heuristic (SAH) splits of the items' boxes, in
+//! obvhs's binary layout (which the collapse turns into the wide nodes).
+//!
+//! It needs little memory besides what it returns: one 32-byte reference per item (box and index), partitioned
+//! in place, and the binary nodes, one per leaf or split rather than one per item. obvhs's PLOC needs about
+//! 224 bytes an item at its peak, and under a hypervisor a fresh page costs more than its use, so the memory is
+//! also the build's time (docs/perf-log/2026-11-own-builder.md).
+//!
+//! The top of the tree is split on the calling thread (binning large ranges in parallel) down to ranges of
+//! about 1/[`TASKS`] of the items; those subtrees are then built in parallel, each into a vector of its own, and
+//! appended. Every split leaves both sides non-empty, and past [`MAX_SAH_DEPTH`] levels ranges are halved at
+//! their median, so the tree's depth stays within the walks' stacks whatever the boxes.
+
+use glam::{Vec3A, Vec4};
+use obvhs::aabb::Aabb;
+use obvhs::bvh2::node::Bvh2Node;
+use rayon::prelude::*;
+
+use super::build::unset;
+
+/// Bins per axis.
+const BINS: usize = 16;
+
+/// The most items a leaf holds (obvhs's presets use the same).
+pub(super) const MAX_LEAF: usize = 8;
+
+/// The cost of visiting a binary node, in item tests: a range of at most [`MAX_LEAF`] items is split only when
+/// that costs less than testing them all in one leaf. Measured: 1 makes leaves of about one sphere and traces
+/// the 1e6 field 30% slower; 4 to 8 trace alike, 12 is slower again (docs/perf-log/2026-11-own-builder.md).
+const NODE_COST: f32 = 6.0;
+
+/// Ranges of at least this many items are binned in parallel.
+const PARALLEL_BINNING: usize = 1 << 15;
+
+/// The top of the tree is split until ranges hold at most 1/`TASKS` of the items (or [`MIN_TASK`]).
+const TASKS: usize = 64;
+
+/// Ranges this small are never split on the calling thread.
+const MIN_TASK: usize = 4096;
+
+/// Binary levels past which ranges are halved at their median instead of by the SAH: with at most about
+/// log2(items) levels below, every collapsed tree fits the walks' stacks.
+const MAX_SAH_DEPTH: u32 = 40;
+
+/// An item's box with its index in the box's spare `w` lane.
+#[derive(Clone, Copy)]
+struct Ref {
+    lo: Vec4,
+    hi: Vec4,
+}
+
+impl Ref {
+    fn new(b: Aabb, item: u32) -> Self {
+        Ref { lo: b.min.extend(f32::from_bits(item)), hi: b.max.extend(0.0) }
+    }
+    fn item(&self) -> u32 {
+        self.lo.w.to_bits()
+    }
+    fn bounds(&self) -> Aabb {
+        Aabb { min: Vec3A::from_vec4(self.lo), max: Vec3A::from_vec4(self.hi) }
+    }
+    /// Twice the box's centre (only compared and binned, so never halved).
+    fn centre2(&self) -> Vec3A {
+        Vec3A::from_vec4(self.lo + self.hi)
+    }
+}
+
+/// The box around a range's boxes and the box around their (doubled) centres.
+#[derive(Clone, Copy)]
+struct Extent {
+    boxes: Aabb,
+    centres: Aabb,
+}
+
+impl Extent {
+    const EMPTY: Extent = Extent { boxes: Aabb::INVALID, centres: Aabb::INVALID };
+
+    fn add(&mut self, r: &Ref) {
+        self.boxes = self.boxes.union(&r.bounds());
+        self.centres.extend(r.centre2());
+    }
+    fn union(self, o: Extent) -> Extent {
+        Extent { boxes: self.boxes.union(&o.boxes), centres: self.centres.union(&o.centres) }
+    }
+    fn of(refs: &[Ref]) -> Extent {
+        let serial = |refs: &[Ref]| refs.iter().fold(Extent::EMPTY, |mut e, r| (e.add(r), e).1);
+        match refs.len() < PARALLEL_BINNING {
+            true => serial(refs),
+            false => {
+                refs.par_chunks(PARALLEL_BINNING / 4).map(serial).reduce(|| Extent::EMPTY, Extent::union)
+            }
+        }
+    }
+}
+
+/// The boxes and count of the items whose centres fall in one bin.
+#[derive(Clone, Copy)]
+struct Bin {
+    bounds: Aabb,
+    count: u32,
+}
+
+/// Bins along each axis.
+type Bins = [[Bin; BINS]; 3];
+
+const EMPTY_BINS: Bins = [[Bin { bounds: Aabb::INVALID, count: 0 }; BINS]; 3];
+
+/// Which bin a centre falls in, along each axis, over a range's centre box.
+struct Binner {
+    min: Vec3A,
+    scale: Vec3A,
+}
+
+impl Binner {
+    fn new(centres: &Aabb) -> Self {
+        let spread = centres.max - centres.min;
+        // Just under BINS, so the largest centre falls in the last bin, not past it.
+        let scale = Vec3A::select(spread.cmpgt(Vec3A::ZERO), (BINS as f32 * 0.9999) / spread, Vec3A::ZERO);
+        Binner { min: centres.min, scale }
+    }
+    /// The bin: the position over the centre box, rounded to the nearest integer by adding 2^23 (whose ulp is
+    /// 1), so the float's low bits hold it, without a float-to-integer conversion (which checks each lane).
+    /// The first bin is half as wide as the others and the last one and a half times: any monotone binning
+    /// serves, as long as the partition uses the same one. A NaN centre (an overflowed corner) lands in the
+    /// last bin.
+    fn index(&self, r: &Ref) -> [usize; 3] {
+        const TWO_23: f32 = 8_388_608.0;
+        let at = (r.centre2() - self.min) * self.scale + TWO_23;
+        at.to_array().map(|x| (x.to_bits().wrapping_sub(TWO_23.to_bits()) as usize).min(BINS - 1))
+    }
+    fn bins(&self, refs: &[Ref]) -> Bins {
+        let serial = |refs: &[Ref]| {
+            let mut bins = EMPTY_BINS;
+            for r in refs {
+                let (at, b) = (self.index(r), r.bounds());
+                for axis in 0..3 {
+                    let bin = &mut bins[axis][at[axis]];
+                    (bin.bounds, bin.count) = (bin.bounds.union(&b), bin.count + 1);
+                }
+            }
+            bins
+        };
+        let merge = |mut a: Bins, b: Bins| {
+            for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
+                (x.bounds, x.count) = (x.bounds.union(&y.bounds), x.count + y.count);
+            }
+            a
+        };
+        match refs.len() < PARALLEL_BINNING {
+            true => serial(refs),
+            false => refs.par_chunks(PARALLEL_BINNING / 4).map(serial).reduce(|| EMPTY_BINS, merge),
+        }
+    }
+}
+
+/// The cheapest split between bins: items whose centre's bin along `axis` is below `bin` go left. `cost` is
+/// the sum over both sides of surface area times items.
+struct Split {
+    axis: usize,
+    bin: usize,
+    cost: f32,
+}
+
+fn best_split(bins: &Bins) -> Option<Split> {
+    let mut best: Option<Split> = None;
+    for (axis, bins) in bins.iter().enumerate() {
+        // left[s]: area × count of the bins below s, None when they are empty.
+        let (mut left, mut acc, mut count) = ([None; BINS], Aabb::INVALID, 0);
+        for s in 1..BINS {
+            (acc, count) = (acc.union(&bins[s - 1].bounds), count + bins[s - 1].count);
+            left[s] = (count > 0).then(|| acc.half_area() * count as f32);
+        }
+        let (mut acc, mut count) = (Aabb::INVALID, 0);
+        for s in (1..BINS).rev() {
+            (acc, count) = (acc.union(&bins[s].bounds), count + bins[s].count);
+            let Some(left) = left[s].filter(|_| count > 0) else { continue };
+            let cost = left + acc.half_area() * count as f32;
+            if best.as_ref().is_none_or(|b| cost < b.cost) {
+                best = Some(Split { axis, bin: s, cost });
+            }
+        }
+    }
+    best
+}
+
+/// Splits `refs` in place into a left and a right part, returning the left part's length and both parts'
+/// extents; `None` when they make a leaf.
+fn split(refs: &mut [Ref], extent: &Extent, depth: u32) -> Option<(usize, Extent, Extent)> {
+    let n = refs.len();
+    if n <= 1 {
+        return None;
+    }
+    let binner = Binner::new(&extent.centres);
+    let split = (depth < MAX_SAH_DEPTH).then(|| best_split(&binner.bins(refs))).flatten();
+    let Some(Split { axis, bin, cost }) = split else {
+        return (n > MAX_LEAF).then(|| median(refs, extent));
+    };
+    let area = extent.boxes.half_area();
+    // Compared multiplied through by the area, so a range of flat boxes (area 0) compares too.
+    if n <= MAX_LEAF && n as f32 * area <= NODE_COST * area + cost {
+        return None;
+    }
+    match partition(refs, |r| binner.index(r)[axis] < bin) {
+        // Only a box with a NaN centre (a corner overflowed) can make a binned side empty.
+        (0, ..) => Some(median(refs, extent)),
+        (mid, ..) if mid == n => Some(median(refs, extent)),
+        parts => Some(parts),
+    }
+}
+
+/// Splits `refs` in place: those `left` accepts first. Returns their number and both parts' extents.
+fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, Extent) {
+    let (mut i, mut j) = (0, refs.len());
+    let (mut l, mut r) = (Extent::EMPTY, Extent::EMPTY);
+    loop {
+        while i < j && left(&refs[i]) {
+            l.add(&refs[i]);
+            i += 1;
+        }
+        while i < j && !left(&refs[j - 1]) {
+            r.add(&refs[j - 1]);
+            j -= 1;
+        }
+        if i == j {
+            return (i, l, r);
+        }
+        // refs[i] goes right and refs[j - 1] left.
+        refs.swap(i, j - 1);
+    }
+}
+
+/// Halves `refs` at the median centre along the axis of widest centre spread.
+fn median(refs: &mut [Ref], extent: &Extent) -> (usize, Extent, Extent) {
+    let axis = extent.centres.largest_axis();
+    let mid = refs.len() / 2;
+    refs.select_nth_unstable_by(mid, |a, b| a.centre2()[axis].total_cmp(&b.centre2()[axis]));
+    let (l, r) = refs.split_at(mid);
+    (mid, Extent::of(l), Extent::of(r))
+}
+
+/// A range of items whose subtree is still to build: the node slot it goes in, its first item, its items'
+/// extent and its depth.
+#[derive(Clone, Copy)]
+struct Pending {
+    slot: usize,
+    first: usize,
+    len: usize,
+    extent: Extent,
+    depth: u32,
+}
+
+/// Builds the subtree of `root`, whose items `refs` holds, into `nodes`.
+fn grow(refs: &mut [Ref], root: Pending, nodes: &mut Vec<Bvh2Node>) {
+    let mut stack = vec![root];
+    while let Some(p) = stack.pop() {
+        let range = p.first - root.first..p.first - root.first + p.len;
+        let split = split(&mut refs[range], &p.extent, p.depth);
+        stack.extend(place(p, split, nodes).into_iter().flatten().rev());
+    }
+}
+
+/// Writes `p`'s node: a leaf, or for `split` an inner node whose two children's slots it appends to `nodes`.
+/// Returns the children's ranges.
+fn place(
+    p: Pending,
+    split: Option<(usize, Extent, Extent)>,
+    nodes: &mut Vec<Bvh2Node>,
+) -> Option<[Pending; 2]> {
+    let Some((mid, l, r)) = split else {
+        nodes[p.slot] = Bvh2Node::new(p.extent.boxes, p.len as u32, p.first as u32);
+        return None;
+    };
+    let at = nodes.len();
+    nodes.extend([unset(); 2]);
+    nodes[p.slot] = Bvh2Node::new(p.extent.boxes, 0, at as u32);
+    let depth = p.depth + 1;
+    Some([
+        Pending { slot: at, first: p.first, len: mid, extent: l, depth },
+        Pending { slot: at + 1, first: p.first + mid, len: p.len - mid, extent: r, depth },
+    ])
+}
+
+/// Disjoint slices of `refs` for `ranges`, which are in item order and do not overlap.
+fn slices<'a>(refs: &'a mut [Ref], ranges: &[Pending]) -> Vec<&'a mut [Ref]> {
+    let (mut rest, mut at, mut out) = (refs, 0, Vec::with_capacity(ranges.len()));
+    for p in ranges {
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(p.first - at);
+        let (mine, tail) = tail.split_at_mut(p.len);
+        (rest, at) = (tail, p.first + p.len);
+        out.push(mine);
+    }
+    out
+}
+
+/// The binary tree over the boxes `item_box` gives for items `0..n`, in obvhs's layout: its nodes (the root
+/// first; an inner node's children adjacent at `first_index`) and the item order its leaves index. `n` ≥ 1.
+pub(super) fn build_sah(n: usize, item_box: impl Fn(usize) -> Aabb + Sync) -> (Vec<Bvh2Node>, Vec<u32>) {
+    assert!(n > 0, "a tree over no items");
+    let mut refs: Vec<Ref> = (0..n).into_par_iter().map(|i| Ref::new(item_box(i), i as u32)).collect();
+    let root = Pending { slot: 0, first: 0, len: n, extent: Extent::of(&refs), depth: 0 };
+    let mut nodes = vec![unset()];
+    // The top, level by level, each level's ranges split in parallel; ranges of at most `task` items are
+    // left for the subtrees.
+    let task = (n / TASKS).max(MIN_TASK);
+    let (mut level, mut tasks) = (vec![root], Vec::new());
+    while !level.is_empty() {
+        let (small, large): (Vec<Pending>, Vec<Pending>) = level.into_iter().partition(|p| p.len <= task);
+        tasks.extend(small);
+        let splits: Vec<_> = (large.par_iter().zip(slices(&mut refs, &large)))
+            .map(|(p, refs)| split(refs, &p.extent, p.depth))
+            .collect();
+        level =
+            (large.into_iter().zip(splits)).flat_map(|(p, s)| place(p, s, &mut nodes)).flatten().collect();
+    }
+    tasks.sort_unstable_by_key(|p| p.first);
+    let subtrees: Vec<Vec<Bvh2Node>> = (tasks.par_iter().zip(slices(&mut refs, &tasks)))
+        .map(|(t, refs)| {
+            let mut nodes = vec![unset()];
+            grow(refs, Pending { slot: 0, ..*t }, &mut nodes);
+            nodes
+        })
+        .collect();
+    // Each subtree's root goes in its slot, the rest after the nodes so far, its links moved with it.
+    nodes.reserve_exact(subtrees.iter().map(|s| s.len() - 1).sum());
+    for (t, subtree) in tasks.iter().zip(subtrees) {
+        let shift = nodes.len() as u32 - 1;
+        nodes[t.slot] = moved(subtree[0], shift);
+        nodes.extend(subtree[1..].iter().map(|&v| moved(v, shift)));
+    }
+    (nodes, refs.par_iter().map(Ref::item).collect())
+}
+
+/// Node `v` of a subtree whose nodes after its root move `shift` places up: an inner node's link moves too.
+fn moved(mut v: Bvh2Node, shift: u32) -> Bvh2Node {
+    if v.prim_count == 0 {
+        v.first_index += shift;
+    }
+    v
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::SplitMix64;
+
+    /// Cubes of half-size `r` around `centres`.
+    fn cubes(centres: impl IntoIterator<Item = (Vec3A, f32)>) -> Vec<Aabb> {
+        centres.into_iter().map(|(c, r)| Aabb { min: c - r, max: c + r }).collect()
+    }
+
+    /// Box sets that stress the builder: uniform, clustered with a pile of copies, all one box, sizes and
+    /// positions spread over many orders of magnitude (a chain for a pure SAH split), flat boxes.
+    fn box_sets() -> Vec<(&'static str, Vec<Aabb>)> {
+        let mut rng = SplitMix64::new(11);
+        let mut next = move || rng.unit() as f32;
+        let mut point = move || Vec3A::new(next(), next(), next());
+        let uniform = cubes((0..20_000).map(|_| (point() * 100.0, 0.05)));
+        let clustered = cubes((0..9000).map(|i| match i % 3 {
+            0 => (Vec3A::splat(5.0), 0.5),
+            _ => (point() * 10.0, 0.01 + point().x),
+        }));
+        let pile = cubes((0..5000).map(|_| (Vec3A::ONE, 0.25)));
+        let spread = cubes((0..800).map(|i| (Vec3A::X * 1.1f32.powi(i), 1e-3 * 1.1f32.powi(i))));
+        let flat: Vec<Aabb> = (0..2000).map(|i| Aabb::from_point(Vec3A::new(i as f32, 0.0, 0.0))).collect();
+        let few = |n: usize| cubes((0..n).map(|i| (Vec3A::Y * i as f32, 0.5)));
+        vec![
+            ("uniform", uniform),
+            ("clustered", clustered),
+            ("pile", pile),
+            ("spread", spread),
+            ("flat", flat),
+            ("one", few(1)),
+            ("two", few(2)),
+            ("nine", few(9)),
+        ]
+    }
+
+    /// Checks the subtree at `i`: boxes enclose what they hold, leaves hold 1 to MAX_LEAF items; collects the
+    /// leaves' ranges and returns the subtree's depth.
+    fn check(
+        nodes: &[Bvh2Node],
+        i: usize,
+        boxes: &[Aabb],
+        order: &[u32],
+        ranges: &mut Vec<(u32, u32)>,
+    ) -> usize {
+        let v = &nodes[i];
+        let encloses = |b: &Aabb| v.aabb.min.cmple(b.min).all() && v.aabb.max.cmpge(b.max).all();
+        if v.prim_count > 0 {
+            assert!(v.prim_count as usize <= MAX_LEAF, "leaf of {}", v.prim_count);
+            let items = &order[v.first_index as usize..][..v.prim_count as usize];
+            assert!(items.iter().all(|&k| encloses(&boxes[k as usize])), "a leaf's box misses an item");
+            ranges.push((v.first_index, v.prim_count));
+            return 1;
+        }
+        let first = v.first_index as usize;
+        assert!(first > i && first + 1 < nodes.len(), "node {i} links to {first}");
+        assert!(encloses(&nodes[first].aabb) && encloses(&nodes[first + 1].aabb), "node {i} misses a child");
+        1 + check(nodes, first, boxes, order, ranges).max(check(nodes, first + 1, boxes, order, ranges))
+    }
+
+    #[test]
+    fn every_item_is_in_one_leaf_under_boxes_that_enclose_it() {
+        for (name, boxes) in box_sets() {
+            let (nodes, order) = build_sah(boxes.len(), |i| boxes[i]);
+            let mut sorted = order.clone();
+            sorted.sort_unstable();
+            assert!(sorted.iter().copied().eq(0..boxes.len() as u32), "{name}: the order is no permutation");
+            let mut ranges = Vec::new();
+            let depth = check(&nodes, 0, &boxes, &order, &mut ranges);
+            ranges.sort_unstable();
+            let mut at = 0;
+            for (first, count) in ranges {
+                assert_eq!(first, at, "{name}: leaves overlap or leave a gap");
+                at += count;
+            }
+            assert_eq!(at as usize, boxes.len(), "{name}");
+            // Past MAX_SAH_DEPTH ranges are halved, so at most log2 more levels follow.
+            let bound = MAX_SAH_DEPTH as usize + boxes.len().ilog2() as usize + 2;
+            assert!(depth <= bound, "{name}: depth {depth} over {bound}");
+            assert!(nodes.len() < 2 * boxes.len(), "{name}: {} nodes", nodes.len());
+        }
+    }
+
+    /// At the depth cap a range is halved at its median, whatever the SAH would choose; below it the SAH
+    /// splits the spread set unevenly.
+    #[test]
+    fn past_the_depth_cap_ranges_are_halved() {
+        let (_, boxes) = box_sets().into_iter().find(|(name, _)| *name == "spread").unwrap();
+        let mut refs: Vec<Ref> = boxes.iter().enumerate().map(|(i, b)| Ref::new(*b, i as u32)).collect();
+        let extent = Extent::of(&refs);
+        let (mid, ..) = split(&mut refs, &extent, 0).expect("a split");
+        assert!(
+            mid.abs_diff(boxes.len() / 2) > boxes.len() / 4,
+            "the SAH split the spread set evenly: {mid}"
+        );
+        let (mid, l, r) = split(&mut refs, &extent, MAX_SAH_DEPTH).expect("a split");
+        assert_eq!(mid, boxes.len() / 2);
+        let right_of = |e: &Extent| e.centres.min.x;
+        assert!(l.centres.max.x <= right_of(&r), "the halves overlap");
+        assert!(
+            refs[..mid].iter().all(|r| r.centre2().x <= l.centres.max.x),
+            "a left item is outside its extent"
+        );
+    }
+
+    /// Boxes whose corners overflowed (centres NaN) still end, each item in one leaf: a binned split that
+    /// leaves a side empty would otherwise repeat forever.
+    #[test]
+    fn boxes_with_overflowed_corners_build() {
+        let whole = Aabb { min: Vec3A::NEG_INFINITY, max: Vec3A::INFINITY };
+        let boxes: Vec<Aabb> = (0..300)
+            .map(|i| if i % 3 == 0 { whole } else { Aabb::from_point(Vec3A::X * i as f32) })
+            .collect();
+        let (nodes, mut order) = build_sah(boxes.len(), |i| boxes[i]);
+        order.sort_unstable();
+        assert!(order.iter().copied().eq(0..300), "the order is no permutation");
+        let held: u32 = nodes.iter().map(|v| v.prim_count).sum();
+        assert_eq!(held, 300);
+    }
+
+    /// Binning in parallel and building subtrees on several threads give the one-thread tree, node for node.
+    #[test]
+    fn the_tree_does_not_depend_on_the_threads() {
+        let (_, boxes) = box_sets().swap_remove(0);
+        let fields = |(nodes, order): (Vec<Bvh2Node>, Vec<u32>)| {
+            let node =
+                |v: &Bvh2Node| (v.aabb.min.to_array(), v.aabb.max.to_array(), v.prim_count, v.first_index);
+            (nodes.iter().map(node).collect::<Vec<_>>(), order)
+        };
+        let on = |threads| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            fields(pool.install(|| build_sah(boxes.len(), |i| boxes[i])))
+        };
+        assert!(on(1) == on(4), "the tree differs between 1 and 4 threads");
+    }
+}
