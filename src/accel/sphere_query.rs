@@ -177,8 +177,8 @@ impl SingleLeafQuery for SphereQuery<'_, f32> {
     }
 }
 
-/// The lane type of a single ray's leaf test, one sphere per lane: obvhs leaves hold at most 8 spheres
-/// (`max_prims_per_leaf` of every preset bareray uses), so one pass covers a leaf.
+/// The lane type of a single ray's leaf test, one sphere per lane: leaves hold at most 8 spheres (the SAH
+/// builder's `MAX_LEAF`, obvhs's `max_prims_per_leaf` in every preset bareray uses), so one pass covers a leaf.
 pub(crate) type LeafLanes = wide::f32x8;
 
 impl SphereQuery<'_, f32> {

@@ -1,5 +1,5 @@
 //! The f64 twin's own sphere BVH: a binary tree built by median split over the spheres' boxes, walked
-//! nearest-first with an explicit stack and an f64 slab test. Independent of the renderer's obvhs BVH on
+//! nearest-first with an explicit stack and an f64 slab test. Independent of the renderer's BVH on
 //! purpose, so that a bug there cannot hide in the reference.
 //!
 //! It returns exactly what brute force over the same spheres returns (t and id, bit for bit): every sphere is

@@ -1,5 +1,6 @@
-//! Building a tree: a binary tree over the item boxes, bareray's binned SAH or obvhs's PLOC (with the fallbacks
-//! for piles of equal boxes and for trees too deep to walk), collapsed into the 4-wide packet nodes and, when asked, the 8-wide single-ray nodes.
+//! Building a tree: a binary tree over the item boxes, bareray's binned SAH or obvhs's PLOC (with the
+//! fallbacks for piles of equal boxes and for trees too deep to walk), collapsed into the 4-wide packet nodes
+//! and, when asked, the 8-wide single-ray nodes.
 
 use std::sync::OnceLock;
 use std::time::Instant;

@@ -1,4 +1,4 @@
-//! obvhs's binary tree collapsed into `WIDTH`-wide nodes: each node takes its two children, then opens the
+//! A binary tree in obvhs's layout (from the SAH builder or obvhs) collapsed into `WIDTH`-wide nodes: each node takes its two children, then opens the
 //! inner child of largest surface area until it has `WIDTH`; the top levels are flattened in parallel.
 
 use obvhs::bvh2::node::Bvh2Node;
@@ -8,7 +8,7 @@ use super::node::{ChildRef, RayNode, EMPTY};
 use super::slab::STACK;
 use super::wide_node::WIDE_N;
 
-/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from obvhs's binary tree, in depth-first order,
+/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from a binary tree in obvhs's layout, in depth-first order,
 /// and the stack entries a walk of them may need ([`stack_need`]; `usize::MAX` for a tree deeper than
 /// [`MAX_COLLAPSE_LEVELS`], whose nodes are then incomplete). The top [`PARALLEL_LEVELS`] levels flatten their
 /// subtrees in parallel; the layout is the serial one ([`flatten`]) node for node.

@@ -258,7 +258,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
     ) -> usize {
         let mut tests = 0;
         let mut updated = far.to_array();
-        // Leaves hold at most 8 spheres under obvhs's presets; longer ones go 16 at a time.
+        // Leaves hold at most 8 spheres under every builder bareray uses; longer ones go 16 at a time.
         for start in items.clone().step_by(16) {
             let chunk = start..(start + 16).min(items.end);
             let mut reach = [0u32; 16];

@@ -1,7 +1,7 @@
-//! A 4-wide BVH over boxes, built by obvhs (PLOC) as a binary tree and collapsed into bareray's own node
-//! layout: each node holds the boxes of up to [`N`] children in SoA form (two 64-byte cache lines), so one node
-//! visit tests all its children — K rays against each child in the packet walk (`packet.rs`), one ray against
-//! all children at once in the single-ray walk (`single.rs`).
+//! A 4-wide BVH over boxes, built as a binary tree (bareray's binned SAH, or obvhs's PLOC) and collapsed into
+//! bareray's own node layout: each node holds the boxes of up to [`N`] children in SoA form (two 64-byte cache
+//! lines), so one node visit tests all its children — K rays against each child in the packet walk
+//! (`packet.rs`), one ray against all children at once in the single-ray walk (`single.rs`).
 //!
 //! The tree knows nothing of primitives. It is built over one box per item ([`build()`]), returns the leaf
 //! order of the items (their owner stores them in that order, so leaves index the arrays directly), and its
@@ -14,9 +14,10 @@
 //! result equal, bit for bit, to brute force over the same items, whatever order the nodes are visited in and
 //! whichever walk runs.
 //!
-//! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`mod@build`] (obvhs,
-//! the fallbacks for piles and deep trees), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and
-//! the traversal stack), `packet.rs` and `single.rs` (the walks).
+//! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`mod@build`] (the
+//! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
+//! (obvhs), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
+//! `packet.rs` and `single.rs` (the walks).
 
 mod binary;
 pub mod build;
@@ -137,7 +138,7 @@ impl Bvh {
 /// What building cost.
 #[derive(Clone, Copy, Debug, Default)]
 pub struct BuildStats {
-    /// Seconds in obvhs plus collapsing and reordering.
+    /// Seconds building the binary tree, collapsing it and reordering the items.
     pub seconds: f64,
     /// Bytes of the node array.
     pub node_bytes: usize,
