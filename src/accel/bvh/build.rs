@@ -19,7 +19,7 @@ use super::{binary, piles, sah, BuildStats, Bvh};
 /// Which builder makes the binary tree that is collapsed into the wide nodes.
 #[derive(Clone, Copy, Debug)]
 pub enum Builder {
-    /// bareray's binned SAH ([`super::sah`]): the least memory and the quickest build.
+    /// bareray's binned SAH (`sah.rs`): the least memory and the quickest build.
     Sah,
     /// obvhs's PLOC with these settings.
     Obvhs(BvhBuildParams),
