@@ -139,7 +139,7 @@ mod tests {
         let xs: Vec<f32> = (0..500).map(|_| (rng.unit() * 100.0) as f32).collect();
         let options = BuildOptions {
             pad: 0.0,
-            builder: crate::accel::bvh::Builder::Sah,
+            builder: crate::accel::bvh::Builder::SAH_SPHERES,
             single_ray_tree: false,
             frustum_culling: true,
             single_ray_lanes: 2,

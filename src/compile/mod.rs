@@ -119,7 +119,7 @@ impl BvhPreset {
     /// The builder.
     pub fn builder(self) -> Builder {
         let params = match self {
-            BvhPreset::Sah => return Builder::Sah,
+            BvhPreset::Sah => return Builder::SAH_SPHERES,
             BvhPreset::Fastest => BvhBuildParams::fastest_build(),
             BvhPreset::VeryFast => BvhBuildParams::very_fast_build(),
             BvhPreset::Fast => BvhBuildParams::fast_build(),
@@ -313,11 +313,13 @@ impl Scene {
             (g.spheres, g.sphere_bvh) = (spheres, Some(tree));
             self.build += stats;
         }
+        // Triangles, ellipsoids and cones cost more to test than a sphere: their trees split smaller ranges.
+        let dearer = BuildOptions { builder: job.options.builder.for_dearer_items(), ..job.options };
         if job.polygons {
             let p = &g.polygons;
             let item_box = |j: usize| padded(p.triangle_box(j), job.options.pad);
             let (tree, polygons, stats) =
-                bvh::build(p.triangles(), item_box, job.options, |order| p.permuted(order));
+                bvh::build(p.triangles(), item_box, dearer, |order| p.permuted(order));
             (g.polygons, g.polygon_bvh) = (polygons, Some(tree));
             self.build += stats;
         }
@@ -325,7 +327,7 @@ impl Scene {
             let pad = Vec3A::splat(job.options.pad);
             let item_box = |j: usize| Aabb { min: bounded[j].1.min - pad, max: bounded[j].1.max + pad };
             let permute = |order: &[u32]| order.iter().map(|&j| bounded[j as usize].0).collect::<Vec<u32>>();
-            let (tree, order, stats) = bvh::build(bounded.len(), item_box, job.options, permute);
+            let (tree, order, stats) = bvh::build(bounded.len(), item_box, dearer, permute);
             // The shapes without a box: the planes.
             g.loose_shapes =
                 (0..g.shapes.len() as u32).filter(|&k| !g.shapes[k as usize].kind.is_solid()).collect();
@@ -336,7 +338,7 @@ impl Scene {
             let cones = &g.cones;
             let item_box = |j: usize| padded(cones.bounds(j), job.options.pad);
             let order = |order: &[u32]| order.to_vec();
-            let (tree, order, stats) = bvh::build(cones.len(), item_box, job.options, order);
+            let (tree, order, stats) = bvh::build(cones.len(), item_box, dearer, order);
             (g.cone_order, g.cone_bvh) = (order, Some(tree));
             self.build += stats;
         }

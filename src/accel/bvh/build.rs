@@ -19,10 +19,34 @@ use super::{binary, piles, sah, BuildStats, Bvh};
 /// Which builder makes the binary tree that is collapsed into the wide nodes.
 #[derive(Clone, Copy, Debug)]
 pub enum Builder {
-    /// bareray's binned SAH (`sah.rs`): the least memory and the quickest build.
-    Sah,
+    /// bareray's binned SAH (`sah.rs`): the least memory and the quickest build. A binary node costs
+    /// `node_cost` tests of the kind's items: ranges of up to 8 items stay one leaf where testing them costs
+    /// less than the split.
+    Sah {
+        /// The cost of a binary node, in item tests.
+        node_cost: f32,
+    },
     /// obvhs's PLOC with these settings.
     Obvhs(BvhBuildParams),
+}
+
+impl Builder {
+    /// The SAH builder for spheres. Measured on the contract fields and balls4: 1 makes leaves of about one
+    /// sphere and traces the 1e6 field 30% slower, 4 to 8 trace alike, 12 is slower again
+    /// (docs/perf-log/2026-11-own-builder.md).
+    pub const SAH_SPHERES: Builder = Builder::Sah { node_cost: 6.0 };
+    /// The SAH builder for items dearer to test than spheres (triangles, ellipsoids, cones): cones.toml and SPD's teapot
+    /// traced 6–8% faster with 1 than with 6 (docs/perf-log/2026-11-own-builder.md).
+    pub const SAH_DEARER_ITEMS: Builder = Builder::Sah { node_cost: 1.0 };
+
+    /// The builder for items dearer to test than spheres: [`Builder::SAH_DEARER_ITEMS`] in place of the SAH
+    /// builder, obvhs's presets as they are.
+    pub fn for_dearer_items(self) -> Builder {
+        match self {
+            Builder::Sah { .. } => Builder::SAH_DEARER_ITEMS,
+            obvhs => obvhs,
+        }
+    }
 }
 
 /// How to build a tree.
@@ -55,7 +79,7 @@ pub fn build<T: Send>(
     let boxes = OnceLock::new();
     let boxes = || boxes.get_or_init(|| (0..n).into_par_iter().map(&item_box).collect::<Vec<Aabb>>());
     let (binary, fallbacks): (_, &[Fallback]) = match builder {
-        Builder::Sah => (sah::build_sah(n, &item_box), &[Fallback::Balanced]),
+        Builder::Sah { node_cost } => (sah::build_sah(n, &item_box, node_cost), &[Fallback::Balanced]),
         Builder::Obvhs(params) if piles::has_piles(boxes()) => {
             (piles::build_over_piles(boxes(), params), &[Fallback::Balanced])
         }

@@ -24,11 +24,6 @@ const BINS: usize = 16;
 /// The most items a leaf holds (obvhs's presets use the same).
 pub(super) const MAX_LEAF: usize = 8;
 
-/// The cost of visiting a binary node, in item tests: a range of at most [`MAX_LEAF`] items is split only when
-/// that costs less than testing them all in one leaf. Measured: 1 makes leaves of about one sphere and traces
-/// the 1e6 field 30% slower; 4 to 8 trace alike, 12 is slower again (docs/perf-log/2026-11-own-builder.md).
-const NODE_COST: f32 = 6.0;
-
 /// Ranges of at least this many items are binned in parallel.
 const PARALLEL_BINNING: usize = 1 << 15;
 
@@ -184,8 +179,9 @@ fn best_split(bins: &Bins) -> Option<Split> {
 }
 
 /// Splits `refs` in place into a left and a right part, returning the left part's length and both parts'
-/// extents; `None` when they make a leaf.
-fn split(refs: &mut [Ref], extent: &Extent, depth: u32) -> Option<(usize, Extent, Extent)> {
+/// extents; `None` when they make a leaf: at most [`MAX_LEAF`] items that cost less tested together than split,
+/// a binary node costing `node_cost` item tests.
+fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Option<(usize, Extent, Extent)> {
     let n = refs.len();
     if n <= 1 {
         return None;
@@ -197,7 +193,7 @@ fn split(refs: &mut [Ref], extent: &Extent, depth: u32) -> Option<(usize, Extent
     };
     let area = extent.boxes.half_area();
     // Compared multiplied through by the area, so a range of flat boxes (area 0) compares too.
-    if n <= MAX_LEAF && n as f32 * area <= NODE_COST * area + cost {
+    if n <= MAX_LEAF && n as f32 * area <= node_cost * area + cost {
         return None;
     }
     match partition(refs, |r| binner.index(r)[axis] < bin) {
@@ -250,11 +246,11 @@ struct Pending {
 }
 
 /// Builds the subtree of `root`, whose items `refs` holds, into `nodes`.
-fn grow(refs: &mut [Ref], root: Pending, nodes: &mut Vec<Bvh2Node>) {
+fn grow(refs: &mut [Ref], root: Pending, nodes: &mut Vec<Bvh2Node>, node_cost: f32) {
     let mut stack = vec![root];
     while let Some(p) = stack.pop() {
         let range = p.first - root.first..p.first - root.first + p.len;
-        let split = split(&mut refs[range], &p.extent, p.depth);
+        let split = split(&mut refs[range], &p.extent, p.depth, node_cost);
         stack.extend(place(p, split, nodes).into_iter().flatten().rev());
     }
 }
@@ -293,8 +289,13 @@ fn slices<'a>(refs: &'a mut [Ref], ranges: &[Pending]) -> Vec<&'a mut [Ref]> {
 }
 
 /// The binary tree over the boxes `item_box` gives for items `0..n`, in obvhs's layout: its nodes (the root
-/// first; an inner node's children adjacent at `first_index`) and the item order its leaves index. `n` ≥ 1.
-pub(super) fn build_sah(n: usize, item_box: impl Fn(usize) -> Aabb + Sync) -> (Vec<Bvh2Node>, Vec<u32>) {
+/// first; an inner node's children adjacent at `first_index`) and the item order its leaves index. `n` ≥ 1;
+/// a binary node costs `node_cost` item tests ([`super::Builder::Sah`]).
+pub(super) fn build_sah(
+    n: usize,
+    item_box: impl Fn(usize) -> Aabb + Sync,
+    node_cost: f32,
+) -> (Vec<Bvh2Node>, Vec<u32>) {
     assert!(n > 0, "a tree over no items");
     let mut refs: Vec<Ref> = (0..n).into_par_iter().map(|i| Ref::new(item_box(i), i as u32)).collect();
     let root = Pending { slot: 0, first: 0, len: n, extent: Extent::of(&refs), depth: 0 };
@@ -307,7 +308,7 @@ pub(super) fn build_sah(n: usize, item_box: impl Fn(usize) -> Aabb + Sync) -> (V
         let (small, large): (Vec<Pending>, Vec<Pending>) = level.into_iter().partition(|p| p.len <= task);
         tasks.extend(small);
         let splits: Vec<_> = (large.par_iter().zip(slices(&mut refs, &large)))
-            .map(|(p, refs)| split(refs, &p.extent, p.depth))
+            .map(|(p, refs)| split(refs, &p.extent, p.depth, node_cost))
             .collect();
         level =
             (large.into_iter().zip(splits)).flat_map(|(p, s)| place(p, s, &mut nodes)).flatten().collect();
@@ -316,7 +317,7 @@ pub(super) fn build_sah(n: usize, item_box: impl Fn(usize) -> Aabb + Sync) -> (V
     let subtrees: Vec<Vec<Bvh2Node>> = (tasks.par_iter().zip(slices(&mut refs, &tasks)))
         .map(|(t, refs)| {
             let mut nodes = vec![unset()];
-            grow(refs, Pending { slot: 0, ..*t }, &mut nodes);
+            grow(refs, Pending { slot: 0, ..*t }, &mut nodes, node_cost);
             nodes
         })
         .collect();
@@ -402,7 +403,7 @@ mod tests {
     #[test]
     fn every_item_is_in_one_leaf_under_boxes_that_enclose_it() {
         for (name, boxes) in box_sets() {
-            let (nodes, order) = build_sah(boxes.len(), |i| boxes[i]);
+            let (nodes, order) = build_sah(boxes.len(), |i| boxes[i], 6.0);
             let mut sorted = order.clone();
             sorted.sort_unstable();
             assert!(sorted.iter().copied().eq(0..boxes.len() as u32), "{name}: the order is no permutation");
@@ -429,12 +430,12 @@ mod tests {
         let (_, boxes) = box_sets().into_iter().find(|(name, _)| *name == "spread").unwrap();
         let mut refs: Vec<Ref> = boxes.iter().enumerate().map(|(i, b)| Ref::new(*b, i as u32)).collect();
         let extent = Extent::of(&refs);
-        let (mid, ..) = split(&mut refs, &extent, 0).expect("a split");
+        let (mid, ..) = split(&mut refs, &extent, 0, 6.0).expect("a split");
         assert!(
             mid.abs_diff(boxes.len() / 2) > boxes.len() / 4,
             "the SAH split the spread set evenly: {mid}"
         );
-        let (mid, l, r) = split(&mut refs, &extent, MAX_SAH_DEPTH).expect("a split");
+        let (mid, l, r) = split(&mut refs, &extent, MAX_SAH_DEPTH, 6.0).expect("a split");
         assert_eq!(mid, boxes.len() / 2);
         let right_of = |e: &Extent| e.centres.min.x;
         assert!(l.centres.max.x <= right_of(&r), "the halves overlap");
@@ -452,7 +453,7 @@ mod tests {
         let boxes: Vec<Aabb> = (0..300)
             .map(|i| if i % 3 == 0 { whole } else { Aabb::from_point(Vec3A::X * i as f32) })
             .collect();
-        let (nodes, mut order) = build_sah(boxes.len(), |i| boxes[i]);
+        let (nodes, mut order) = build_sah(boxes.len(), |i| boxes[i], 6.0);
         order.sort_unstable();
         assert!(order.iter().copied().eq(0..300), "the order is no permutation");
         let held: u32 = nodes.iter().map(|v| v.prim_count).sum();
@@ -470,7 +471,7 @@ mod tests {
         };
         let on = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
-            fields(pool.install(|| build_sah(boxes.len(), |i| boxes[i])))
+            fields(pool.install(|| build_sah(boxes.len(), |i| boxes[i], 6.0)))
         };
         assert!(on(1) == on(4), "the tree differs between 1 and 4 threads");
     }
