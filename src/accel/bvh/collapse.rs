@@ -1,5 +1,6 @@
-//! A binary tree in obvhs's layout (from the SAH builder or obvhs) collapsed into `WIDTH`-wide nodes: each node takes its two children, then opens the
-//! inner child of largest surface area until it has `WIDTH`; the top levels are flattened in parallel.
+//! A binary tree in obvhs's layout (from the SAH builder or obvhs) collapsed into `WIDTH`-wide nodes: each
+//! node takes its two children, then opens the inner child of largest surface area until it has `WIDTH`; the
+//! top levels are flattened in parallel.
 
 use obvhs::bvh2::node::Bvh2Node;
 use rayon::prelude::*;
