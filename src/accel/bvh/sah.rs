@@ -21,7 +21,7 @@ use super::build::unset;
 /// Bins per axis.
 const BINS: usize = 16;
 
-/// The most items a leaf holds (obvhs's presets use the same).
+/// The most items a leaf holds (as in obvhs's presets other than `fastest`, whose leaves hold one).
 pub(super) const MAX_LEAF: usize = 8;
 
 /// Ranges of at least this many items are binned in parallel.
@@ -70,9 +70,14 @@ struct Extent {
 impl Extent {
     const EMPTY: Extent = Extent { boxes: Aabb::INVALID, centres: Aabb::INVALID };
 
+    /// Adds `r`. A NaN centre (a box infinite both ways on an axis) is left out of the centre box: the SSE
+    /// min and max would let it replace the centres before it. It bins into the last bin all the same.
     fn add(&mut self, r: &Ref) {
         self.boxes = self.boxes.union(&r.bounds());
-        self.centres.extend(r.centre2());
+        let centre = r.centre2();
+        if !centre.is_nan() {
+            self.centres.extend(centre);
+        }
     }
     fn union(self, o: Extent) -> Extent {
         Extent { boxes: self.boxes.union(&o.boxes), centres: self.centres.union(&o.centres) }
@@ -109,7 +114,7 @@ struct Binner {
 impl Binner {
     fn new(centres: &Aabb) -> Self {
         let spread = centres.max - centres.min;
-        // Just under BINS, so the largest centre falls in the last bin, not past it.
+        // The largest centre rounds to BINS in `index`, whose clamp puts it in the last bin.
         let scale = Vec3A::select(spread.cmpgt(Vec3A::ZERO), (BINS as f32 * 0.9999) / spread, Vec3A::ZERO);
         Binner { min: centres.min, scale }
     }
@@ -179,8 +184,9 @@ fn best_split(bins: &Bins) -> Option<Split> {
 }
 
 /// Splits `refs` in place into a left and a right part, returning the left part's length and both parts'
-/// extents; `None` when they make a leaf: at most [`MAX_LEAF`] items that cost less tested together than split,
-/// a binary node costing `node_cost` item tests.
+/// extents; `None` when they make a leaf: one item, or at most [`MAX_LEAF`] items that cost less tested
+/// together than split (a binary node costing `node_cost` item tests), that have no binned split (all centres
+/// equal), or that lie past [`MAX_SAH_DEPTH`].
 fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Option<(usize, Extent, Extent)> {
     let n = refs.len();
     if n <= 1 {
@@ -196,12 +202,10 @@ fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Optio
     if n <= MAX_LEAF && n as f32 * area <= node_cost * area + cost {
         return None;
     }
-    match partition(refs, |r| binner.index(r)[axis] < bin) {
-        // Only a box with a NaN centre (a corner overflowed) can make a binned side empty.
-        (0, ..) => Some(median(refs, extent)),
-        (mid, ..) if mid == n => Some(median(refs, extent)),
-        parts => Some(parts),
-    }
+    // The partition bins as `bins` did, so it leaves the split's counts on each side, neither empty.
+    let parts = partition(refs, |r| binner.index(r)[axis] < bin);
+    debug_assert!(0 < parts.0 && parts.0 < n, "a split left a side empty");
+    Some(parts)
 }
 
 /// Splits `refs` in place: those `left` accepts first. Returns their number and both parts' extents.
@@ -297,6 +301,8 @@ pub(super) fn build_sah(
     node_cost: f32,
 ) -> (Vec<Bvh2Node>, Vec<u32>) {
     assert!(n > 0, "a tree over no items");
+    // Item indices and node links are u32, and a tree has fewer than 2n nodes.
+    assert!(n < 1 << 31, "{n} items: more than a tree's u32 links reach");
     let mut refs: Vec<Ref> = (0..n).into_par_iter().map(|i| Ref::new(item_box(i), i as u32)).collect();
     let root = Pending { slot: 0, first: 0, len: n, extent: Extent::of(&refs), depth: 0 };
     let mut nodes = vec![unset()];
@@ -445,8 +451,8 @@ mod tests {
         );
     }
 
-    /// Boxes whose corners overflowed (centres NaN) still end, each item in one leaf: a binned split that
-    /// leaves a side empty would otherwise repeat forever.
+    /// Boxes infinite both ways (centres NaN) still build, each item in one leaf: a split with an empty side
+    /// would repeat forever, and a NaN cost must not make one the best.
     #[test]
     fn boxes_with_overflowed_corners_build() {
         let whole = Aabb { min: Vec3A::NEG_INFINITY, max: Vec3A::INFINITY };
@@ -460,10 +466,19 @@ mod tests {
         assert_eq!(held, 300);
     }
 
-    /// Binning in parallel and building subtrees on several threads give the one-thread tree, node for node.
+    /// Binning in parallel and building subtrees on several threads give the one-thread tree, node for node:
+    /// over enough boxes for the parallel binning, some of them infinite both ways (NaN centres).
     #[test]
     fn the_tree_does_not_depend_on_the_threads() {
-        let (_, boxes) = box_sets().swap_remove(0);
+        let mut rng = SplitMix64::new(3);
+        let mut next = move || rng.unit() as f32;
+        let whole = Aabb { min: Vec3A::NEG_INFINITY, max: Vec3A::INFINITY };
+        let boxes: Vec<Aabb> = (0..3 * PARALLEL_BINNING)
+            .map(|i| match i % 1000 {
+                0 => whole,
+                _ => cubes([(Vec3A::new(next(), next(), next()) * 100.0, 0.05)])[0],
+            })
+            .collect();
         let fields = |(nodes, order): (Vec<Bvh2Node>, Vec<u32>)| {
             let node =
                 |v: &Bvh2Node| (v.aabb.min.to_array(), v.aabb.max.to_array(), v.prim_count, v.first_index);
