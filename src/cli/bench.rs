@@ -57,7 +57,7 @@ pub struct BenchArgs {
     /// sphere: the setting for comparing kernels).
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
     pub accel: AccelArg,
-    /// obvhs build preset for the BVH (`very-fast` builds quickest and traces uniform fields fastest).
+    /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").
     #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
     pub bvh_preset: BvhPresetArg,
     /// Test each BVH node's children, and each leaf's spheres, against a shared-origin packet's frustum

@@ -127,7 +127,7 @@ pub struct RenderArgs {
     /// scenes/ but the refraction-heavy whitted.toml, docs/perf-log/2026-11.md). The image is identical at every width.
     #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
     pub lanes: usize,
-    /// obvhs build preset for the BVH over the spheres (`very-fast` builds quickest; docs/perf-log/2026-11.md compares them).
+    /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").
     #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
     pub bvh_preset: BvhPresetArg,
     /// No progress bar and no summary line.

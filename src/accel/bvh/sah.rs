@@ -84,12 +84,21 @@ impl Extent {
     }
     fn of(refs: &[Ref]) -> Extent {
         let serial = |refs: &[Ref]| refs.iter().fold(Extent::EMPTY, |mut e, r| (e.add(r), e).1);
-        match refs.len() < PARALLEL_BINNING {
-            true => serial(refs),
-            false => {
-                refs.par_chunks(PARALLEL_BINNING / 4).map(serial).reduce(|| Extent::EMPTY, Extent::union)
-            }
-        }
+        summarise(refs, serial, Extent::EMPTY, Extent::union)
+    }
+}
+
+/// `serial` of `refs`: at once for a short range, else of chunks in parallel, combined by `merge` (which
+/// must not depend on how the range is cut: unions and counts).
+fn summarise<T: Send + Sync + Copy>(
+    refs: &[Ref],
+    serial: impl Fn(&[Ref]) -> T + Sync + Send,
+    empty: T,
+    merge: impl Fn(T, T) -> T + Sync + Send,
+) -> T {
+    match refs.len() < PARALLEL_BINNING {
+        true => serial(refs),
+        false => refs.par_chunks(PARALLEL_BINNING / 4).map(serial).reduce(|| empty, merge),
     }
 }
 
@@ -146,10 +155,7 @@ impl Binner {
             }
             a
         };
-        match refs.len() < PARALLEL_BINNING {
-            true => serial(refs),
-            false => refs.par_chunks(PARALLEL_BINNING / 4).map(serial).reduce(|| EMPTY_BINS, merge),
-        }
+        summarise(refs, serial, EMPTY_BINS, merge)
     }
 }
 
