@@ -235,12 +235,13 @@ fn len(v: V3<f64>) -> f64 {
 }
 
 /// `normal` turned toward rays along `dir`, and whether it was flipped (hit from inside): shade.rs's
-/// `facing`, which is private, replicated with the same operations (`n·d > 0` flips).
-fn facing<F: crate::math::Real>(normal: V3<F>, dir: V3<F>) -> (V3<F>, bool)
+/// `facing`, which is private, replicated with the same operations: the side `eye_inside` gives where it is
+/// known (a camera ray's sphere hit), else `n·d > 0` flips.
+fn facing<F: crate::math::Real>(normal: V3<F>, dir: V3<F>, eye_inside: Option<bool>) -> (V3<F>, bool)
 where
     F::Mask: Into<bool>,
 {
-    let inside: bool = normal.dot(dir).gt(F::splat(0.0)).into();
+    let inside: bool = eye_inside.unwrap_or_else(|| normal.dot(dir).gt(F::splat(0.0)).into());
     (if inside { -normal } else { normal }, inside)
 }
 
@@ -319,10 +320,10 @@ impl Comparer<'_> {
         let g = &self.scene.geometry;
         let ray32 = self.scene.camera_f64.ray_f32(x as f32 + 0.5, y as f32 + 0.5);
         let sp = g.surface(&ray32, t32, storage);
-        let (n32, inside32) = facing(sp.normal, ray32.dir);
+        let (n32, inside32) = facing(sp.normal, ray32.dir, g.eye_inside(storage));
         let from32 = Departure { prim: storage, inward: inside32 };
         let (p64, outward64) = self.twin.surface(&ray64, h64.t, h64.prim);
-        let (n64, inside64) = facing(outward64, ray64.dir);
+        let (n64, inside64) = facing(outward64, ray64.dir, self.twin.eye_inside(h64.prim));
         let from64 = Departure { prim: h64.prim, inward: inside64 };
         // The f32 point in the twin's camera-relative frame: relative to the f32 ray's own origin (the eye in
         // whatever frame the f32 scene lives in), so this holds before and after compile moves to camera space.

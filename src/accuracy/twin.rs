@@ -370,6 +370,14 @@ impl Twin {
         hit.then_some(t)
     }
 
+    /// Whether a ray from the eye meets primitive `prim` from inside, where that is known exactly (a sphere:
+    /// the sign of its eye term `|C|² − r²` in f64); `None` for other kinds. The f32 scene's
+    /// [`crate::accel::Geometry::eye_inside`].
+    pub fn eye_inside(&self, prim: u32) -> Option<bool> {
+        let (centre, radius) = *self.spheres.get(prim as usize)?;
+        Some(crate::geometry::eye_term(centre, radius) < 0.0)
+    }
+
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated
     /// vertex normal when it has them, a cone's normal away from its axis), computed as [`crate::accel::Geometry::surface`] computes them in f32.
     pub fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
