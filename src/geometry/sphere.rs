@@ -10,7 +10,9 @@
 //! Four choices keep the f32 results accurate at every scale (ARCHITECTURE.md, "Numerics"):
 //!
 //! - **Perpendicular discriminant.** `r² − l²` instead of the textbook `b² − 4ac`, which subtracts two
-//!   nearly equal large numbers for small distant spheres (Haines et al., Ray Tracing Gems ch. 7).
+//!   nearly equal large numbers for small distant spheres (Haines et al., Ray Tracing Gems ch. 7). Each
+//!   component of `oc − d·proj` is one fused multiply-add: a separately rounded product leaves about
+//!   `ε·|oc|·r` of error in `l²`, a large share of a small distant sphere's `r²`.
 //! - **Vieta's near root.** Only the root of larger magnitude, `proj + sign(proj)·td`, is computed directly;
 //!   the other is `c/(d·d)` divided by it, with `c = |oc|² − r²` (the product of the roots is `c/(d·d)`).
 //!   `proj − td` would cancel for a large sphere seen from close by.
@@ -23,8 +25,9 @@
 //!   one always is, within a small factor ([`sphere_roots_of`] applies the rule).
 //! - **Discriminant by bound.** With an accurate `c`, `proj² − c/(d·d)` is also available; in scenes with a
 //!   sphere near the eye each lane takes it where its rounding bound `ε·(proj²·(d·d) + bound(c))` is below
-//!   the perpendicular form's `ε·|oc|·r` (compared squared). That is a ray from near a large sphere, whose
-//!   `l²` carries the f32 rounding of a far-away centre.
+//!   the perpendicular form's `ε·|oc|·r` (compared squared; the unfused form's bound, above the fused
+//!   one's). That is a ray from near a large sphere, whose `l²` carries the f32 rounding of a far-away
+//!   centre.
 //!
 //! For rays that do not start at the eye, a sphere whose surface passes within `c`'s rounding bound of the
 //! ray's origin is treated as touching it there (the **contact rule**): a ray heading into it enters at `t = 0`, a ray heading away misses it. At
@@ -290,7 +293,9 @@ pub fn sphere_approach<F: Real>(centre: V3<F>, radius: F, ray: &SphereRay<F>) ->
     let d = ray.ray.dir;
     let oc = centre - ray.ray.origin;
     let proj = oc.dot(d) * ray.inv_dd;
-    let perp = oc - d * proj;
+    // Each component rounded once: with the product `d·proj` rounded on its own, `l` carries about ε·|oc| of
+    // error, a large share of a small distant sphere's radius (see the module documentation).
+    let perp = V3::new((-d.x).mul_add(proj, oc.x), (-d.y).mul_add(proj, oc.y), (-d.z).mul_add(proj, oc.z));
     Approach {
         oc,
         proj,
@@ -425,5 +430,43 @@ mod tests {
         assert!(hit);
         let exact = 1.0e5 - (1.0f64 - 0.25).sqrt();
         assert!(((t as f64) - exact).abs() / exact < 1e-6, "t = {t}");
+    }
+
+    /// `l²` for f32 rays aimed at the rims of spheres 10 to 1000 radii away, against `l²` in f64 from the
+    /// same f32 inputs: within 16 ε of `r²` (each component of `oc − d·proj` rounded once; `proj`'s own
+    /// error only moves the foot point along the line, which changes `l²` in second order). With the
+    /// product rounded on its own the error is about `ε·|oc|·r`: the same rays show it exceeding the bound.
+    #[test]
+    fn perpendicular_distance_is_accurate_for_small_distant_spheres() {
+        use crate::math::SplitMix64;
+        let mut rng = SplitMix64::new(3);
+        let (mut worst, mut worst_separate) = (0.0f64, 0.0f64);
+        for _ in 0..20_000 {
+            let distance = 10f64.powf(1.0 + 2.0 * rng.unit());
+            let r = 0.001 + rng.unit();
+            let dir = V3::new(rng.unit() - 0.5, rng.unit() - 0.5, 1.0).normalize();
+            let centre = (dir * (distance * r)).to_f32();
+            // Aim a ray at a point a relative 1e-3 inside or outside the rim, off the centre's line.
+            let side = V3::new(-dir.y, dir.x, 0.0).normalize();
+            let target = dir * (distance * r) + side * (r * (1.0 + 2e-3 * (rng.unit() - 0.5)));
+            let ray = Ray::new(V3::all(0.0f32), target.normalize().to_f32());
+            let line = sphere_approach(centre, r as f32, &SphereRay::new(ray));
+            let (oc, d) = (centre.to_f64(), ray.dir.to_f64());
+            let proj = oc.dot(d) / d.dot(d);
+            let exact = (oc - d * proj).dot(oc - d * proj);
+            let r2 = f64::from(r as f32).powi(2);
+            worst = worst.max((f64::from(line.l2) - exact).abs() / r2);
+            let (oc32, d32) = (centre, ray.dir);
+            let perp_separate = oc32 - d32 * (oc32.dot(d32) * (1.0 / d32.dot(d32)));
+            worst_separate =
+                worst_separate.max((f64::from(perp_separate.dot(perp_separate)) - exact).abs() / r2);
+        }
+        let eps = f64::from(f32::EPSILON) / 2.0;
+        assert!(worst <= 16.0 * eps, "l² off by {:.1} ε of r²", worst / eps);
+        assert!(
+            worst_separate > 16.0 * eps,
+            "the separately rounded form stays within {:.1} ε",
+            worst_separate / eps
+        );
     }
 }
