@@ -13,7 +13,7 @@ use std::marker::PhantomData;
 use std::ops::AddAssign;
 
 use crate::compile::Scene;
-use crate::geometry::{at_eye, DeparturePacket, HitPacket, RayPacket};
+use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
 use crate::scene::desc::{Falloff, Material, Shade};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -89,9 +89,9 @@ fn trace_lane_by_lane<F: Lanes>(
 }
 
 /// The outward `normal` turned toward rays along `dir`, and the lanes where it was flipped (hit from
-/// inside: the lecture's case 4): in the lanes of `known`, inside where `eye_inside` says so (a sphere hit
-/// by a ray from the eye, [`crate::accel::Geometry::eye_inside`]); elsewhere where `n·d > 0`. Zero normals
-/// (lanes that found nothing) stay unflipped.
+/// inside: the lecture's case 4): in the lanes of `known`, inside where `eye_inside` says so (a camera ray's
+/// sphere hit, [`crate::accel::Geometry::eye_inside`]); elsewhere where `n·d > 0`. Zero normals (lanes that
+/// found nothing) stay unflipped.
 fn facing<F: Lanes>(normal: V3<F>, dir: V3<F>, known: F::Mask, eye_inside: F::Mask) -> (V3<F>, F::Mask) {
     let inside = (known & eye_inside) | (!known & normal.dot(dir).gt(F::splat_f32(0.0)));
     (V3::select(inside, -normal, normal), inside)
@@ -180,7 +180,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         if !found.any() {
             return background;
         }
-        let s = self.surface(rays, hit, found);
+        let s = self.surface(rays, hit, found, depth == 0);
         let view = -rays.dir;
         let mut color = s.base.mul_elem(splat_rgb::<F>(self.scene.render.ambient)) * s.ambient;
         let zero_f = F::splat_f32(0.0);
@@ -206,16 +206,25 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 
     /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
-    /// of one plain material (most packets), else lane by lane with the scalar code.
-    fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
-        self.sphere_surface(rays, hit, found).unwrap_or_else(|| self.surface_by_lane(rays, hit, found))
+    /// of one plain material (most packets), else lane by lane with the scalar code. `camera`: the rays are
+    /// camera rays (from the eye, departing from nothing), whose sphere hits take their side from the eye
+    /// term.
+    fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask, camera: bool) -> Surface<F> {
+        self.sphere_surface(rays, hit, found, camera)
+            .unwrap_or_else(|| self.surface_by_lane(rays, hit, found, camera))
     }
 
     /// [`Tracer::surface`] for packets whose found lanes all hit spheres of one material without a checker:
     /// point and normal from the SoA sphere arrays in lanes, by [`crate::accel::Geometry::surface`]'s
     /// operations in its order (so each lane gets the scalar bits), and the material splatted. `None` for
     /// any other packet.
-    fn sphere_surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Option<Surface<F>> {
+    fn sphere_surface(
+        &self,
+        rays: &RayPacket<F>,
+        hit: &HitPacket<F>,
+        found: F::Mask,
+        camera: bool,
+    ) -> Option<Surface<F>> {
         let spheres = &self.scene.geometry.spheres;
         let bits = F::move_mask(found);
         let lanes = || set_bits(bits);
@@ -235,8 +244,12 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let center = V3::new(gather(&spheres.cx), gather(&spheres.cy), gather(&spheres.cz));
         let zero = V3::all(F::splat_f32(0.0));
         let point = V3::select(found, rays.ray().at(hit.t), zero);
-        let from_eye = found & at_eye(rays.origin);
-        let eye_inside = gather(&spheres.c_eye).lt(F::splat_f32(0.0));
+        // `Geometry::eye_inside` in lanes: known where the eye term is not zero (the eye not on the surface).
+        let c_eye = gather(&spheres.c_eye);
+        let zero_f = F::splat_f32(0.0);
+        let from_eye =
+            F::mask_from_bits(if camera { bits } else { 0 }) & (c_eye.lt(zero_f) | c_eye.gt(zero_f));
+        let eye_inside = c_eye.lt(zero_f);
         let outward = V3::select(found, (point - center).normalize(), zero);
         let (normal, inside) = facing(outward, rays.dir, from_eye, eye_inside);
         let splat = F::splat_f32;
@@ -257,7 +270,13 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 
     /// [`Tracer::surface`] lane by lane with the scalar code: any primitives and materials.
-    fn surface_by_lane(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask) -> Surface<F> {
+    fn surface_by_lane(
+        &self,
+        rays: &RayPacket<F>,
+        hit: &HitPacket<F>,
+        found: F::Mask,
+        camera: bool,
+    ) -> Surface<F> {
         // K lanes per row, not 16: the scalar tracer gathers once per ray, and zeroing 1 KB each time showed.
         let mut v = [F::splat_f32(0.0).to_array(); 16];
         let (mut fresnel, mut known, mut eye_inside) = (0u32, 0u32, 0u32);
@@ -265,7 +284,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             let (ray, _, _) = rays.lane(i);
             let geometry = &self.scene.geometry;
             let sp = geometry.surface(&ray, hit.t.lane(i), hit.prim.lane(i));
-            if let (true, Some(side)) = (at_eye(ray.origin), geometry.eye_inside(hit.prim.lane(i))) {
+            if let (true, Some(side)) = (camera, geometry.eye_inside(hit.prim.lane(i))) {
                 known |= 1 << i;
                 eye_inside |= u32::from(side) << i;
             }
@@ -479,8 +498,9 @@ mod tests {
             });
             let hit = scene.geometry.intersect_k(&rays, &DeparturePacket::camera());
             let found = hit.found() & rays.active;
-            let Some(lanes) = tracer.sphere_surface(&rays, &hit, found) else { continue };
-            let scalar = tracer.surface_by_lane(&rays, &hit, found);
+            let camera = p % 3 == 2;
+            let Some(lanes) = tracer.sphere_surface(&rays, &hit, found, camera) else { continue };
+            let scalar = tracer.surface_by_lane(&rays, &hit, found, camera);
             let bits = |v: V3<f32x8>, i: usize| [v.x, v.y, v.z].map(|c| c.lane(i).to_bits());
             for i in (0..8).filter(|&i| f32x8::mask_lane(found, i)) {
                 assert_eq!(bits(lanes.point, i), bits(scalar.point, i), "packet {p} lane {i}");
@@ -531,8 +551,8 @@ mod tests {
                     + d(s.normal.z) * d(rays.dir.z))
             };
             for s in [
-                tracer.sphere_surface(&rays, &hit, found).expect("one material"),
-                tracer.surface_by_lane(&rays, &hit, found),
+                tracer.sphere_surface(&rays, &hit, found, true).expect("one material"),
+                tracer.surface_by_lane(&rays, &hit, found, true),
             ] {
                 for i in (0..8).filter(|&i| f32x8::mask_lane(found, i)) {
                     assert!(!f32x8::mask_lane(s.inside, i), "a camera hit taken as from inside");
@@ -546,6 +566,37 @@ mod tests {
             normal_wrong_side > 0,
             "no grazing hit had its normal on the ray's side: the case is not exercised"
         );
+    }
+
+    /// The eye exactly on a sphere's surface (eye term 0): camera rays heading into the sphere hit it from
+    /// outside at t = 0, rays heading away hit it from inside (its exit, also at t = 0); the side comes from
+    /// the normal there, not from the eye term's sign.
+    #[test]
+    fn eye_on_a_sphere_takes_the_side_from_the_normal() {
+        use crate::scene::desc::{SceneDesc, SphereDesc};
+        use wide::f32x8;
+        let mut desc = SceneDesc::default();
+        // The default eye is (0, 0, −5): on this sphere, exactly.
+        desc.spheres.push(SphereDesc { center: glam::DVec3::ZERO, radius: 5.0, material: 0 });
+        let scene = Scene::compile(&desc).expect("scene");
+        assert_eq!(scene.geometry.spheres.c_eye[0], 0.0);
+        let tracer = Tracer::<f32x8>::new(&scene);
+        let rays = RayPacket::<f32x8>::from_fn(|i| {
+            let z = if i % 2 == 0 { 1.0 } else { -1.0 };
+            let dir = V3::new(0.1 * i as f32 - 0.35, 0.05, z);
+            (crate::geometry::Ray::new(V3::all(0.0), dir), f32::INFINITY, true)
+        });
+        let hit = scene.geometry.intersect_k(&rays, &DeparturePacket::camera());
+        let found = hit.found() & rays.active;
+        assert!(found.all());
+        for s in [
+            tracer.sphere_surface(&rays, &hit, found, true).expect("one material"),
+            tracer.surface_by_lane(&rays, &hit, found, true),
+        ] {
+            for i in 0..8 {
+                assert_eq!(f32x8::mask_lane(s.inside, i), i % 2 == 1, "lane {i}");
+            }
+        }
     }
 
     #[test]

@@ -370,12 +370,13 @@ impl Twin {
         hit.then_some(t)
     }
 
-    /// Whether a ray from the eye meets primitive `prim` from inside, where that is known exactly (a sphere:
-    /// the sign of its eye term `|C|² − r²` in f64); `None` for other kinds. The f32 scene's
+    /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere: the
+    /// sign of its eye term `|C|² − r²` in f64, when not zero); `None` otherwise. The f32 scene's
     /// [`crate::accel::Geometry::eye_inside`].
     pub fn eye_inside(&self, prim: u32) -> Option<bool> {
         let (centre, radius) = *self.spheres.get(prim as usize)?;
-        Some(crate::geometry::eye_term(centre, radius) < 0.0)
+        let c_eye = crate::geometry::eye_term(centre, radius);
+        (c_eye < 0.0 || c_eye > 0.0).then_some(c_eye < 0.0)
     }
 
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated

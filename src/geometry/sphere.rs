@@ -25,9 +25,9 @@
 //!   one always is, within a small factor ([`sphere_roots_of`] applies the rule).
 //! - **Discriminant by bound.** With an accurate `c`, `proj² − c/(d·d)` is also available; in scenes with a
 //!   sphere near the eye each lane takes it where its rounding bound `ε·(proj²·(d·d) + bound(c))` is below
-//!   the perpendicular form's `ε·|oc|·r` (compared squared; the unfused form's bound, above the fused
-//!   one's). That is a ray from near a large sphere, whose `l²` carries the f32 rounding of a far-away
-//!   centre.
+//!   the perpendicular form's `ε·|oc|·r` (compared squared). That is a ray from near a large sphere, whose
+//!   `l²` carries the f32 rounding of a far-away centre (in `oc` itself: the stored centre and `centre −
+//!   origin`, which the fused `perp` does not remove).
 //!
 //! For rays that do not start at the eye, a sphere whose surface passes within `c`'s rounding bound of the
 //! ray's origin is treated as touching it there (the **contact rule**): a ray heading into it enters at `t = 0`, a ray heading away misses it. At

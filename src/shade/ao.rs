@@ -29,7 +29,7 @@ impl<F: Lanes> Tracer<'_, F> {
         if !found.any() {
             return background;
         }
-        let s = self.surface(rays, hit, found);
+        let s = self.surface(rays, hit, found, true);
         let distance = F::splat_f32(ao.distance.map_or(f32::INFINITY, |d| d as f32));
         let open = if ao.samples as usize >= F::K {
             self.open_by_hit(rays, hit, &s, found, ao, distance)

@@ -14,7 +14,8 @@
 //!   `fmul`/`fadd` without fast-math flags, so `a*b + c` rounds twice at every width.
 //! - Fused multiply-add is used only where asked for, through [`Real::mul_add`]: `vfmadd…ps` in the lane
 //!   types and `f32::mul_add` (`vfmadd…ss`, or libm's correctly rounded `fmaf` without the FMA feature) in
-//!   the scalar one — one rounding in both. (The BVH slab test uses it; the sphere kernels do not.)
+//!   the scalar one — one rounding in both. (Users: the sphere kernel's perpendicular distance, the cone
+//!   kernel, the BVH slab test and the frustum tests.)
 //! - Negation XORs the sign bit, as scalar negation does.
 //! - `simd_lt`/`simd_le` use the *ordered* predicates (`cmpltps`, `_CMP_LT_OQ`, `_CMP_LE_OQ`): a NaN operand
 //!   gives false, like scalar `<`/`<=`. The results are all-ones/all-zeros lanes (AVX-512 compares into a
