@@ -518,54 +518,64 @@ mod tests {
         assert!(checked > 1000, "only {checked} lanes checked");
     }
 
-    /// Camera rays grazing a unit sphere 1e6 away: the rounded hit point often puts the outward normal on
-    /// the ray's side (`n·d > 0`), yet the eye is outside the sphere, so no hit is taken as from inside.
+    /// Camera rays grazing a unit sphere, and an ellipsoid, 1e6 away: the rounded hit point often puts the
+    /// outward normal on the ray's side (`n·d > 0`), yet the eye is outside, so no hit is taken as from
+    /// inside.
     #[test]
     fn grazing_camera_hits_on_a_distant_sphere_are_outside() {
+        use crate::geometry::ShapeKind;
         use crate::math::SplitMix64;
-        use crate::scene::desc::{SceneDesc, SphereDesc};
+        use crate::scene::desc::{SceneDesc, ShapeDesc, SphereDesc};
         use wide::f32x8;
         let centre = glam::DVec3::new(0.0, 0.0, 1e6);
-        let mut desc = SceneDesc::default();
-        desc.spheres.push(SphereDesc { center: centre, radius: 1.0, material: 0 });
-        let scene = Scene::compile(&desc).expect("scene");
-        let tracer = Tracer::<f32x8>::new(&scene);
-        let mut rng = SplitMix64::new(5);
-        let (mut found_lanes, mut normal_wrong_side) = (0, 0);
-        for _ in 0..500 {
-            let rays = RayPacket::<f32x8>::from_fn(|_| {
-                // Aimed within a relative 1e-3 of the rim (radius 1 at distance 1e6), all around it.
-                let a = rng.unit() * std::f64::consts::TAU;
-                let rim = 1.0 - 1e-3 * rng.unit();
-                let dir = V3::new(rim * a.cos(), rim * a.sin(), 1e6 - scene.origin.z).to_f32();
-                (crate::geometry::Ray::new(V3::all(0.0), dir), f32::INFINITY, true)
-            });
-            let hit = scene.geometry.intersect_k(&rays, &DeparturePacket::camera());
-            let found = hit.found() & rays.active;
-            let outward_dot = |s: &Surface<f32x8>, i: usize| {
-                let d = |v: wide::f32x8| v.lane(i);
-                // The flipped normal points back out of the sphere where `inside` is set.
-                let sign = if f32x8::mask_lane(s.inside, i) { -1.0 } else { 1.0 };
-                sign * (d(s.normal.x) * d(rays.dir.x)
-                    + d(s.normal.y) * d(rays.dir.y)
-                    + d(s.normal.z) * d(rays.dir.z))
-            };
-            for s in [
-                tracer.sphere_surface(&rays, &hit, found, true).expect("one material"),
-                tracer.surface_by_lane(&rays, &hit, found, true),
-            ] {
-                for i in (0..8).filter(|&i| f32x8::mask_lane(found, i)) {
-                    assert!(!f32x8::mask_lane(s.inside, i), "a camera hit taken as from inside");
-                    found_lanes += 1;
-                    normal_wrong_side += usize::from(outward_dot(&s, i) > 0.0);
+        // Semi-axes: 1 and 1 for the sphere, 1 and 1.5 across the view for the ellipsoid.
+        for stretch in [1.0, 1.5] {
+            let mut desc = SceneDesc::default();
+            if stretch == 1.0 {
+                desc.spheres.push(SphereDesc { center: centre, radius: 1.0, material: 0 });
+            } else {
+                let world_from_object = glam::DAffine3::from_scale_rotation_translation(
+                    glam::DVec3::new(1.0, stretch, 1.0),
+                    glam::DQuat::IDENTITY,
+                    centre,
+                );
+                desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
+            }
+            let scene = Scene::compile(&desc).expect("scene");
+            let tracer = Tracer::<f32x8>::new(&scene);
+            let mut rng = SplitMix64::new(5);
+            let (mut found_lanes, mut normal_wrong_side) = (0, 0);
+            for _ in 0..500 {
+                let rays = RayPacket::<f32x8>::from_fn(|_| {
+                    // Aimed within a relative 1e-3 of the rim, all around it.
+                    let a = rng.unit() * std::f64::consts::TAU;
+                    let rim = 1.0 - 1e-3 * rng.unit();
+                    let dir = V3::new(rim * a.cos(), stretch * rim * a.sin(), 1e6 - scene.origin.z).to_f32();
+                    (crate::geometry::Ray::new(V3::all(0.0), dir), f32::INFINITY, true)
+                });
+                let hit = scene.geometry.intersect_k(&rays, &DeparturePacket::camera());
+                let found = hit.found() & rays.active;
+                let outward_dot = |s: &Surface<f32x8>, i: usize| {
+                    let d = |v: wide::f32x8| v.lane(i);
+                    // The flipped normal points back out where `inside` is set.
+                    let sign = if f32x8::mask_lane(s.inside, i) { -1.0 } else { 1.0 };
+                    sign * (d(s.normal.x) * d(rays.dir.x)
+                        + d(s.normal.y) * d(rays.dir.y)
+                        + d(s.normal.z) * d(rays.dir.z))
+                };
+                let lanes = tracer.sphere_surface(&rays, &hit, found, true);
+                assert_eq!(lanes.is_some(), stretch == 1.0 && found.any());
+                for s in lanes.into_iter().chain([tracer.surface_by_lane(&rays, &hit, found, true)]) {
+                    for i in (0..8).filter(|&i| f32x8::mask_lane(found, i)) {
+                        assert!(!f32x8::mask_lane(s.inside, i), "a camera hit taken as from inside");
+                        found_lanes += 1;
+                        normal_wrong_side += usize::from(outward_dot(&s, i) > 0.0);
+                    }
                 }
             }
+            assert!(found_lanes > 2000, "stretch {stretch}: {found_lanes} hits");
+            assert!(normal_wrong_side > 0, "stretch {stretch}: no hit had its normal on the ray's side");
         }
-        assert!(found_lanes > 4000, "{found_lanes} hits");
-        assert!(
-            normal_wrong_side > 0,
-            "no grazing hit had its normal on the ray's side: the case is not exercised"
-        );
     }
 
     /// The eye exactly on a sphere's surface (eye term 0): camera rays heading into the sphere hit it from

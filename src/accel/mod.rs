@@ -509,19 +509,24 @@ impl Geometry {
     }
 
     /// Whether a camera ray (from the eye, the rendering space's origin) meets primitive `prim` from inside,
-    /// where that is known exactly: for a sphere, the sign of its exact eye term (`|C|² − r² < 0`: the eye is
-    /// in it). `None` for a sphere whose eye term is zero (the eye on its surface: rays leave it or enter it
-    /// there, and the normal tells which) and for the other kinds, whose side is read from the normal. Why:
+    /// where that is known exactly: for a sphere or an ellipsoid, the sign of its exact eye term (`|C|² − r²`,
+    /// or `|o_eye|² − 1` in object space: negative when the eye is in it). `None` where the eye term is zero
+    /// (the eye on the surface: rays leave it or enter it there, and the normal tells which) and for the
+    /// other kinds, whose side is read from the normal. Why:
     /// at a grazing hit the rounded hit point can put the normal's side wrong (a unit sphere 1e6 away, `t`
     /// one ulp long, turns `n·d` from −0.013 to +0.013), and the hit would be shaded and left as if from
     /// inside.
     pub fn eye_inside(&self, prim: u32) -> Option<bool> {
-        match self.prim(prim) {
-            PrimRef::Sphere(i) => {
-                let c_eye = self.spheres.c_eye[i];
-                (c_eye < 0.0 || c_eye > 0.0).then_some(c_eye < 0.0)
-            }
-            _ => None,
+        let c_eye = match self.prim(prim) {
+            PrimRef::Sphere(i) => self.spheres.c_eye[i],
+            PrimRef::Shape(shape) if shape.kind.is_solid() => shape.c_eye,
+            _ => return None,
+        };
+        // Known only where the term is strictly negative or positive (not 0, not NaN), as in the lanes.
+        match c_eye.partial_cmp(&0.0)? {
+            std::cmp::Ordering::Less => Some(true),
+            std::cmp::Ordering::Greater => Some(false),
+            std::cmp::Ordering::Equal => None,
         }
     }
 

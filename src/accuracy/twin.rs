@@ -370,13 +370,27 @@ impl Twin {
         hit.then_some(t)
     }
 
-    /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere: the
-    /// sign of its eye term `|C|² − r²` in f64, when not zero); `None` otherwise. The f32 scene's
+    /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere or an
+    /// ellipsoid: the sign of its eye term in f64, when not zero); `None` otherwise. The f32 scene's
     /// [`crate::accel::Geometry::eye_inside`].
     pub fn eye_inside(&self, prim: u32) -> Option<bool> {
-        let (centre, radius) = *self.spheres.get(prim as usize)?;
-        let c_eye = crate::geometry::eye_term(centre, radius);
-        (c_eye < 0.0 || c_eye > 0.0).then_some(c_eye < 0.0)
+        let i = prim as usize;
+        let c_eye = match self.spheres.get(i) {
+            Some(&(centre, radius)) => crate::geometry::eye_term(centre, radius),
+            None => {
+                let shape = self.shapes.get(i - self.spheres.len())?;
+                if !shape.kind.is_solid() {
+                    return None;
+                }
+                shape.c_eye
+            }
+        };
+        // Known only where the term is strictly negative or positive (not 0, not NaN), as in the lanes.
+        match c_eye.partial_cmp(&0.0)? {
+            std::cmp::Ordering::Less => Some(true),
+            std::cmp::Ordering::Greater => Some(false),
+            std::cmp::Ordering::Equal => None,
+        }
     }
 
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated
