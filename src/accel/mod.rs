@@ -522,12 +522,7 @@ impl Geometry {
             PrimRef::Shape(shape) if shape.kind.is_solid() => shape.c_eye,
             _ => return None,
         };
-        // Known only where the term is strictly negative or positive (not 0, not NaN), as in the lanes.
-        match c_eye.partial_cmp(&0.0)? {
-            std::cmp::Ordering::Less => Some(true),
-            std::cmp::Ordering::Greater => Some(false),
-            std::cmp::Ordering::Equal => None,
-        }
+        crate::geometry::eye_side(f64::from(c_eye))
     }
 
     /// Position, normal and material of hit `t` on primitive `prim` along `ray`.

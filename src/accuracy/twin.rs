@@ -385,12 +385,7 @@ impl Twin {
                 shape.c_eye
             }
         };
-        // Known only where the term is strictly negative or positive (not 0, not NaN), as in the lanes.
-        match c_eye.partial_cmp(&0.0)? {
-            std::cmp::Ordering::Less => Some(true),
-            std::cmp::Ordering::Greater => Some(false),
-            std::cmp::Ordering::Equal => None,
-        }
+        crate::geometry::eye_side(c_eye)
     }
 
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated

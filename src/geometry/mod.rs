@@ -22,4 +22,4 @@ pub use sphere::{
     at_eye, far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,
     EyeLanes, Roots, SphereRay, CONTACT_ROUNDINGS,
 };
-pub use spheres::{eye_term, Spheres};
+pub use spheres::{eye_side, eye_term, Spheres};
