@@ -215,24 +215,23 @@ fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Optio
 }
 
 /// Splits `refs` in place: those `left` accepts first. Returns their number and both parts' extents.
+///
+/// Branch-free (Lomuto's scheme with the swap always made): which side an item goes to is a coin toss for the
+/// branch predictor, and a mispredicted branch per item costs more than the swap.
 fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, Extent) {
-    let (mut i, mut j) = (0, refs.len());
-    let (mut l, mut r) = (Extent::EMPTY, Extent::EMPTY);
-    loop {
-        while i < j && left(&refs[i]) {
-            l.add(&refs[i]);
-            i += 1;
-        }
-        while i < j && !left(&refs[j - 1]) {
-            r.add(&refs[j - 1]);
-            j -= 1;
-        }
-        if i == j {
-            return (i, l, r);
-        }
-        // refs[i] goes right and refs[j - 1] left.
-        refs.swap(i, j - 1);
+    // [right, left]: indexed by the test, so no branch picks the side.
+    let mut sides = [Extent::EMPTY; 2];
+    let mut store = 0;
+    for i in 0..refs.len() {
+        let r = refs[i];
+        let goes_left = left(&r);
+        // refs[store..i] all go right: swapping refs[i] to `store` keeps that, whichever side it goes.
+        refs[i] = refs[store];
+        refs[store] = r;
+        store += goes_left as usize;
+        sides[goes_left as usize].add(&r);
     }
+    (store, sides[1], sides[0])
 }
 
 /// Halves `refs` at the median centre along the axis of widest centre spread.
@@ -433,6 +432,26 @@ mod tests {
             assert!(depth <= bound, "{name}: depth {depth} over {bound}");
             assert!(nodes.len() < 2 * boxes.len(), "{name}: {} nodes", nodes.len());
         }
+    }
+
+    /// The partition puts exactly the accepted items first, keeps every item, and returns each side's extent
+    /// as computed afresh.
+    #[test]
+    fn the_partition_keeps_the_items_and_their_extents() {
+        let (_, boxes) = box_sets().into_iter().find(|(name, _)| *name == "clustered").unwrap();
+        let mut refs: Vec<Ref> = boxes.iter().enumerate().map(|(i, b)| Ref::new(*b, i as u32)).collect();
+        let left = |r: &Ref| r.item() % 3 == 1 || r.centre2().y < 6.0;
+        let (mid, l, r) = partition(&mut refs, left);
+        assert!(refs[..mid].iter().all(left) && !refs[mid..].iter().any(left), "a side holds a stray item");
+        let mut items: Vec<u32> = refs.iter().map(Ref::item).collect();
+        items.sort_unstable();
+        assert!(items.into_iter().eq(0..boxes.len() as u32), "items lost or repeated");
+        let same = |a: &Extent, b: &Extent| {
+            (a.boxes.min, a.boxes.max, a.centres.min, a.centres.max)
+                == (b.boxes.min, b.boxes.max, b.centres.min, b.centres.max)
+        };
+        assert!(same(&l, &Extent::of(&refs[..mid])) && same(&r, &Extent::of(&refs[mid..])));
+        assert!(0 < mid && mid < refs.len(), "the test's split is one-sided: {mid}");
     }
 
     /// At the depth cap a range is halved at its median, whatever the SAH would choose; below it the SAH
