@@ -51,6 +51,8 @@ use crate::math::Rgb;
 use super::error::SceneError;
 use crate::scene::desc::*;
 
+mod chunks;
+
 /// Ambient coefficient of NFF materials (see the module documentation).
 pub const NFF_AMBIENT: f32 = 0.1;
 
@@ -60,22 +62,16 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     parse(path, &source)
 }
 
-/// Parses NFF text; `path` names it in errors.
+/// Parses NFF text; `path` names it in errors. Large files are cut into pieces at entity boundaries and the
+/// pieces read in parallel ([`chunks`]); the scene, and any error, are those of one reading from the start.
 pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
-    let mut reader = Reader {
-        path,
-        tokens: Tokens::new(source),
-        desc: SceneDesc {
-            render: RenderDesc { transfer: Transfer::Linear, ..RenderDesc::default() },
-            ..SceneDesc::default()
-        },
-        material: None,
-        colourless: Vec::new(),
-        view_seen: false,
-    };
-    while let Some(tok) = reader.tokens.next() {
-        reader.entity(tok)?;
-    }
+    chunks::parse(path, source, chunks::CHUNK_BYTES)
+}
+
+/// Reads `source` from start to end on the calling thread.
+fn parse_sequential(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
+    let mut reader = Reader::new(path, source, false);
+    reader.read_all()?;
     reader.finish()
 }
 
@@ -132,12 +128,39 @@ struct Reader<'a> {
     desc: SceneDesc,
     /// The material of the last `f`, if any.
     material: Option<u32>,
+    /// Reading a piece of a file: objects before the piece's first `f` get [`chunks::INHERITED`] (the fill
+    /// in force where the piece starts), not a material of their own.
+    piece: bool,
     /// Indices of lights given without colour, scaled once the number of lights is known.
     colourless: Vec<usize>,
     view_seen: bool,
+    background_seen: bool,
 }
 
 impl<'a> Reader<'a> {
+    fn new(path: &'a Path, source: &'a str, piece: bool) -> Self {
+        Reader {
+            path,
+            tokens: Tokens::new(source),
+            desc: SceneDesc {
+                render: RenderDesc { transfer: Transfer::Linear, ..RenderDesc::default() },
+                ..SceneDesc::default()
+            },
+            material: None,
+            piece,
+            colourless: Vec::new(),
+            view_seen: false,
+            background_seen: false,
+        }
+    }
+
+    fn read_all(&mut self) -> Result<(), SceneError> {
+        while let Some(tok) = self.tokens.next() {
+            self.entity(tok)?;
+        }
+        Ok(())
+    }
+
     fn err(&self, line: usize, message: impl Into<String>) -> SceneError {
         SceneError::at_line(self.path, line, message)
     }
@@ -193,6 +216,7 @@ impl<'a> Reader<'a> {
             "v" => self.view(line),
             "b" => {
                 self.desc.render.background = self.color("background colour r g b")?;
+                self.background_seen = true;
                 Ok(())
             }
             "l" => self.light(),
@@ -295,6 +319,9 @@ impl<'a> Reader<'a> {
 
     /// The current fill; objects before any `f` get bareray's default material.
     fn current_material(&mut self) -> u32 {
+        if self.piece && self.material.is_none() {
+            return chunks::INHERITED;
+        }
         *self.material.get_or_insert_with(|| {
             self.desc.materials.push(Material { ambient: NFF_AMBIENT, ..Material::default() });
             self.desc.materials.len() as u32 - 1
