@@ -225,9 +225,10 @@ fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, E
     for i in 0..refs.len() {
         let r = refs[i];
         let goes_left = left(&r);
-        // refs[store..i] all go right: swapping refs[i] to `store` keeps that, whichever side it goes.
-        refs[i] = refs[store];
-        refs[store] = r;
+        // refs[store..i] all go right: swapping refs[i] to `store` keeps that, whichever side it goes. `swap`
+        // copies whole references: storing `r` by halves made the next item's load of refs[store] wait for
+        // both stores (a failed store-to-load forwarding), the partition's hottest instruction.
+        refs.swap(i, store);
         store += goes_left as usize;
         sides[goes_left as usize].add(&r);
     }
