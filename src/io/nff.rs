@@ -317,7 +317,8 @@ impl<'a> Reader<'a> {
         Ok(())
     }
 
-    /// The current fill; objects before any `f` get bareray's default material.
+    /// The current fill; objects before any `f` get bareray's default material (in a piece of a file,
+    /// [`chunks::INHERITED`] until the piece's first `f`).
     fn current_material(&mut self) -> u32 {
         if self.piece && self.material.is_none() {
             return chunks::INHERITED;

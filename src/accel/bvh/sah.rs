@@ -226,8 +226,9 @@ fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, E
         let r = refs[i];
         let goes_left = left(&r);
         // refs[store..i] all go right: swapping refs[i] to `store` keeps that, whichever side it goes. `swap`
-        // copies whole references: storing `r` by halves made the next item's load of refs[store] wait for
-        // both stores (a failed store-to-load forwarding), the partition's hottest instruction.
+        // moves whole 32-byte references; two half-width stores of `r` followed by the next item's
+        // full-width load of refs[store] can defeat store-to-load forwarding (in `perf annotate` such a store
+        // was the partition's hottest instruction).
         refs.swap(i, store);
         store += goes_left as usize;
         sides[goes_left as usize].add(&r);

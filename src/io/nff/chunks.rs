@@ -155,6 +155,49 @@ mod tests {
         }
     }
 
+    /// Mutants of a scene (words dropped, repeated or inserted, lines indented, joined or cut short, the
+    /// last newline removed) read in pieces as in one pass: the same scene or the same error. A share of
+    /// them must still read, so the joins are exercised and not only the fallback.
+    #[test]
+    fn mutated_scenes_read_as_one_pass() {
+        let inserts =
+            ["v", "l", "f", "s 1 2 3 0.5", "inf", "nan", "1e40", "-1", "#", "p 3", "from 0 0 0", "b 1 1 1"];
+        let mut rng = crate::math::SplitMix64::new(26);
+        let mut pick = move |n: usize| (rng.next_u64() % n as u64) as usize;
+        let (mut read, mut failed) = (0, 0);
+        for _ in 0..300 {
+            let mut lines: Vec<String> = scene(4).lines().map(str::to_owned).collect();
+            for _ in 0..1 + pick(3) {
+                let at = pick(lines.len());
+                let mut words: Vec<String> = lines[at].split(' ').map(str::to_owned).collect();
+                let w = pick(words.len());
+                match pick(6) {
+                    0 => drop(words.remove(w)),
+                    1 => words.insert(w, words[w].clone()),
+                    2 => words.insert(w, inserts[pick(inserts.len())].to_owned()),
+                    3 => words.insert(0, " \t".to_owned()),
+                    4 if at + 1 < lines.len() => words.push(lines.remove(at + 1)),
+                    _ => words.truncate(w),
+                }
+                lines[at] = words.join(" ");
+            }
+            let mut text = lines.join("\n");
+            if pick(2) == 0 {
+                text.push('\n');
+            }
+            let once = sequential(&text).map_err(|e| e.to_string());
+            (read, failed) = if once.is_ok() { (read + 1, failed) } else { (read, failed + 1) };
+            for size in [1, 37, 300] {
+                let read = parse(Path::new("t.nff"), &text, size).map_err(|e| e.to_string());
+                assert!(read == once, "pieces of {size} bytes differ on:\n{text}");
+                // A file that reads in one pass reads in pieces, without the fallback.
+                let joined = read_pieces(Path::new("t.nff"), &pieces(&text, size)).is_some();
+                assert!(joined || once.is_err(), "pieces of {size} bytes fell back on:\n{text}");
+            }
+        }
+        assert!(read >= 30 && failed >= 30, "{read} mutants read and {failed} failed");
+    }
+
     /// Every error is the one-pass reading's, file and line, wherever the pieces are cut.
     #[test]
     fn errors_are_those_of_one_pass() {
