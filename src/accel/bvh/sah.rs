@@ -227,8 +227,8 @@ fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, E
         let goes_left = left(&r);
         // refs[store..i] all go right: swapping refs[i] to `store` keeps that, whichever side it goes. `swap`
         // moves whole 32-byte references; two half-width stores of `r` followed by the next item's
-        // full-width load of refs[store] can defeat store-to-load forwarding (`perf annotate` shows a
-        // partition written that way spending most of its time there).
+        // full-width load of refs[store] can defeat store-to-load forwarding (`perf annotate` of a
+        // partition written that way shows its hottest instruction there).
         refs.swap(i, store);
         store += goes_left as usize;
         sides[goes_left as usize].add(&r);
