@@ -63,7 +63,8 @@ pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 }
 
 /// Parses NFF text; `path` names it in errors. Large files are cut into pieces at entity boundaries and the
-/// pieces read in parallel (the `chunks` module); the scene, and any error, are those of one reading from the start.
+/// pieces read in parallel (the `chunks` module); the scene, and any error, are those of one reading from
+/// the start.
 pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
     chunks::parse(path, source, chunks::CHUNK_BYTES)
 }
