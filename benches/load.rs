@@ -5,24 +5,14 @@
 //! - `build/field_1e5`: a 100 000-sphere contract field compiled: the rendering-space sphere arrays and the
 //!   SAH tree over them.
 
+mod common;
+
 use std::path::Path;
 
 use bareray::compile::Scene;
-use bareray::io::generate::{flake_nff, FieldParams};
+use bareray::io::generate::flake_nff;
 use bareray::io::nff;
-use bareray::scene::desc::{SceneDesc, SphereDesc};
 use criterion::{criterion_group, criterion_main, Criterion, Throughput};
-use glam::DVec3;
-
-fn field(count: u64) -> SceneDesc {
-    let params = FieldParams { count, ..FieldParams::default() };
-    let mut desc = SceneDesc::default();
-    for [x, y, z, r] in params.spheres().expect("valid field") {
-        let center = DVec3::new(x.into(), y.into(), z.into());
-        desc.spheres.push(SphereDesc { center, radius: r.into(), material: 0 });
-    }
-    desc
-}
 
 fn benches(c: &mut Criterion) {
     let text = flake_nff(5).expect("balls 5");
@@ -34,7 +24,7 @@ fn benches(c: &mut Criterion) {
     });
     group.finish();
 
-    let desc = field(100_000);
+    let desc = common::field_desc(100_000);
     let mut group = c.benchmark_group("build");
     group.throughput(Throughput::Elements(desc.spheres.len() as u64));
     group.sample_size(20);

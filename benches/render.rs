@@ -5,14 +5,15 @@
 //! - `shading/K`: a full Whitted render of scenes/whitted.toml at 96×72, one thread (shadow packets,
 //!   masked reflection and refraction packets, per-lane material gathers).
 
+mod common;
+
 use std::path::Path;
 
 use bareray::compile::Scene;
 use bareray::geometry::DeparturePacket;
-use bareray::io::generate::FieldParams;
 use bareray::io::toml;
 use bareray::render::{for_each_packet, render, thread_pool, tiles};
-use bareray::scene::desc::{Aim, CameraDesc, SceneDesc, SphereDesc};
+use bareray::scene::desc::{Aim, CameraDesc};
 use bareray::simd::Lanes;
 use criterion::measurement::WallTime;
 use criterion::{criterion_group, criterion_main, BenchmarkGroup, BenchmarkId, Criterion, Throughput};
@@ -20,12 +21,7 @@ use glam::DVec3;
 use wide::{f32x16, f32x4, f32x8};
 
 fn field_scene() -> Scene {
-    let params = FieldParams { count: 10_000, ..FieldParams::default() };
-    let mut desc = SceneDesc::default();
-    for [x, y, z, r] in params.spheres().expect("valid field") {
-        let center = DVec3::new(x.into(), y.into(), z.into());
-        desc.spheres.push(SphereDesc { center, radius: r.into(), material: 0 });
-    }
+    let mut desc = common::field_desc(10_000);
     desc.camera = CameraDesc {
         eye: DVec3::new(0.0, 0.0, -4.0),
         aim: Aim::LookAt(DVec3::ZERO),
