@@ -39,7 +39,7 @@ pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
 fn parse_in_chunks(path: &Path, source: &str, chunk_bytes: usize) -> Result<SceneDesc, SceneError> {
     let chunks = line_chunks(source, chunk_bytes);
     let counts: Vec<usize> =
-        chunks.par_iter().map(|text| text.lines().filter(|line| is_sphere(line)).count()).collect();
+        chunks.par_iter().map(|text| text.lines().filter(|line| is_sphere(line.trim())).count()).collect();
     // Lines that are not blank or comments are spheres or errors, so with none there is no error to report.
     let total = counts.iter().sum();
     if total == 0 {
@@ -81,18 +81,17 @@ fn line_chunks(source: &str, size: usize) -> Vec<&str> {
     chunks
 }
 
-/// Whether a line holds a sphere (or an error): it is neither blank nor a `#` comment.
-fn is_sphere(line: &str) -> bool {
-    let text = line.trim();
-    !text.is_empty() && !text.starts_with('#')
+/// Whether a trimmed line holds a sphere (or an error): it is neither blank nor a `#` comment.
+fn is_sphere(trimmed: &str) -> bool {
+    !trimmed.is_empty() && !trimmed.starts_with('#')
 }
 
 /// Parses the sphere lines of `text` into `out` (one slot for each, [`is_sphere`]), or returns the first bad
 /// line's number within `text` (from 1) and what is wrong with it.
 fn parse_lines(text: &str, out: &mut [SphereDesc]) -> Result<(), (usize, String)> {
     let mut slots = out.iter_mut();
-    for (i, line) in text.lines().enumerate().filter(|(_, line)| is_sphere(line)) {
-        *slots.next().expect("a slot for each sphere line") = sphere(line.trim()).map_err(|m| (i + 1, m))?;
+    for (i, line) in text.lines().map(str::trim).enumerate().filter(|(_, line)| is_sphere(line)) {
+        *slots.next().expect("a slot for each sphere line") = sphere(line).map_err(|m| (i + 1, m))?;
     }
     Ok(())
 }
