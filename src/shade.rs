@@ -13,7 +13,7 @@ use std::marker::PhantomData;
 use std::ops::AddAssign;
 
 use crate::compile::Scene;
-use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
+use crate::geometry::{at_eye, DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
 use crate::scene::desc::{Falloff, Material, Shade};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -207,8 +207,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
 
     /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
     /// of one plain material (most packets), else lane by lane with the scalar code. `camera`: the rays are
-    /// camera rays (from the eye, departing from nothing), whose sphere hits take their side from the eye
-    /// term.
+    /// camera rays (departing from nothing); those that start at the eye take their sphere or ellipsoid
+    /// hit's side from the eye term.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask, camera: bool) -> Surface<F> {
         self.sphere_surface(rays, hit, found, camera)
             .unwrap_or_else(|| self.surface_by_lane(rays, hit, found, camera))
@@ -244,11 +244,12 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let center = V3::new(gather(&spheres.cx), gather(&spheres.cy), gather(&spheres.cz));
         let zero = V3::all(F::splat_f32(0.0));
         let point = V3::select(found, rays.ray().at(hit.t), zero);
-        // `Geometry::eye_inside` in lanes: known where the eye term is not zero (the eye not on the surface).
+        // `Geometry::eye_inside` in lanes, for camera rays from the eye: known where the eye term is not zero
+        // (the eye not on the surface).
         let c_eye = gather(&spheres.c_eye);
         let zero_f = F::splat_f32(0.0);
-        let from_eye =
-            F::mask_from_bits(if camera { bits } else { 0 }) & (c_eye.lt(zero_f) | c_eye.gt(zero_f));
+        let camera_lanes = if camera { found & at_eye(rays.origin) } else { F::mask_from_bits(0) };
+        let from_eye = camera_lanes & (c_eye.lt(zero_f) | c_eye.gt(zero_f));
         let eye_inside = c_eye.lt(zero_f);
         let outward = V3::select(found, (point - center).normalize(), zero);
         let (normal, inside) = facing(outward, rays.dir, from_eye, eye_inside);
@@ -284,7 +285,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             let (ray, _, _) = rays.lane(i);
             let geometry = &self.scene.geometry;
             let sp = geometry.surface(&ray, hit.t.lane(i), hit.prim.lane(i));
-            if let (true, Some(side)) = (camera, geometry.eye_inside(hit.prim.lane(i))) {
+            if let (true, Some(side)) = (camera && at_eye(ray.origin), geometry.eye_inside(hit.prim.lane(i)))
+            {
                 known |= 1 << i;
                 eye_inside |= u32::from(side) << i;
             }
