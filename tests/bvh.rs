@@ -494,27 +494,33 @@ fn check_kind<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
     }
 }
 
+/// `n` random ellipsoids and a floor plane beside three spheres (and their two duplicates).
+fn shape_field(n: usize, seed: u64) -> SceneDesc {
+    use bareray::geometry::ShapeKind;
+    use bareray::scene::desc::ShapeDesc;
+    use glam::{DAffine3, DQuat};
+    let mut desc = field(3, seed);
+    let mut rng = Rng::new(seed);
+    for _ in 0..n {
+        let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        let size = if n < 10 { 0.6 } else { 0.2 };
+        let scale = DVec3::new(rng.range(0.01, size), rng.range(0.01, size), rng.range(0.01, size));
+        let turn = DQuat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 3.0), rng.range(0.0, 3.0), 0.0);
+        let world_from_object = DAffine3::from_scale_rotation_translation(scale, turn, c);
+        desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
+    }
+    let floor = DAffine3::from_translation(DVec3::new(0.0, -1.3, 0.0))
+        * DAffine3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
+    desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: floor, material: 0 });
+    desc
+}
+
 /// Bounded shapes (ellipsoids) live in a BVH, planes beside it: closest hits and occlusion equal brute force
 /// at every width.
 #[test]
 fn shape_bvh_equals_brute_force_at_every_width() {
-    use bareray::geometry::ShapeKind;
-    use bareray::scene::desc::ShapeDesc;
-    use glam::{DAffine3, DQuat};
     for (n, seed) in [(5, 21), (200, 22)] {
-        let mut desc = field(3, seed);
-        let mut rng = Rng::new(seed);
-        for _ in 0..n {
-            let c = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
-            let size = if n < 10 { 0.6 } else { 0.2 };
-            let scale = DVec3::new(rng.range(0.01, size), rng.range(0.01, size), rng.range(0.01, size));
-            let turn = DQuat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 3.0), rng.range(0.0, 3.0), 0.0);
-            let world_from_object = DAffine3::from_scale_rotation_translation(scale, turn, c);
-            desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
-        }
-        let floor = DAffine3::from_translation(DVec3::new(0.0, -1.3, 0.0))
-            * DAffine3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
-        desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: floor, material: 0 });
+        let desc = shape_field(n, seed);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
         assert!(bvh.geometry.shape_bvh.is_some() && brute.geometry.shape_bvh.is_none());
@@ -531,29 +537,29 @@ fn shape_bvh_equals_brute_force_at_every_width() {
     }
 }
 
+/// `n` random open cones and cylinders beside three spheres (and their two duplicates).
+fn cone_field(n: usize, seed: u64) -> SceneDesc {
+    use bareray::scene::desc::ConeDesc;
+    let mut desc = field(3, seed);
+    let mut rng = Rng::new(seed);
+    for k in 0..n {
+        let base = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
+        let size = if n < 10 { 0.8 } else { 0.25 };
+        let axis = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * size;
+        let r0 = rng.range(0.01, 0.3) * size;
+        // Cylinders, pointed cones and truncated ones.
+        let r1 = [r0, 0.0, rng.range(0.01, 0.3) * size][k % 3];
+        desc.cones.push(ConeDesc { base, base_radius: r0, apex: base + axis, apex_radius: r1, material: 0 });
+    }
+    desc
+}
+
 /// Open cones and cylinders live in their own BVH: closest hits and occlusion equal brute force at every
 /// width, camera rays and rays leaving a cone (which may meet it again).
 #[test]
 fn cone_bvh_equals_brute_force_at_every_width() {
-    use bareray::scene::desc::ConeDesc;
     for (n, seed) in [(4, 31), (300, 32)] {
-        let mut desc = field(3, seed);
-        let mut rng = Rng::new(seed);
-        for k in 0..n {
-            let base = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0));
-            let size = if n < 10 { 0.8 } else { 0.25 };
-            let axis = DVec3::new(rng.range(-1.0, 1.0), rng.range(-1.0, 1.0), rng.range(-1.0, 1.0)) * size;
-            let r0 = rng.range(0.01, 0.3) * size;
-            // Cylinders, pointed cones and truncated ones.
-            let r1 = [r0, 0.0, rng.range(0.01, 0.3) * size][k % 3];
-            desc.cones.push(ConeDesc {
-                base,
-                base_radius: r0,
-                apex: base + axis,
-                apex_radius: r1,
-                material: 0,
-            });
-        }
+        let desc = cone_field(n, seed);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
         assert!(bvh.geometry.cone_bvh.is_some() && brute.geometry.cone_bvh.is_none());
@@ -608,4 +614,77 @@ fn rays_leaving_a_cone_meet_it_again() {
         let out = g.intersect(&up, Departure { prim: flare_id, inward: true }, f32::INFINITY);
         assert_eq!(out.prim, u32::MAX, "{accel:?}: out through the open end");
     }
+}
+
+/// The scalar walk (`--lanes scalar`: each BVH's binary tree, one box and one primitive at a time) gives brute
+/// force's closest hit (t bits and scene-file id) and occlusion, for every kind: spheres (from one leaf to
+/// 20 000, with exact duplicates, and a pile of coincident copies, whose tree is a fallback), polygons'
+/// triangles, ellipsoids beside a plane, and cones; camera rays, rays from inside spheres and rays leaving
+/// a polygon, shape or cone (`check_kind`'s secondary rays).
+#[test]
+fn scalar_walk_equals_brute_force_for_every_kind() {
+    use bareray::compile::CompileOptions;
+    use bareray::scene::desc::{Falloff, LightDesc};
+    let scalar = |desc: &SceneDesc| {
+        let options = CompileOptions { accel: Accel::Bvh, scalar: true, ..CompileOptions::default() };
+        let scene = Scene::compile_with_options(desc, options).unwrap();
+        assert!(scene.geometry.bvhs().count() > 0);
+        for bvh in scene.geometry.bvhs() {
+            assert!(bvh.scalar.is_some() && bvh.scalar_walk, "every BVH keeps its binary tree and walks it");
+        }
+        scene
+    };
+    let mut pile = field(300, 33);
+    let copy = SphereDesc { center: DVec3::new(0.1, -0.2, 0.3), radius: 0.05, material: 0 };
+    pile.spheres.extend(std::iter::repeat_n(copy, 1500));
+    let spheres =
+        [(field(1, 1), 1), (field(17, 3), 3), (field(2000, 5), 5), (field(20_000, 15), 15), (pile, 33)];
+    for (mut desc, seed) in spheres {
+        // With a light the scene also has the 8-wide single-ray tree: the scalar walk is chosen over it.
+        let light =
+            LightDesc { position: DVec3::new(0.0, 3.0, -3.0), color: Rgb::all(1.0), falloff: Falloff::None };
+        desc.lights.push(light);
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let rays = rays(&desc, 3000, seed + 100);
+        check_packets::<f32>(&scalar(&desc), &brute, &rays, 1);
+    }
+    for desc in [polygon_field(40, 12), polygon_field(1500, 13), shape_field(200, 22), cone_field(300, 32)] {
+        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        check_kind::<f32>(&scalar(&desc), &brute, &rays(&desc, 3000, 7));
+    }
+}
+
+/// The scalar walk visits boxes two at a time and the single-ray SIMD walk a wide node's at once: the work
+/// counters tell them apart, so a scene compiled for the scalar walk really takes it, and
+/// `Geometry::set_scalar_walk` switches between them.
+#[test]
+fn scalar_walk_is_taken_and_can_be_switched_off() {
+    use bareray::compile::CompileOptions;
+    let desc = field(2000, 5);
+    let options = CompileOptions { accel: Accel::Bvh, scalar: true, ..CompileOptions::default() };
+    let mut scene = Scene::compile_with_options(&desc, options).unwrap();
+    let rays = rays(&desc, 500, 105);
+    let trace = |scene: &Scene| {
+        bareray::accel::set_counting(true);
+        bareray::accel::take_work();
+        for ray in &rays {
+            scene.geometry.intersect(ray, Departure::CAMERA, f32::INFINITY);
+        }
+        let work = bareray::accel::take_work();
+        bareray::accel::set_counting(false);
+        work
+    };
+    let scalar = trace(&scene);
+    assert!(scene.geometry.set_scalar_walk(false));
+    let simd = trace(&scene);
+    // Two boxes per scalar visit; 4 per 4-wide node visit (no 8-wide tree without lights).
+    assert_eq!(scalar.box_tests % 2, 0);
+    assert_eq!(simd.box_tests % 4, 0);
+    assert_ne!(scalar, simd);
+    assert!(scene.geometry.set_scalar_walk(true));
+    assert_eq!(trace(&scene), scalar);
+    // Without the binary trees the switch cannot turn the scalar walk on.
+    let mut plain = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    assert!(!plain.geometry.set_scalar_walk(true));
+    assert_eq!(trace(&plain), simd);
 }

@@ -145,24 +145,29 @@ fn half_pixel_pattern_agrees_with_a_fine_grid() {
     assert!(err(&half) < 0.5 * err(&one), "half-pixel {} vs one sample {}", err(&half), err(&one));
 }
 
-/// Every scene in scenes/ and scenes/stress/ renders to the same pixels, bit for bit, at 1, 4, 8 and 16
-/// lanes and on 1 and 2 threads: the packet path and the scalar reference path are one computation. The ray
-/// counts agree too (secondary packets with few live lanes are handed to the scalar tracer, whose counts must
-/// not be lost).
+/// Every scene in scenes/ and scenes/stress/ renders to the same pixels, bit for bit, on the scalar path
+/// (binary BVHs, one box and one primitive at a time) and at 1, 4, 8 and 16 lanes, on 1 and 2 threads: the
+/// packet paths, single-ray SIMD and the scalar path are one computation. The ray counts agree too
+/// (secondary packets with few live lanes are handed to the K = 1 tracer, whose counts must not be lost).
+/// The scene is compiled once with the scalar trees; the scalar walk is switched off after the reference.
 #[test]
 fn every_scene_is_identical_at_every_width_and_thread_count() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
     let mut scenes = scene_files(&root);
     scenes.extend(scene_files(&root.join("stress")));
     scenes.sort();
-    let mut checked = 0;
+    let (mut checked, mut scalar_trees) = (0, 0);
     for path in &scenes {
         let mut desc = bareray::io::load(path).unwrap();
         desc.camera.width = 96;
         desc.camera.height = 64;
-        let scene = Scene::compile(&desc).unwrap();
-        let reference = render_lanes(&scene, 1, &thread_pool(Some(1)).unwrap(), &ProgressBar::hidden());
-        for (lanes, threads) in [(1, 2), (4, 1), (4, 2), (8, 1), (8, 2), (16, 1), (16, 2)] {
+        let options = bareray::compile::CompileOptions { scalar: true, ..Default::default() };
+        let mut scene = Scene::compile_with_options(&desc, options).unwrap();
+        scalar_trees += scene.geometry.bvhs().filter(|b| b.scalar.is_some() && b.scalar_walk).count();
+        // The scalar path: K = 1 on the binary trees.
+        let reference = render_lanes(&scene, 1, &thread_pool(Some(2)).unwrap(), &ProgressBar::hidden());
+        assert!(scene.geometry.set_scalar_walk(false));
+        for (lanes, threads) in [(1, 1), (1, 2), (4, 1), (4, 2), (8, 1), (8, 2), (16, 1), (16, 2)] {
             let rendered =
                 render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
             assert_eq!(
@@ -180,6 +185,7 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
         checked += 1;
     }
     assert!(checked >= 18, "toml, nff and xyzr scenes, and the stress scenes: {checked}");
+    assert!(scalar_trees >= 10, "the scalar path walked only {scalar_trees} BVHs");
 }
 
 /// The per-pixel patterns (jittered strata, rotated R2) give the same bits at every width and thread count:

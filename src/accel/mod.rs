@@ -414,6 +414,21 @@ impl Geometry {
             .flatten()
     }
 
+    /// Sets whether single rays (K = 1: [`Geometry::intersect`], [`Geometry::occluded`] and the `_k` queries
+    /// at `f32`) walk each BVH's binary tree one box and one primitive at a time (the scalar path), or the
+    /// wide nodes with SIMD over a node's children and a leaf's spheres (single-ray SIMD). Both give the same
+    /// bits. Turning it on needs the trees, kept by compiling with
+    /// [`crate::compile::CompileOptions::scalar`] (which also turns it on); returns whether every BVH walks
+    /// as asked.
+    pub fn set_scalar_walk(&mut self, on: bool) -> bool {
+        let mut all = true;
+        for bvh in self.bvhs_mut() {
+            bvh.scalar_walk = on;
+            all &= !on || bvh.scalar.is_some();
+        }
+        all
+    }
+
     /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's
     /// while to compute one.
     pub fn culls_by_pyramid(&self) -> bool {

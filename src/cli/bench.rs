@@ -11,7 +11,7 @@ use serde::{Deserialize, Serialize};
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
-use super::values::{AccelArg, BvhPresetArg};
+use super::values::{AccelArg, BvhPresetArg, LanesArg};
 use crate::compile::{Accel, CompileOptions, Scene};
 use crate::io::toml;
 use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
@@ -26,14 +26,17 @@ version; the header notes when this CPU has AVX-512 that the build leaves unused
 build; `cargo build-native` builds for this CPU).\n\n\
 Examples:\n  bareray gen field --count 1000000 -o f.xyzr\n  \
 bareray bench f.xyzr --primary-only --eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080\n  \
-bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --json > old.json\n  \
-bareray bench scenes/whitted.toml --lanes 1,16 --threads 1,2 --compare old.json")]
+bareray bench scenes/whitted.toml --lanes scalar,1,16 --threads 1,2 --json > old.json\n  \
+bareray bench scenes/whitted.toml --lanes scalar,1,16 --threads 1,2 --compare old.json")]
 pub struct BenchArgs {
     /// Scene file (.toml, .nff or .xyzr).
     pub scene: PathBuf,
-    /// Packet widths to measure, a comma list of 1, 4, 8, 16 (1 is the scalar reference path).
-    #[arg(long, value_delimiter = ',', default_values_t = vec![1, 4, 8, 16], value_parser = parse_lanes)]
-    pub lanes: Vec<usize>,
+    /// Packet widths to measure, a comma list of `scalar` (one ray against one box and one primitive at a
+    /// time, over binary BVHs), 1 (single-ray SIMD), 4, 8, 16. Each row is relative to the first thread
+    /// count's `scalar` row when it is measured, else to its 1-lane row. `scalar` keeps each BVH's binary
+    /// tree, which the reported build time and bytes per sphere then include.
+    #[arg(long, value_delimiter = ',', default_values = ["1", "4", "8", "16"], value_parser = parse_lanes)]
+    pub lanes: Vec<LanesArg>,
     /// Thread counts to measure, a comma list, each from 1 to 1024 [default: 1 and all cores (1 alone on a
     /// 1-core machine)].
     #[arg(long, value_delimiter = ',', value_parser = parse_threads)]
@@ -77,6 +80,7 @@ pub struct BenchArgs {
     pub json: bool,
     /// A previous `--json` output (one object per line): print each row's old and new Mrays/s and their
     /// ratio, rows matched by (lanes, threads). With --json the objects get a `compare` field instead.
+    /// In JSON, `lanes` is a packet width's number or the string `"scalar"`.
     #[arg(long, value_name = "OLD.json")]
     pub compare: Option<PathBuf>,
     #[command(flatten)]
@@ -85,7 +89,7 @@ pub struct BenchArgs {
 
 /// One measured setting.
 struct Row {
-    lanes: usize,
+    lanes: LanesArg,
     threads: usize,
     rays: u64,
     /// Median, minimum and maximum of the timed runs.
@@ -188,7 +192,7 @@ struct Record<'a> {
     tracer: &'static str,
     scene: String,
     primary_only: bool,
-    lanes: usize,
+    lanes: LanesArg,
     threads: usize,
     rays: u64,
     /// Median seconds.
@@ -228,7 +232,7 @@ struct CompareField {
 /// The fields of an old `--json` line that `--compare` reads (the others are ignored).
 #[derive(Deserialize)]
 struct OldRow {
-    lanes: usize,
+    lanes: LanesArg,
     threads: usize,
     mrays_per_s: f64,
     scene: Option<String>,
@@ -243,7 +247,7 @@ struct OldRow {
 /// appended to one file), and the first row, for its settings.
 struct Old {
     path: PathBuf,
-    rows: BTreeMap<(usize, usize), Vec<f64>>,
+    rows: BTreeMap<(LanesArg, usize), Vec<f64>>,
     first: OldRow,
 }
 
@@ -251,7 +255,7 @@ impl Old {
     fn read(path: &Path) -> Result<Old> {
         let text = std::fs::read_to_string(path)
             .with_context(|| format!("{}: cannot read the --compare file", path.display()))?;
-        let mut rows: BTreeMap<(usize, usize), Vec<f64>> = BTreeMap::new();
+        let mut rows: BTreeMap<(LanesArg, usize), Vec<f64>> = BTreeMap::new();
         let mut first = None;
         for (i, line) in text.lines().enumerate() {
             if line.trim().is_empty() {
@@ -267,7 +271,7 @@ impl Old {
     }
 
     /// The old Mrays/s of a setting (the median when the file holds several) and how many rows it had.
-    fn mrays(&self, lanes: usize, threads: usize) -> Option<(f64, usize)> {
+    fn mrays(&self, lanes: LanesArg, threads: usize) -> Option<(f64, usize)> {
         let mut v = self.rows.get(&(lanes, threads))?.clone();
         v.sort_by(f64::total_cmp);
         Some((v[v.len() / 2], v.len()))
@@ -363,11 +367,12 @@ pub fn run(args: BenchArgs) -> Result<()> {
         preset: args.bvh_preset.into(),
         frustum_culling: args.frustum_culling,
         single_ray_lanes: args.single_ray_lanes.unwrap_or(defaults.single_ray_lanes),
+        scalar: args.lanes.contains(&LanesArg::Scalar),
     };
-    let scene = build_pool.install(|| Scene::compile_owned(desc, options))?;
+    let mut scene = build_pool.install(|| Scene::compile_owned(desc, options))?;
     drop(build_pool);
     let compile_s = clock.elapsed().as_secs_f64();
-    let g = &scene.geometry;
+    let (primitives, spheres) = (scene.geometry.len(), scene.geometry.spheres.len());
     let scene_name = args.scene.display().to_string();
     let (width, height) = (scene.camera.width, scene.camera.height);
     if let Some(old) = &old {
@@ -385,13 +390,15 @@ pub fn run(args: BenchArgs) -> Result<()> {
         }
     }
     let mut out = std::io::stdout().lock();
+    // The row every other is compared with: scalar when it is measured, else one lane.
+    let base = if args.lanes.contains(&LanesArg::Scalar) { LanesArg::Scalar } else { LanesArg::Packet(1) };
     if !args.json {
         writeln!(
             out,
             "{scene_name}: {} primitives ({} spheres), {width}x{height}; parse {parse_s:.3} s, compile \
              {compile_s:.3} s (BVH build {:.3} s, {:.1} bytes/sphere); {}",
-            g.len(),
-            g.spheres.len(),
+            primitives,
+            spheres,
             scene.build.seconds,
             scene.bytes_per_sphere(),
             if args.primary_only {
@@ -416,17 +423,20 @@ pub fn run(args: BenchArgs) -> Result<()> {
         writeln!(out, "{} timed runs per row after one warm-up; Mrays/s from the median", args.reps)?;
         writeln!(
             out,
-            "lanes threads        rays      min s   median s      max s    Mrays/s  vs 1 lane  checksum"
+            " lanes threads        rays      min s   median s      max s    Mrays/s {:>10}  checksum",
+            if base.is_scalar() { "vs scalar" } else { "vs 1 lane" }
         )?;
     }
-    let mut scalar: Option<f64> = None;
+    let mut base_mrays: Option<f64> = None;
     let mut compared = Vec::new();
     for &t in &threads {
         for &lanes in &args.lanes {
+            // The scalar row walks the binary trees, every other row the wide nodes.
+            scene.geometry.set_scalar_walk(lanes.is_scalar());
             let row = measure(&scene, &args, lanes, t)?;
             let mrays = row.rays as f64 / row.seconds / 1e6;
-            if lanes == 1 && t == threads[0] {
-                scalar = Some(mrays);
+            if lanes == base && t == threads[0] {
+                base_mrays = Some(mrays);
             }
             let old_mrays = old.as_ref().and_then(|o| o.mrays(lanes, t));
             compared.push((lanes, t, mrays, old_mrays));
@@ -447,7 +457,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     spp,
                     pattern: pattern.clone(),
                     max_depth,
-                    spheres: g.spheres.len(),
+                    spheres,
                     build_s: scene.build.seconds,
                     width,
                     height,
@@ -462,10 +472,10 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 };
                 writeln!(out, "{}", serde_json::to_string(&record)?)?;
             } else {
-                let ratio = scalar.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
+                let ratio = base_mrays.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
                 writeln!(
                     out,
-                    "{:5} {:7} {:11} {:10.4} {:10.4} {:10.4} {:10.2} {:>10}  {:016x}",
+                    "{:>6} {:7} {:11} {:10.4} {:10.4} {:10.4} {:10.2} {:>10}  {:016x}",
                     row.lanes,
                     row.threads,
                     row.rays,
@@ -496,16 +506,16 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 "\ncompared with {} (Mrays/s; old: the median when it holds several runs):",
                 old.path.display()
             )?;
-            writeln!(out, "lanes threads        old        new   new/old")?;
+            writeln!(out, " lanes threads        old        new   new/old")?;
             for (lanes, t, new, old_mrays) in compared {
                 match old_mrays {
                     Some((m, n)) => writeln!(
                         out,
-                        "{lanes:5} {t:7} {m:10.2} {new:10.2} {:>8.3}x{}",
+                        "{lanes:>6} {t:7} {m:10.2} {new:10.2} {:>8.3}x{}",
                         new / m,
                         if n > 1 { format!("  (old: median of {n})") } else { String::new() }
                     )?,
-                    None => writeln!(out, "{lanes:5} {t:7} {:>10} {new:10.2} {:>9}  no old row", "-", "-")?,
+                    None => writeln!(out, "{lanes:>6} {t:7} {:>10} {new:10.2} {:>9}  no old row", "-", "-")?,
                 }
             }
             if !unmatched.is_empty() {
@@ -528,7 +538,7 @@ fn default_threads(cores: usize) -> Vec<usize> {
 /// Minimum, median and maximum of `reps` timed runs after one warm-up. The checksum is taken from the
 /// warm-up and from the last run, which must agree (every path is deterministic); the runs between skip
 /// it, since hashing a frame byte by byte costs about as long as tracing a small field's.
-fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Result<Row> {
+fn measure(scene: &Scene, args: &BenchArgs, lanes: LanesArg, threads: usize) -> Result<Row> {
     let mut times = Vec::with_capacity(args.reps as usize);
     let (mut rays, mut checksum) = (0, None);
     // One thread pool for every repetition, and for primary rays one frame, as the peer harnesses do.
@@ -537,17 +547,17 @@ fn measure(scene: &Scene, args: &BenchArgs, lanes: usize, threads: usize) -> Res
     for rep in 0..=args.reps {
         let hashed = rep == 0 || rep == args.reps;
         let (seconds, sum) = if let Some(hits) = &mut frame {
-            trace_primary_lanes(scene, lanes, &pool, hits);
+            trace_primary_lanes(scene, lanes.k(), &pool, hits);
             rays = hits.t.len() as u64;
             (hits.seconds, hashed.then(|| hits.checksum(scene)))
         } else {
-            let r = render_lanes(scene, lanes, &pool, &());
+            let r = render_lanes(scene, lanes.k(), &pool, &());
             rays = r.counts.total();
             (r.seconds, hashed.then(|| image_checksum(&r.image)))
         };
         match (checksum, sum) {
             (Some(first), Some(last)) if first != last => anyhow::bail!(
-                "{lanes} lanes, {threads} threads: the last run's checksum {last:016x} differs from the \
+                "lanes {lanes}, {threads} threads: the last run's checksum {last:016x} differs from the \
                  warm-up's {first:016x}"
             ),
             (None, sum) => checksum = sum,

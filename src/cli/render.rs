@@ -9,13 +9,13 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::camera_args::CameraArgs;
-use super::values::{BvhPresetArg, TransferArg};
+use super::values::{BvhPresetArg, LanesArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::compile::{CompileOptions, Scene};
 use crate::io::toml;
 use crate::math::Rgb;
 use crate::output::{BitDepth, Format, WriteOptions};
-use crate::render::{Traced, Window, LANE_CHOICES, TILE};
+use crate::render::{Traced, Window, TILE};
 use crate::scene::desc::{Pattern, PostFilter};
 use crate::scene::SceneDesc;
 use crate::still::{self, Job};
@@ -123,10 +123,12 @@ pub struct RenderArgs {
     /// Print a scene summary, rays by kind and the time split (parse, build, render and write).
     #[arg(long)]
     pub stats: bool,
-    /// Rays per packet: 1 (the scalar reference path), 4, 8 or 16 (the default: fastest on every scene in
-    /// scenes/ but the refraction-heavy whitted.toml, docs/perf-log/2026-11.md). The image is identical at every width.
-    #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
-    pub lanes: usize,
+    /// Rays per packet: 1 (single-ray SIMD: one ray against a BVH node's children, and a leaf's spheres, at
+    /// once), 4, 8 or 16 (the default: fastest on every scene in scenes/ but the refraction-heavy whitted.toml,
+    /// docs/perf-log/2026-11.md); or `scalar`: one ray against one box and one primitive at a time, over
+    /// binary BVHs. The image is identical at every width and on the scalar path.
+    #[arg(long, default_value = "16", value_parser = parse_lanes)]
+    pub lanes: LanesArg,
     /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").
     #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
     pub bvh_preset: BvhPresetArg,
@@ -252,14 +254,18 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
 
     // Build: the scene compiled for rendering, the BVH included (`scene.build.seconds` is the BVH's part).
     let clock = Instant::now();
-    let options = CompileOptions { preset: args.bvh_preset.into(), ..CompileOptions::default() };
+    let options = CompileOptions {
+        preset: args.bvh_preset.into(),
+        scalar: args.lanes.is_scalar(),
+        ..CompileOptions::default()
+    };
     let scene = pool.install(|| Scene::compile_owned(desc, options)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     let job = Job {
         write: write_options(args, &scene, scene_name),
         window,
-        lanes: args.lanes,
+        lanes: args.lanes.k(),
         aov: args.aov.as_ref().map(|which| (which.0.clone(), aov::aov_path(&output))),
         resume: settings,
         ..Job::whole(&scene, &output, WriteOptions::default())?
@@ -606,13 +612,7 @@ pub fn parse_threads(s: &str) -> Result<usize, String> {
     }
 }
 
-/// Parses a packet width.
-pub fn parse_lanes(s: &str) -> Result<usize, String> {
-    match s.trim().parse::<usize>() {
-        Ok(k) if LANE_CHOICES.contains(&k) => Ok(k),
-        _ => Err(format!("lanes must be one of 1, 4, 8, 16, got `{s}`")),
-    }
-}
+pub use super::values::parse_lanes;
 
 fn stem(path: &Path) -> String {
     path.file_stem().map_or_else(|| "out".to_owned(), |s| s.to_string_lossy().into_owned())

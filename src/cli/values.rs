@@ -4,6 +4,77 @@
 use crate::compile::{Accel, BvhPreset};
 use crate::scene::desc::{Filter, FilterKind, Pattern, Shade, Transfer};
 
+/// `--lanes`: the scalar path, or a packet width.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, PartialOrd, Ord, Hash)]
+pub enum LanesArg {
+    /// `scalar`: one ray against one box and one primitive at a time, over each BVH's binary tree (the scene
+    /// is compiled with [`crate::compile::CompileOptions::scalar`] and traced at K = 1).
+    Scalar,
+    /// Packets of this many rays: 1 (single-ray SIMD: one ray against a wide node's children, and a leaf's
+    /// spheres, at once), 4, 8 or 16.
+    Packet(usize),
+}
+
+impl LanesArg {
+    /// The packet width the renderer runs at: 1 for the scalar path.
+    pub fn k(self) -> usize {
+        match self {
+            LanesArg::Scalar => 1,
+            LanesArg::Packet(k) => k,
+        }
+    }
+
+    /// Whether this is the scalar path.
+    pub fn is_scalar(self) -> bool {
+        self == LanesArg::Scalar
+    }
+}
+
+impl std::fmt::Display for LanesArg {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            LanesArg::Scalar => f.pad("scalar"),
+            LanesArg::Packet(k) => f.pad(&k.to_string()),
+        }
+    }
+}
+
+/// In JSON a packet width is its number and the scalar path the string `"scalar"`.
+impl serde::Serialize for LanesArg {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        match self {
+            LanesArg::Scalar => s.serialize_str("scalar"),
+            LanesArg::Packet(k) => s.serialize_u64(*k as u64),
+        }
+    }
+}
+
+impl<'de> serde::Deserialize<'de> for LanesArg {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        #[derive(serde::Deserialize)]
+        #[serde(untagged)]
+        enum Json {
+            Width(usize),
+            Name(String),
+        }
+        match Json::deserialize(d)? {
+            Json::Width(k) => Ok(LanesArg::Packet(k)),
+            Json::Name(name) => parse_lanes(&name).map_err(serde::de::Error::custom),
+        }
+    }
+}
+
+/// Parses `--lanes`: `scalar`, or a packet width of [`crate::render::LANE_CHOICES`].
+pub fn parse_lanes(s: &str) -> Result<LanesArg, String> {
+    match s.trim() {
+        "scalar" => Ok(LanesArg::Scalar),
+        k => match k.parse::<usize>() {
+            Ok(k) if crate::render::LANE_CHOICES.contains(&k) => Ok(LanesArg::Packet(k)),
+            _ => Err(format!("lanes must be scalar, 1, 4, 8 or 16, got `{s}`")),
+        },
+    }
+}
+
 /// `--transfer`: [`Transfer`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum TransferArg {
@@ -245,6 +316,23 @@ mod tests {
         assert!(parse_shade("ao:2,-1").unwrap_err().contains("DISTANCE is a length above 0"));
         assert!(parse_shade("toon").unwrap_err().contains("unknown shading `toon`"));
         assert_eq!(shade_name(parse_shade("ao:8,1.5").unwrap()), "ao:8,1.5");
+    }
+
+    #[test]
+    fn lanes_parse_and_round_trip_through_json() {
+        assert_eq!(parse_lanes("scalar"), Ok(LanesArg::Scalar));
+        assert_eq!(parse_lanes(" 8 "), Ok(LanesArg::Packet(8)));
+        for bad in ["0", "2", "32", "Scalar", "", "x"] {
+            assert!(parse_lanes(bad).unwrap_err().contains("scalar, 1, 4, 8 or 16"), "{bad}");
+        }
+        for lanes in [LanesArg::Scalar, LanesArg::Packet(1), LanesArg::Packet(16)] {
+            let json = serde_json::to_string(&lanes).unwrap();
+            assert_eq!(serde_json::from_str::<LanesArg>(&json).unwrap(), lanes, "{json}");
+        }
+        assert_eq!(serde_json::to_string(&LanesArg::Scalar).unwrap(), "\"scalar\"");
+        assert_eq!(serde_json::to_string(&LanesArg::Packet(4)).unwrap(), "4");
+        assert_eq!((LanesArg::Scalar.k(), LanesArg::Packet(8).k()), (1, 8));
+        assert_eq!(format!("{:>7}|{}", LanesArg::Scalar, LanesArg::Packet(4)), " scalar|4");
     }
 
     use clap::ValueEnum;

@@ -70,6 +70,10 @@ pub struct CompileOptions {
     /// Subtrees entered by at most this many live lanes are walked one ray at a time
     /// ([`crate::accel::bvh::SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
     pub single_ray_lanes: u32,
+    /// Keep each BVH's binary tree and have single rays (K = 1) walk it one box and one primitive at a time:
+    /// the scalar path (`--lanes scalar`, [`crate::accel::Geometry::set_scalar_walk`]). Off by default, so
+    /// other renders pay nothing for it.
+    pub scalar: bool,
 }
 
 impl Default for CompileOptions {
@@ -79,6 +83,7 @@ impl Default for CompileOptions {
             preset: BvhPreset::default(),
             frustum_culling: true,
             single_ray_lanes: SINGLE_RAY_MAX_LANES,
+            scalar: false,
         }
     }
 }
@@ -212,7 +217,7 @@ impl Scene {
 
     /// Everything but the BVH: the scene without one, and the build it needs, if any.
     fn assemble(desc: &SceneDesc, options: CompileOptions) -> Result<(Scene, BvhJob), CameraError> {
-        let CompileOptions { accel, preset, frustum_culling, single_ray_lanes } = options;
+        let CompileOptions { accel, preset, frustum_culling, single_ray_lanes, scalar } = options;
         let origin = desc.camera.eye;
         let mut camera_f64 = Camera::new(&desc.camera)?;
         camera_f64.eye = V3::all(0.0);
@@ -271,6 +276,7 @@ impl Scene {
                 single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
                     || features::bounces(desc.render.max_depth, &materials)
                     || matches!(desc.render.shade, Shade::Ao(_)),
+                scalar_tree: scalar,
                 frustum_culling,
                 single_ray_lanes,
             },

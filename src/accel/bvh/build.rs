@@ -1,6 +1,6 @@
 //! Building a tree: a binary tree over the item boxes, bareray's binned SAH or obvhs's PLOC (with the
 //! fallbacks for piles of equal boxes and for trees too deep to walk), collapsed into the 4-wide packet nodes
-//! and, when asked, the 8-wide single-ray nodes.
+//! and, when asked, the 8-wide single-ray nodes; the binary tree itself is kept for the scalar walk when asked.
 
 use std::sync::OnceLock;
 use std::time::Instant;
@@ -12,6 +12,7 @@ use rayon::prelude::*;
 
 use super::collapse::collapse;
 use super::node::Node;
+use super::scalar::{pair_tree, PairNode};
 use super::slab::STACK;
 use super::wide_node::WideNode;
 use super::{binary, piles, sah, BuildStats, Bvh};
@@ -58,6 +59,9 @@ pub struct BuildOptions {
     pub builder: Builder,
     /// Whether to build the 8-wide single-ray tree too (scenes that trace secondary rays).
     pub single_ray_tree: bool,
+    /// Whether to keep the binary tree for the scalar walk ([`Bvh::scalar`]) and have single rays walk it
+    /// ([`Bvh::scalar_walk`]).
+    pub scalar_tree: bool,
     /// [`Bvh::frustum_culling`].
     pub frustum_culling: bool,
     /// [`Bvh::single_ray_lanes`].
@@ -73,7 +77,8 @@ pub fn build<T: Send>(
     options: BuildOptions,
     permute: impl Fn(&[u32]) -> T + Sync,
 ) -> (Bvh, T, BuildStats) {
-    let BuildOptions { pad, builder, single_ray_tree, frustum_culling, single_ray_lanes } = options;
+    let BuildOptions { pad, builder, single_ray_tree, scalar_tree, frustum_culling, single_ray_lanes } =
+        options;
     let start = Instant::now();
     // The item boxes as one array: obvhs's input, and the fallbacks'. The SAH builder keeps its own copy.
     let boxes = OnceLock::new();
@@ -89,36 +94,43 @@ pub fn build<T: Send>(
         }
     };
     let trees = |(tree, order): &(Vec<Bvh2Node>, Vec<u32>)| {
-        rayon::join(
-            || permute(order),
-            || rayon::join(|| collapse::<Node>(tree), || single_ray_tree.then(|| collapse::<WideNode>(tree))),
-        )
+        let single = || {
+            rayon::join(
+                || single_ray_tree.then(|| collapse::<WideNode>(tree)),
+                || scalar_tree.then(|| pair_tree(tree)),
+            )
+        };
+        rayon::join(|| permute(order), || rayon::join(|| collapse::<Node>(tree), single))
     };
-    let fits = |(_, need): &(Vec<Node>, usize), wide: &Option<(Vec<WideNode>, usize)>| {
-        *need <= STACK && wide.as_ref().is_none_or(|(_, need)| *need <= STACK)
+    type Single = (Option<(Vec<WideNode>, usize)>, Option<(Vec<PairNode>, usize)>);
+    let fits = |(_, need): &(Vec<Node>, usize), (wide, scalar): &Single| {
+        *need <= STACK
+            && wide.as_ref().is_none_or(|(_, need)| *need <= STACK)
+            && scalar.as_ref().is_none_or(|(_, need)| *need <= STACK)
     };
-    let (mut permuted, (mut packet_tree, mut wide)) = trees(&binary);
+    let (mut permuted, (mut packet_tree, mut single)) = trees(&binary);
     drop(binary);
     // Coincident items can make obvhs's tree a chain as long as their number: too deep for the traversal
     // stacks (and for the collapse's recursion, which gives up past MAX_COLLAPSE_LEVELS). A pile the sample
     // missed is then built over one box per distinct item; anything still too deep gets the balanced tree.
     for fallback in fallbacks {
-        if fits(&packet_tree, &wide) {
+        if fits(&packet_tree, &single) {
             break;
         }
         let binary = match *fallback {
             Fallback::Piles(params) => piles::build_over_piles(boxes(), params),
             Fallback::Balanced => balanced(boxes()),
         };
-        (permuted, (packet_tree, wide)) = trees(&binary);
+        (permuted, (packet_tree, single)) = trees(&binary);
     }
-    assert!(fits(&packet_tree, &wide), "a balanced tree of {n} items fits the traversal stacks");
-    let (nodes, wide) = (packet_tree.0, wide.map(|(w, _)| w));
-    let wide_bytes = wide.as_ref().map_or(0, |w: &Vec<WideNode>| w.len() * size_of::<WideNode>());
-    let node_bytes = nodes.len() * size_of::<Node>() + wide_bytes;
-    let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes };
+    assert!(fits(&packet_tree, &single), "a balanced tree of {n} items fits the traversal stacks");
+    let (wide, scalar) = single;
+    let (nodes, wide, scalar) = (packet_tree.0, wide.map(|(w, _)| w), scalar.map(|(s, _)| s));
     let extent = extent(&nodes[0]);
-    (Bvh { nodes, single_ray_lanes, frustum_culling, extent, pad, wide }, permuted, stats)
+    let tree =
+        Bvh { nodes, single_ray_lanes, frustum_culling, extent, pad, wide, scalar, scalar_walk: scalar_tree };
+    let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: tree.bytes() };
+    (tree, permuted, stats)
 }
 
 /// A tree built when the first is too deep for the walks' stacks.

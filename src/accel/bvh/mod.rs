@@ -17,7 +17,7 @@
 //! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`mod@build`] (the
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
 //! (obvhs), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
-//! `packet.rs` and `single.rs` (the walks).
+//! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built).
 
 mod binary;
 pub mod build;
@@ -27,6 +27,7 @@ pub mod node;
 mod packet;
 mod piles;
 mod sah;
+mod scalar;
 mod single;
 mod slab;
 pub mod wide_node;
@@ -34,6 +35,7 @@ pub mod wide_node;
 pub use build::{build, BuildOptions, Builder};
 pub use large::MAX_PACKETS;
 pub use node::{Node, N};
+pub use scalar::{PairChild, PairNode};
 pub use wide_node::{WideNode, WIDE_N};
 
 use crate::geometry::{HitPacket, Pyramid, Ray};
@@ -99,19 +101,35 @@ pub struct Bvh {
     /// The same tree in 8-wide nodes for rays walked alone from the root ([`WideNode`]), when the scene traces
     /// secondary rays.
     pub wide: Option<Vec<WideNode>>,
+    /// The binary tree before the collapse, in nodes of the scalar walk ([`PairNode`]), when the build was
+    /// asked for it ([`BuildOptions::scalar_tree`]).
+    pub scalar: Option<Vec<PairNode>>,
+    /// Single rays (K = 1) walk [`Bvh::scalar`], one box and one item at a time, instead of the wide nodes
+    /// (`--lanes scalar`). Has no effect without that tree.
+    pub scalar_walk: bool,
 }
 
 impl Bvh {
-    /// Bytes of the node arrays (the packet tree and the single-ray tree, if built).
+    /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built).
     pub fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
-        self.nodes.len() * size_of::<Node>() + wide
+        let scalar = self.scalar.as_ref().map_or(0, |s| s.len() * size_of::<PairNode>());
+        self.nodes.len() * size_of::<Node>() + wide + scalar
     }
 
-    /// Closest hits of the spheres for the live lanes, merged into `best`: one ray at a time for K = 1,
-    /// else the packet traversal, which switches to single rays in sparse subtrees.
+    /// The scalar tree, when single rays walk it ([`Bvh::scalar_walk`]).
+    fn scalar_nodes(&self) -> Option<&[PairNode]> {
+        self.scalar.as_deref().filter(|_| self.scalar_walk)
+    }
+
+    /// Closest hits of the spheres for the live lanes, merged into `best`: one ray at a time for K = 1 (the
+    /// scalar walk when set, [`Bvh::scalar_walk`]), else the packet traversal, which switches to single rays
+    /// in sparse subtrees.
     pub fn intersect_k<F: Lanes, Q: LeafQuery<F>>(&self, q: &Q, live: F::Mask, best: &mut HitPacket<F>) {
         if F::K == 1 {
+            if let Some(nodes) = self.scalar_nodes() {
+                return self.intersect_scalar(nodes, q, live, best);
+            }
             let slab = SlabRay::new(q.ray());
             return match &self.wide {
                 Some(wide) => self.intersect_lanes(wide, 0, q, &slab, live, best),
@@ -125,6 +143,9 @@ impl Bvh {
     /// to a sphere that blocked a lane.
     pub fn occluded_k<F: Lanes, Q: LeafQuery<F>>(&self, q: &Q, live: F::Mask, blocker: &mut u32) -> F::Mask {
         if F::K == 1 {
+            if let Some(nodes) = self.scalar_nodes() {
+                return self.occluded_scalar(nodes, q, live, blocker);
+            }
             let slab = SlabRay::new(q.ray());
             return match &self.wide {
                 Some(wide) => self.occluded_lanes(wide, 0, q, &slab, live, blocker),
