@@ -193,6 +193,33 @@ fn json_output_has_every_key() {
     assert!(v["scene"].as_str().is_some_and(|s| s.ends_with("whitted.toml")));
     assert!(v["examples"].is_array());
 
+    // The scalar path: `"lanes":"scalar"`, and the same comparison as packets of 4 (the same bits).
+    let balls = concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/balls3.nff");
+    let json = |lanes: &str| -> serde_json::Value {
+        let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+            .args([
+                "accuracy",
+                balls,
+                "--secondary",
+                "--json",
+                "--width",
+                "48",
+                "--lanes",
+                lanes,
+                "--threads",
+                "2",
+            ])
+            .output()
+            .expect("bareray runs");
+        assert!(run.status.success(), "{}", String::from_utf8_lossy(&run.stderr));
+        serde_json::from_slice(&run.stdout).expect("valid JSON")
+    };
+    let (scalar, packets) = (json("scalar"), json("4"));
+    assert_eq!(scalar["lanes"], "scalar");
+    for key in ["rays", "id_disagree", "t_rel_err_max", "shadow_disagree", "reflection_t_rel_err_max"] {
+        assert_eq!(scalar[key], packets[key], "{key}");
+    }
+
     let dir = tempfile::tempdir().unwrap();
     let bad = dir.path().join("bad.toml");
     std::fs::write(&bad, "[camera]\neye = [0, 0]\n").unwrap();

@@ -447,6 +447,41 @@ fn bench_json_is_valid_and_compare_matches_rows() {
     assert!(compared[1]["compare"]["old_mrays_per_s"].is_null());
 }
 
+/// `bench --lanes scalar,...`: the scalar row (binary BVHs, one box and one primitive at a time) has the
+/// checksum of every packet width, for primary hits and for a shaded render (shadow rays, reflections);
+/// JSON writes its lanes as `"scalar"`, `--compare` matches it, and the table compares every row with it.
+#[test]
+fn bench_scalar_row_has_the_same_checksum() {
+    let dir = tempfile::tempdir().unwrap();
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/balls3.nff");
+    let scene = scene.to_str().unwrap();
+    let small = ["--width", "32", "--height", "24", "--reps", "1", "--threads", "1"];
+    for mode in [&["--primary-only"][..], &["--depth", "2"][..]] {
+        let rows = bench_json(&[&[scene, "--lanes", "scalar,1,4,16"], mode, &small[..]].concat());
+        let lanes: Vec<_> = rows.iter().map(|r| r["lanes"].clone()).collect();
+        assert_eq!(lanes, [serde_json::json!("scalar"), 1.into(), 4.into(), 16.into()], "{mode:?}");
+        for row in &rows {
+            assert_eq!(row["checksum"], rows[0]["checksum"], "{mode:?}: {row}");
+            assert_eq!(row["rays"], rows[0]["rays"], "{mode:?}: {row}");
+        }
+    }
+    let old = dir.path().join("old.json");
+    let args = [&[scene, "--lanes", "scalar,4", "--primary-only"], &small[..]].concat();
+    let text: String = bench_json(&args).iter().map(|r| format!("{r}\n")).collect();
+    std::fs::write(&old, text).unwrap();
+    let args = [&[scene, "--lanes", "scalar,8", "--primary-only"], &small[..]].concat();
+    let compared = bench_json(&[&args[..], &["--compare", old.to_str().unwrap()]].concat());
+    assert!(compared[0]["compare"]["ratio"].as_f64().unwrap() > 0.0, "{}", compared[0]);
+    assert!(compared[1]["compare"]["old_mrays_per_s"].is_null(), "{}", compared[1]);
+    let run = bareray(&[&["bench"], &args[..], &["--compare", old.to_str().unwrap()]].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let table = String::from_utf8_lossy(&run.stdout);
+    assert!(table.contains("vs scalar"), "{table}");
+    let row = table.lines().find(|l| l.trim_start().starts_with("scalar ")).unwrap();
+    assert!(row.contains(" 1.00x "), "{table}");
+    assert!(table.contains("old rows not measured now: lanes 4 threads 1"), "{table}");
+}
+
 #[test]
 fn bench_compare_errors_name_the_file_and_line() {
     let dir = tempfile::tempdir().unwrap();
@@ -643,10 +678,11 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     assert!(stderr(&bad).contains("unknown method `sobol`"));
 }
 
-/// `converge --precision`: the f32 packet and scalar paths give the same hits (so the same error against
-/// the f64 twin), small but measured; the f64 twin is the reference (error 0); CSV has one line per path.
+/// `converge --precision`: the f32 packet, single-ray SIMD and scalar paths give the same hits (so the same
+/// error against the f64 twin), small but measured; the f64 twin is the reference (error 0); CSV has one
+/// line per path.
 #[test]
-fn converge_precision_compares_the_three_paths() {
+fn converge_precision_compares_the_four_paths() {
     let dir = tempfile::tempdir().unwrap();
     let csv = dir.path().join("p.csv");
     let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/field1k.xyzr");
@@ -664,16 +700,19 @@ fn converge_precision_compares_the_three_paths() {
     assert!(run.status.success(), "{}", stderr(&run));
     let text = std::fs::read_to_string(&csv).unwrap();
     let rows: Vec<Vec<&str>> = text.lines().skip(1).map(|l| l.split(',').collect()).collect();
-    assert_eq!(rows.len(), 3, "{text}");
+    assert_eq!(rows.len(), 4, "{text}");
     assert!(
         rows[0][0].starts_with("f32 packets")
-            && rows[1][0].starts_with("f32 scalar")
-            && rows[2][0] == "f64 twin"
+            && rows[1][0].starts_with("f32 single-ray SIMD")
+            && rows[2][0] == "f32 scalar"
+            && rows[3][0] == "f64 twin",
+        "{text}"
     );
-    assert_eq!(rows[0][2..], rows[1][2..], "packets and scalar: the same hits");
+    assert_eq!(rows[0][2..], rows[1][2..], "packets and single-ray SIMD: the same hits");
+    assert_eq!(rows[0][2..], rows[2][2..], "packets and scalar: the same hits");
     let p99: f64 = rows[0][4].parse().unwrap();
     assert!(p99 > 0.0 && p99 < 2e-6, "{text}");
-    assert!(rows[2][2..].iter().all(|v| v.parse::<f64>().unwrap() == 0.0));
+    assert!(rows[3][2..].iter().all(|v| v.parse::<f64>().unwrap() == 0.0));
 }
 
 /// Formats beyond 8 bits: `--bit-depth 16` writes a 16-bit PNG whose values are the 8-bit PNG's to within

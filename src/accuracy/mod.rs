@@ -45,7 +45,7 @@ use std::time::Instant;
 use anyhow::Result;
 use rayon::prelude::*;
 
-use crate::compile::Scene;
+use crate::compile::{CompileOptions, Scene};
 use crate::geometry::{Departure, Ray, NO_PRIM};
 use crate::math::V3;
 use crate::render::{thread_pool, trace_primary_lanes, PrimaryHits};
@@ -69,6 +69,9 @@ pub const K_SELF: f64 = 4.0;
 pub struct Options {
     /// Packet width of the f32 primary pass: 1, 4, 8 or 16.
     pub lanes: usize,
+    /// Compile the f32 scene for the scalar path ([`crate::compile::CompileOptions::scalar`]): with `lanes`
+    /// 1, every f32 ray walks binary BVHs one box and one primitive at a time.
+    pub scalar: bool,
     /// Also compare shadow and mirror rays.
     pub secondary: bool,
     /// Worker threads (default: all cores).
@@ -79,7 +82,7 @@ pub struct Options {
 
 impl Default for Options {
     fn default() -> Self {
-        Self { lanes: 16, secondary: false, threads: None, max_examples: 8 }
+        Self { lanes: 16, scalar: false, secondary: false, threads: None, max_examples: 8 }
     }
 }
 
@@ -89,7 +92,9 @@ impl Default for Options {
 pub fn run(name: &str, desc: &SceneDesc, opts: &Options) -> Result<Report> {
     let start = Instant::now();
     let pool = thread_pool(opts.threads)?;
-    let (scene, twin) = pool.install(|| rayon::join(|| Scene::compile(desc), || Twin::new(desc)));
+    let options = CompileOptions { scalar: opts.scalar, ..CompileOptions::default() };
+    let compile = || Scene::compile_with_options(desc, options);
+    let (scene, twin) = pool.install(|| rayon::join(compile, || Twin::new(desc)));
     let mut report = compare(name, &scene?, &twin?, opts, &pool);
     report.seconds = start.elapsed().as_secs_f64();
     Ok(report)
@@ -123,6 +128,7 @@ pub fn compare(name: &str, scene: &Scene, twin: &Twin, opts: &Options, pool: &ra
         width,
         height,
         lanes: opts.lanes,
+        scalar: opts.scalar && opts.lanes == 1,
         primitives: twin.len(),
         twin_bvh: twin.has_bvh(),
         primary: acc.primary.finish(),

@@ -175,6 +175,8 @@ pub struct Report {
     pub height: u32,
     /// Packet width of the f32 primary pass.
     pub lanes: usize,
+    /// Whether the f32 pass ran on the scalar path (`lanes` is then 1; JSON writes `"lanes":"scalar"`).
+    pub scalar: bool,
     /// Primitives in the scene.
     pub primitives: usize,
     /// Whether the twin searched spheres through its BVH.
@@ -216,7 +218,7 @@ impl Report {
         put("scene", json_str(&self.scene));
         put("width", self.width.to_string());
         put("height", self.height.to_string());
-        put("lanes", self.lanes.to_string());
+        put("lanes", if self.scalar { json_str("scalar") } else { self.lanes.to_string() });
         put("primitives", self.primitives.to_string());
         put("twin_bvh", self.twin_bvh.to_string());
         put("secondary", self.shadow.is_some().to_string());
@@ -302,12 +304,12 @@ impl Report {
         let mut o = String::new();
         let _ = writeln!(
             o,
-            "{}: {}x{}, {} primitives, f32 packets of {} against the f64 twin ({}), {:.2} s",
+            "{}: {}x{}, {} primitives, f32 {} against the f64 twin ({}), {:.2} s",
             self.scene,
             self.width,
             self.height,
             self.primitives,
-            self.lanes,
+            if self.scalar { "scalar path".to_owned() } else { format!("packets of {}", self.lanes) },
             if self.twin_bvh { "BVH" } else { "brute force" },
             self.seconds
         );

@@ -10,7 +10,8 @@ use indicatif::ProgressBar;
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
-use crate::compile::Scene;
+use super::values::LanesArg;
+use crate::compile::{CompileOptions, Scene};
 use crate::converge::{csv, curves, ladder, plot, study, Reference, METHODS};
 use crate::film::Image;
 use crate::math::Rgb;
@@ -48,7 +49,8 @@ pub struct ConvergeArgs {
     #[arg(long)]
     pub plot: Option<PathBuf>,
     /// Compare precision paths instead of sampling methods: primary hits at pixel centres by f32 packets,
-    /// f32 single rays and the f64 twin, each timed, the f32 ones measured against the f64 one.
+    /// f32 single-ray SIMD, the f32 scalar path and the f64 twin, each timed, the f32 ones measured against
+    /// the f64 one.
     #[arg(long)]
     pub precision: bool,
     /// Shading of the reference and of every run, overriding the scene: `whitted` or
@@ -57,9 +59,11 @@ pub struct ConvergeArgs {
     /// reference-spp×SAMPLES: the ambient occlusion's noise falls with the samples per pixel too.
     #[arg(long, value_name = "MODE", value_parser = super::values::parse_shade)]
     pub shade: Option<crate::scene::desc::Shade>,
-    /// Rays per packet: 1, 4, 8 or 16.
-    #[arg(long, default_value_t = 16, value_parser = parse_lanes)]
-    pub lanes: usize,
+    /// Rays per packet: 1 (single-ray SIMD), 4, 8 or 16; or `scalar` (one ray against one box and one
+    /// primitive at a time, over binary BVHs). With --precision, the packet path's width (the scalar path
+    /// is always one of the paths compared).
+    #[arg(long, default_value = "16", value_parser = parse_lanes)]
+    pub lanes: LanesArg,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = parse_threads)]
     pub threads: Option<usize>,
@@ -84,10 +88,14 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
     if let Some(shade) = args.shade {
         desc.render.shade = shade;
     }
-    let mut scene = pool.install(|| Scene::compile(&desc)).context("camera")?;
+    // The scalar path needs each BVH's binary tree; --precision compares it with the others.
+    let options =
+        CompileOptions { scalar: args.lanes.is_scalar() || args.precision, ..CompileOptions::default() };
+    let mut scene = pool.install(|| Scene::compile_with_options(&desc, options)).context("camera")?;
     if args.precision {
-        return run_precision(&args, &desc, &scene, &pool);
+        return run_precision(&args, &desc, &mut scene, &pool);
     }
+    let lanes = args.lanes.k();
     let side = crate::io::toml::grid_side(args.reference_spp).map_err(|e| anyhow!(e))?;
     let key = reference_key(&source, &desc, args.reference_spp);
     let cached = args.csv.as_ref().map(|csv| csv.with_extension("reference.exr"));
@@ -97,11 +105,11 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
                 "reference: {} (cached)",
                 cached.as_deref().map_or(String::new(), |p| p.display().to_string())
             );
-            Reference::from_image(&scene, image, args.lanes, &pool)
+            Reference::from_image(&scene, image, lanes, &pool)
         }
         None => {
             eprintln!("reference: {} samples per pixel (stratified {side}×{side}) ...", args.reference_spp);
-            let reference = Reference::render(&mut scene, Pattern::Stratified(side), args.lanes, &pool);
+            let reference = Reference::render(&mut scene, Pattern::Stratified(side), lanes, &pool);
             if let Some(path) = cached.as_deref() {
                 write_image(&reference.image, path, Transfer::Linear)?;
                 std::fs::write(path.with_extension("key"), &key)?;
@@ -110,7 +118,7 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
         }
     };
     let bar = ProgressBar::new(0);
-    let runs = study(&mut scene, &methods, &reference, args.lanes, &pool, &bar);
+    let runs = study(&mut scene, &methods, &reference, lanes, &pool, &bar);
     bar.finish_and_clear();
     let mut out = std::io::stdout().lock();
     writeln!(
@@ -140,14 +148,15 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
     Ok(())
 }
 
-/// `converge --precision`: the three primary-hit paths, a table, and the CSV and plot when asked.
+/// `converge --precision`: the primary-hit paths, a table, and the CSV and plot when asked.
 fn run_precision(
     args: &ConvergeArgs,
     desc: &crate::scene::SceneDesc,
-    scene: &Scene,
+    scene: &mut Scene,
     pool: &rayon::ThreadPool,
 ) -> Result<()> {
-    let runs = crate::converge::precision::primary_paths(desc, scene, args.lanes, pool).context("camera")?;
+    let runs =
+        crate::converge::precision::primary_paths(desc, scene, args.lanes.k(), pool).context("camera")?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,

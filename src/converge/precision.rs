@@ -1,5 +1,6 @@
-//! Precision against time for primary hits: the f32 packet path, the f32 scalar path (K = 1) and the f64
-//! twin ([`crate::accuracy::Twin`]), each timed over one camera ray per pixel centre, the f32 paths measured
+//! Precision against time for primary hits: the f32 packet path, f32 single-ray SIMD (K = 1), the f32 scalar
+//! path (binary BVHs, one box and one primitive at a time; when the scene was compiled with
+//! [`crate::compile::CompileOptions::scalar`]) and the f64 twin ([`crate::accuracy::Twin`]), each timed over one camera ray per pixel centre, the f32 paths measured
 //! against the f64 one: the fraction of pixels whose hit names another primitive (or hits where the other
 //! misses), and the relative t error over the pixels that agree.
 
@@ -16,7 +17,7 @@ use crate::scene::SceneDesc;
 /// One path's time and error.
 #[derive(Clone, Debug, PartialEq)]
 pub struct PathRun {
-    /// `f32 packets (K = 16)`, `f32 scalar (K = 1)` or `f64 twin`.
+    /// `f32 packets (K = 16)`, `f32 single-ray SIMD (K = 1)`, `f32 scalar` or `f64 twin`.
     pub path: String,
     /// Wall-clock seconds for every pixel's primary hit.
     pub seconds: f64,
@@ -26,10 +27,11 @@ pub struct PathRun {
     pub t_err: [f64; 3],
 }
 
-/// Times the three paths on `desc` (compiled as `scene`) at `lanes` for the packet path.
+/// Times the paths on `desc` (compiled as `scene`) at `lanes` for the packet path; the scalar path only where
+/// the scene has its binary trees, and its scalar walk is on afterwards exactly then (as compiling leaves it).
 pub fn primary_paths(
     desc: &SceneDesc,
-    scene: &Scene,
+    scene: &mut Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,
 ) -> Result<Vec<PathRun>, crate::camera::CameraError> {
@@ -48,7 +50,15 @@ pub fn primary_paths(
     });
     let f64_seconds = clock.elapsed().as_secs_f64();
     let mut runs = Vec::new();
-    for (k, name) in [(lanes, format!("f32 packets (K = {lanes})")), (1, "f32 scalar (K = 1)".to_owned())] {
+    // The scalar walk is on only for the scalar path, which runs where the scene has the binary trees.
+    let scalar = scene.geometry.set_scalar_walk(true);
+    let paths = [
+        (lanes, false, format!("f32 packets (K = {lanes})")),
+        (1, false, "f32 single-ray SIMD (K = 1)".to_owned()),
+        (1, true, "f32 scalar".to_owned()),
+    ];
+    for (k, walk, name) in paths.into_iter().filter(|&(_, walk, _)| !walk || scalar) {
+        scene.geometry.set_scalar_walk(walk);
         let hits = primary_hits_lanes(scene, k, pool);
         let (mut disagree, mut errs) = (0usize, Vec::new());
         for ((&t, &prim), e) in hits.t.iter().zip(&hits.prim).zip(&exact) {
@@ -66,6 +76,7 @@ pub fn primary_paths(
             t_err: percentiles(errs),
         });
     }
+    scene.geometry.set_scalar_walk(scalar);
     runs.push(PathRun { path: "f64 twin".to_owned(), seconds: f64_seconds, disagree: 0.0, t_err: [0.0; 3] });
     Ok(runs)
 }
