@@ -1,4 +1,4 @@
-//! Brute-force sphere kernels at K = 1 (the scalar path), 4, 8 and 16, in rays per second:
+//! Brute-force sphere kernels at K = 1 (one ray, plain f32), 4, 8 and 16, in rays per second:
 //!
 //! - `packet_vs_spheres/K`: packets of K camera rays against every sphere (lanes = rays).
 //! - `ray_vs_spheres/K`: one camera ray against K spheres at a time (lanes = spheres).

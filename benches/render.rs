@@ -1,4 +1,4 @@
-//! Whole-pipeline benchmarks at K = 1 (the scalar path), 4, 8 and 16, in rays per second:
+//! Whole-pipeline benchmarks at K = 1 (single-ray SIMD), 4, 8 and 16, in rays per second:
 //!
 //! - `bvh_primary/K`: camera-ray packets through the BVH of a 10 000-sphere contract field (slab tests of
 //!   two-child nodes plus leaf sphere tests: the packet/box path).

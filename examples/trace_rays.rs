@@ -39,7 +39,7 @@ fn main() -> Result<(), Box<dyn std::error::Error>> {
         Ray::new(scene.to_rendering(above + DVec3::new(x, 0.0, 0.0)), V3::new(0.0, -1.0, 0.0))
     }));
 
-    // One ray at a time: the scalar reference path.
+    // One ray at a time (K = 1).
     let scalar: Vec<Hit> =
         rays.iter().map(|ray| scene.geometry.intersect(ray, Departure::CAMERA, f32::INFINITY)).collect();
 

@@ -2,7 +2,8 @@
 //!
 //! It renders scenes of spheres, transformed quadrics, polygons and cones by Whitted ray tracing (shadows,
 //! mirrors, glass) in packets of 4, 8 or 16 rays through a 4-wide BVH, and every packet width gives the
-//! same bits as its scalar reference path (K = 1). The same compiled scene also answers ray queries: closest
+//! same bits as single rays (K = 1) and as the scalar path (binary BVHs, one box and one primitive at a
+//! time, [`compile::CompileOptions::scalar`]). The same compiled scene also answers ray queries: closest
 //! hit and occlusion, one ray or K at a time.
 //!
 //! # Data flow

@@ -1,5 +1,5 @@
 //! Spheres as the items of BVH leaves ([`LeafQuery`]) and of brute force: the sphere kernel over a range of
-//! spheres, generic over the lane type (lanes = rays; the K = 1 instance is the scalar reference path), and
+//! spheres, generic over the lane type (lanes = rays; the K = 1 instance tests one sphere at a time, the scalar walk's leaf test), and
 //! the single-ray leaf test with the spheres across the lanes. Hits are combined by [`HitPacket::update`]'s
 //! (t, id) order, so the result does not depend on the order of the loops.
 

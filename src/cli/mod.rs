@@ -15,7 +15,7 @@ use std::process::ExitCode;
 
 use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
 
-/// bareray — a data-oriented SIMD packet ray tracer with a scalar reference path.
+/// bareray — a data-oriented SIMD packet ray tracer with a bit-identical scalar path.
 ///
 /// Renders Whitted-shaded scenes (spheres, planes, transformed shapes, polygons; shadows, mirrors, glass)
 /// to PNG, EXR or PPM. Scenes are read by extension: `.toml` (bareray's format), `.nff` (SPD's Neutral

@@ -271,7 +271,7 @@ impl Scene {
             options: BuildOptions {
                 pad: bvh::padding(reach(desc)),
                 builder: preset.builder(),
-                // The 8-wide single-ray trees serve the scalar tracer's secondary and ambient occlusion
+                // The 8-wide single-ray trees serve the K = 1 tracer's secondary and ambient occlusion
                 // rays: only scenes that trace them pay for their build.
                 single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
                     || features::bounces(desc.render.max_depth, &materials)

@@ -1,5 +1,5 @@
 //! Primitives and their intersection kernels. Each kernel is generic over [`crate::math::Real`]: the f32
-//! instance is the scalar reference path, the f64 instance the accuracy oracle.
+//! instance serves single rays (K = 1, the scalar path among them), the f64 instance the accuracy oracle.
 
 pub mod cone;
 mod ellipse;

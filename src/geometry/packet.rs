@@ -1,6 +1,6 @@
 //! Ray packets, hit packets, and the two brute-force sphere kernels built on them.
 //!
-//! Both kernels run the scalar reference formula ([`sphere_approach`], with each sphere's exact eye term for
+//! Both kernels run the `f32` instance's formula ([`sphere_approach`], with each sphere's exact eye term for
 //! rays from the eye) at a lane type, so their results are bit-identical to
 //! [`crate::accel::Geometry::intersect`] over the same spheres (for camera rays):
 //!

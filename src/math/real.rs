@@ -3,7 +3,7 @@
 //! `f32` is the renderer, `f64` the accuracy oracle, and (later) SIMD lane types give the packet kernels.
 //! Every comparison yields a [`Mask`] and every choice goes through [`Real::select`], so a scalar instance and
 //! a lane instance evaluate the same IEEE operations in the same order: that is what makes packet results
-//! bit-identical to the scalar reference.
+//! bit-identical to the `f32` instance.
 
 use std::fmt::Debug;
 use std::ops::{Add, BitAnd, BitOr, Div, Mul, Neg, Not, Sub};

@@ -17,7 +17,7 @@ use crate::shade::RayCounts;
 use crate::simd::Lanes;
 
 /// Evaluates `$call` with the type name `$F` bound to the lane type of the run-time packet width `$lanes`
-/// (1: `f32`, the scalar reference path; 4, 8, 16: `wide`'s `f32x4`, `f32x8`, `f32x16`); panics on another
+/// (1: `f32`, single rays, on the scalar walk when the scene is compiled for it; 4, 8, 16: `wide`'s `f32x4`, `f32x8`, `f32x16`); panics on another
 /// width. The one place a width chosen at run time becomes a type parameter.
 macro_rules! with_lanes {
     ($lanes:expr, $F:ident => $call:expr) => {
@@ -167,7 +167,8 @@ impl<F: Fn(u64, u64) + Sync> Progress for F {
 /// Renders `scene` with packets of `lanes` rays (1, 4, 8 or 16) on the threads of `pool`, reporting each
 /// finished tile to `progress` (`&()` for no reports).
 ///
-/// Every width and thread count gives the same image, bit for bit; 1 is the scalar reference path. Panics
+/// Every width and thread count gives the same image, bit for bit; 1 traces single rays (single-ray SIMD,
+/// or the scalar path for a scene compiled with [`crate::compile::CompileOptions::scalar`]). Panics
 /// on a width not in [`LANE_CHOICES`].
 ///
 /// ```

@@ -1,6 +1,8 @@
 //! Lane types: [`Real`] for wide's `f32x4`, `f32x8` and `f32x16`, and the [`Lanes`] trait packets are written
-//! against. `f32` is the K = 1 instance, so the scalar reference path and every packet width are one generic
-//! code path instantiated at different types.
+//! against. `f32` is the K = 1 instance, so single rays and every packet width are one generic
+//! code path instantiated at different types. (At K = 1 the arithmetic is plain `f32`; the BVH walk is
+//! single-ray SIMD — one ray against a wide node's children, and a leaf's spheres, at once — unless the scene
+//! is compiled for the scalar path, which walks binary trees one box and one primitive at a time.)
 //!
 //! # Why the lane instances are bit-identical to `f32`
 //!
@@ -63,7 +65,7 @@ pub trait IdLanes: Copy + Debug + PartialEq + Send + Sync + 'static + Add<Output
 }
 
 /// What packet code needs from a lane type beyond [`Real`]: its width, loads, lane access, masks as bits, and
-/// id lanes selected by float masks. Implemented for `f32` (K = 1, the scalar reference), `f32x4`, `f32x8`
+/// id lanes selected by float masks. Implemented for `f32` (K = 1, single rays), `f32x4`, `f32x8`
 /// and `f32x16`.
 pub trait Lanes: Real {
     /// The number of lanes.

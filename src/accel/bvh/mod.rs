@@ -45,7 +45,7 @@ use slab::SlabRay;
 
 /// What a walk asks of the items in its leaves, for a packet of K rays (`F`): the tree holds only boxes and
 /// item ranges, and every kind of primitive answers for its own items. Implementations must give each lane the
-/// result its scalar (K = 1) instance gives, and combine hits by [`HitPacket::update`]'s (t, id) order, so the
+/// result its K = 1 (`f32`) instance gives, and combine hits by [`HitPacket::update`]'s (t, id) order, so the
 /// walk's order of visits cannot change a result.
 pub trait LeafQuery<F: Lanes> {
     /// The query of one lane's ray alone, for the single-ray walk.

@@ -1,7 +1,7 @@
 //! The single-ray tree: the same binary tree collapsed into 8-wide nodes, so one `f32x8` slab test covers a
 //! node's children (one AVX2 register) and a ray walks about half as many levels as in the 4-wide tree.
 //! Built beside the 4-wide packet tree only for scenes that trace secondary rays (shadow, mirror or
-//! transmitted), whose lanes the scalar tracer walks one ray at a time from the root.
+//! transmitted), whose lanes the K = 1 tracer walks one ray at a time from the root.
 
 use wide::f32x8;
 
