@@ -612,9 +612,9 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("method,spp,seconds,rays,rmse,rmse_edges,psnr"));
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(String::from).collect()).collect();
-    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture and coverage
-    // once.
-    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 1 + 1, "{text}");
+    // grid and stratified at 1, 4, 16; r2 and sobol at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture and
+    // coverage once.
+    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 5 + 1 + 1, "{text}");
     let rmse = |method: &str, spp: f64| -> f64 {
         let at = |r: &&Vec<String>| r[0] == method && r[1].parse::<f64>().unwrap() == spp;
         rows.iter().find(at).map(|r| r[4].parse().unwrap()).unwrap()
@@ -625,7 +625,7 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
         .map(|r| (r[1].parse().unwrap(), r[4].parse().unwrap()))
         .collect();
     assert!(adaptive[4].0 > adaptive[0].0 && adaptive[4].1 < adaptive[0].1, "adaptive: {adaptive:?}");
-    for method in ["grid", "stratified", "r2"] {
+    for method in ["grid", "stratified", "r2", "sobol"] {
         assert!(rmse(method, 16.0) < 0.6 * rmse(method, 1.0), "{method}: {text}");
     }
     // Coverage has one setting, about one ray a pixel: on the edges it beats one sample per pixel.
@@ -634,13 +634,42 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let one = rows.iter().find(|r| r[0] == "grid" && r[1].parse::<f64>().unwrap() == 1.0).unwrap();
     assert!(edges(coverage) < edges(one), "{text}");
     let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 6);
+    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 7);
     assert!(stderr(&first).contains("stratified 8×8"), "{}", stderr(&first));
     let second = run(&[]);
     assert!(second.status.success() && stderr(&second).contains("(cached)"), "{}", stderr(&second));
-    let bad = run(&["--methods", "grid,sobol"]);
+    let bad = run(&["--methods", "grid,halton"]);
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
-    assert!(stderr(&bad).contains("unknown method `sobol`"));
+    assert!(stderr(&bad).contains("unknown method `halton`"));
+}
+
+/// `--aa sobol:N` renders with the scrambled Sobol' points and names them in the summary; `sobol:0` is an
+/// argument error that says what N may be.
+#[test]
+fn render_takes_sobol_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let render = |aa: &str| {
+        bareray(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "32",
+            "--stats",
+            "--aa",
+            aa,
+        ])
+    };
+    let run = render("sobol:16");
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(text.contains("16 samples per pixel (Sobol' sequence, Owen-scrambled per pixel)"), "{text}");
+    let bad = render("sobol:0");
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("samples per pixel run from 1 to 65536, got `0`"), "{}", stderr(&bad));
 }
 
 /// `converge --precision`: the f32 packet and scalar paths give the same hits (so the same error against

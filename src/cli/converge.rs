@@ -22,7 +22,7 @@ use crate::scene::desc::{Pattern, Transfer};
 #[command(
     after_help = "Renders a reference (32×32 stratified samples per pixel unless --reference-spp says \
 otherwise; cached next to the CSV, reused while the scene file and settings are unchanged), then each method \
-at 1, 4, 16, … samples per pixel (R2 at 1, 2, 4, …) up to --max-spp, and reports wall time, rays traced, and \
+at 1, 4, 16, … samples per pixel (R2 and Sobol at 1, 2, 4, …) up to --max-spp, and reports wall time, rays traced, and \
 the error against the reference: RMSE over the image, RMSE over edge pixels (where the primitive seen at \
 the pixel centre changes between neighbours), PSNR. Values are linear film values clamped to [0, 1].\n\n\
 Examples:\n  bareray converge scenes/whitted.toml --width 320 --height 240 --csv w.csv --plot w.svg\n  \
@@ -31,7 +31,7 @@ bareray converge scenes/balls3.nff --methods grid,r2 --max-spp 16"
 pub struct ConvergeArgs {
     /// Scene file (.toml, .nff or .xyzr).
     pub scene: PathBuf,
-    /// Methods to compare, comma-separated: grid, stratified, r2, adaptive, lecture, coverage.
+    /// Methods to compare, comma-separated: grid, stratified, r2, sobol, adaptive, lecture, coverage.
     #[arg(long, value_delimiter = ',', default_values_t = METHODS.map(String::from), value_parser = parse_method)]
     pub methods: Vec<String>,
     /// Largest samples per pixel of a method's runs.

@@ -24,7 +24,7 @@ impl From<TransferArg> for Transfer {
 }
 
 /// Parses `--aa METHOD[:N]`: `grid:N` and `stratified:N` (N a square number of samples per pixel), `r2:N`
-/// (any N from 1), `lecture` (the half-pixel pattern, no N), `adaptive[:T,D]`, `coverage` (no N).
+/// and `sobol:N` (any N from 1), `lecture` (the half-pixel pattern, no N), `adaptive[:T,D]`, `coverage` (no N).
 pub fn parse_aa(s: &str) -> Result<Pattern, String> {
     let (method, count) = match s.trim().split_once(':') {
         Some((m, n)) => (m, Some(n)),
@@ -47,13 +47,14 @@ pub fn parse_aa(s: &str) -> Result<Pattern, String> {
         "grid" => Ok(Pattern::Grid(side(samples()?)?)),
         "stratified" => Ok(Pattern::Stratified(side(samples()?)?)),
         "r2" => Ok(Pattern::R2(samples()?)),
+        "sobol" => Ok(Pattern::Sobol(samples()?)),
         "adaptive" => adaptive(count),
         "lecture" if count.is_none() => Ok(Pattern::HalfPixel),
         "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
         "coverage" if count.is_none() => Ok(Pattern::Coverage),
         "coverage" => Err("`coverage` computes each pixel's covered areas and takes no count".to_owned()),
         _ => Err(format!(
-            "unknown method `{method}`: grid:N, stratified:N, r2:N, adaptive[:T,D], lecture or coverage"
+            "unknown method `{method}`: grid:N, stratified:N, r2:N, sobol:N, adaptive[:T,D], lecture or coverage"
         )),
     }
 }
@@ -198,6 +199,12 @@ mod tests {
         assert_eq!(parse_aa("grid:16"), Ok(Pattern::Grid(4)));
         assert_eq!(parse_aa("stratified:9"), Ok(Pattern::Stratified(3)));
         assert_eq!(parse_aa("r2:5"), Ok(Pattern::R2(5)));
+        assert_eq!(parse_aa("sobol:16"), Ok(Pattern::Sobol(16)));
+        assert_eq!(parse_aa("sobol:3"), Ok(Pattern::Sobol(3)));
+        let e = parse_aa("sobol:0").unwrap_err();
+        assert!(e.contains("from 1 to 65536") && e.contains("`0`"), "{e}");
+        assert!(parse_aa("sobol").unwrap_err().contains("`sobol:N`"));
+        assert!(parse_aa("halton:4").unwrap_err().contains("sobol:N"));
         assert_eq!(parse_aa("lecture"), Ok(Pattern::HalfPixel));
         assert_eq!(parse_aa("coverage"), Ok(Pattern::Coverage));
         assert!(parse_aa("coverage:4").unwrap_err().contains("takes no count"));
@@ -209,7 +216,8 @@ mod tests {
             "r2:0",
             "r2:x",
             "lecture:9",
-            "sobol:4",
+            "sobol:x",
+            "sobol:65537",
             "",
             "adaptive:0,2",
             "adaptive:0.1,9",

@@ -14,21 +14,23 @@ use crate::scene::desc::Pattern;
 use metrics::{edge_mask, errors, Errors};
 
 /// The sampling methods a study can compare, by their `--aa` names.
-pub const METHODS: [&str; 6] = ["grid", "stratified", "r2", "adaptive", "lecture", "coverage"];
+pub const METHODS: [&str; 7] = ["grid", "stratified", "r2", "sobol", "adaptive", "lecture", "coverage"];
 
 /// The patterns a method runs at, by increasing sample count up to `max_spp` samples per pixel: squares
-/// (1, 4, 16, 64, …) for the grids, powers of two for R2, the one half-pixel pattern for `lecture`, for
-/// `adaptive` falling thresholds (0.4 to 0.025) at depth 3 (up to 81 points a pixel where every level
-/// splits, whatever `max_spp` says), and the one setting of `coverage` (it has no sample count: one ray per
-/// covered part of a pixel).
+/// (1, 4, 16, 64, …) for the grids, powers of two for R2 and Sobol' (the counts where Sobol' points form
+/// nets), the one half-pixel pattern for `lecture`, for `adaptive` falling thresholds (0.4 to 0.025) at
+/// depth 3 (up to 81 points a pixel where every level splits, whatever `max_spp` says), and the one setting
+/// of `coverage` (it has no sample count: one ray per covered part of a pixel).
 pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
+    let powers = || (0..).map(|e| 1u32 << e).take_while(move |&s| s <= max_spp.max(1));
     let squares = || {
         (1..).map(|n: u32| n * n).take_while(move |&s| s <= max_spp.max(1)).filter(|s| s.is_power_of_two())
     };
     match method {
         "grid" => Ok(squares().map(|s| Pattern::Grid(s.isqrt())).collect()),
         "stratified" => Ok(squares().map(|s| Pattern::Stratified(s.isqrt())).collect()),
-        "r2" => Ok((0..).map(|e| 1u32 << e).take_while(|&s| s <= max_spp.max(1)).map(Pattern::R2).collect()),
+        "r2" => Ok(powers().map(Pattern::R2).collect()),
+        "sobol" => Ok(powers().map(Pattern::Sobol).collect()),
         "lecture" => Ok(vec![Pattern::HalfPixel]),
         "coverage" => Ok(vec![Pattern::Coverage]),
         "adaptive" => Ok([0.4, 0.2, 0.1, 0.05, 0.025]
@@ -155,6 +157,7 @@ mod tests {
         assert_eq!(ladder("r2", 8), Ok(vec![Pattern::R2(1), Pattern::R2(2), Pattern::R2(4), Pattern::R2(8)]));
         assert_eq!(ladder("lecture", 64), Ok(vec![Pattern::HalfPixel]));
         assert_eq!(ladder("coverage", 1), Ok(vec![Pattern::Coverage]));
-        assert!(ladder("sobol", 64).is_err());
+        assert_eq!(ladder("sobol", 6), Ok(vec![Pattern::Sobol(1), Pattern::Sobol(2), Pattern::Sobol(4)]));
+        assert!(ladder("halton", 64).is_err());
     }
 }
