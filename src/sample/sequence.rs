@@ -81,17 +81,26 @@ const SOBOL_PASCAL: [u32; 32] = {
 
 /// Owen's nested uniform scramble of the 32-bit fraction `v` under `seed`, on its top [`SOBOL_BITS`] bits
 /// (the rest are returned as 0). Every node of the binary tree of dyadic intervals gets its own random
-/// flip: bit `d` (from the top) of the result is bit `d` of `v` XOR a hash of the seed and the node `v`'s
-/// top `d` bits name. Points sharing an interval of width 2^−d stay in one (possibly swapped) interval of
-/// that width, so a net stays a net; each point on its own becomes uniform on [0, 1). The node is the heap
-/// index `2^d + prefix`, distinct across levels, hashed with the seed by one splitmix64 step (the flip is
-/// its top bit). The flips depend on `v`'s own bits, not on earlier flips, so the levels are independent.
+/// flip: bit `d` (from the top) of the result is bit `d` of `v` XOR the flip of the node `v`'s top `d` bits
+/// name. Points sharing an interval of width 2^−d stay in one (possibly swapped) interval of that width, so
+/// a net stays a net; each point on its own becomes uniform on [0, 1). The flips depend on `v`'s own bits,
+/// not on earlier flips.
+///
+/// The tree is cut into subtrees six levels deep (levels 0–5, 6–11, 12–17, 18–23): the 63 nodes of one
+/// subtree take their flips from the bits of one splitmix64 step over the seed XOR the subtree root's heap
+/// index (`2^top + prefix`, distinct for every root), node `2^r + q` (relative depth `r`, the next `r` bits
+/// `q`) from bit `2^r + q`. So every node's flip is its own random bit, at four hashes a coordinate.
 pub fn owen_scramble(v: u32, seed: u64) -> u32 {
+    const DEPTH: u32 = 6;
+    let wide = u64::from(v) << 32;
     let mut flips = 0u32;
-    for d in 0..SOBOL_BITS {
-        let node = (1u64 << d) | u64::from(v).checked_shr(32 - d).unwrap_or(0);
-        let flip = (SplitMix64::new(seed ^ node).next_u64() >> 63) as u32;
-        flips |= flip << (31 - d);
+    for top in (0..SOBOL_BITS).step_by(DEPTH as usize) {
+        let root = (1u64 << top) | wide.checked_shr(64 - top).unwrap_or(0);
+        let bits = SplitMix64::new(seed ^ root).next_u64();
+        for r in 0..DEPTH {
+            let node = (1u64 << r) | (wide << top).checked_shr(64 - r).unwrap_or(0);
+            flips |= ((bits >> node) as u32 & 1) << (31 - top - r);
+        }
     }
     (v ^ flips) & !(u32::MAX >> SOBOL_BITS)
 }
@@ -163,8 +172,7 @@ mod tests {
     #[test]
     fn sobol_points_are_the_first_two_dimensions() {
         let unit = |v: u32| f64::from(v) / 4_294_967_296.0;
-        let first: Vec<(f64, f64)> =
-            (0..8).map(|k| sobol_point(k)).map(|(a, b)| (unit(a), unit(b))).collect();
+        let first: Vec<(f64, f64)> = (0..8).map(sobol_point).map(|(a, b)| (unit(a), unit(b))).collect();
         let vdc = [0.0, 0.5, 0.25, 0.75, 0.125, 0.625, 0.375, 0.875];
         let second = [0.0, 0.5, 0.75, 0.25, 0.625, 0.125, 0.375, 0.875];
         assert_eq!(first, vdc.into_iter().zip(second).collect::<Vec<_>>());
@@ -268,9 +276,18 @@ mod tests {
         images.iter_mut().for_each(|v| *v >>= 20);
         images.sort();
         assert_eq!(images, (0..4096).collect::<Vec<_>>());
+        // Each level flips about half the time, and a node's flip is independent of its sibling's (the
+        // sibling of 0's node at level d is the node of 2^−d) and of its parent's.
+        let flip = |v: u32, d: u32, s: u64| owen_scramble(v, s * 0x9E37) >> (31 - d) & 1;
         for d in 0..SOBOL_BITS {
-            let flips = (0..2000u64).filter(|s| owen_scramble(0, s * 0x9E37) >> (31 - d) & 1 == 1).count();
+            let flips = (0..2000u64).filter(|&s| flip(0, d, s) == 1).count();
             assert!((900..=1100).contains(&flips), "level {d}: {flips} of 2000");
+            if d > 0 {
+                let sibling = (0..2000u64).filter(|&s| flip(0, d, s) == flip(1 << (32 - d), d, s)).count();
+                let parent = (0..2000u64).filter(|&s| flip(0, d, s) == flip(0, d - 1, s)).count();
+                assert!((900..=1100).contains(&sibling), "level {d}: siblings agree {sibling} of 2000");
+                assert!((900..=1100).contains(&parent), "level {d}: parent agrees {parent} of 2000");
+            }
         }
     }
 
