@@ -52,11 +52,10 @@ const SOBOL_BITS: u32 = 24;
 /// are a subset of those of `i`). Together they are a (0, 2)-sequence in base 2: each aligned block of 2^m
 /// points, the first one included, is a (0, m, 2)-net.
 pub fn sobol_point(k: u32) -> (u32, u32) {
-    let mut second = 0u32;
-    for (i, column) in SOBOL_PASCAL.iter().enumerate() {
-        if k >> i & 1 == 1 {
-            second ^= column;
-        }
+    let (mut second, mut bits) = (0u32, k);
+    while bits != 0 {
+        second ^= SOBOL_PASCAL[bits.trailing_zeros() as usize];
+        bits &= bits - 1;
     }
     (k.reverse_bits(), second)
 }
@@ -91,16 +90,19 @@ const SOBOL_PASCAL: [u32; 32] = {
 /// index (`2^top + prefix`, distinct for every root), node `2^r + q` (relative depth `r`, the next `r` bits
 /// `q`) from bit `2^r + q`. So every node's flip is its own random bit, at four hashes a coordinate.
 pub fn owen_scramble(v: u32, seed: u64) -> u32 {
-    const DEPTH: u32 = 6;
-    let wide = u64::from(v) << 32;
+    const _: () = assert!(SOBOL_BITS == 4 * 6, "four subtrees of six levels");
     let mut flips = 0u32;
-    for top in (0..SOBOL_BITS).step_by(DEPTH as usize) {
-        let root = (1u64 << top) | wide.checked_shr(64 - top).unwrap_or(0);
+    for top in [0, 6, 12, 18] {
+        // The root's prefix (`top` bits; none for the first subtree) and the subtree's six bits of `v`.
+        let root = (1u64 << top) | u64::from(v) >> (32 - top);
+        let chunk = v >> (26 - top) & 63;
         let bits = SplitMix64::new(seed ^ root).next_u64();
-        for r in 0..DEPTH {
-            let node = (1u64 << r) | (wide << top).checked_shr(64 - r).unwrap_or(0);
-            flips |= ((bits >> node) as u32 & 1) << (31 - top - r);
+        let mut local = 0u32;
+        for r in 0..6 {
+            let node = (1 << r) | chunk >> (6 - r);
+            local |= ((bits >> node) as u32 & 1) << (5 - r);
         }
+        flips |= local << (26 - top);
     }
     (v ^ flips) & !(u32::MAX >> SOBOL_BITS)
 }
