@@ -643,6 +643,74 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     assert!(stderr(&bad).contains("unknown method `halton`"));
 }
 
+/// `converge --filters`: each (method, filter) pair is a series (CSV `filter` column, plot legend
+/// `method, filter`) measured against a reference with the same filter, cached per filter; adaptive ignores
+/// filters and runs under `none` only; a bad filter is an argument error.
+#[test]
+fn converge_compares_filters() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, svg) = (dir.path().join("f.csv"), dir.path().join("f.svg"));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let run = |filters: &str| {
+        bareray(&[
+            "converge",
+            scene.to_str().unwrap(),
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--methods",
+            "sobol,adaptive",
+            "--filters",
+            filters,
+            "--max-spp",
+            "4",
+            "--reference-spp",
+            "64",
+            "--csv",
+            csv.to_str().unwrap(),
+            "--plot",
+            svg.to_str().unwrap(),
+        ])
+    };
+    let first = run("none,gaussian");
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(stderr(&first).contains("adaptive ignores reconstruction filters"), "{}", stderr(&first));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("method,filter,spp,seconds,rays,rmse,rmse_edges,psnr"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let series = |m: &str, f: &str| rows.iter().filter(|r| r[0] == m && r[1] == f).count();
+    // sobol at 1, 2, 4 under each filter; adaptive's 5 thresholds under `none` only.
+    assert_eq!((series("sobol", "none"), series("sobol", "gaussian:1.5")), (3, 3), "{text}");
+    assert_eq!((series("adaptive", "none"), series("adaptive", "gaussian:1.5")), (5, 0), "{text}");
+    // Rising counts lower the error under each filter (a filter's spp counts its apron's rays too).
+    for filter in ["none", "gaussian:1.5"] {
+        let rmse: Vec<f64> = rows
+            .iter()
+            .filter(|r| r[0] == "sobol" && r[1] == filter)
+            .map(|r| r[5].parse().unwrap())
+            .collect();
+        assert!(rmse[2] < rmse[0], "{filter}: {text}");
+    }
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(plot.matches("<polyline").count(), 3, "{plot}");
+    assert!(plot.contains(">sobol, gaussian:1.5<") && plot.contains(">adaptive, none<"), "{plot}");
+    for name in ["f.reference.none.exr", "f.reference.gaussian-1.5.exr"] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+    let again = run("gaussian");
+    assert!(again.status.success() && stderr(&again).contains("filter gaussian:1.5: "), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("(cached)") && stderr(&again).contains("does not run"),
+        "{}",
+        stderr(&again)
+    );
+    let bad = run("none,sinc");
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("unknown filter `sinc`"), "{}", stderr(&bad));
+}
+
 /// `--aa sobol:N` renders with the scrambled Sobol' points and names them in the summary; `sobol:0` is an
 /// argument error that says what N may be.
 #[test]

@@ -101,6 +101,35 @@ pub fn parse_filter(s: &str) -> Result<Filter, String> {
     Ok(Filter { kind, radius })
 }
 
+/// One of `converge --filters`: a reconstruction filter, or none (each pixel averages its own samples).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterChoice(pub Option<Filter>);
+
+impl FilterChoice {
+    /// The name reports give it: `none`, or the kind and its radius in pixels (`gaussian:1.5`), as
+    /// `--filter` takes it.
+    pub fn name(self) -> String {
+        let Some(f) = self.0 else { return "none".to_owned() };
+        let kind = match f.kind {
+            FilterKind::Box => "box",
+            FilterKind::Tent => "tent",
+            FilterKind::Gaussian => "gaussian",
+            FilterKind::Mitchell => "mitchell",
+        };
+        format!("{kind}:{}", f.radius)
+    }
+}
+
+/// Parses one of `converge --filters`: `none` or `KIND[:RADIUS]` as [`parse_filter`].
+pub fn parse_filter_choice(s: &str) -> Result<FilterChoice, String> {
+    match s.trim() {
+        "none" => Ok(FilterChoice(None)),
+        _ => parse_filter(s)
+            .map(|f| FilterChoice(Some(f)))
+            .map_err(|e| format!("{e} (or `none`: each pixel averages its own samples)")),
+    }
+}
+
 /// `--ambient`: ambient coefficients, one for every material or one per material.
 #[derive(Clone, Debug, PartialEq)]
 pub struct AmbientList(pub Vec<f32>);
@@ -229,7 +258,14 @@ mod tests {
         assert_eq!(parse_filter("mitchell:1.5"), Ok(Filter { kind: FilterKind::Mitchell, radius: 1.5 }));
         for bad in ["sinc", "tent:0", "tent:9", "box:x"] {
             assert!(parse_filter(bad).is_err(), "{bad}");
+            assert!(parse_filter_choice(bad).unwrap_err().contains("`none`"), "{bad}");
         }
+        assert_eq!(parse_filter_choice("none"), Ok(FilterChoice(None)));
+        let gaussian = parse_filter_choice("gaussian").unwrap();
+        assert_eq!(gaussian, FilterChoice(Some(Filter { kind: FilterKind::Gaussian, radius: 1.5 })));
+        assert_eq!(gaussian.name(), "gaussian:1.5");
+        assert_eq!(parse_filter_choice("box:0.5").unwrap().name(), "box:0.5");
+        assert_eq!(FilterChoice(None).name(), "none");
         let e = parse_aa("grid:3").unwrap_err();
         assert!(
             e.contains("samples per pixel") && e.contains("grid:1 is 1×1") && e.contains("grid:4 is 2×2"),

@@ -3,12 +3,16 @@
 
 use std::fmt::Write as _;
 
-/// One curve: a name and its points `(seconds, error)`, both positive.
+/// One curve: a name and its points `(seconds, error)`, both positive, and how it is drawn.
 pub struct Curve {
     /// The legend's label.
     pub name: String,
     /// Points in the order to join them.
     pub points: Vec<(f64, f64)>,
+    /// Its colour, an index into a fixed palette (taken modulo its size).
+    pub colour: usize,
+    /// Its line's dash pattern, an index into a fixed set whose first is solid (modulo its size).
+    pub dash: usize,
 }
 
 /// Plot width, in SVG user units.
@@ -27,6 +31,9 @@ const BOTTOM: f64 = 60.0;
 /// Line colours, one per curve in turn (a colour-blind-safe set).
 const COLOURS: [&str; 8] =
     ["#0072B2", "#D55E00", "#009E73", "#CC79A7", "#E69F00", "#56B4E9", "#000000", "#F0E442"];
+
+/// Dash patterns (`stroke-dasharray`), one per [`Curve::dash`]; the first is a solid line.
+const DASHES: [&str; 5] = ["", "8 4", "2 3", "8 3 2 3", "14 4"];
 
 /// The decades `10^a ..= 10^b` that cover `[lo, hi]`.
 fn decades(lo: f64, hi: f64) -> (i32, i32) {
@@ -91,8 +98,14 @@ pub fn svg(title: &str, y_label: &str, curves: &[Curve]) -> String {
         TOP + ph / 2.0,
         escape(y_label)
     );
+    // Legend rows 20 apart, closer when there are more than the plot's height holds.
+    let row = (ph / curves.len().max(1) as f64).min(20.0);
     for (k, c) in curves.iter().enumerate() {
-        let colour = COLOURS[k % COLOURS.len()];
+        let colour = COLOURS[c.colour % COLOURS.len()];
+        let dash = match DASHES[c.dash % DASHES.len()] {
+            "" => String::new(),
+            d => format!(r#" stroke-dasharray="{d}""#),
+        };
         let pts: Vec<String> = c
             .points
             .iter()
@@ -101,18 +114,18 @@ pub fn svg(title: &str, y_label: &str, curves: &[Curve]) -> String {
             .collect();
         let _ = writeln!(
             s,
-            r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"/>"#,
+            r#"<polyline points="{}" fill="none" stroke="{colour}" stroke-width="2"{dash}/>"#,
             pts.join(" ")
         );
         for p in &pts {
             let (x, y) = p.split_once(',').unwrap_or(("0", "0"));
             let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="3" fill="{colour}"/>"#);
         }
-        let ly = TOP + 10.0 + 20.0 * k as f64;
+        let ly = TOP + 10.0 + row * k as f64;
         let lx = W - RIGHT + 16.0;
         let _ = writeln!(
             s,
-            r#"<line x1="{lx}" y1="{ly}" x2="{}" y2="{ly}" stroke="{colour}" stroke-width="2"/>"#,
+            r#"<line x1="{lx}" y1="{ly}" x2="{}" y2="{ly}" stroke="{colour}" stroke-width="2"{dash}/>"#,
             lx + 24.0
         );
         let _ = writeln!(s, r#"<text x="{}" y="{:.1}">{}</text>"#, lx + 30.0, ly + 4.0, escape(&c.name));
@@ -133,13 +146,26 @@ mod tests {
     #[test]
     fn the_plot_has_a_curve_and_a_legend_entry_per_method_and_labelled_axes() {
         let curves = [
-            Curve { name: "grid".into(), points: vec![(0.01, 0.1), (0.04, 0.05), (0.16, 0.02)] },
-            Curve { name: "r2 <low-discrepancy>".into(), points: vec![(0.01, 0.08), (0.04, 0.02)] },
+            Curve {
+                name: "grid".into(),
+                points: vec![(0.01, 0.1), (0.04, 0.05), (0.16, 0.02)],
+                colour: 0,
+                dash: 0,
+            },
+            Curve {
+                name: "r2 <low-discrepancy>".into(),
+                points: vec![(0.01, 0.08), (0.04, 0.02)],
+                colour: 1,
+                dash: 1,
+            },
         ];
         let s = svg("whitted.toml", "RMSE", &curves);
         assert_eq!(s.matches("<polyline").count(), 2);
         assert_eq!(s.matches("<circle").count(), 5);
         assert!(s.contains(">grid<") && s.contains("r2 &lt;low-discrepancy&gt;"));
+        // The second curve is dashed, on the plot and in the legend; the first is solid.
+        assert_eq!(s.matches(r#"stroke-dasharray="8 4""#).count(), 2);
+        assert_eq!(s.matches("stroke-dasharray").count(), 2);
         assert!(s.contains("wall time (s)") && s.contains(">RMSE<"));
         // Decade ticks 1e-2 .. 1e0 on x (0.01 to 0.16), 1e-2 .. 1e-1 on y.
         assert!(s.contains(">1e-2<") && s.contains(">1e0<") && s.contains(">1e-1<"));

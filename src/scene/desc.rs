@@ -106,6 +106,15 @@ pub enum Pattern {
 }
 
 impl Pattern {
+    /// Whether a reconstruction filter ([`RenderDesc::filter`]) applies: to the grid, stratified, R2 and
+    /// Sobol' samples; the half-pixel, adaptive and coverage patterns weigh their own rays and ignore it.
+    pub fn takes_filter(self) -> bool {
+        match self {
+            Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => true,
+            Pattern::HalfPixel | Pattern::Adaptive { .. } | Pattern::Coverage => false,
+        }
+    }
+
     /// Camera rays per pixel (the half-pixel pattern shares its 9 with the neighbours: about 4).
     pub fn rays_per_pixel(self) -> f64 {
         match self {
