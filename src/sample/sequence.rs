@@ -78,7 +78,7 @@ const SOBOL_PASCAL: [u32; 32] = {
     columns
 };
 
-/// Owen's nested uniform scramble of the 32-bit fraction `v` under `seed`, on its top [`SOBOL_BITS`] bits
+/// Owen's nested uniform scramble of the 32-bit fraction `v` under `seed`, on its top 24 bits
 /// (the rest are returned as 0). Every node of the binary tree of dyadic intervals gets its own random
 /// flip: bit `d` (from the top) of the result is bit `d` of `v` XOR the flip of the node `v`'s top `d` bits
 /// name. Points sharing an interval of width 2^−d stay in one (possibly swapped) interval of that width, so
