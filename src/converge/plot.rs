@@ -15,14 +15,16 @@ pub struct Curve {
     pub dash: usize,
 }
 
-/// Plot width, in SVG user units.
+/// Plot width, in SVG user units, when the legend's labels fit in [`RIGHT`].
 const W: f64 = 720.0;
 /// Plot height.
 const H: f64 = 480.0;
 /// Margin left of the axes (tick labels and the y label).
 const LEFT: f64 = 80.0;
-/// Margin right of the axes (the legend).
+/// Margin right of the axes (the legend), widened for longer labels.
 const RIGHT: f64 = 180.0;
+/// A generous width of one character of a 12-unit sans-serif label, for sizing the legend.
+const CHAR_W: f64 = 7.0;
 /// Margin above the axes (the title).
 const TOP: f64 = 30.0;
 /// Margin below the axes (tick labels and the x label).
@@ -52,14 +54,18 @@ pub fn svg(title: &str, y_label: &str, curves: &[Curve]) -> String {
     }
     let ((xa, xb), (ya, yb)) = (decades(x_lo, x_hi), decades(y_lo, y_hi));
     let (pw, ph) = (W - LEFT - RIGHT, H - TOP - BOTTOM);
+    // The legend: a 24-unit line sample, then the label, inside the image whatever the labels' length.
+    let longest = curves.iter().map(|c| c.name.chars().count()).max().unwrap_or(0) as f64;
+    let right = RIGHT.max(16.0 + 30.0 + CHAR_W * longest + 8.0);
+    let w = LEFT + pw + right;
     let sx = |x: f64| LEFT + (x.log10() - f64::from(xa)) / f64::from(xb - xa) * pw;
     let sy = |y: f64| TOP + ph - (y.log10() - f64::from(ya)) / f64::from(yb - ya) * ph;
     let mut s = String::new();
     let _ = writeln!(
         s,
-        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{W}" height="{H}" font-family="sans-serif" font-size="12">"#
+        r#"<svg xmlns="http://www.w3.org/2000/svg" width="{w}" height="{H}" font-family="sans-serif" font-size="12">"#
     );
-    let _ = writeln!(s, r#"<rect width="{W}" height="{H}" fill="white"/>"#);
+    let _ = writeln!(s, r#"<rect width="{w}" height="{H}" fill="white"/>"#);
     let _ = writeln!(
         s,
         r#"<text x="{}" y="18" text-anchor="middle" font-size="14">{}</text>"#,
@@ -122,7 +128,7 @@ pub fn svg(title: &str, y_label: &str, curves: &[Curve]) -> String {
             let _ = writeln!(s, r#"<circle cx="{x}" cy="{y}" r="3" fill="{colour}"/>"#);
         }
         let ly = TOP + 10.0 + row * k as f64;
-        let lx = W - RIGHT + 16.0;
+        let lx = LEFT + pw + 16.0;
         let _ = writeln!(
             s,
             r#"<line x1="{lx}" y1="{ly}" x2="{}" y2="{ly}" stroke="{colour}" stroke-width="2"{dash}/>"#,
@@ -170,5 +176,11 @@ mod tests {
         // Decade ticks 1e-2 .. 1e0 on x (0.01 to 0.16), 1e-2 .. 1e-1 on y.
         assert!(s.contains(">1e-2<") && s.contains(">1e0<") && s.contains(">1e-1<"));
         assert!(s.starts_with("<svg") && s.trim_end().ends_with("</svg>"));
+        // Short labels keep the default width; a longer one widens the image by what it needs (the label
+        // starts 46 right of the axes, 7 a character, 8 to spare: 80 + 460 + 46 + 24·7 + 8).
+        let curve = |name: &str| Curve { name: name.into(), points: vec![(0.1, 0.1)], colour: 0, dash: 2 };
+        assert!(svg("t", "RMSE", &[curve("stratified")]).contains(r#"width="720""#));
+        let s = svg("t", "RMSE", &[curve("grid"), curve("stratified, gaussian:1.5")]);
+        assert!(s.contains(r#"width="762""#) && s.contains(r#"<text x="586""#), "{s}");
     }
 }
