@@ -647,9 +647,9 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("method,spp,seconds,rays,rmse,rmse_edges,psnr"));
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(String::from).collect()).collect();
-    // grid and stratified at 1, 4, 16; r2 at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture and coverage
-    // once.
-    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 1 + 1, "{text}");
+    // grid and stratified at 1, 4, 16; r2 and sobol at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture and
+    // coverage once.
+    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 5 + 1 + 1, "{text}");
     let rmse = |method: &str, spp: f64| -> f64 {
         let at = |r: &&Vec<String>| r[0] == method && r[1].parse::<f64>().unwrap() == spp;
         rows.iter().find(at).map(|r| r[4].parse().unwrap()).unwrap()
@@ -660,7 +660,7 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
         .map(|r| (r[1].parse().unwrap(), r[4].parse().unwrap()))
         .collect();
     assert!(adaptive[4].0 > adaptive[0].0 && adaptive[4].1 < adaptive[0].1, "adaptive: {adaptive:?}");
-    for method in ["grid", "stratified", "r2"] {
+    for method in ["grid", "stratified", "r2", "sobol"] {
         assert!(rmse(method, 16.0) < 0.6 * rmse(method, 1.0), "{method}: {text}");
     }
     // Coverage has one setting, about one ray a pixel: on the edges it beats one sample per pixel.
@@ -669,13 +669,110 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let one = rows.iter().find(|r| r[0] == "grid" && r[1].parse::<f64>().unwrap() == 1.0).unwrap();
     assert!(edges(coverage) < edges(one), "{text}");
     let plot = std::fs::read_to_string(&svg).unwrap();
-    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 6);
+    assert!(plot.starts_with("<svg") && plot.matches("<polyline").count() == 7);
     assert!(stderr(&first).contains("stratified 8×8"), "{}", stderr(&first));
     let second = run(&[]);
     assert!(second.status.success() && stderr(&second).contains("(cached)"), "{}", stderr(&second));
-    let bad = run(&["--methods", "grid,sobol"]);
+    let bad = run(&["--methods", "grid,halton"]);
     assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
-    assert!(stderr(&bad).contains("unknown method `sobol`"));
+    assert!(stderr(&bad).contains("unknown method `halton`"));
+}
+
+/// `converge --filters`: each (method, filter) pair is a series (CSV `filter` column, plot legend
+/// `method, filter`) measured against a reference with the same filter, cached per filter; adaptive ignores
+/// filters and runs under `none` only; a bad filter is an argument error.
+#[test]
+fn converge_compares_filters() {
+    let dir = tempfile::tempdir().unwrap();
+    let (csv, svg) = (dir.path().join("f.csv"), dir.path().join("f.svg"));
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let run = |filters: &str| {
+        bareray(&[
+            "converge",
+            scene.to_str().unwrap(),
+            "--width",
+            "40",
+            "--height",
+            "30",
+            "--methods",
+            "sobol,adaptive",
+            "--filters",
+            filters,
+            "--max-spp",
+            "4",
+            "--reference-spp",
+            "64",
+            "--csv",
+            csv.to_str().unwrap(),
+            "--plot",
+            svg.to_str().unwrap(),
+        ])
+    };
+    let first = run("none,gaussian");
+    assert!(first.status.success(), "{}", stderr(&first));
+    assert!(stderr(&first).contains("adaptive ignores reconstruction filters"), "{}", stderr(&first));
+    let text = std::fs::read_to_string(&csv).unwrap();
+    let mut lines = text.lines();
+    assert_eq!(lines.next(), Some("method,filter,spp,seconds,rays,rmse,rmse_edges,psnr"));
+    let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
+    let series = |m: &str, f: &str| rows.iter().filter(|r| r[0] == m && r[1] == f).count();
+    // sobol at 1, 2, 4 under each filter; adaptive's 5 thresholds under `none` only.
+    assert_eq!((series("sobol", "none"), series("sobol", "gaussian:1.5")), (3, 3), "{text}");
+    assert_eq!((series("adaptive", "none"), series("adaptive", "gaussian:1.5")), (5, 0), "{text}");
+    // Rising counts lower the error under each filter (a filter's spp counts its apron's rays too).
+    for filter in ["none", "gaussian:1.5"] {
+        let rmse: Vec<f64> = rows
+            .iter()
+            .filter(|r| r[0] == "sobol" && r[1] == filter)
+            .map(|r| r[5].parse().unwrap())
+            .collect();
+        assert!(rmse[2] < rmse[0], "{filter}: {text}");
+    }
+    let plot = std::fs::read_to_string(&svg).unwrap();
+    assert_eq!(plot.matches("<polyline").count(), 3, "{plot}");
+    assert!(plot.contains(">sobol, gaussian:1.5<") && plot.contains(">adaptive, none<"), "{plot}");
+    for name in ["f.reference.none.exr", "f.reference.gaussian-1.5.exr"] {
+        assert!(dir.path().join(name).exists(), "{name}");
+    }
+    let again = run("gaussian");
+    assert!(again.status.success() && stderr(&again).contains("filter gaussian:1.5: "), "{}", stderr(&again));
+    assert!(
+        stderr(&again).contains("(cached)") && stderr(&again).contains("does not run"),
+        "{}",
+        stderr(&again)
+    );
+    let bad = run("none,sinc");
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("unknown filter `sinc`"), "{}", stderr(&bad));
+}
+
+/// `--aa sobol:N` renders with the scrambled Sobol' points and names them in the summary; `sobol:0` is an
+/// argument error that says what N may be.
+#[test]
+fn render_takes_sobol_samples() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("s.png");
+    let scene = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/whitted.toml");
+    let render = |aa: &str| {
+        bareray(&[
+            "render",
+            scene.to_str().unwrap(),
+            "-o",
+            out.to_str().unwrap(),
+            "--width",
+            "32",
+            "--stats",
+            "--aa",
+            aa,
+        ])
+    };
+    let run = render("sobol:16");
+    assert!(run.status.success(), "{}", stderr(&run));
+    let text = String::from_utf8_lossy(&run.stdout);
+    assert!(text.contains("16 samples per pixel (Sobol' sequence, Owen-scrambled per pixel)"), "{text}");
+    let bad = render("sobol:0");
+    assert_eq!(bad.status.code(), Some(2), "{}", stderr(&bad));
+    assert!(stderr(&bad).contains("samples per pixel run from 1 to 65536, got `0`"), "{}", stderr(&bad));
 }
 
 /// `converge --precision`: the f32 packet, single-ray SIMD and scalar paths give the same hits (so the same

@@ -188,7 +188,8 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
     assert!(scalar_trees >= 10, "the scalar path walked only {scalar_trees} BVHs");
 }
 
-/// The per-pixel patterns (jittered strata, rotated R2) give the same bits at every width and thread count:
+/// The per-pixel patterns (jittered strata, rotated R2, scrambled Sobol') give the same bits at every width
+/// and thread count:
 /// each pixel's positions come from its coordinates, not from the tile, thread or lane that traces it. They
 /// also differ from the regular grid (the jitter is real) and converge toward the same image: with 16
 /// samples each, both lie closer to a 64-sample stratified render than one centred sample does.
@@ -207,9 +208,9 @@ fn per_pixel_patterns_are_deterministic_and_converge() {
     };
     let bits =
         |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
-    for pattern in [Pattern::Stratified(2), Pattern::R2(3)] {
+    for pattern in [Pattern::Stratified(2), Pattern::R2(3), Pattern::Sobol(4)] {
         let reference = bits(&image(pattern, 1, 1));
-        for (lanes, threads) in [(4, 2), (8, 1), (16, 2)] {
+        for (lanes, threads) in [(1, 2), (4, 1), (4, 2), (8, 1), (16, 2)] {
             assert!(
                 bits(&image(pattern, lanes, threads)) == reference,
                 "{pattern:?} at {lanes} lanes, {threads} threads"
@@ -217,6 +218,7 @@ fn per_pixel_patterns_are_deterministic_and_converge() {
         }
     }
     assert!(bits(&image(Pattern::Stratified(2), 8, 2)) != bits(&image(Pattern::Grid(2), 8, 2)));
+    assert!(bits(&image(Pattern::Sobol(4), 8, 2)) != bits(&image(Pattern::Grid(2), 8, 2)));
     let fine = image(Pattern::Stratified(8), 16, 2);
     let err = |img: &Image| {
         img.pixels
@@ -226,7 +228,7 @@ fn per_pixel_patterns_are_deterministic_and_converge() {
             .sum::<f64>()
     };
     let one = err(&image(Pattern::Grid(1), 8, 2));
-    for pattern in [Pattern::Stratified(4), Pattern::R2(16), Pattern::Grid(4)] {
+    for pattern in [Pattern::Stratified(4), Pattern::R2(16), Pattern::Sobol(16), Pattern::Grid(4)] {
         let e = err(&image(pattern, 8, 2));
         assert!(e < 0.5 * one, "{pattern:?}: {e} against one sample's {one}");
     }
@@ -391,7 +393,7 @@ fn per_pixel_patterns_are_identical_at_every_width_with_frustum_culling() {
     (desc.camera.width, desc.camera.height) = (128, 72);
     let bits =
         |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
-    for pattern in [Pattern::Stratified(3), Pattern::R2(5)] {
+    for pattern in [Pattern::Stratified(3), Pattern::R2(5), Pattern::Sobol(6)] {
         desc.render.pattern = pattern;
         let scene = Scene::compile(&desc).unwrap();
         assert!(scene.geometry.culls_by_pyramid());

@@ -133,7 +133,7 @@ fn camera_errors_point_at_the_camera_table() {
     error_at("[camera]\nhfov = 200\n", 1, "(0, 180)");
 }
 
-/// `[render]` sampling patterns and filters: stratified and R2 with their counts, a filter with its default
+/// `[render]` sampling patterns and filters: stratified, R2 and Sobol' with their counts (Sobol' from 1), a filter with its default
 /// radius or a given one; a radius without a filter, a radius out of range and a non-square stratified count
 /// are errors at their line.
 #[test]
@@ -146,6 +146,12 @@ fn patterns_and_filters_are_read() {
         .unwrap();
     assert_eq!(d.render.pattern, Pattern::R2(5));
     assert_eq!(d.render.filter, Some(Filter { kind: FilterKind::Mitchell, radius: 1.5 }));
+    assert_eq!(
+        parse("[render]\npattern = \"sobol\"\nsamples = 16\n").unwrap().render.pattern,
+        Pattern::Sobol(16)
+    );
+    assert_eq!(parse("[render]\npattern = \"sobol\"\n").unwrap().render.pattern, Pattern::Sobol(1));
+    error_at("[render]\npattern = \"sobol\"\nsamples = 0\n", 3, "at least 1 sample");
     assert_eq!(parse("").unwrap().render.filter, None);
     error_at("[render]\nfilter_radius = 1.0\n", 2, "needs a filter");
     error_at("[render]\nfilter = \"box\"\nfilter_radius = 9.0\n", 3, "filter_radius");

@@ -345,6 +345,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
         (false, Pattern::Grid(n)) => (Some(n * n), format!("grid {n}x{n}")),
         (false, Pattern::Stratified(n)) => (Some(n * n), format!("stratified {n}x{n}")),
         (false, Pattern::R2(count)) => (Some(count), format!("r2 {count}")),
+        (false, Pattern::Sobol(count)) => (Some(count), format!("sobol {count}")),
         (false, Pattern::HalfPixel) => (None, "half-pixel".to_owned()),
         (false, Pattern::Adaptive { threshold, depth }) => {
             (None, format!("adaptive {threshold} to depth {depth}"))

@@ -10,7 +10,7 @@ use indicatif::ProgressBar;
 
 use super::camera_args::CameraArgs;
 use super::render::{load_scene, parse_lanes, parse_threads};
-use super::values::LanesArg;
+use super::values::{FilterChoice, LanesArg};
 use crate::compile::{CompileOptions, Scene};
 use crate::converge::{csv, curves, ladder, plot, study, Reference, METHODS};
 use crate::film::Image;
@@ -23,21 +23,29 @@ use crate::scene::desc::{Pattern, Transfer};
 #[command(
     after_help = "Renders a reference (32×32 stratified samples per pixel unless --reference-spp says \
 otherwise; cached next to the CSV, reused while the scene file and settings are unchanged), then each method \
-at 1, 4, 16, … samples per pixel (R2 at 1, 2, 4, …) up to --max-spp, and reports wall time, rays traced, and \
+at 1, 4, 16, … samples per pixel (R2 and Sobol at 1, 2, 4, …) up to --max-spp, and reports wall time, rays traced, and \
 the error against the reference: RMSE over the image, RMSE over edge pixels (where the primitive seen at \
 the pixel centre changes between neighbours), PSNR. Values are linear film values clamped to [0, 1].\n\n\
 Examples:\n  bareray converge scenes/whitted.toml --width 320 --height 240 --csv w.csv --plot w.svg\n  \
-bareray converge scenes/balls3.nff --methods grid,r2 --max-spp 16"
+bareray converge scenes/balls3.nff --methods grid,r2 --max-spp 16\n  \
+bareray converge scenes/field.toml --methods stratified,sobol --filters none,gaussian,mitchell --csv f.csv"
 )]
 pub struct ConvergeArgs {
     /// Scene file (.toml, .nff or .xyzr).
     pub scene: PathBuf,
-    /// Methods to compare, comma-separated: grid, stratified, r2, adaptive, lecture, coverage.
+    /// Methods to compare, comma-separated: grid, stratified, r2, sobol, adaptive, lecture, coverage.
     #[arg(long, value_delimiter = ',', default_values_t = METHODS.map(String::from), value_parser = parse_method)]
     pub methods: Vec<String>,
     /// Largest samples per pixel of a method's runs.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
     pub max_spp: u32,
+    /// Reconstruction filters to compare, comma-separated: `none` (each pixel averages its own samples) or
+    /// `KIND[:RADIUS]` as `render --filter` takes it (box, tent, gaussian, mitchell). Each (method, filter)
+    /// pair is a series of its own (CSV: a `filter` column after `method`; plot: `method, filter`), measured
+    /// against a reference rendered with the same filter. Adaptive, lecture and coverage ignore filters and
+    /// run under `none` only. Default: the scene's own filter, one series per method.
+    #[arg(long, value_delimiter = ',', value_parser = super::values::parse_filter_choice, conflicts_with = "precision")]
+    pub filters: Option<Vec<FilterChoice>>,
     /// Samples per pixel of the reference, a square number (stratified √N×√N).
     #[arg(long, default_value_t = 1024, value_parser = super::render::parse_spp)]
     pub reference_spp: u32,
@@ -97,41 +105,84 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
     }
     let lanes = args.lanes.k();
     let side = crate::io::toml::grid_side(args.reference_spp).map_err(|e| anyhow!(e))?;
-    let key = reference_key(&source, &desc, args.reference_spp);
-    let cached = args.csv.as_ref().map(|csv| csv.with_extension("reference.exr"));
-    let reference = match cached.as_deref().and_then(|path| read_cached(path, &key, &scene)) {
-        Some(image) => {
-            eprintln!(
-                "reference: {} (cached)",
-                cached.as_deref().map_or(String::new(), |p| p.display().to_string())
-            );
-            Reference::from_image(&scene, image, lanes, &pool)
-        }
-        None => {
-            eprintln!("reference: {} samples per pixel (stratified {side}×{side}) ...", args.reference_spp);
-            let reference = Reference::render(&mut scene, Pattern::Stratified(side), lanes, &pool);
-            if let Some(path) = cached.as_deref() {
-                write_image(&reference.image, path, Transfer::Linear)?;
-                std::fs::write(path.with_extension("key"), &key)?;
-            }
-            reference
-        }
+    // One pass with the scene's own filter, or one per filter of --filters, each with its own reference.
+    let passes: Vec<Option<FilterChoice>> = match &args.filters {
+        None => vec![None],
+        Some(list) => list.iter().copied().map(Some).collect(),
     };
-    let bar = ProgressBar::new(0);
-    let runs = study(&mut scene, &methods, &reference, lanes, &pool, &bar);
-    bar.finish_and_clear();
+    if args.filters.as_ref().is_some_and(|list| list.iter().any(|c| c.0.is_some())) {
+        let unfiltered = passes.contains(&Some(FilterChoice(None)));
+        for (name, _) in methods.iter().filter(|(_, p)| !p.iter().all(|p| p.takes_filter())) {
+            let under =
+                if unfiltered { "runs under `none` only" } else { "does not run (no `none` in --filters)" };
+            eprintln!("{name} ignores reconstruction filters: it {under}");
+        }
+    }
+    let mut runs = Vec::new();
+    for pass in passes {
+        if let Some(choice) = pass {
+            desc.render.filter = choice.0;
+            scene.render.filter = choice.0;
+        }
+        let label = pass.map(FilterChoice::name);
+        let key = reference_key(&source, &desc, args.reference_spp);
+        let file = match &label {
+            None => "reference.exr".to_owned(),
+            Some(name) => format!("reference.{}.exr", name.replace(':', "-")),
+        };
+        let cached = args.csv.as_ref().map(|csv| csv.with_extension(&file));
+        let filtered = label.as_ref().map_or(String::new(), |name| format!(", filter {name}"));
+        let reference = match cached.as_deref().and_then(|path| read_cached(path, &key, &scene)) {
+            Some(image) => {
+                eprintln!(
+                    "reference{filtered}: {} (cached)",
+                    cached.as_deref().map_or(String::new(), |p| p.display().to_string())
+                );
+                Reference::from_image(&scene, image, lanes, &pool)
+            }
+            None => {
+                let spp = args.reference_spp;
+                eprintln!("reference{filtered}: {spp} samples per pixel (stratified {side}×{side}) ...");
+                let reference = Reference::render(&mut scene, Pattern::Stratified(side), lanes, &pool);
+                if let Some(path) = cached.as_deref() {
+                    write_image(&reference.image, path, Transfer::Linear)?;
+                    std::fs::write(path.with_extension("key"), &key)?;
+                }
+                reference
+            }
+        };
+        // Under a filter, only the methods it applies to: the others would repeat their unfiltered runs
+        // against a filtered reference.
+        let here: Vec<(String, Vec<Pattern>)> = methods
+            .iter()
+            .filter(|(_, p)| pass.is_none_or(|c| c.0.is_none() || p.iter().all(|p| p.takes_filter())))
+            .cloned()
+            .collect();
+        let bar = ProgressBar::new(0);
+        let mut part = study(&mut scene, &here, &reference, lanes, &pool, &bar);
+        bar.finish_and_clear();
+        part.iter_mut().for_each(|r| r.filter.clone_from(&label));
+        runs.extend(part);
+    }
     let mut out = std::io::stdout().lock();
+    let width = runs.iter().map(|r| r.series().chars().count()).max().unwrap_or(0).max(11);
     writeln!(
         out,
-        "{:<11} {:>7} {:>9} {:>12} {:>10} {:>10} {:>7}",
+        "{:<width$} {:>7} {:>9} {:>12} {:>10} {:>10} {:>7}",
         "method", "spp", "seconds", "rays", "rmse", "rmse_edges", "psnr"
     )?;
     for r in &runs {
         let e = &r.errors;
         writeln!(
             out,
-            "{:<11} {:>7.2} {:>9.4} {:>12} {:>10.3e} {:>10.3e} {:>7.2}",
-            r.method, r.spp, r.seconds, r.rays, e.rmse, e.rmse_edges, e.psnr
+            "{:<width$} {:>7.2} {:>9.4} {:>12} {:>10.3e} {:>10.3e} {:>7.2}",
+            r.series(),
+            r.spp,
+            r.seconds,
+            r.rays,
+            e.rmse,
+            e.rmse_edges,
+            e.psnr
         )?;
     }
     if let Some(path) = &args.csv {
@@ -183,7 +234,13 @@ fn run_precision(
         let curves: Vec<plot::Curve> = runs
             .iter()
             .filter(|r| r.t_err[1] > 0.0)
-            .map(|r| plot::Curve { name: r.path.clone(), points: vec![(r.seconds, r.t_err[1])] })
+            .enumerate()
+            .map(|(colour, r)| plot::Curve {
+                name: r.path.clone(),
+                points: vec![(r.seconds, r.t_err[1])],
+                colour,
+                dash: 0,
+            })
             .collect();
         let title =
             format!("{}: primary hits, precision against time (f64 twin: reference)", args.scene.display());

@@ -53,7 +53,8 @@ pub struct RenderArgs {
     pub spp: Option<u32>,
     /// Sampling method and samples per pixel N, overriding the scene: `grid:N` (regular √N×√N grid of
     /// stratum centres), `stratified:N` (one jittered sample per stratum of a √N×√N grid), `r2:N` (N points
-    /// of the R2 low-discrepancy sequence, rotated per pixel), `lecture` (the 9-point half-pixel grid shared
+    /// of the R2 low-discrepancy sequence, rotated per pixel), `sobol:N` (N points of the Sobol' sequence,
+    /// Owen-scrambled per pixel; a (0, 2)-net at powers of two), `lecture` (the 9-point half-pixel grid shared
     /// with the neighbours), `adaptive[:THRESHOLD,DEPTH]` (Whitted: pixel corners shared, squares split where
     /// their corners differ by more than THRESHOLD in a channel, down to DEPTH levels; default 0.1,2),
     /// `coverage` (prefiltering: each sphere's exact covered area of the pixel, one ray per covered part and
@@ -524,6 +525,12 @@ fn pattern_name(pattern: Pattern) -> String {
         Pattern::R2(count) => {
             format!(
                 "{count} sample{} per pixel (R2 sequence, rotated per pixel)",
+                if count == 1 { "" } else { "s" }
+            )
+        }
+        Pattern::Sobol(count) => {
+            format!(
+                "{count} sample{} per pixel (Sobol' sequence, Owen-scrambled per pixel)",
                 if count == 1 { "" } else { "s" }
             )
         }

@@ -95,7 +95,7 @@ impl From<TransferArg> for Transfer {
 }
 
 /// Parses `--aa METHOD[:N]`: `grid:N` and `stratified:N` (N a square number of samples per pixel), `r2:N`
-/// (any N from 1), `lecture` (the half-pixel pattern, no N), `adaptive[:T,D]`, `coverage` (no N).
+/// and `sobol:N` (any N from 1), `lecture` (the half-pixel pattern, no N), `adaptive[:T,D]`, `coverage` (no N).
 pub fn parse_aa(s: &str) -> Result<Pattern, String> {
     let (method, count) = match s.trim().split_once(':') {
         Some((m, n)) => (m, Some(n)),
@@ -118,13 +118,14 @@ pub fn parse_aa(s: &str) -> Result<Pattern, String> {
         "grid" => Ok(Pattern::Grid(side(samples()?)?)),
         "stratified" => Ok(Pattern::Stratified(side(samples()?)?)),
         "r2" => Ok(Pattern::R2(samples()?)),
+        "sobol" => Ok(Pattern::Sobol(samples()?)),
         "adaptive" => adaptive(count),
         "lecture" if count.is_none() => Ok(Pattern::HalfPixel),
         "lecture" => Err("`lecture` is the 9-point half-pixel grid and takes no count".to_owned()),
         "coverage" if count.is_none() => Ok(Pattern::Coverage),
         "coverage" => Err("`coverage` computes each pixel's covered areas and takes no count".to_owned()),
         _ => Err(format!(
-            "unknown method `{method}`: grid:N, stratified:N, r2:N, adaptive[:T,D], lecture or coverage"
+            "unknown method `{method}`: grid:N, stratified:N, r2:N, sobol:N, adaptive[:T,D], lecture or coverage"
         )),
     }
 }
@@ -169,6 +170,35 @@ pub fn parse_filter(s: &str) -> Result<Filter, String> {
         },
     };
     Ok(Filter { kind, radius })
+}
+
+/// One of `converge --filters`: a reconstruction filter, or none (each pixel averages its own samples).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FilterChoice(pub Option<Filter>);
+
+impl FilterChoice {
+    /// The name reports give it: `none`, or the kind and its radius in pixels (`gaussian:1.5`), as
+    /// `--filter` takes it.
+    pub fn name(self) -> String {
+        let Some(f) = self.0 else { return "none".to_owned() };
+        let kind = match f.kind {
+            FilterKind::Box => "box",
+            FilterKind::Tent => "tent",
+            FilterKind::Gaussian => "gaussian",
+            FilterKind::Mitchell => "mitchell",
+        };
+        format!("{kind}:{}", f.radius)
+    }
+}
+
+/// Parses one of `converge --filters`: `none` or `KIND[:RADIUS]` as [`parse_filter`].
+pub fn parse_filter_choice(s: &str) -> Result<FilterChoice, String> {
+    match s.trim() {
+        "none" => Ok(FilterChoice(None)),
+        _ => parse_filter(s)
+            .map(|f| FilterChoice(Some(f)))
+            .map_err(|e| format!("{e} (or `none`: each pixel averages its own samples)")),
+    }
 }
 
 /// `--ambient`: ambient coefficients, one for every material or one per material.
@@ -269,6 +299,12 @@ mod tests {
         assert_eq!(parse_aa("grid:16"), Ok(Pattern::Grid(4)));
         assert_eq!(parse_aa("stratified:9"), Ok(Pattern::Stratified(3)));
         assert_eq!(parse_aa("r2:5"), Ok(Pattern::R2(5)));
+        assert_eq!(parse_aa("sobol:16"), Ok(Pattern::Sobol(16)));
+        assert_eq!(parse_aa("sobol:3"), Ok(Pattern::Sobol(3)));
+        let e = parse_aa("sobol:0").unwrap_err();
+        assert!(e.contains("from 1 to 65536") && e.contains("`0`"), "{e}");
+        assert!(parse_aa("sobol").unwrap_err().contains("`sobol:N`"));
+        assert!(parse_aa("halton:4").unwrap_err().contains("sobol:N"));
         assert_eq!(parse_aa("lecture"), Ok(Pattern::HalfPixel));
         assert_eq!(parse_aa("coverage"), Ok(Pattern::Coverage));
         assert!(parse_aa("coverage:4").unwrap_err().contains("takes no count"));
@@ -280,7 +316,8 @@ mod tests {
             "r2:0",
             "r2:x",
             "lecture:9",
-            "sobol:4",
+            "sobol:x",
+            "sobol:65537",
             "",
             "adaptive:0,2",
             "adaptive:0.1,9",
@@ -292,7 +329,14 @@ mod tests {
         assert_eq!(parse_filter("mitchell:1.5"), Ok(Filter { kind: FilterKind::Mitchell, radius: 1.5 }));
         for bad in ["sinc", "tent:0", "tent:9", "box:x"] {
             assert!(parse_filter(bad).is_err(), "{bad}");
+            assert!(parse_filter_choice(bad).unwrap_err().contains("`none`"), "{bad}");
         }
+        assert_eq!(parse_filter_choice("none"), Ok(FilterChoice(None)));
+        let gaussian = parse_filter_choice("gaussian").unwrap();
+        assert_eq!(gaussian, FilterChoice(Some(Filter { kind: FilterKind::Gaussian, radius: 1.5 })));
+        assert_eq!(gaussian.name(), "gaussian:1.5");
+        assert_eq!(parse_filter_choice("box:0.5").unwrap().name(), "box:0.5");
+        assert_eq!(FilterChoice(None).name(), "none");
         let e = parse_aa("grid:3").unwrap_err();
         assert!(
             e.contains("samples per pixel") && e.contains("grid:1 is 1×1") && e.contains("grid:4 is 2×2"),

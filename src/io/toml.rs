@@ -86,6 +86,7 @@ enum PatternToml {
     HalfPixel,
     Stratified,
     R2,
+    Sobol,
     Coverage,
 }
 
@@ -435,6 +436,11 @@ impl Reader<'_> {
                 return Err(self.err(s.span(), "the R2 pattern takes at least 1 sample per pixel"));
             }
             (PatternToml::R2, Some(s)) => Pattern::R2(*s.get_ref()),
+            (PatternToml::Sobol, None) => Pattern::Sobol(1),
+            (PatternToml::Sobol, Some(s)) if *s.get_ref() == 0 => {
+                return Err(self.err(s.span(), "the Sobol pattern takes at least 1 sample per pixel"));
+            }
+            (PatternToml::Sobol, Some(s)) => Pattern::Sobol(*s.get_ref()),
             (PatternToml::Coverage, Some(s)) => {
                 return Err(self.err(s.span(), "the coverage pattern computes areas and takes no samples"));
             }

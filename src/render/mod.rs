@@ -362,8 +362,13 @@ pub fn for_each_packet_at<F: Lanes>(
             let (dx, dy) = match offsets {
                 Offsets::Shared(dx, dy) => (F::splat_f32(*dx), F::splat_f32(*dy)),
                 Offsets::PerPixel(at) => {
-                    let lane = |i: usize| at(x0 + i as u32 % bw, y0 + i as u32 / bw);
-                    (F::from_fn(|i| lane(i).0), F::from_fn(|i| lane(i).1))
+                    // Each lane's offset once (a scrambled or hashed position costs several hashes).
+                    let mut lanes = [(0.0, 0.0); 16];
+                    debug_assert!(F::K <= lanes.len());
+                    for (i, o) in lanes.iter_mut().enumerate().take(F::K) {
+                        *o = at(x0 + i as u32 % bw, y0 + i as u32 / bw);
+                    }
+                    (F::from_fn(|i| lanes[i].0), F::from_fn(|i| lanes[i].1))
                 }
             };
             let sx = (F::splat_f32(x0 as f32) + lane_x) + dx;

@@ -24,7 +24,7 @@ pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: 
             return adaptive_tile(camera, tracer, tile, threshold, depth)
         }
         Pattern::Coverage => return super::coverage::coverage_tile(scene, tracer, tile),
-        Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) => {}
+        Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => {}
     }
     if let Some(filter) = scene.render.filter {
         return filtered_tile(scene, tracer, tile, filter);
@@ -69,6 +69,7 @@ fn sample_offset(pattern: Pattern, grid: &[(f32, f32)], k: u32, x: u32, y: u32) 
         Pattern::Grid(_) => grid[k as usize],
         Pattern::Stratified(n) => sequence::stratified(n, x, y, k),
         Pattern::R2(_) => sequence::r2(x, y, k),
+        Pattern::Sobol(_) => sequence::sobol(x, y, k),
         Pattern::HalfPixel | Pattern::Adaptive { .. } | Pattern::Coverage => {
             unreachable!("the half-pixel, adaptive and coverage patterns have their own reconstruction")
         }

@@ -83,6 +83,10 @@ pub enum Pattern {
     Stratified(u32),
     /// N points of the R2 low-discrepancy sequence, rotated by a per-pixel random shift; box filter.
     R2(u32),
+    /// N points of the Sobol' sequence's first two dimensions under an Owen (nested uniform) scramble seeded
+    /// per pixel; box filter. Any N from 1; at powers of two each pixel's points form a (0, m, 2)-net in base
+    /// 2 (every elementary interval of area 1/N holds one).
+    Sobol(u32),
     /// Whitted's adaptive supersampling: the pixel corners (shared with the neighbours) are traced, and a
     /// square whose corners differ by more than `threshold` in some channel is split into four, down to
     /// `depth` levels; a square's value is its corners' mean, or its quarters' mean when split. Flat
@@ -102,11 +106,20 @@ pub enum Pattern {
 }
 
 impl Pattern {
+    /// Whether a reconstruction filter ([`RenderDesc::filter`]) applies: to the grid, stratified, R2 and
+    /// Sobol' samples; the half-pixel, adaptive and coverage patterns weigh their own rays and ignore it.
+    pub fn takes_filter(self) -> bool {
+        match self {
+            Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => true,
+            Pattern::HalfPixel | Pattern::Adaptive { .. } | Pattern::Coverage => false,
+        }
+    }
+
     /// Camera rays per pixel (the half-pixel pattern shares its 9 with the neighbours: about 4).
     pub fn rays_per_pixel(self) -> f64 {
         match self {
             Pattern::Grid(n) | Pattern::Stratified(n) => f64::from(n * n),
-            Pattern::R2(count) => f64::from(count),
+            Pattern::R2(count) | Pattern::Sobol(count) => f64::from(count),
             Pattern::HalfPixel => 4.0,
             // At least the shared corners, or one ray a pixel; how many more depends on the image.
             Pattern::Adaptive { .. } | Pattern::Coverage => 1.0,
