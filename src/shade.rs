@@ -1,11 +1,11 @@
 //! Whitted shading for packets of K rays: ambient + Lambert + Phong from coloured point lights, hard shadows
 //! by packet occlusion queries, mirror reflection and refraction (Snell, total internal reflection, optional
 //! Fresnel) as masked packets, to a depth limit; or ambient occlusion (`ao.rs`). Generic over the lane type;
-//! K = 1 is the scalar reference.
+//! K = 1 is single-ray SIMD (one ray; the BVH walk is SIMD over a node's children).
 //!
 //! Work that differs per lane and has no exact SIMD form (surface lookup by primitive id, material fetch,
 //! checker `floor`, Phong's `powf`) is done lane by lane with the scalar code, so every width computes the
-//! same bits; everything else is lane arithmetic in the scalar path's operation order.
+//! same bits; everything else is lane arithmetic in the one-ray f32 code's operation order.
 
 mod ao;
 
@@ -61,12 +61,12 @@ fn lanes_set<F: Lanes>(m: F::Mask) -> u64 {
 /// Whether a secondary packet has so few live lanes (at most 3/4 of K) that tracing them one by one beats
 /// tracing the packet: below that, the packet walk visits nodes for lanes that are not there. The share was
 /// measured on sphereflakes at K = 8 and 16 (docs/perf-log/2026-11.md): anything from 1/2 to 7/8 of K gave about
-/// the same; all of K lost on the coherent first reflections; never going scalar was 10–15% slower.
+/// the same; all of K lost on the coherent first reflections; never going one ray at a time was 10–15% slower.
 fn is_sparse<F: Lanes>(active: F::Mask) -> bool {
     4 * lanes_set::<F>(active) <= 3 * F::K as u64
 }
 
-/// The live lanes of a secondary packet traced one at a time by the scalar tracer. A lane's scalar trace
+/// The live lanes of a secondary packet traced one at a time by the K = 1 tracer. A lane's K = 1 trace
 /// computes the same bits as the packet trace, so only the time changes.
 fn trace_lane_by_lane<F: Lanes>(
     scalar: &mut Tracer<'_, f32>,
@@ -130,7 +130,7 @@ pub struct Tracer<'a, F: Lanes> {
     shadow_hints: Vec<u32>,
     /// A sphere that blocked the last ambient occlusion packet, tested first for the next one.
     ao_hint: u32,
-    /// The scalar tracer that secondary packets with few live lanes are handed to, lane by lane (`None`
+    /// The K = 1 tracer that secondary packets with few live lanes are handed to, lane by lane (`None`
     /// for K = 1).
     sparse: Option<Box<Tracer<'a, f32>>>,
     lanes: PhantomData<F>,
