@@ -6,10 +6,10 @@
 #
 # With DROP_CACHES=1 (root) the page cache is dropped before every run and the run's files read back in, so
 # each run's program text lands on fresh physical pages: on these VMs one load of a binary can run 10-15%
-# slower than another load of the same bytes, for as long as its pages stay cached (PERF.md, session 12).
+# slower than another load of the same bytes, for as long as its pages stay cached (docs/perf-log/2026-11.md, session 12).
 #
 # The header and footer give the load average and the share of CPU time the hypervisor took (steal): the ratio
-# has measured 10.4-10.6x on a quiet host and 9.4-9.9x on a loaded one (PERF.md, sessions 13-14).
+# has measured 10.4-10.6x on a quiet host and 9.4-9.9x on a loaded one (docs/perf-log/2026-11.md, sessions 13-14).
 #
 # usage: run_pov_pair.sh path/to/bareray [more builds...]     env: ROUNDS=8 THREADS=2 DROP_CACHES=0
 set -euo pipefail
