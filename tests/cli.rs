@@ -1052,3 +1052,100 @@ fn stats_count_ambient_occlusion_rays() {
     let distance = 0.25 * 1.6 * 3f64.sqrt();
     assert!((shown.parse::<f64>().unwrap() - distance).abs() < 1e-12, "{distance}: {text}");
 }
+
+/// `--accel pkd` maps an `.f32r` field and renders the BVH's image byte for byte; `auto` takes the tree
+/// when `--memory` leaves too little for the BVH and says why in `--stats`; a field too large for either is
+/// refused before loading, with the largest count that fits, exit 1 and the old output kept.
+#[test]
+fn the_particle_tree_renders_the_bvhs_image_and_memory_decides_auto() {
+    let dir = tempfile::tempdir().unwrap();
+    let field = dir.path().join("f.f32r");
+    let field_s = field.to_str().unwrap();
+    assert!(bareray(&["gen", "field", "--count", "20000", "-o", field_s]).status.success());
+    let render = |accel: &str, extra: &[&str]| {
+        let out = dir.path().join(format!("{accel}.png"));
+        let mut args =
+            vec!["render", field_s, "--width", "200", "--height", "120", "--stats", "--accel", accel];
+        args.extend_from_slice(&["-o", out.to_str().unwrap()]);
+        args.extend_from_slice(extra);
+        let run = bareray(&args);
+        (run, out)
+    };
+    let (bvh, bvh_png) = render("bvh", &[]);
+    assert!(bvh.status.success(), "{}", stderr(&bvh));
+    let (pkd, pkd_png) = render("pkd", &[]);
+    assert!(pkd.status.success(), "{}", stderr(&pkd));
+    let stats = String::from_utf8_lossy(&pkd.stdout);
+    assert!(stats.contains("spheres by the particle tree over the mapped file"), "{stats}");
+    assert_eq!(std::fs::read(&bvh_png).unwrap(), std::fs::read(&pkd_png).unwrap());
+    // 20 000 spheres: the tree needs 0.4 MB and the BVH 1.8 MB beside the 256 MB reserve.
+    let (auto, auto_png) = render("auto", &["--memory", "257M"]);
+    assert!(auto.status.success(), "{}", stderr(&auto));
+    let stats = String::from_utf8_lossy(&auto.stdout);
+    assert!(stats.contains("chosen by auto: the particle tree, as the BVH would need"), "{stats}");
+    assert_eq!(std::fs::read(&bvh_png).unwrap(), std::fs::read(&auto_png).unwrap());
+    let (auto, _) = render("auto", &["--memory", "1G"]);
+    assert!(String::from_utf8_lossy(&auto.stdout).contains("spheres by BVH"));
+    // Too large for either: refused before loading, the old image kept.
+    let keep = dir.path().join("keep.png");
+    std::fs::copy(&bvh_png, &keep).unwrap();
+    let keep_s = keep.to_str().unwrap();
+    let refused = bareray(&["render", field_s, "--memory", "262244K", "-o", keep_s]);
+    assert_eq!(refused.status.code(), Some(1));
+    let err = stderr(&refused);
+    // 100 KiB above the reserve: 102400 / 21 bytes.
+    assert!(err.contains(field_s) && err.contains("at most 4876 spheres fit"), "{err}");
+    assert_eq!(std::fs::read(&bvh_png).unwrap(), std::fs::read(&keep).unwrap());
+    let planned = bareray(&["render", field_s, "--accel", "bvh", "--memory", "1K", "-o", keep_s]);
+    assert!(planned.status.success(), "--accel bvh plans no memory: {}", stderr(&planned));
+}
+
+/// Hostile `.f32r` files are refused by the mapped reader as by the plain one: exit 1, the file and the
+/// byte offset named, no panic.
+#[test]
+fn hostile_f32r_files_are_refused_by_the_mapped_reader() {
+    let dir = tempfile::tempdir().unwrap();
+    let good = dir.path().join("good.f32r");
+    assert!(bareray(&["gen", "field", "--count", "100", "-o", good.to_str().unwrap()]).status.success());
+    let bytes = std::fs::read(&good).unwrap();
+    let mut nan = bytes.clone();
+    nan[16 + 16 * 7 + 4..16 + 16 * 7 + 8].copy_from_slice(&f32::NAN.to_le_bytes());
+    let mut lying = bytes.clone();
+    lying[12..16].copy_from_slice(&1000u32.to_le_bytes());
+    let cases: [(&str, Vec<u8>, &str); 6] = [
+        ("text", b"0 0 0 1\n1 1 1 1\n2 2 2 1\n".to_vec(), "not an .f32r sphere list"),
+        ("truncated", bytes[..16 + 16 * 50 + 5].to_vec(), "ends inside record 50 (byte 816)"),
+        ("lying", lying, "the header's count is 1000"),
+        ("nan", nan, "record 7 (byte 128): y is not finite"),
+        ("header", bytes[..10].to_vec(), "ends inside the 16-byte header"),
+        ("empty", Vec::new(), "ends inside the 16-byte header, after 0 bytes"),
+    ];
+    for (name, content, want) in cases {
+        let path = dir.path().join(format!("{name}.f32r"));
+        std::fs::write(&path, content).unwrap();
+        let out = dir.path().join("out.png");
+        let run = bareray(&["render", path.to_str().unwrap(), "--accel", "pkd", "-o", out.to_str().unwrap()]);
+        assert_eq!(run.status.code(), Some(1), "{name}");
+        let err = stderr(&run);
+        assert!(err.contains(path.to_str().unwrap()) && err.contains(want), "{name}: {err}");
+        assert!(!err.contains("panicked"), "{name}: {err}");
+    }
+}
+
+/// `convert` streams `.xyzr` text into `.f32r` (the same bytes `gen` writes for the same field), and a bad
+/// line is named with its number, exit 1 and no output file.
+#[test]
+fn convert_streams_text_into_binary() {
+    let dir = tempfile::tempdir().unwrap();
+    let p = |name: &str| dir.path().join(name).to_str().unwrap().to_owned();
+    assert!(bareray(&["gen", "field", "--count", "3000", "-o", &p("g.f32r")]).status.success());
+    assert!(bareray(&["gen", "field", "--count", "3000", "-o", &p("g.xyzr")]).status.success());
+    let run = bareray(&["convert", &p("g.xyzr"), "-o", &p("c.f32r")]);
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert_eq!(std::fs::read(p("g.f32r")).unwrap(), std::fs::read(p("c.f32r")).unwrap());
+    std::fs::write(p("bad.xyzr"), "# two good, one bad\n0 0 0 1\n1 1 1 0.5\n\n2 2 x 1\n").unwrap();
+    let run = bareray(&["convert", &p("bad.xyzr"), "-o", &p("bad.f32r")]);
+    assert_eq!(run.status.code(), Some(1));
+    assert!(stderr(&run).contains("bad.xyzr:5"), "{}", stderr(&run));
+    assert!(!Path::new(&p("bad.f32r")).exists());
+}

@@ -156,7 +156,7 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
     let mut scenes = scene_files(&root);
     scenes.extend(scene_files(&root.join("stress")));
     scenes.sort();
-    let (mut checked, mut scalar_trees) = (0, 0);
+    let (mut checked, mut scalar_trees, mut particle_trees) = (0, 0, 0);
     for path in &scenes {
         let mut desc = bareray::io::load(path).unwrap();
         desc.camera.width = 96;
@@ -182,9 +182,33 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
             });
             assert!(same, "{path:?} differs at lanes {lanes}, threads {threads}");
         }
+        // The spheres in the particle tree instead of the BVH: the same bits (coverage prefilters spheres
+        // from the BVH's arrays and does not take the tree).
+        if desc.render.pattern != bareray::scene::desc::Pattern::Coverage {
+            let options = bareray::compile::CompileOptions {
+                accel: bareray::compile::Accel::Particles,
+                ..Default::default()
+            };
+            let scene = Scene::compile_with_options(&desc, options).unwrap();
+            assert_eq!(scene.geometry.particles.len(), desc.spheres.len());
+            for (lanes, threads) in [(1, 1), (4, 2), (8, 1), (16, 2)] {
+                let rendered =
+                    render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
+                assert_eq!(rendered.counts, reference.counts, "{path:?} particle tree counts, lanes {lanes}");
+                let same = rendered
+                    .image
+                    .pixels
+                    .iter()
+                    .zip(&reference.image.pixels)
+                    .all(|(a, b)| [a.x, a.y, a.z].map(f32::to_bits) == [b.x, b.y, b.z].map(f32::to_bits));
+                assert!(same, "{path:?} differs in the particle tree at lanes {lanes}, threads {threads}");
+            }
+            particle_trees += 1;
+        }
         checked += 1;
     }
     assert!(checked >= 18, "toml, nff and xyzr scenes, and the stress scenes: {checked}");
+    assert!(particle_trees >= 16, "only {particle_trees} scenes rendered with the particle tree");
     assert!(scalar_trees >= 10, "the scalar path walked only {scalar_trees} BVHs");
 }
 

@@ -45,6 +45,10 @@ impl Geometry {
     fn exit_of_departure(&self, ray: &Ray<f32>, prim: u32, t_max: f32) -> Option<f32> {
         let roots = match self.prim(prim) {
             PrimRef::Sphere(i) => sphere_roots(self.spheres.center(i), self.spheres.r[i], ray),
+            PrimRef::Particle(i) => {
+                let (centre, r) = self.particles.sphere(i);
+                sphere_roots(centre, r, ray)
+            }
             PrimRef::Shape(shape) if shape.kind.is_solid() => shape.unit_sphere_roots(&shape.to_object(ray)),
             PrimRef::Cone(k) => {
                 let (hit, t) = rehit_cone(&self.cones.cone(k), ray, t_max);

@@ -12,6 +12,7 @@ mod cone_query;
 mod departure;
 mod item_query;
 mod near_first;
+pub mod pkd;
 mod polygons;
 mod shape_query;
 mod sphere_query;
@@ -19,6 +20,7 @@ mod triangle_query;
 pub use cone_query::{ConeItems, ConeQuery};
 pub use item_query::{ItemQuery, ItemTest};
 pub use near_first::NearFirst;
+pub use pkd::Particles;
 pub use polygons::Polygons;
 pub use shape_query::{ShapeQuery, Shapes};
 pub use sphere_query::SphereQuery;
@@ -84,13 +86,16 @@ pub(crate) fn count_work(prim_tests: usize, box_tests: usize) {
     });
 }
 
-/// All primitives: spheres have ids `0..spheres.len()`, then the shapes, then the polygons, then the cones.
+/// All primitives: spheres have ids `0..spheres.len()`, then the spheres of the particle tree (a scene has
+/// one or the other), then the shapes, then the polygons, then the cones.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// Plain spheres, in BVH leaf order when there is a BVH.
     pub spheres: Spheres,
     /// The BVH over the spheres, or `None` for brute force.
     pub sphere_bvh: Option<Bvh>,
+    /// Spheres in a particle tree (`--accel pkd`, for fields too large for a BVH) instead of `spheres`.
+    pub particles: Particles,
     /// Transformed generic shapes, in file order.
     pub shapes: Vec<Shape<f32>>,
     /// The BVH over the bounded shapes, or `None` when every shape is tested brute force.
@@ -157,6 +162,8 @@ fn occluded_items<F: Lanes, Q: LeafQuery<F>>(
 pub enum PrimRef<'a> {
     /// Index into [`Geometry::spheres`].
     Sphere(usize),
+    /// Position in [`Geometry::particles`].
+    Particle(usize),
     /// A transformed shape.
     Shape(&'a Shape<f32>),
     /// Index into [`Geometry::polygons`].
@@ -250,7 +257,10 @@ impl Geometry {
 
     /// Whether the scene has primitives other than spheres.
     fn has_other_kinds(&self) -> bool {
-        !(self.polygons.is_empty() && self.shapes.is_empty() && self.cones.is_empty())
+        !(self.polygons.is_empty()
+            && self.shapes.is_empty()
+            && self.cones.is_empty()
+            && self.particles.is_empty())
     }
 
     /// The closest hits of every kind but spheres, merged into `best`.
@@ -260,6 +270,7 @@ impl Geometry {
         from: &DeparturePacket<F>,
         best: &mut HitPacket<F>,
     ) {
+        self.particles.intersect_k(rays, from, self.spheres.len() as u32, best);
         if !self.polygons.is_empty() {
             let q = self.triangle_query(rays, from);
             intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, best);
@@ -317,6 +328,13 @@ impl Geometry {
             }
             blocked = blocked
                 | occluded_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), live & !blocked, hint);
+            if (blocked | !live).all() {
+                return blocked;
+            }
+        }
+        if !self.particles.is_empty() {
+            let base = self.spheres.len() as u32;
+            blocked = blocked | self.particles.occluded_k(rays, from, base, live & !blocked);
             if (blocked | !live).all() {
                 return blocked;
             }
@@ -384,7 +402,7 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> (ShapeQuery<'a, F>, ShapeQuery<'a, F>) {
-        let base = self.spheres.len() as u32;
+        let base = self.shape_base() as u32;
         let query = |order| Self::item_query(Shapes { shapes: &self.shapes, order, base }, rays, from);
         match self.shape_bvh {
             Some(_) => (query(Some(&self.shape_order)), query(Some(&self.loose_shapes))),
@@ -482,10 +500,15 @@ impl Geometry {
         F::Ids::from_fn(|i| if F::mask_lane(lanes, i) { self.file_id(prims.lane(i)) } else { NO_PRIM })
     }
 
-    /// The scene-file id of primitive `prim` (spheres are stored in BVH order; other ids are unchanged).
+    /// The scene-file id of primitive `prim` (spheres are stored in BVH or particle-tree order; other ids
+    /// are unchanged).
     pub fn file_id(&self, prim: u32) -> u32 {
-        match self.spheres.key.get(prim as usize) {
+        let (i, spheres) = (prim as usize, self.spheres.len());
+        match self.spheres.key.get(i) {
             Some(&id) => id,
+            None if (spheres..self.shape_base()).contains(&i) => {
+                (spheres + self.particles.key(i - spheres) as usize) as u32
+            }
             None => prim,
         }
     }
@@ -499,9 +522,14 @@ impl Geometry {
         self.len() == 0
     }
 
+    /// The id of the first shape (shape k has id `shape_base() + k`).
+    pub fn shape_base(&self) -> usize {
+        self.spheres.len() + self.particles.len()
+    }
+
     /// The id of the first polygon (polygon k has id `polygon_base() + k`).
     pub fn polygon_base(&self) -> usize {
-        self.spheres.len() + self.shapes.len()
+        self.shape_base() + self.shapes.len()
     }
 
     /// The id of the first cone (cone k has id `cone_base() + k`).
@@ -514,8 +542,10 @@ impl Geometry {
         let i = prim as usize;
         if i < self.spheres.len() {
             PrimRef::Sphere(i)
+        } else if i < self.shape_base() {
+            PrimRef::Particle(i - self.spheres.len())
         } else if i < self.polygon_base() {
-            PrimRef::Shape(&self.shapes[i - self.spheres.len()])
+            PrimRef::Shape(&self.shapes[i - self.shape_base()])
         } else if i < self.cone_base() {
             PrimRef::Polygon(i - self.polygon_base())
         } else {
@@ -534,6 +564,7 @@ impl Geometry {
     pub fn eye_inside(&self, prim: u32) -> Option<bool> {
         let c_eye = match self.prim(prim) {
             PrimRef::Sphere(i) => self.spheres.c_eye[i],
+            PrimRef::Particle(i) => self.particles.c_eye(i),
             PrimRef::Shape(shape) if shape.kind.is_solid() => shape.c_eye,
             _ => return None,
         };
@@ -549,6 +580,12 @@ impl Geometry {
                 let object_point = point - self.spheres.center(i);
                 let normal = object_point.normalize();
                 SurfacePoint { point, normal, object_point, material: self.spheres.material[i] }
+            }
+            PrimRef::Particle(i) => {
+                let (centre, _) = self.particles.sphere(i);
+                let object_point = point - centre;
+                let normal = object_point.normalize();
+                SurfacePoint { point, normal, object_point, material: self.particles.material(i) }
             }
             PrimRef::Polygon(k) => {
                 let p = &self.polygons;

@@ -10,7 +10,7 @@ use super::gen::check_extension;
 use super::render::{load_scene, parse_threads};
 use super::usage;
 use crate::io::{f32r, xyzr, SceneFormat};
-use crate::output::write_atomic_with;
+use crate::output::{write_atomic, write_atomic_with};
 use crate::scene::desc::SphereDesc;
 
 /// Arguments of `bareray convert`.
@@ -35,6 +35,30 @@ pub fn run(args: ConvertArgs) -> Result<()> {
     let binary = check_extension(&args.output, &["xyzr", "f32r"])? == "f32r";
     if !matches!(SceneFormat::from_extension(&args.input), Some(SceneFormat::Xyzr | SceneFormat::F32r)) {
         return Err(usage(format!("{}: convert reads sphere lists, .xyzr or .f32r", args.input.display())));
+    }
+    if binary && SceneFormat::from_extension(&args.input) == Some(SceneFormat::Xyzr) {
+        // Text to binary streams, in memory independent of the list's size.
+        let mut count = 0;
+        let mut failure = None;
+        let written = write_atomic(&args.output, |tmp| {
+            let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(tmp)?);
+            match xyzr::stream_to_f32r(&args.input, &mut w) {
+                Ok(n) => count = n,
+                Err(xyzr::StreamError::Write(e)) => return Err(e.into()),
+                Err(xyzr::StreamError::Scene(e)) => {
+                    failure = Some(e);
+                    return Err("bad input".into());
+                }
+            }
+            w.into_inner().map_err(|e| e.into_error())?.sync_all()?;
+            Ok(())
+        });
+        if let Some(e) = failure {
+            return Err(e.into());
+        }
+        written.map_err(|e| anyhow::anyhow!("{}: cannot write: {e}", args.output.display()))?;
+        println!("{}: {count} spheres in {:.3} s", args.output.display(), start.elapsed().as_secs_f64());
+        return Ok(());
     }
     let desc = load_scene(&args.input, &crate::render::thread_pool(args.threads)?)?;
     let spheres = &desc.spheres;

@@ -9,9 +9,9 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::camera_args::CameraArgs;
-use super::values::{BvhPresetArg, LanesArg, TransferArg};
+use super::values::{AccelArg, BvhPresetArg, LanesArg, TransferArg};
 use crate::aov::{self, AovList};
-use crate::compile::{CompileOptions, Scene};
+use crate::compile::{load, Accel, CompileOptions, Scene};
 use crate::io::toml;
 use crate::math::Rgb;
 use crate::output::{BitDepth, Format, WriteOptions};
@@ -133,6 +133,16 @@ pub struct RenderArgs {
     /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").
     #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
     pub bvh_preset: BvhPresetArg,
+    /// How the spheres are searched: `auto` (a BVH, or the particle tree when the BVH would not fit in
+    /// memory), `bvh`, `brute` or `pkd` (the particle tree: 5 bytes per sphere beside the spheres; an .f32r
+    /// file is mapped, not read). The image is the same bits whichever is used.
+    #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
+    pub accel: AccelArg,
+    /// The memory a render may plan for, in bytes with an optional K, M, G or T suffix (powers of 1024).
+    /// Default: what the system has available (MemAvailable, or a container's limit). Decides what `auto`
+    /// picks; a field that fits neither structure is refused before it is loaded.
+    #[arg(long, value_name = "BYTES", value_parser = super::values::parse_bytes)]
+    pub memory: Option<u64>,
     /// No progress bar and no summary line.
     #[arg(short, long)]
     pub quiet: bool,
@@ -214,13 +224,16 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
     // Reading and the build run on the render's threads too: `--threads 1` means one core throughout.
     let pool = crate::render::thread_pool(threads)?;
     let clock = Instant::now();
-    let (mut desc, name) = match &args.scene {
+    let memory = args.memory.unwrap_or_else(crate::compile::memory::available);
+    let in_memory = |desc| load::loaded_desc(desc, args.accel.into(), memory);
+    let (mut loaded, name) = match &args.scene {
         Some(path) if path == Path::new("-") => {
-            (pool.install(|| read_stdin_scene(args))?, "stdin".to_owned())
+            (in_memory(pool.install(|| read_stdin_scene(args))?), "stdin".to_owned())
         }
-        Some(path) => (load_scene(path, &pool)?, stem(path)),
-        None => (toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?, "demo".to_owned()),
+        Some(path) => (pool.install(|| load::load(path, args.accel.into(), memory))?, stem(path)),
+        None => (in_memory(toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?), "demo".to_owned()),
     };
+    let desc = &mut loaded.desc;
     let output = args.output.clone().unwrap_or_else(|| PathBuf::from(format!("{name}.png")));
     let to_stdout = crate::output::is_stdout(&output);
     if to_stdout && (args.aov.is_some() || args.resume) {
@@ -234,9 +247,20 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
             output.display()
         )));
     }
-    apply_overrides(&mut desc, args)?;
+    apply_overrides(desc, args)?;
+    if loaded.accel == Accel::Particles {
+        if let Some(why) = load::particles_unsupported(desc) {
+            return Err(super::usage(format!("--accel pkd: {why}")));
+        }
+    }
     let window = region(args, desc.camera.width, desc.camera.height)?;
-    let settings = args.resume.then(|| settings_hash(args, &desc, window, &output));
+    // A mapped field's spheres are not in the description: its size, bounds and modification time stand
+    // for them.
+    let field = loaded.mapped.as_ref().map(|m| {
+        let modified = args.scene.as_ref().and_then(|p| std::fs::metadata(p).ok()?.modified().ok());
+        format!("{m:?} {modified:?}")
+    });
+    let settings = args.resume.then(|| settings_hash(args, desc, field.as_deref(), window, &output));
     if window != Window::whole(desc.camera.width, desc.camera.height)
         && !matches!(format, Format::Png | Format::Exr | Format::Ppm)
     {
@@ -247,7 +271,7 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
     }
     let scene_name = args.scene.as_deref().unwrap_or(Path::new("<built-in demo>"));
     if warn {
-        for warning in scene_warnings(&desc) {
+        for warning in scene_warnings(desc).into_iter().filter(|_| loaded.mapped.is_none()) {
             eprintln!("warning: {}: {warning}", scene_name.display());
         }
     }
@@ -260,7 +284,7 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
         scalar: args.lanes.is_scalar(),
         ..CompileOptions::default()
     };
-    let scene = pool.install(|| Scene::compile_owned(desc, options)).context("camera")?;
+    let scene = pool.install(|| Scene::compile_loaded(loaded, options)).context("camera")?;
     time.build = clock.elapsed().as_secs_f64();
 
     let job = Job {
@@ -316,7 +340,13 @@ fn read_stdin_scene(args: &RenderArgs) -> Result<SceneDesc> {
 
 /// What decides the output's bytes, hashed: the version, the scene after the command line's overrides
 /// (every field, in Rust's exact float notation), the settings the file records and the part rendered.
-fn settings_hash(args: &RenderArgs, desc: &SceneDesc, window: Window, output: &Path) -> u64 {
+fn settings_hash(
+    args: &RenderArgs,
+    desc: &SceneDesc,
+    field: Option<&str>,
+    window: Window,
+    output: &Path,
+) -> u64 {
     struct Fnv(u64);
     impl std::fmt::Write for Fnv {
         fn write_str(&mut self, s: &str) -> std::fmt::Result {
@@ -328,9 +358,10 @@ fn settings_hash(args: &RenderArgs, desc: &SceneDesc, window: Window, output: &P
     let _ = std::fmt::Write::write_fmt(
         &mut hash,
         format_args!(
-            "bareray {} {:?} {:?} {} {:?} {:?} {:?} {:?}",
+            "bareray {} {:?} {:?} {:?} {} {:?} {:?} {:?} {:?}",
             env!("CARGO_PKG_VERSION"),
             desc,
+            field,
             window,
             args.bit_depth,
             args.scene,
@@ -469,11 +500,21 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     );
     let _ = writeln!(out, "features: {features}");
     let search = |bvh: &Option<crate::accel::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
+    let spheres = match (&scene.accel_note, g.particles.is_empty()) {
+        (_, true) => {
+            format!("{} ({:.1} bytes/sphere with the nodes)", search(&g.sphere_bvh), scene.bytes_per_sphere())
+        }
+        (why, false) => format!(
+            "the particle tree{} ({:.1} bytes/sphere with the keys{}{})",
+            if g.particles.is_mapped() { " over the mapped file" } else { "" },
+            scene.bytes_per_sphere(),
+            if why.is_some() { "; chosen by auto: " } else { "" },
+            why.as_deref().unwrap_or_default()
+        ),
+    };
     let _ = writeln!(
         out,
-        "accel: spheres by {} ({:.1} bytes/sphere with the nodes), polygons by {}, ellipsoids by {}, cones by {}",
-        search(&g.sphere_bvh),
-        scene.bytes_per_sphere(),
+        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}, cones by {}",
         search(&g.polygon_bvh),
         search(&g.shape_bvh),
         search(&g.cone_bvh),

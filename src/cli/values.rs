@@ -238,6 +238,30 @@ pub fn name(value: impl clap::ValueEnum) -> String {
     value.to_possible_value().map_or_else(String::new, |v| v.get_name().to_owned())
 }
 
+/// A byte count with an optional K, M, G or T suffix (powers of 1024): `--memory 8G`.
+pub fn parse_bytes(s: &str) -> Result<u64, String> {
+    let t = s.trim();
+    let (digits, shift) = match t.char_indices().last() {
+        Some((i, c)) if c.is_ascii_alphabetic() => {
+            let shift = match c.to_ascii_uppercase() {
+                'K' => 10,
+                'M' => 20,
+                'G' => 30,
+                'T' => 40,
+                _ => return Err(format!("'{s}': the suffix must be K, M, G or T")),
+            };
+            (&t[..i], shift)
+        }
+        _ => (t, 0),
+    };
+    let value: f64 = digits.parse().map_err(|_| format!("'{s}' is not a byte count such as 512M or 8G"))?;
+    let bytes = value * (1u64 << shift) as f64;
+    if !(bytes.is_finite() && bytes >= 1.0 && bytes < u64::MAX as f64) {
+        return Err(format!("'{s}': a byte count must be at least 1"));
+    }
+    Ok(bytes as u64)
+}
+
 /// `--accel`: [`Accel`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub enum AccelArg {
@@ -247,6 +271,9 @@ pub enum AccelArg {
     Bvh,
     /// Always brute force.
     Brute,
+    /// Spheres in the particle tree (5 bytes per sphere beside the spheres, for fields too large for a
+    /// BVH); an `.f32r` file is mapped, not read.
+    Pkd,
 }
 
 impl From<AccelArg> for Accel {
@@ -255,6 +282,7 @@ impl From<AccelArg> for Accel {
             AccelArg::Auto => Accel::Auto,
             AccelArg::Bvh => Accel::Bvh,
             AccelArg::Brute => Accel::Brute,
+            AccelArg::Pkd => Accel::Particles,
         }
     }
 }

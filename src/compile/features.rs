@@ -50,7 +50,7 @@ impl Features {
         let deep = scene.render.max_depth > 0 && !ao;
         Features {
             counts: Counts {
-                spheres: g.spheres.len(),
+                spheres: g.spheres.len() + g.particles.len(),
                 ellipsoids: kind(ShapeKind::Sphere),
                 planes: kind(ShapeKind::Plane),
                 polygons: g.polygons.len(),

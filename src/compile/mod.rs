@@ -10,12 +10,15 @@
 //! mean what they meant in world space; [`Scene::origin`] maps points back.
 
 pub mod features;
+pub mod load;
+pub mod memory;
 
 use crate::accel::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
-use crate::accel::{Geometry, Polygons};
+use crate::accel::{Geometry, Particles, Polygons};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
+use crate::io::f32r::MappedRecords;
 use crate::math::{Rgb, Vec3f, V3};
 use glam::{DAffine3, Vec3A};
 use obvhs::aabb::Aabb;
@@ -53,8 +56,10 @@ pub struct Scene {
     pub materials: Vec<Material>,
     /// Point lights.
     pub lights: Vec<Light>,
-    /// What building the BVH cost (zero without one).
+    /// What building the BVH (and the particle tree) cost (zero without one).
     pub build: BuildStats,
+    /// Why the spheres are in the particle tree, when `--accel auto` put them there for lack of memory.
+    pub accel_note: Option<String>,
 }
 
 /// How a scene is compiled: the search structures and how their walks run.
@@ -98,6 +103,9 @@ pub enum Accel {
     Bvh,
     /// Always brute force.
     Brute,
+    /// Spheres in the particle tree ([`crate::accel::pkd`]: 5 bytes per sphere beside the spheres), other
+    /// kinds as [`Accel::Auto`].
+    Particles,
 }
 
 /// How the BVHs are built: bareray's binned SAH builder, or obvhs with one of its `BvhBuildParams` presets.
@@ -141,9 +149,10 @@ pub const BVH_MIN_SPHERES: usize = 4;
 
 /// The largest coordinate magnitude in rendering space a ray can start from or pass near: spheres' far
 /// sides, lights (the eye is the origin).
-fn reach(desc: &SceneDesc) -> f32 {
+fn reach(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> f32 {
     let eye = desc.camera.eye;
-    let spheres = desc.spheres.iter().map(|s| (s.center - eye).abs().max_element() + s.radius);
+    let extra = extra.into_iter().flatten().map(|p| (p - eye).abs().max_element());
+    let spheres = desc.spheres.iter().map(|s| (s.center - eye).abs().max_element() + s.radius).chain(extra);
     let lights = desc.lights.iter().map(|l| (l.position - eye).abs().max_element());
     let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| (*v - eye).abs().max_element());
     let shapes =
@@ -158,9 +167,13 @@ impl Scene {
         V3::from(world - self.origin).to_f32()
     }
 
-    /// Memory per sphere of the spheres' arrays and their BVH's nodes (what `--stats` and `bench` report).
+    /// Memory per sphere of the spheres' arrays and their BVH's nodes, or of the particle tree's records and
+    /// keys (what `--stats` and `bench` report).
     pub fn bytes_per_sphere(&self) -> f64 {
-        let s = &self.geometry.spheres;
+        let (s, p) = (&self.geometry.spheres, &self.geometry.particles);
+        if !p.is_empty() {
+            return (p.record_bytes() + p.overhead_bytes()) as f64 / p.len() as f64;
+        }
         let nodes = self.geometry.sphere_bvh.as_ref().map_or(0, Bvh::bytes);
         (s.bytes() + nodes) as f64 / s.len().max(1) as f64
     }
@@ -200,7 +213,27 @@ impl Scene {
 
     /// Compiles with the given options.
     pub fn compile_with_options(desc: &SceneDesc, options: CompileOptions) -> Result<Scene, CameraError> {
-        let (mut scene, job) = Self::assemble(desc, options)?;
+        let (mut scene, job) = Self::assemble(desc, options, None)?;
+        scene.build_bvh(job);
+        Ok(scene)
+    }
+
+    /// Compiles `desc` (whose own spheres, if any, are compiled as usual) with the spheres of a mapped
+    /// `.f32r` file in the particle tree, built in the mapping's private pages: no copy of the records is
+    /// made. Their bounds (the mapping's, [`MappedRecords::bounds`]) count for the culling padding and the
+    /// default ambient occlusion distance.
+    pub fn compile_mapped(
+        desc: SceneDesc,
+        records: MappedRecords,
+        options: CompileOptions,
+    ) -> Result<Scene, CameraError> {
+        let (mut scene, job) = Self::assemble(&desc, options, Some(records.bounds()))?;
+        drop(desc);
+        let clock = std::time::Instant::now();
+        let particles = Particles::from_store(Box::new(records), scene.origin, job.options.pad);
+        scene.build +=
+            BuildStats { seconds: clock.elapsed().as_secs_f64(), node_bytes: particles.overhead_bytes() };
+        scene.geometry.particles = particles;
         scene.build_bvh(job);
         Ok(scene)
     }
@@ -209,22 +242,39 @@ impl Scene {
     /// build is the peak of a large scene's memory, and the description's spheres (40 bytes each, in f64)
     /// are no longer needed then.
     pub fn compile_owned(desc: SceneDesc, options: CompileOptions) -> Result<Scene, CameraError> {
-        let (mut scene, job) = Self::assemble(&desc, options)?;
+        let (mut scene, job) = Self::assemble(&desc, options, None)?;
         drop(desc);
         scene.build_bvh(job);
         Ok(scene)
     }
 
     /// Everything but the BVH: the scene without one, and the build it needs, if any.
-    fn assemble(desc: &SceneDesc, options: CompileOptions) -> Result<(Scene, BvhJob), CameraError> {
+    /// `extra` is the world box of spheres compiled apart (a mapped field's).
+    fn assemble(
+        desc: &SceneDesc,
+        options: CompileOptions,
+        extra: Option<[glam::DVec3; 2]>,
+    ) -> Result<(Scene, BvhJob), CameraError> {
         let CompileOptions { accel, preset, frustum_culling, single_ray_lanes, scalar } = options;
         let origin = desc.camera.eye;
         let mut camera_f64 = Camera::new(&desc.camera)?;
         camera_f64.eye = V3::all(0.0);
         let mut geometry = Geometry { origin: V3::from(origin).to_f32(), ..Geometry::default() };
-        geometry.spheres.reserve_exact(desc.spheres.len());
-        for s in &desc.spheres {
-            geometry.spheres.push_exact(V3::from(s.center - origin), s.radius, s.material);
+        let pad = bvh::padding(reach(desc, extra));
+        let mut build = BuildStats::default();
+        if accel == Accel::Particles {
+            let clock = std::time::Instant::now();
+            let records =
+                desc.spheres.iter().map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect();
+            let material = desc.spheres.iter().map(|s| s.material).collect();
+            geometry.particles = Particles::from_f64(records, material, origin, pad);
+            build.seconds = clock.elapsed().as_secs_f64();
+            build.node_bytes = geometry.particles.overhead_bytes();
+        } else {
+            geometry.spheres.reserve_exact(desc.spheres.len());
+            for s in &desc.spheres {
+                geometry.spheres.push_exact(V3::from(s.center - origin), s.radius, s.material);
+            }
         }
         let to_rendering = DAffine3::from_translation(-origin);
         geometry.shapes = desc
@@ -253,7 +303,7 @@ impl Scene {
             .iter()
             .all(|v| v.iter().all(|p| [p.x, p.y, p.z].iter().all(|x| x.is_finite())));
         let wants = |items: usize| match accel {
-            Accel::Auto => items >= BVH_MIN_SPHERES,
+            Accel::Auto | Accel::Particles => items >= BVH_MIN_SPHERES,
             Accel::Bvh => items > 0,
             Accel::Brute => false,
         };
@@ -269,7 +319,7 @@ impl Scene {
             spheres: finite && wants(geometry.spheres.len()),
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
             options: BuildOptions {
-                pad: bvh::padding(reach(desc)),
+                pad,
                 builder: preset.builder(),
                 // The 8-wide single-ray trees serve the K = 1 tracer's secondary and ambient occlusion
                 // rays: only scenes that trace them pay for their build.
@@ -294,11 +344,12 @@ impl Scene {
             camera: camera_f64.to_f32(),
             camera_f64,
             origin,
-            render: RenderDesc { shade: resolved_shade(desc), ..desc.render },
+            render: RenderDesc { shade: resolved_shade(desc, extra), ..desc.render },
             geometry,
             materials,
             lights,
-            build: BuildStats::default(),
+            build,
+            accel_note: None,
         };
         Ok((scene, job))
     }
@@ -354,10 +405,10 @@ impl Scene {
 /// The scene's shading mode with ambient occlusion's default distance filled in: [`Ao::DEFAULT_REACH`] times
 /// the diagonal of the box around every bounded primitive (spheres, ellipsoids, polygons, cones; planes
 /// are unbounded), or unlimited when there is none.
-fn resolved_shade(desc: &SceneDesc) -> Shade {
+fn resolved_shade(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> Shade {
     match desc.render.shade {
         Shade::Ao(Ao { samples, distance: None }) => {
-            let reach = bounded_diagonal(desc) * Ao::DEFAULT_REACH;
+            let reach = bounded_diagonal(desc, extra) * Ao::DEFAULT_REACH;
             let distance = if reach > 0.0 { reach } else { f64::INFINITY };
             Shade::Ao(Ao { samples, distance: Some(distance) })
         }
@@ -365,8 +416,8 @@ fn resolved_shade(desc: &SceneDesc) -> Shade {
     }
 }
 
-/// The diagonal of the box around every bounded primitive (0 without any), in f64.
-fn bounded_diagonal(desc: &SceneDesc) -> f64 {
+/// The diagonal of the box around every bounded primitive and the box `extra` (0 without any), in f64.
+fn bounded_diagonal(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> f64 {
     use glam::DVec3;
     let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
     let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
@@ -379,6 +430,7 @@ fn bounded_diagonal(desc: &SceneDesc) -> f64 {
     let eye = desc.camera.eye;
     let shapes = shape_boxes(desc).into_iter().flat_map(|(_, b)| [b.min, b.max].map(|p| p.as_dvec3() + eye));
     let (lo, hi) = spheres
+        .chain(extra.into_iter().flatten())
         .chain(vertices)
         .chain(cones)
         .chain(shapes)

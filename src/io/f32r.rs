@@ -68,6 +68,130 @@ pub fn spheres(path: &Path, bytes: &[u8]) -> Result<Vec<SphereDesc>, SceneError>
     Ok(out)
 }
 
+/// An `.f32r` file mapped privately (copy-on-write): its records are read where they lie, with no copy, and
+/// writes to them (the particle tree reorders them in place, [`crate::accel::Particles`]) go to private
+/// pages of this process, never to the file. Records are checked as [`spheres`] checks them.
+///
+/// The mapping assumes the file is not changed by another process while it is mapped.
+pub struct MappedRecords {
+    map: memmap2::MmapMut,
+    count: usize,
+    /// The world box of the spheres (centres widened by radii).
+    bounds: [DVec3; 2],
+}
+
+impl MappedRecords {
+    /// The records `x, y, z, r`, in file order until something reorders them.
+    pub fn records(&self) -> &[[f32; 4]] {
+        // SAFETY: the map holds `HEADER_BYTES + count·RECORD_BYTES` bytes (checked by `map`); the map starts
+        // on a page boundary, so the records, 16 bytes after it, are 4-byte aligned; any bits are valid f32s,
+        // and the host is little-endian (checked by `map`), the file's order.
+        unsafe { std::slice::from_raw_parts(self.map.as_ptr().add(HEADER_BYTES).cast(), self.count) }
+    }
+
+    /// The records, to reorder them (in private pages: the file is not changed).
+    pub fn records_mut(&mut self) -> &mut [[f32; 4]] {
+        // SAFETY: as in `records`, and the map is private to this process.
+        unsafe { std::slice::from_raw_parts_mut(self.map.as_mut_ptr().add(HEADER_BYTES).cast(), self.count) }
+    }
+
+    /// Number of records.
+    pub fn len(&self) -> usize {
+        self.count
+    }
+
+    /// The world box of the spheres, `[lo, hi]`: every centre widened by its radius.
+    pub fn bounds(&self) -> [DVec3; 2] {
+        self.bounds
+    }
+
+    /// True when there are none (never, for a mapped file: the reader refuses a count of 0).
+    pub fn is_empty(&self) -> bool {
+        self.count == 0
+    }
+}
+
+impl crate::accel::pkd::RecordStore for MappedRecords {
+    fn records(&self) -> &[[f32; 4]] {
+        MappedRecords::records(self)
+    }
+    fn records_mut(&mut self) -> &mut [[f32; 4]] {
+        MappedRecords::records_mut(self)
+    }
+}
+
+impl std::fmt::Debug for MappedRecords {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "MappedRecords({} records within {:?})", self.count, self.bounds)
+    }
+}
+
+/// Maps an `.f32r` file privately and checks it as [`load`] does (header, length, every record's values in
+/// parallel on the current rayon pool), without reading it into memory first: the records stay in the
+/// page cache, and only pages written later become this process's own.
+pub fn map(path: &Path) -> Result<MappedRecords, SceneError> {
+    let fail = |m: String| SceneError::whole_file(path, m);
+    if cfg!(target_endian = "big") {
+        return Err(fail("mapping .f32r records needs a little-endian machine".into()));
+    }
+    let file = std::fs::File::open(path).map_err(|e| fail(format!("cannot read sphere list: {e}")))?;
+    let len = file.metadata().map_err(|e| fail(format!("cannot read sphere list: {e}")))?.len();
+    if len < HEADER_BYTES as u64 {
+        // Too short to map usefully (and an empty file cannot be mapped): the reader's own message.
+        let bytes = std::fs::read(path).map_err(|e| fail(format!("cannot read sphere list: {e}")))?;
+        return Err(fail(records(&bytes).err().unwrap_or_else(|| "the file changed while read".into())));
+    }
+    // SAFETY: a private mapping; the file is assumed not to change while mapped (see `MappedRecords`).
+    let map = unsafe { memmap2::MmapOptions::new().map_copy(&file) }
+        .map_err(|e| fail(format!("cannot map sphere list: {e}")))?;
+    let body = records(&map).map_err(fail)?;
+    // One pass: the first bad record, and the bounds of all of them.
+    type Acc = (usize, DVec3, DVec3);
+    let empty = || -> Acc { (usize::MAX, DVec3::INFINITY, DVec3::NEG_INFINITY) };
+    let (bad, lo, hi) = body
+        .par_chunks_exact(RECORD_BYTES)
+        .enumerate()
+        .with_min_len(1 << 16)
+        .fold(empty, |(bad, lo, hi), (i, r)| {
+            let v = values(r);
+            if bad != usize::MAX || problem(v).is_some() {
+                return (bad.min(i), lo, hi);
+            }
+            let (c, r) = (DVec3::new(v[0].into(), v[1].into(), v[2].into()), f64::from(v[3]));
+            (bad, lo.min(c - r), hi.max(c + r))
+        })
+        .reduce(empty, |a, b| (a.0.min(b.0), a.1.min(b.1), a.2.max(b.2)));
+    if bad != usize::MAX {
+        let what = problem(values(&body[bad * RECORD_BYTES..])).expect("the record has a problem");
+        let at = HEADER_BYTES + bad * RECORD_BYTES;
+        return Err(fail(format!("record {bad} (byte {at}): {what}")));
+    }
+    let count = body.len() / RECORD_BYTES;
+    Ok(MappedRecords { map, count, bounds: [lo, hi] })
+}
+
+/// The count an `.f32r` file's header states, read from its first 16 bytes alone (for a memory check before
+/// loading); the header is checked as [`load`] checks it, the length and records are not.
+pub fn header_count(path: &Path) -> Result<u64, SceneError> {
+    use std::io::Read;
+    let fail = |m: String| SceneError::whole_file(path, m);
+    let mut head = Vec::with_capacity(HEADER_BYTES);
+    std::fs::File::open(path)
+        .and_then(|f| f.take(HEADER_BYTES as u64).read_to_end(&mut head))
+        .map_err(|e| fail(format!("cannot read sphere list: {e}")))?;
+    if head.len() < HEADER_BYTES || !head.starts_with(&MAGIC) {
+        return Err(fail(records(&head).err().unwrap_or_else(|| "the header is cut short".into())));
+    }
+    let word = |at: usize| u32::from_le_bytes(head[at..at + 4].try_into().expect("4 bytes"));
+    match (word(8), word(12)) {
+        (VERSION, 0) => Err(fail("no spheres: the header's count is 0".into())),
+        (VERSION, count) => Ok(u64::from(count)),
+        (v, _) => {
+            Err(fail(format!("version {v} is not one this bareray reads (it reads version {VERSION})")))
+        }
+    }
+}
+
 /// The record bytes after a checked header, or what is wrong with the header or the length.
 fn records(bytes: &[u8]) -> Result<&[u8], String> {
     let len = bytes.len();
@@ -121,6 +245,14 @@ fn problem(v: [f32; 4]) -> Option<String> {
 
 fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect::<Vec<_>>().join(" ")
+}
+
+/// Writes the 16-byte header of an `.f32r` file of `count` records (a streaming writer writes it again
+/// once it knows the count).
+pub fn write_header(w: &mut impl Write, count: u32) -> io::Result<()> {
+    w.write_all(&MAGIC)?;
+    w.write_all(&VERSION.to_le_bytes())?;
+    w.write_all(&count.to_le_bytes())
 }
 
 /// Writes an `.f32r` file of `count` spheres `[x, y, z, r]`. The caller vouches for the values (finite,

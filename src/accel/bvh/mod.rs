@@ -43,6 +43,10 @@ use crate::math::Vec3f;
 use crate::simd::Lanes;
 use slab::SlabRay;
 
+// The slab test and the frustum, shared with the particle tree's walk (`crate::accel::pkd`).
+pub(crate) use packet::Frustum;
+pub(crate) use slab::{SlabRay as SlabRays, Stack, WIDEN};
+
 /// What a walk asks of the items in its leaves, for a packet of K rays (`F`): the tree holds only boxes and
 /// item ranges, and every kind of primitive answers for its own items. Implementations must give each lane the
 /// result its K = 1 (`f32`) instance gives, and combine hits by [`HitPacket::update`]'s (t, id) order, so the

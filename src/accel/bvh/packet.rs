@@ -127,7 +127,7 @@ impl Side {
 /// The planes are widened by margins that cover the rounding of their construction and of the box test, so
 /// the test never rules out a box an exact ray enters.
 #[derive(Clone, Copy)]
-pub(super) struct Frustum {
+pub(crate) struct Frustum {
     pub(super) sides: [Side; 5],
     /// The four sides again, one per lane, for the sphere test: normal components, `|n|` rounded up, and
     /// the offsets. (A sphere behind the apex is in a box the fifth plane ruled out.)
@@ -141,7 +141,7 @@ pub(super) struct Frustum {
 impl Frustum {
     /// The box and sphere tests of `p` ([`Side::all`]).
     #[inline(always)]
-    pub(super) fn new(p: &Pyramid, extent: f32) -> Self {
+    pub(crate) fn new(p: &Pyramid, extent: f32) -> Self {
         let sides = Side::all(p, extent);
         let [a, b, c, d, _] = &sides;
         let lanes = |f: &dyn Fn(&Side) -> f32| f32x4::from([a, b, c, d].map(f));
@@ -160,13 +160,25 @@ impl Frustum {
     /// its centre within `reach`, so the slack in the offsets covers this test's rounding as it does the
     /// box test's (the extra term `r·|n|` adds one rounding of a value below |n|₁·reach).
     #[inline(always)]
-    pub(super) fn may_meet(&self, c: V3<f32>, r: f32) -> bool {
+    pub(crate) fn may_meet(&self, c: V3<f32>, r: f32) -> bool {
         let s = self.nz.mul_add(
             f32x4::splat(c.z),
             self.ny
                 .mul_add(f32x4::splat(c.y), self.nx.mul_add(f32x4::splat(c.x), self.norm * r - self.offset)),
         );
         f32x4::move_mask(Real::lt(s, f32x4::splat(0.0))) == 0
+    }
+
+    /// Whether some lane may enter the box `[lo, hi]`: false when it lies wholly outside a side (the one-box
+    /// form of [`Frustum::maybe_entered`], for the particle tree's implicit boxes).
+    #[inline(always)]
+    pub(crate) fn may_enter(&self, lo: [f32; 3], hi: [f32; 3]) -> bool {
+        self.sides.iter().all(|side| {
+            let corner = |a: usize| if side.far_side[a] == 1 { hi[a] } else { lo[a] };
+            let n = side.normal;
+            // Unfused: the sides' slack covers the rounding of three products and three sums alike.
+            corner(0) * n[0] + corner(1) * n[1] + corner(2) * n[2] - side.offset >= 0.0
+        })
     }
 
     /// Bit `c` set for each child of `n` that some lane may enter.

@@ -11,7 +11,7 @@ use crate::simd::Lanes;
 /// [`padding`]; where |o| > 2·reach every box plane is more than |o|/2 away, so the move is at most a further
 /// relative 2u. Entry and exit each err by at most γ₂ + 2u(1 + γ₂) < 4.01u; widening the exit by 6ε = 12u
 /// (rounded up, and itself rounded) covers both sides.
-pub(super) const WIDEN: f32 = 1.0 + 6.0 * f32::EPSILON;
+pub(crate) const WIDEN: f32 = 1.0 + 6.0 * f32::EPSILON;
 
 /// `1/d` with a zero component replaced by ±1e-30 first, so no slab product is 0·inf = NaN.
 #[inline(always)]
@@ -24,14 +24,14 @@ pub(super) fn inverse<F: Lanes>(d: F) -> F {
 /// A ray (or a packet of them) prepared for slab tests: `1/d` and `−o·(1/d)`, so each box plane costs one
 /// fused multiply-add.
 #[derive(Clone, Copy)]
-pub(super) struct SlabRay<F> {
-    pub(super) inv_dir: V3<F>,
-    pub(super) neg_o_inv: V3<F>,
+pub(crate) struct SlabRay<F> {
+    pub(crate) inv_dir: V3<F>,
+    pub(crate) neg_o_inv: V3<F>,
 }
 
 impl<F: Lanes> SlabRay<F> {
     #[inline(always)]
-    pub(super) fn new(ray: &Ray<F>) -> Self {
+    pub(crate) fn new(ray: &Ray<F>) -> Self {
         let (origin, dir) = (&ray.origin, &ray.dir);
         let inv_dir = V3::new(inverse(dir.x), inverse(dir.y), inverse(dir.z));
         let neg = |o: F, inv: F| -(o * inv);
@@ -46,7 +46,7 @@ impl<F: Lanes> SlabRay<F> {
 /// traversal) or lanes = boxes (one ray splatted; single-ray traversal). Returns each lane's entry distance,
 /// `inf` where it misses the box or enters beyond `limit`. Conservative by [`WIDEN`] and [`padding`].
 #[inline(always)]
-pub(super) fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], ray: &SlabRay<F>, limit: F) -> F {
+pub(crate) fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], ray: &SlabRay<F>, limit: F) -> F {
     let slab = |lo: F, hi: F, inv: F, neg_o_inv: F| {
         let (t0, t1) = (lo.mul_add(inv, neg_o_inv), hi.mul_add(inv, neg_o_inv));
         (t0.fast_min(t1), t0.fast_max(t1))
@@ -94,18 +94,18 @@ pub(super) const STACK: usize = 256;
 
 /// A fixed-capacity traversal stack on the call stack (a heap vector per packet costs more than a small
 /// BVH's whole traversal).
-pub(super) struct Stack<E: Copy> {
+pub(crate) struct Stack<E: Copy> {
     items: [std::mem::MaybeUninit<E>; STACK],
     len: usize,
 }
 
 impl<E: Copy> Stack<E> {
     #[inline(always)]
-    pub(super) fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self { items: [const { std::mem::MaybeUninit::uninit() }; STACK], len: 0 }
     }
     #[inline(always)]
-    pub(super) fn push(&mut self, e: E) {
+    pub(crate) fn push(&mut self, e: E) {
         assert!(self.len < STACK, "BVH deeper than the traversal stack");
         self.items[self.len].write(e);
         self.len += 1;
@@ -119,7 +119,7 @@ impl<E: Copy> Stack<E> {
         self.len += usize::from(keep);
     }
     #[inline(always)]
-    pub(super) fn pop(&mut self) -> Option<E> {
+    pub(crate) fn pop(&mut self) -> Option<E> {
         if self.len == 0 {
             return None;
         }
