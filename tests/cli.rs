@@ -1093,8 +1093,8 @@ fn the_particle_tree_renders_the_bvhs_image_and_memory_decides_auto() {
     let refused = bareray(&["render", field_s, "--memory", "262244K", "-o", keep_s]);
     assert_eq!(refused.status.code(), Some(1));
     let err = stderr(&refused);
-    // 100 KiB above the reserve: 102400 / 21 bytes.
-    assert!(err.contains(field_s) && err.contains("at most 4876 spheres fit"), "{err}");
+    // 100 KiB above the reserve: 102400 / 20 bytes.
+    assert!(err.contains(field_s) && err.contains("at most 5120 spheres fit"), "{err}");
     assert_eq!(std::fs::read(&bvh_png).unwrap(), std::fs::read(&keep).unwrap());
     let planned = bareray(&["render", field_s, "--accel", "bvh", "--memory", "1K", "-o", keep_s]);
     assert!(planned.status.success(), "--accel bvh plans no memory: {}", stderr(&planned));

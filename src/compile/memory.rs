@@ -9,8 +9,8 @@ use std::fmt;
 pub const BVH_BYTES_PER_SPHERE: u64 = 90;
 
 /// Bytes per sphere of a mapped `.f32r` field in the particle tree: the 16-byte record (its page becomes
-/// this process's own when the build reorders it), the 4-byte scene-file index and the 1-byte split axis.
-pub const PARTICLE_BYTES_PER_SPHERE: u64 = 21;
+/// this process's own when the build reorders it) and the 4-byte key.
+pub const PARTICLE_BYTES_PER_SPHERE: u64 = 20;
 
 /// Bytes every render needs beside the spheres (image, threads' stacks, the program), so a field is not
 /// planned to the last byte.
@@ -43,8 +43,8 @@ impl fmt::Display for TooLarge {
     fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
         write!(
             f,
-            "{} spheres need about {:.1} GB in the particle tree ({PARTICLE_BYTES_PER_SPHERE} bytes each), \
-             and {:.1} GB of memory is available: at most {} spheres fit",
+            "{} spheres need about {:.1} GB in the particle tree ({PARTICLE_BYTES_PER_SPHERE} bytes each, at \
+             most 2^30 spheres), and {:.1} GB of memory is available: at most {} spheres fit",
             self.spheres,
             (self.spheres * PARTICLE_BYTES_PER_SPHERE + RESERVE_BYTES) as f64 / 1e9,
             self.available as f64 / 1e9,
@@ -63,10 +63,11 @@ pub fn choose(spheres: u64, particles: bool, available: u64) -> Result<FieldChoi
     if !particles && fits(BVH_BYTES_PER_SPHERE) {
         return Ok(FieldChoice::Bvh);
     }
-    if fits(PARTICLE_BYTES_PER_SPHERE) {
+    if fits(PARTICLE_BYTES_PER_SPHERE) && spheres <= crate::accel::pkd::MAX_PARTICLES as u64 {
         return Ok(FieldChoice::Particles { for_memory: !particles });
     }
-    let largest = available.saturating_sub(RESERVE_BYTES) / PARTICLE_BYTES_PER_SPHERE;
+    let largest = (available.saturating_sub(RESERVE_BYTES) / PARTICLE_BYTES_PER_SPHERE)
+        .min(crate::accel::pkd::MAX_PARTICLES as u64);
     Err(TooLarge { spheres, available, largest })
 }
 

@@ -13,15 +13,15 @@ pub const LEAF: usize = 8;
 /// Ranges at least this long build their halves on two rayon tasks.
 const PARALLEL: usize = 1 << 15;
 
-/// Builds the tree over `recs`, reordering `key` and `material` (empty, or one per record) alike and writing
-/// each node's axis into `split`.
-pub(super) fn build<R: Record>(recs: &mut [R], key: &mut [u32], material: &mut [u32], split: &mut [u8]) {
+/// Builds the tree over `recs`, reordering `key` (file indices below [`super::MAX_PARTICLES`]) and `material`
+/// (empty, or one per record) alike, and writing each node's split axis into the top bits of its key.
+pub(super) fn build<R: Record>(recs: &mut [R], key: &mut [u32], material: &mut [u32]) {
     let n = recs.len();
     if n == 0 {
         return;
     }
     let (lo, hi) = centre_box(recs);
-    node(Slices { recs, key, material, split }, lo, hi);
+    node(Slices { recs, key, material }, lo, hi);
 }
 
 /// The arrays of one range, reordered together.
@@ -30,7 +30,6 @@ struct Slices<'a, R> {
     key: &'a mut [u32],
     /// Empty when the spheres share one material.
     material: &'a mut [u32],
-    split: &'a mut [u8],
 }
 
 impl<'a, R: Record> Slices<'a, R> {
@@ -46,14 +45,13 @@ impl<'a, R: Record> Slices<'a, R> {
     /// The order the tree keeps on `axis`: the centre's coordinate, then the file index.
     #[inline(always)]
     fn order(&self, i: usize, axis: usize) -> (f64, u32) {
-        (self.recs[i].value(axis), self.key[i])
+        (self.recs[i].value(axis), self.key[i] & super::INDEX_MASK)
     }
 
     /// The ranges before and after position `mid` (the node itself in neither).
     fn split_at(self, mid: usize) -> (Slices<'a, R>, Slices<'a, R>) {
         let (recs_lo, recs_hi) = self.recs.split_at_mut(mid);
         let (key_lo, key_hi) = self.key.split_at_mut(mid);
-        let (split_lo, split_hi) = self.split.split_at_mut(mid);
         let (mat_lo, mat_hi) = match self.material.is_empty() {
             true => (&mut [][..], &mut [][..]),
             false => {
@@ -62,13 +60,8 @@ impl<'a, R: Record> Slices<'a, R> {
             }
         };
         (
-            Slices { recs: recs_lo, key: key_lo, material: mat_lo, split: split_lo },
-            Slices {
-                recs: &mut recs_hi[1..],
-                key: &mut key_hi[1..],
-                material: mat_hi,
-                split: &mut split_hi[1..],
-            },
+            Slices { recs: recs_lo, key: key_lo, material: mat_lo },
+            Slices { recs: &mut recs_hi[1..], key: &mut key_hi[1..], material: mat_hi },
         )
     }
 }
@@ -95,7 +88,8 @@ fn node<R: Record>(mut s: Slices<'_, R>, lo: DVec3, hi: DVec3) {
     let axis = (hi - lo).max_position();
     let mid = n / 2;
     select(&mut s, mid, axis);
-    s.split[mid] = axis as u8;
+    // The halves' selections never see this key (they exclude `mid`), nor compare the axis bits.
+    s.key[mid] |= (axis as u32) << super::INDEX_BITS;
     let plane = s.recs[mid].value(axis);
     let (mut below_hi, mut above_lo) = (hi, lo);
     below_hi[axis] = plane;
@@ -164,18 +158,18 @@ mod tests {
 
     /// Checks the tree's order over `recs`/`key` (see the module documentation of `pkd`): every node's
     /// lower range at or below it on its axis, its upper range at or above, in (coordinate, index) order.
-    fn check<R: Record>(recs: &[R], key: &[u32], split: &[u8], range: std::ops::Range<usize>) {
+    fn check<R: Record>(recs: &[R], key: &[u32], range: std::ops::Range<usize>) {
         let n = range.len();
         if n <= LEAF {
             return;
         }
         let mid = range.start + n / 2;
-        let axis = usize::from(split[mid]);
-        let at = |i: usize| (recs[i].value(axis), key[i]);
+        let axis = (key[mid] >> crate::accel::pkd::INDEX_BITS) as usize;
+        let at = |i: usize| (recs[i].value(axis), key[i] & crate::accel::pkd::INDEX_MASK);
         assert!((range.start..mid).all(|i| at(i) < at(mid)), "lower range of {mid}");
         assert!((mid + 1..range.end).all(|i| at(i) > at(mid)), "upper range of {mid}");
-        check(recs, key, split, range.start..mid);
-        check(recs, key, split, mid + 1..range.end);
+        check(recs, key, range.start..mid);
+        check(recs, key, mid + 1..range.end);
     }
 
     /// Random fields, duplicated centres and collinear sorted runs all build into a valid tree that keeps
@@ -194,12 +188,12 @@ mod tests {
             let mut tree = recs.clone();
             let mut key: Vec<u32> = (0..n as u32).collect();
             let mut material: Vec<u32> = (0..n as u32).map(|i| i * 3).collect();
-            let mut split = vec![0u8; n];
-            build(&mut tree, &mut key, &mut material, &mut split);
-            check(&tree, &key, &split, 0..n);
+            build(&mut tree, &mut key, &mut material);
+            check(&tree, &key, 0..n);
             for i in 0..n {
-                assert_eq!(tree[i], recs[key[i] as usize], "record {i} kept its key");
-                assert_eq!(material[i], key[i] * 3, "record {i} kept its material");
+                let k = key[i] & crate::accel::pkd::INDEX_MASK;
+                assert_eq!(tree[i], recs[k as usize], "record {i} kept its key");
+                assert_eq!(material[i], k * 3, "record {i} kept its material");
             }
         }
     }

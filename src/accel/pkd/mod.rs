@@ -1,10 +1,11 @@
 //! The particle tree: a balanced k-d tree whose nodes are the spheres themselves (the P-k-d tree of Wald,
 //! Knoll, Johnson, Usher, Pascucci and Papka, "CPU Ray Tracing Large Particle Data with Balanced P-k-d
-//! Trees", 2015), for sphere fields too large for a BVH. It costs 5 bytes per sphere beside the spheres'
-//! own records: a `u32` scene-file index and a `u8` split axis.
+//! Trees", 2015), for sphere fields too large for a BVH. It costs 4 bytes per sphere beside the spheres'
+//! own records: a `u32` holding the scene-file index (30 bits, so at most [`MAX_PARTICLES`] spheres) and,
+//! for a node, its split axis (the top 2 bits).
 //!
 //! **Layout.** Implicit and in order: the spheres of a range `lo..hi` longer than [`LEAF`] are split at
-//! `mid = lo + (hi − lo)/2`; sphere `mid` is the node, `split[mid]` its axis, and every centre in `lo..mid`
+//! `mid = lo + (hi − lo)/2`; sphere `mid` is the node, split on the widest axis of its range's box, and every centre in `lo..mid`
 //! is at or below its centre on that axis, every centre in `mid + 1..hi` at or above (ties ordered by file
 //! index). Ranges of at most [`LEAF`] spheres are leaves. No node holds a box: a walk carries its node's box
 //! down, cutting it at the split plane widened by the largest radius ([`Particles::r_max`]; one bound for the
@@ -27,6 +28,13 @@ use crate::geometry::eye_term;
 use crate::math::{Vec3f, V3};
 
 pub use build::LEAF;
+
+/// Bits of a key holding the scene-file index; the two above hold a node's split axis.
+pub(crate) const INDEX_BITS: u32 = 30;
+/// The index part of a key.
+pub(crate) const INDEX_MASK: u32 = (1 << INDEX_BITS) - 1;
+/// The most spheres a particle tree holds (2³⁰, 1.07e9).
+pub const MAX_PARTICLES: usize = 1 << INDEX_BITS;
 
 /// A sphere's world-space record `x, y, z, r`, in f32 (files) or f64 (scene descriptions).
 pub(crate) trait Record: Copy + Send + Sync {
@@ -138,10 +146,9 @@ pub(crate) use with_records;
 pub struct Particles {
     /// The spheres in tree order.
     records: Records,
-    /// Scene-file index of the sphere at each position: breaks ties in t and names it.
+    /// Scene-file index of the sphere at each position (breaks ties in t and names it), and a node's split
+    /// axis in the top bits.
     key: Vec<u32>,
-    /// Split axis of the node at each position (positions that are no node hold 0).
-    split: Vec<u8>,
     /// Material of the sphere at each position; empty when every sphere has `material0`.
     material: Vec<u32>,
     /// The material of every sphere when `material` is empty.
@@ -192,18 +199,16 @@ impl Particles {
     /// bounds and flags the walk needs.
     fn build(mut records: Records, mut material: Vec<u32>, material0: u32, origin: DVec3, pad: f32) -> Self {
         let n = records.len();
-        assert!(n <= u32::MAX as usize, "{n} spheres: ids are u32");
+        assert!(n <= MAX_PARTICLES, "{n} spheres: a particle tree holds at most {MAX_PARTICLES}");
         let mut key: Vec<u32> = (0..n as u32).into_par_iter().with_min_len(1 << 16).collect();
-        let mut split = vec![0u8; n];
         match &mut records {
-            Records::Mapped(m) => build::build(m.records_mut(), &mut key, &mut material, &mut split),
-            Records::F32(v) => build::build(v, &mut key, &mut material, &mut split),
-            Records::F64(v) => build::build(v, &mut key, &mut material, &mut split),
+            Records::Mapped(m) => build::build(m.records_mut(), &mut key, &mut material),
+            Records::F32(v) => build::build(v, &mut key, &mut material),
+            Records::F64(v) => build::build(v, &mut key, &mut material),
         }
         let mut p = Particles {
             records,
             key,
-            split,
             material,
             material0,
             origin,
@@ -261,9 +266,9 @@ impl Particles {
         matches!(self.records, Records::Mapped(_))
     }
 
-    /// Bytes beside the records: keys, split axes and materials (the tree's whole cost).
+    /// Bytes beside the records: keys and materials (the tree's whole cost).
     pub fn overhead_bytes(&self) -> usize {
-        self.key.len() * size_of::<u32>() + self.split.len() + self.material.len() * size_of::<u32>()
+        (self.key.len() + self.material.len()) * size_of::<u32>()
     }
 
     /// Bytes of the records.
@@ -290,8 +295,15 @@ impl Particles {
     }
 
     /// Scene-file index of the sphere at position `i`.
+    #[inline(always)]
     pub fn key(&self, i: usize) -> u32 {
-        self.key[i]
+        self.key[i] & INDEX_MASK
+    }
+
+    /// Split axis of the node at position `i`.
+    #[inline(always)]
+    pub(crate) fn axis(&self, i: usize) -> usize {
+        (self.key[i] >> INDEX_BITS) as usize
     }
 }
 

@@ -16,7 +16,7 @@ use crate::accel::count_work;
 use crate::geometry::{
     first_root, sphere_approach, sphere_roots_of, DeparturePacket, EyeLanes, HitPacket, RayPacket, SphereRay,
 };
-use crate::math::Mask;
+use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
 /// One pending range: positions `lo..hi`, its box, and each lane's distances into and out of the box
@@ -74,12 +74,11 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
         }
     }
 
-    /// The sphere at position `i` for the lanes of `live`: the lanes it is hit in (the departure sphere
-    /// excluded) and their t; `None` when no live lane's line meets it. The sphere kernel's operations, as
-    /// [`crate::accel::SphereQuery`] runs them.
+    /// The sphere at position `i` (centre `c` in rendering space, radius `r`: [`place`]) for the lanes of
+    /// `live`: the lanes it is hit in (the departure sphere excluded) and their t; `None` when no live
+    /// lane's line meets it. The sphere kernel's operations, as [`crate::accel::SphereQuery`] runs them.
     #[inline(always)]
-    fn sphere(&self, i: usize, live: F::Mask) -> Option<(F::Mask, F)> {
-        let (c, r) = place(&self.recs[i], self.tree.origin);
+    fn placed_sphere(&self, i: usize, c: Vec3f, r: f32, live: F::Mask) -> Option<(F::Mask, F)> {
         // A sphere wholly outside the packet's frustum is missed by every lane (the BVH's leaf test).
         if self.frustum.as_ref().is_some_and(|f| !f.may_meet(c, r + self.tree.pad)) {
             return None;
@@ -132,9 +131,16 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
 
     /// The two children of the node of `e` (its middle position `mid`), near one last.
     #[inline(always)]
-    fn children(&self, e: &Entry<F>, mid: usize, limit: F, live: F::Mask, stack: &mut Stack<Entry<F>>) {
-        let axis = usize::from(self.tree.split[mid]);
-        let (c, _) = place(&self.recs[mid], self.tree.origin);
+    fn children(
+        &self,
+        e: &Entry<F>,
+        mid: usize,
+        c: Vec3f,
+        limit: F,
+        live: F::Mask,
+        stack: &mut Stack<Entry<F>>,
+    ) {
+        let axis = self.tree.axis(mid);
         let (plane, inv, neg, dir) = match axis {
             0 => (c.x, self.slab.inv_dir.x, self.slab.neg_o_inv.x, self.terms.ray.dir.x),
             1 => (c.y, self.slab.inv_dir.y, self.slab.neg_o_inv.y, self.terms.ray.dir.y),
@@ -177,22 +183,26 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
                 continue;
             }
             let (lo, hi) = (e.lo as usize, e.hi as usize);
-            let mut test = |i: usize| {
-                if let Some((hit, t)) = self.sphere(i, open) {
-                    let key = self.tree.key[i];
+            let mut test = |i: usize, c: Vec3f, r: f32| {
+                if let Some((hit, t)) = self.placed_sphere(i, c, r, open) {
+                    let key = self.tree.key(i);
                     best.update(hit, t, F::Ids::splat(self.base + i as u32), F::Ids::splat(key));
                 }
             };
             if hi - lo <= LEAF {
-                (lo..hi).for_each(&mut test);
+                for i in lo..hi {
+                    let (c, r) = place(&self.recs[i], self.tree.origin);
+                    test(i, c, r);
+                }
                 spheres += hi - lo;
                 continue;
             }
             let mid = lo + (hi - lo) / 2;
-            test(mid);
+            let (c, r) = place(&self.recs[mid], self.tree.origin);
+            test(mid, c, r);
             spheres += 1;
             boxes += 2;
-            self.children(&e, mid, best.t.fast_min(self.t_max), open, &mut stack);
+            self.children(&e, mid, c, best.t.fast_min(self.t_max), open, &mut stack);
         }
         count_work(spheres, boxes);
     }
@@ -213,17 +223,20 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
             let mid = lo + (hi - lo) / 2;
             let tested = if leaf { lo..hi } else { mid..mid + 1 };
             spheres += tested.len();
+            let mut centre = None;
             for i in tested {
-                if let Some((hit, _)) = self.sphere(i, open) {
+                let (c, r) = place(&self.recs[i], self.tree.origin);
+                centre = Some(c);
+                if let Some((hit, _)) = self.placed_sphere(i, c, r, open) {
                     blocked = blocked | hit;
                 }
             }
             if (blocked | !live).all() {
                 break;
             }
-            if !leaf {
+            if let (false, Some(c)) = (leaf, centre) {
                 boxes += 2;
-                self.children(&e, mid, self.t_max, live & !blocked, &mut stack);
+                self.children(&e, mid, c, self.t_max, live & !blocked, &mut stack);
             }
         }
         count_work(spheres, boxes);
