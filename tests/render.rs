@@ -150,6 +150,8 @@ fn half_pixel_pattern_agrees_with_a_fine_grid() {
 /// packet paths, single-ray SIMD and the scalar path are one computation. The ray counts agree too
 /// (secondary packets with few live lanes are handed to the K = 1 tracer, whose counts must not be lost).
 /// The scene is compiled once with the scalar trees; the scalar walk is switched off after the reference.
+/// Compiled again with its spheres in the particle tree (`--accel pkd`), every scene but the coverage one
+/// renders the same bits and counts.
 #[test]
 fn every_scene_is_identical_at_every_width_and_thread_count() {
     let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");

@@ -5,8 +5,8 @@
 use std::fmt;
 
 /// Peak bytes per sphere of reading a sphere list and building its BVH: the description's f64 spheres, the
-/// SoA arrays, their reordered copy and the nodes (1e7 spheres from `.f32r` peak at 887 MB; PERF.md, "Scale").
-pub const BVH_BYTES_PER_SPHERE: u64 = 90;
+/// SoA arrays, their reordered copy and the nodes, with a margin over the measured peaks (PERF.md, "Scale").
+pub const BVH_BYTES_PER_SPHERE: u64 = 110;
 
 /// Bytes per sphere of a mapped `.f32r` field in the particle tree: the 16-byte record (its page becomes
 /// this process's own when the build reorders it) and the 4-byte key.
