@@ -2,7 +2,8 @@
 //! sits in, and may name through `crate::` only its own module and modules of a lower rank. Modules of the
 //! same rank are independent of each other. The check reads the source text: `crate::` paths in code
 //! (`use` lines and inline paths, grouped `crate::{a, b}` too), not in comments or string literals.
-//! `super::` paths stay inside a module, and `src/main.rs` is a separate crate, so neither is checked.
+//! `super::` paths stay inside a module, and `src/main.rs` is a separate crate, so neither is checked for
+//! ranks. A second check forbids circles of imports between files (below, "Import circles between files").
 
 use std::fs;
 use std::path::{Path, PathBuf};
@@ -328,4 +329,251 @@ pub(crate) fn g() {}
 fn an_unknown_module_is_reported() {
     assert_eq!(violations("src/newthing.rs", "newthing", "").len(), 1);
     assert_eq!(violations("src/accel/x.rs", "accel", "use crate::newthing::X;\n").len(), 1);
+}
+
+// ---- Import circles between files ----
+//
+// Within and across modules, no file may reach itself through the files it imports: a file's imports are the
+// paths it names through `crate::`, `super::` and `self::` (grouped `{…}` paths expanded), each resolved to
+// the deepest module that has a file of its own. A file and the modules above or below it (a parent declaring
+// its children, a child using its parent's items) are one unit and make no edge; every other pair of files
+// does, and the check fails on any circle of such edges.
+
+/// The module path of a file under `src/`: `accel/bvh/build.rs` is `accel::bvh::build`, a `mod.rs` its folder.
+fn module_of(rel: &str) -> Vec<String> {
+    let mut parts: Vec<String> = rel.trim_end_matches(".rs").split('/').map(str::to_owned).collect();
+    if parts.last().is_some_and(|p| p == "mod") {
+        parts.pop();
+    }
+    parts
+}
+
+/// Tokens of blanked code: identifiers, `::`, braces and commas, each with its line.
+fn path_tokens(code: &str) -> Vec<(usize, String)> {
+    let c: Vec<char> = code.chars().collect();
+    let (mut out, mut line, mut i) = (Vec::new(), 1, 0);
+    while i < c.len() {
+        let ch = c[i];
+        if ch == '\n' {
+            line += 1;
+        }
+        if ch.is_alphanumeric() || ch == '_' {
+            let start = i;
+            while i < c.len() && (c[i].is_alphanumeric() || c[i] == '_') {
+                i += 1;
+            }
+            let prev = if start > 0 { c[start - 1] } else { ' ' };
+            // `$crate` and `r#ident` are not paths of this crate's files.
+            let word: String = c[start..i].iter().collect();
+            out.push((line, if prev == '$' { format!("${word}") } else { word }));
+            continue;
+        }
+        if ch == ':' && c.get(i + 1) == Some(&':') {
+            out.push((line, "::".into()));
+            i += 2;
+            continue;
+        }
+        if matches!(ch, '{' | '}' | ',') {
+            out.push((line, ch.to_string()));
+        } else if !ch.is_whitespace() {
+            out.push((line, ";".into()));
+        }
+        i += 1;
+    }
+    out
+}
+
+/// Reads the path segments after `tokens[*at]` (which is `::`), expanding one level of `{…}` groups at a
+/// time, into `out` as full paths prefixed by `prefix`.
+fn expand(
+    tokens: &[(usize, String)],
+    at: &mut usize,
+    prefix: Vec<String>,
+    line: usize,
+    out: &mut Vec<(usize, Vec<String>)>,
+) {
+    let mut path = prefix;
+    while tokens.get(*at).is_some_and(|t| t.1 == "::") {
+        *at += 1;
+        match tokens.get(*at).map(|t| t.1.as_str()) {
+            Some("{") => {
+                *at += 1;
+                loop {
+                    match tokens.get(*at).map(|t| t.1.as_str()) {
+                        Some("}") => {
+                            *at += 1;
+                            return;
+                        }
+                        Some(",") => *at += 1,
+                        Some(word) if word.chars().all(|c| c.is_alphanumeric() || c == '_') => {
+                            let mut inner = path.clone();
+                            match word {
+                                "self" => {}
+                                "super" => {
+                                    inner.pop();
+                                }
+                                _ => inner.push(word.to_owned()),
+                            }
+                            let l = tokens[*at].0;
+                            *at += 1;
+                            let before = out.len();
+                            expand(tokens, at, inner.clone(), l, out);
+                            if out.len() == before {
+                                out.push((l, inner));
+                            }
+                        }
+                        _ => {
+                            *at += 1;
+                        }
+                    }
+                    if *at >= tokens.len() {
+                        return;
+                    }
+                }
+            }
+            Some(word) if word.chars().all(|c| c.is_alphanumeric() || c == '_') => {
+                path.push(word.to_owned());
+                *at += 1;
+            }
+            _ => break,
+        }
+    }
+    out.push((line, path));
+}
+
+/// The full module paths a file of module `own` names (`is_mod`: it is a `mod.rs`), with their lines.
+fn named_paths(own: &[String], code: &str) -> Vec<(usize, Vec<String>)> {
+    let tokens = path_tokens(code);
+    let mut out = Vec::new();
+    let mut i = 0;
+    while i < tokens.len() {
+        let (line, word) = (tokens[i].0, tokens[i].1.as_str());
+        let after_path = i > 0 && tokens[i - 1].1 == "::";
+        let base = match word {
+            "crate" if !after_path => Some(Vec::new()),
+            "self" if !after_path && tokens.get(i + 1).is_some_and(|t| t.1 == "::") => Some(own.to_vec()),
+            "super" if !after_path => {
+                let mut base = own.to_vec();
+                base.pop();
+                let mut j = i + 1;
+                // `super::super::…`
+                while tokens.get(j).is_some_and(|t| t.1 == "::")
+                    && tokens.get(j + 1).is_some_and(|t| t.1 == "super")
+                {
+                    base.pop();
+                    j += 2;
+                }
+                i = j - 1;
+                Some(base)
+            }
+            _ => None,
+        };
+        i += 1;
+        if let Some(base) = base {
+            expand(&tokens, &mut i, base, line, &mut out);
+        }
+    }
+    out
+}
+
+/// The import edges between files that are not above or below one another: (from, to, line).
+fn file_edges(files: &[(Vec<String>, String)]) -> Vec<(usize, usize, usize)> {
+    let related = |a: &[String], b: &[String]| a.starts_with(b) || b.starts_with(a);
+    let mut edges = Vec::new();
+    for (from, (own, code)) in files.iter().enumerate() {
+        for (line, path) in named_paths(own, &code_only(code)) {
+            // The deepest prefix of the path that is a file's module.
+            let target = (0..=path.len()).rev().find_map(|n| files.iter().position(|(m, _)| *m == path[..n]));
+            if let Some(to) = target.filter(|&to| !related(own, &files[to].0)) {
+                if !edges.iter().any(|&(f, t, _)| f == from && t == to) {
+                    edges.push((from, to, line));
+                }
+            }
+        }
+    }
+    edges
+}
+
+/// Every circle of imports among `files` (module path, source), each as `a.rs:line → b.rs:line → … → a.rs`.
+fn import_circles(files: &[(Vec<String>, String)]) -> Vec<String> {
+    let edges = file_edges(files);
+    let name = |i: usize| files[i].0.join("::");
+    let mut circles = Vec::new();
+    // A depth-first search from each file for a way back to it through files later in the list (each
+    // circle found once, from its first file).
+    for start in 0..files.len() {
+        let mut stack = vec![(start, vec![(start, 0usize)])];
+        let mut seen = vec![false; files.len()];
+        while let Some((at, trail)) = stack.pop() {
+            for &(f, t, line) in edges.iter().filter(|e| e.0 == at) {
+                let mut next = trail.clone();
+                next.last_mut().expect("non-empty").1 = line;
+                if t == start {
+                    let hops: Vec<String> = next.iter().map(|&(i, l)| format!("{}:{l}", name(i))).collect();
+                    circles.push(format!("{} → {}", hops.join(" → "), name(start)));
+                } else if t > start && !seen[t] {
+                    seen[t] = true;
+                    next.push((t, 0));
+                    stack.push((t, next));
+                }
+                let _ = f;
+            }
+        }
+    }
+    circles
+}
+
+#[test]
+fn no_file_reaches_itself_through_its_imports() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut paths = Vec::new();
+    rust_files(&src, &mut paths);
+    paths.sort();
+    let files: Vec<(Vec<String>, String)> = paths
+        .iter()
+        .map(|p| p.strip_prefix(&src).expect("under src").to_str().expect("UTF-8 path").to_owned())
+        .filter(|rel| !ROOTS.contains(&rel.as_str()))
+        .map(|rel| (module_of(&rel), fs::read_to_string(src.join(&rel)).expect("read source")))
+        .collect();
+    assert!(file_edges(&files).len() > 20, "the import edges were not found");
+    let circles = import_circles(&files);
+    assert!(
+        circles.is_empty(),
+        "import circles between files (ARCHITECTURE.md, \"Layers\"):\n{}",
+        circles.join("\n")
+    );
+}
+
+/// A small tree: `m/a.rs` and `m/b.rs` import each other, `m/c.rs` imports `a` only, `m/mod.rs` declares and
+/// re-exports its children (parent and child: no edge), and `n.rs` names `m::c` through a group.
+fn toy(a_uses_b: &str) -> Vec<(Vec<String>, String)> {
+    [
+        ("m/mod.rs", "mod a;\nmod b;\nmod c;\npub use a::A;\nuse self::b::B;\n"),
+        ("m/a.rs", a_uses_b),
+        ("m/b.rs", "use super::a::A;\npub struct B;\n"),
+        ("m/c.rs", "use super::{a::A, super::n};\nfn f() -> super::super::m::a::A { todo!() }\n"),
+        ("n.rs", "use crate::m::{self, c::{self}};\n"),
+    ]
+    .iter()
+    .map(|(p, s)| (module_of(p), (*s).to_owned()))
+    .collect()
+}
+
+#[test]
+fn the_circle_checker_finds_circles_and_only_circles() {
+    let circles = import_circles(&toy("pub struct A;\nfn g() { let _ = crate::m::b::B; }\n"));
+    let want = ["m::a:2 → m::b:1 → m::a", "m::c:1 → n:1 → m::c"].map(str::to_owned);
+    assert_eq!(circles, want, "{circles:?}");
+    // Through a group, across modules and with `super::super`: c → n (line 1) and n → c (line 1), c → a.
+    let edges = file_edges(&toy("pub struct A;\n"));
+    let names: Vec<(String, String)> = edges
+        .iter()
+        .map(|&(f, t, _)| (toy("").get(f).unwrap().0.join("::"), toy("").get(t).unwrap().0.join("::")))
+        .collect();
+    for want in [("m::b", "m::a"), ("m::c", "m::a"), ("m::c", "n"), ("n", "m::c"), ("n", "m")] {
+        assert!(names.contains(&(want.0.to_owned(), want.1.to_owned())), "{want:?} missing from {names:?}");
+    }
+    assert_eq!(names.len(), 5, "parent and child make no edge: {names:?}");
+    let circles = import_circles(&toy("pub struct A;\n"));
+    assert_eq!(circles, vec!["m::c:1 → n:1 → m::c".to_owned()], "{circles:?}");
 }

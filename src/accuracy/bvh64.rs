@@ -9,7 +9,7 @@
 use crate::geometry::{intersect_sphere, Ray};
 use crate::math::V3;
 
-use super::twin::Hit64;
+use super::hit64::Hit64;
 
 /// Most spheres in a leaf.
 const LEAF: usize = 4;

@@ -34,6 +34,7 @@
 //! ⌈p·n⌉-th.
 
 pub mod bvh64;
+mod hit64;
 mod report;
 pub mod twin;
 

@@ -29,39 +29,13 @@ use crate::math::{Affine, V3};
 use crate::scene::desc::SceneDesc;
 
 use super::bvh64::Bvh64;
+pub use super::hit64::Hit64;
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
 pub const EPS32: f64 = f32::EPSILON as f64 / 2.0;
 
 /// From this many spheres on the twin searches them through its own BVH; below, brute force.
 pub const TWIN_BVH_MIN_SPHERES: usize = 16;
-
-/// A closest hit in f64: its parameter (`inf` on a miss) and scene-file id ([`NO_PRIM`] on a miss).
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit64 {
-    /// Ray parameter (the direction's units).
-    pub t: f64,
-    /// Scene-file id.
-    pub prim: u32,
-}
-
-impl Hit64 {
-    /// No hit.
-    pub const MISS: Hit64 = Hit64 { t: f64::INFINITY, prim: NO_PRIM };
-
-    /// True when something was hit.
-    pub fn is_hit(&self) -> bool {
-        self.prim != NO_PRIM
-    }
-
-    /// Takes `(prim, t)` when it is closer by the renderer's total order: smaller t, or equal t and a lower id.
-    #[inline]
-    pub fn update(&mut self, prim: u32, t: f64) {
-        if t < self.t || (t == self.t && prim < self.prim) {
-            *self = Hit64 { t, prim };
-        }
-    }
-}
 
 /// How far the f32 ray under test may stray from the twin's f64 ray, measured per ray: the explanations
 /// widen their tolerances by it (a secondary ray starts from each precision's own hit point, along its own

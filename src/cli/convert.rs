@@ -42,10 +42,10 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         let mut failure = None;
         let written = write_atomic(&args.output, |tmp| {
             let mut w = std::io::BufWriter::with_capacity(1 << 20, std::fs::File::create(tmp)?);
-            match xyzr::stream_to_f32r(&args.input, &mut w) {
+            match f32r::from_xyzr(&args.input, &mut w) {
                 Ok(n) => count = n,
-                Err(xyzr::StreamError::Write(e)) => return Err(e.into()),
-                Err(xyzr::StreamError::Scene(e)) => {
+                Err(f32r::StreamError::Write(e)) => return Err(e.into()),
+                Err(f32r::StreamError::Scene(e)) => {
                     failure = Some(e);
                     return Err("bad input".into());
                 }

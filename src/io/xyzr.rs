@@ -82,7 +82,7 @@ fn line_chunks(source: &str, size: usize) -> Vec<&str> {
 }
 
 /// Whether a trimmed line holds a sphere (or an error): it is neither blank nor a `#` comment.
-fn is_sphere(trimmed: &str) -> bool {
+pub(super) fn is_sphere(trimmed: &str) -> bool {
     !trimmed.is_empty() && !trimmed.starts_with('#')
 }
 
@@ -97,7 +97,7 @@ fn parse_lines(text: &str, out: &mut [SphereDesc]) -> Result<(), (usize, String)
 }
 
 /// One `x y z r` line.
-fn sphere(text: &str) -> Result<SphereDesc, String> {
+pub(super) fn sphere(text: &str) -> Result<SphereDesc, String> {
     let mut v = [0.0f64; 4];
     let mut words = text.split_ascii_whitespace();
     for (k, name) in ["x", "y", "z", "r"].iter().enumerate() {
@@ -114,71 +114,6 @@ fn sphere(text: &str) -> Result<SphereDesc, String> {
         return Err(format!("radius must be positive, got {}", v[3]));
     }
     Ok(SphereDesc { center: DVec3::new(v[0], v[1], v[2]), radius: v[3], material: 0 })
-}
-
-/// Converts an `.xyzr` file into `.f32r` in bounded memory: each line is read, checked as [`parse`] checks
-/// it, rounded to f32 and written as it comes (a radius that rounds to 0 is an error: the file would be
-/// refused), and the header's count is written last. Returns the number of spheres. Errors name the file
-/// and line; an I/O error on `out` is reported as itself.
-pub fn stream_to_f32r<W: std::io::Write + std::io::Seek>(
-    path: &Path,
-    out: &mut W,
-) -> Result<u64, StreamError> {
-    use std::io::BufRead;
-    let file = std::fs::File::open(path).map_err(|e| {
-        StreamError::Scene(SceneError::whole_file(path, format!("cannot read sphere list: {e}")))
-    })?;
-    let mut reader = std::io::BufReader::with_capacity(1 << 20, file);
-    super::f32r::write_header(out, 0)?;
-    let (mut count, mut line, mut text) = (0u64, 0usize, String::new());
-    loop {
-        text.clear();
-        let read = reader.read_line(&mut text).map_err(|e| {
-            let what = format!("cannot read line {}: {e}", line + 1);
-            StreamError::Scene(SceneError::whole_file(path, what))
-        })?;
-        if read == 0 {
-            break;
-        }
-        line += 1;
-        let trimmed = text.trim();
-        if !is_sphere(trimmed) {
-            continue;
-        }
-        let fail = |m: String| StreamError::Scene(SceneError::at_line(path, line, m));
-        let s = sphere(trimmed).map_err(fail)?;
-        let v = [s.center.x, s.center.y, s.center.z, s.radius].map(|x| x as f32);
-        if v[3] <= 0.0 {
-            return Err(fail(format!("radius {} is 0 as an f32", s.radius)));
-        }
-        if count == u64::from(u32::MAX) {
-            return Err(fail(format!("more than {} spheres, the most an .f32r file holds", u32::MAX)));
-        }
-        for x in v {
-            out.write_all(&x.to_le_bytes())?;
-        }
-        count += 1;
-    }
-    if count == 0 {
-        return Err(StreamError::Scene(SceneError::whole_file(
-            path,
-            "no spheres: expected lines of `x y z r`",
-        )));
-    }
-    out.seek(std::io::SeekFrom::Start(0))?;
-    super::f32r::write_header(out, count as u32)?;
-    Ok(count)
-}
-
-/// Why [`stream_to_f32r`] stopped: the input's fault, or the output's.
-#[derive(Debug, thiserror::Error)]
-pub enum StreamError {
-    /// A bad or unreadable input line.
-    #[error(transparent)]
-    Scene(#[from] SceneError),
-    /// Writing the output failed.
-    #[error(transparent)]
-    Write(#[from] std::io::Error),
 }
 
 /// Writes `spheres` as `.xyzr` after the `#` line `comment`: `x y z r` per line, each value in the

@@ -16,13 +16,14 @@
 //!
 //! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`mod@build`] (the
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
-//! (obvhs), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
+//! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
 //! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built).
 
 mod binary;
 pub mod build;
 mod collapse;
 mod large;
+mod median;
 pub mod node;
 mod packet;
 mod piles;

@@ -8,7 +8,7 @@ use obvhs::bvh2::node::Bvh2Node;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use super::build::{balanced_into, tree_for, unset};
+use super::median::{balanced_into, tree_for, unset};
 
 /// Spheres sampled to look for piles.
 const SAMPLE: usize = 4096;
@@ -92,7 +92,7 @@ mod tests {
                 pending.extend([first, first + 1]);
                 continue;
             }
-            assert!(n.prim_count as usize <= super::super::build::BALANCED_LEAF);
+            assert!(n.prim_count as usize <= super::super::median::BALANCED_LEAF);
             for &p in &order[first..first + n.prim_count as usize] {
                 seen[p as usize] += 1;
                 let b = &piled[p as usize];

@@ -16,7 +16,7 @@ use obvhs::aabb::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
 use rayon::prelude::*;
 
-use super::build::unset;
+use super::median::unset;
 
 /// Bins per axis.
 const BINS: usize = 16;
