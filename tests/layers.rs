@@ -258,23 +258,31 @@ fn rust_files(dir: &Path, into: &mut Vec<PathBuf>) {
     }
 }
 
+/// Every Rust file under `src/` but the crate roots: its path relative to `src/` and its source, sorted.
+fn src_files() -> Vec<(String, String)> {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let mut paths = Vec::new();
+    rust_files(&src, &mut paths);
+    paths.sort();
+    assert!(paths.len() > 20, "found only {} files under {}", paths.len(), src.display());
+    paths
+        .iter()
+        .map(|p| p.strip_prefix(&src).expect("under src").to_str().expect("UTF-8 path").replace('\\', "/"))
+        .filter(|rel| !ROOTS.contains(&rel.as_str()))
+        .map(|rel| {
+            let source = fs::read_to_string(src.join(&rel)).expect("read source");
+            (rel, source)
+        })
+        .collect()
+}
+
 #[test]
 fn every_module_imports_only_lower_layers() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut files = Vec::new();
-    rust_files(&src, &mut files);
-    files.sort();
-    assert!(files.len() > 20, "found only {} files under {}", files.len(), src.display());
     let mut problems = Vec::new();
-    for path in &files {
-        let rel = path.strip_prefix(&src).expect("under src");
-        let first = rel.components().next().expect("non-empty").as_os_str().to_str().expect("UTF-8 path");
-        if rel.components().count() == 1 && ROOTS.contains(&first) {
-            continue;
-        }
+    for (rel, source) in src_files() {
+        let first = rel.split('/').next().expect("non-empty");
         let module = first.strip_suffix(".rs").unwrap_or(first);
-        let source = fs::read_to_string(path).expect("read source");
-        problems.extend(violations(&format!("src/{}", rel.display()), module, &source));
+        problems.extend(violations(&format!("src/{rel}"), module, &source));
     }
     assert!(problems.is_empty(), "layer violations (ARCHITECTURE.md, \"Layers\"):\n{}", problems.join("\n"));
 }
@@ -505,7 +513,7 @@ fn import_circles(files: &[(Vec<String>, String)]) -> Vec<String> {
         let mut stack = vec![(start, vec![(start, 0usize)])];
         let mut seen = vec![false; files.len()];
         while let Some((at, trail)) = stack.pop() {
-            for &(f, t, line) in edges.iter().filter(|e| e.0 == at) {
+            for &(_, t, line) in edges.iter().filter(|e| e.0 == at) {
                 let mut next = trail.clone();
                 next.last_mut().expect("non-empty").1 = line;
                 if t == start {
@@ -516,7 +524,6 @@ fn import_circles(files: &[(Vec<String>, String)]) -> Vec<String> {
                     next.push((t, 0));
                     stack.push((t, next));
                 }
-                let _ = f;
             }
         }
     }
@@ -525,16 +532,8 @@ fn import_circles(files: &[(Vec<String>, String)]) -> Vec<String> {
 
 #[test]
 fn no_file_reaches_itself_through_its_imports() {
-    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
-    let mut paths = Vec::new();
-    rust_files(&src, &mut paths);
-    paths.sort();
-    let files: Vec<(Vec<String>, String)> = paths
-        .iter()
-        .map(|p| p.strip_prefix(&src).expect("under src").to_str().expect("UTF-8 path").to_owned())
-        .filter(|rel| !ROOTS.contains(&rel.as_str()))
-        .map(|rel| (module_of(&rel), fs::read_to_string(src.join(&rel)).expect("read source")))
-        .collect();
+    let files: Vec<(Vec<String>, String)> =
+        src_files().into_iter().map(|(rel, source)| (module_of(&rel), source)).collect();
     assert!(file_edges(&files).len() > 20, "the import edges were not found");
     let circles = import_circles(&files);
     assert!(

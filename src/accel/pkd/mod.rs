@@ -165,21 +165,6 @@ pub struct Particles {
     eye_terms_help: bool,
 }
 
-/// Bounds of a record slice: the world box of the centres widened by their radii, and the largest radius.
-pub fn world_bounds(spheres: &[[f32; 4]]) -> (DVec3, DVec3, f64) {
-    let fold = |(lo, hi, r): (DVec3, DVec3, f64), s: &[f32; 4]| {
-        let c = DVec3::new(s[0].into(), s[1].into(), s[2].into());
-        let sr = f64::from(s[3]);
-        (lo.min(c - sr), hi.max(c + sr), r.max(sr))
-    };
-    let empty = || (DVec3::INFINITY, DVec3::NEG_INFINITY, 0.0);
-    spheres
-        .par_iter()
-        .with_min_len(1 << 16)
-        .fold(empty, fold)
-        .reduce(empty, |a, b| (a.0.min(b.0), a.1.max(b.1), a.2.max(b.2)))
-}
-
 impl Particles {
     /// Spheres given in f64 (world space: `x, y, z, r`) and their materials in a particle tree, in rendering
     /// space about `origin` (the eye), culling with padding `pad`.

@@ -8,8 +8,6 @@
 //! lane that has found a hit nearer than its entry. The near child is popped first, by the sign of the first
 //! live lane's direction on the node's axis.
 
-use glam::DVec3;
-
 use super::{eye_term_of, place, with_records, Particles, Record, Records, LEAF};
 use crate::accel::bvh::{Frustum, SlabRays, Stack, WIDEN};
 use crate::accel::count_work;
@@ -283,10 +281,5 @@ impl Particles {
             return F::mask_from_bits(0);
         }
         with_records!(&self.records, |recs| Query::new(self, recs, rays, from, base).occluded(live))
-    }
-
-    /// The rendering space's origin in world space.
-    pub fn origin(&self) -> DVec3 {
-        self.origin
     }
 }
