@@ -199,3 +199,58 @@ fn camera_tiles_match_the_bvh() {
     assert!(tree.pixels.iter().zip(&bvh.pixels).all(|(a, b)| bits(a) == bits(b)));
     assert!(bvh.pixels.iter().any(|p| bits(p) != bits(&bvh.pixels[0])), "the image shows something");
 }
+
+/// Camera tiles of K-ray packets (K = 4, 8, 16), each packet with its pyramid, walked through the tree as one
+/// large packet ([`bareray::accel::Geometry::intersect_tile`]) give every lane the bits of its packet walked
+/// alone: on each hard field, from a view inside the field (where members are done early and late) and one
+/// outside it, with packets part empty and whole packets inactive.
+#[test]
+fn large_packets_through_the_tree_give_each_packets_hits() {
+    fn check<F: Lanes>(scene: &Scene, rng: &mut Rng) -> usize {
+        use bareray::render::{for_each_packet, large_packets, tile_pyramid, Tile};
+        let (w, h) = (scene.camera.width, scene.camera.height);
+        let mut found = 0;
+        for piece in large_packets::<F>(Tile { x0: 0, y0: 0, w, h }) {
+            let mut packets = Vec::new();
+            for_each_packet::<F>(&scene.camera_f64, piece, (0.5, 0.5), true, |rays, _| packets.push(*rays));
+            // Some lanes and some whole packets inactive.
+            for rays in packets.iter_mut() {
+                let keep = match rng.unit() {
+                    u if u < 0.1 => 0,
+                    u if u < 0.3 => (rng.unit() * 65536.0) as u32,
+                    _ => u32::MAX,
+                };
+                rays.active = rays.active & F::mask_from_bits(keep);
+            }
+            let pyramid = tile_pyramid(&scene.camera_f64, piece, (0.5, 0.5));
+            let mut hits = vec![HitPacket::<F>::miss(); packets.len()];
+            scene.geometry.intersect_tile(&packets, pyramid.as_ref(), &mut hits);
+            for (rays, large) in packets.iter().zip(&hits) {
+                let alone = scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+                for i in (0..F::K).filter(|&i| F::mask_lane(rays.active, i)) {
+                    let (a, b) = (large.lane(i), alone.lane(i));
+                    assert_eq!((a.t.to_bits(), a.prim), (b.t.to_bits(), b.prim), "lane {i} of {piece:?}");
+                    found += usize::from(a.is_hit());
+                }
+            }
+        }
+        found
+    }
+    for kind in 0..3 {
+        let mut rng = Rng::new(97 + kind as u64);
+        let spheres = field(kind, 6000, &mut rng);
+        for eye in [DVec3::new(0.1, 0.2, -3.0), DVec3::new(0.05, -0.1, 0.02)] {
+            let desc = SceneDesc {
+                camera: common::camera(eye, DVec3::new(0.0, 0.0, 1.0), DVec3::Y, 60.0, 96, 72),
+                spheres: spheres.clone(),
+                materials: vec![Material::default(); 3],
+                ..SceneDesc::default()
+            };
+            let scene = Scene::compile_with(&desc, Accel::Particles).unwrap();
+            assert!(scene.geometry.culls_by_pyramid(), "the tree's camera packets carry pyramids");
+            let found = [check::<f32x4>(&scene, &mut rng), check::<f32x8>(&scene, &mut rng)];
+            let found16 = check::<f32x16>(&scene, &mut rng);
+            assert!(found.iter().chain([&found16]).all(|&n| n > 50), "kind {kind}: hits {found:?} {found16}");
+        }
+    }
+}

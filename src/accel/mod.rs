@@ -221,7 +221,7 @@ impl Geometry {
             let q = self.sphere_query(rays, from);
             intersect_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), rays.active, &mut best);
         }
-        self.intersect_other_kinds(rays, from, &mut best);
+        self.intersect_other_kinds(rays, from, true, &mut best);
         let (exits, t) = self.departure_exits_k(rays, from);
         best.update(exits, t, from.prim, self.keys_k::<F>(from.prim, exits));
         best
@@ -240,37 +240,53 @@ impl Geometry {
     ) {
         let camera = DeparturePacket::camera();
         let bvh = self.sphere_bvh.as_ref().filter(|bvh| bvh.frustum_culling);
-        let (Some(bvh), Some(pyramid), true) = (bvh, pyramid, F::K > 1) else {
+        let tree = (!self.particles.is_empty() && self.particles.frustum_culling).then_some(&self.particles);
+        let (Some(pyramid), true, true) = (pyramid, F::K > 1, bvh.is_some() || tree.is_some()) else {
             for (rays, hit) in packets.iter().zip(hits) {
                 *hit = self.intersect_k(rays, &camera);
             }
             return;
         };
         hits.fill(HitPacket::miss());
-        bvh.intersect_large(packets, |p| self.sphere_query(&packets[p], &camera), pyramid, hits);
-        if self.has_other_kinds() {
+        match bvh {
+            Some(bvh) => {
+                bvh.intersect_large(packets, |p| self.sphere_query(&packets[p], &camera), pyramid, hits)
+            }
+            None if !self.spheres.is_empty() => {
+                for (rays, hit) in packets.iter().zip(hits.iter_mut()) {
+                    let q = self.sphere_query(rays, &camera);
+                    intersect_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), rays.active, hit);
+                }
+            }
+            None => {}
+        }
+        if let Some(tree) = tree {
+            tree.intersect_large(packets, pyramid, self.spheres.len() as u32, hits);
+        }
+        let particles_left = tree.is_none() && !self.particles.is_empty();
+        if self.has_other_kinds() || particles_left {
             for (rays, hit) in packets.iter().zip(hits).filter(|(rays, _)| rays.active.any()) {
-                self.intersect_other_kinds(rays, &camera, hit);
+                self.intersect_other_kinds(rays, &camera, particles_left, hit);
             }
         }
     }
 
-    /// Whether the scene has primitives other than spheres.
+    /// Whether the scene has primitives other than spheres and particles.
     fn has_other_kinds(&self) -> bool {
-        !(self.polygons.is_empty()
-            && self.shapes.is_empty()
-            && self.cones.is_empty()
-            && self.particles.is_empty())
+        !(self.polygons.is_empty() && self.shapes.is_empty() && self.cones.is_empty())
     }
 
-    /// The closest hits of every kind but spheres, merged into `best`.
+    /// The closest hits of every kind but spheres (and particles unless `particles`), merged into `best`.
     fn intersect_other_kinds<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
+        particles: bool,
         best: &mut HitPacket<F>,
     ) {
-        self.particles.intersect_k(rays, from, self.spheres.len() as u32, best);
+        if particles {
+            self.particles.intersect_k(rays, from, self.spheres.len() as u32, best);
+        }
         if !self.polygons.is_empty() {
             let q = self.triangle_query(rays, from);
             intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, best);
@@ -451,6 +467,7 @@ impl Geometry {
     /// while to compute one.
     pub fn culls_by_pyramid(&self) -> bool {
         self.bvhs().any(|bvh| bvh.frustum_culling)
+            || (!self.particles.is_empty() && self.particles.frustum_culling)
     }
 
     /// Closest hit of one ray in `[0, t_max)`: the K = 1 instance of [`Geometry::intersect_k`].

@@ -230,7 +230,8 @@ impl Scene {
         let (mut scene, job) = Self::assemble(&desc, options, Some(records.bounds()))?;
         drop(desc);
         let clock = std::time::Instant::now();
-        let particles = Particles::from_store(Box::new(records), scene.origin, job.options.pad);
+        let mut particles = Particles::from_store(Box::new(records), scene.origin, job.options.pad);
+        particles.frustum_culling = options.frustum_culling;
         scene.build +=
             BuildStats { seconds: clock.elapsed().as_secs_f64(), node_bytes: particles.overhead_bytes() };
         scene.geometry.particles = particles;
@@ -268,6 +269,7 @@ impl Scene {
                 desc.spheres.iter().map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect();
             let material = desc.spheres.iter().map(|s| s.material).collect();
             geometry.particles = Particles::from_f64(records, material, origin, pad);
+            geometry.particles.frustum_culling = frustum_culling;
             build.seconds = clock.elapsed().as_secs_f64();
             build.node_bytes = geometry.particles.overhead_bytes();
         } else {

@@ -38,8 +38,8 @@ struct Pending {
 }
 
 /// Every member's four frustum sides, one member per lane: which members may reach a box or a ball.
-/// Members without a pyramid always may.
-struct MemberSides {
+/// Members without a pyramid always may. Shared with the particle tree's large-packet walk.
+pub(crate) struct MemberSides {
     /// Per side, the normals' components.
     normal: [[f32x16; 3]; 4],
     /// Per side, `|n|` rounded up, for balls.
@@ -51,7 +51,7 @@ struct MemberSides {
 impl MemberSides {
     /// The sides of `packets`' pyramids, which share the apex `apex`, by [`Side::all`]'s arithmetic (its
     /// slack) in 16 lanes.
-    fn new<F: Lanes>(packets: &[RayPacket<F>], apex: [f32; 3], extent: f32) -> Self {
+    pub(crate) fn new<F: Lanes>(packets: &[RayPacket<F>], apex: [f32; 3], extent: f32) -> Self {
         // One pass over the members, transposing their normals into lanes. Added to the offsets: 0 for a
         // member's own planes; −inf (nothing is outside) for a member without a pyramid; NaN (no comparison
         // holds, so nothing is outside) for one whose apex is not the tile's.
@@ -85,11 +85,18 @@ impl MemberSides {
     /// side's normal (per lane) is not below the side, as in [`Frustum`]'s box test.
     #[inline(always)]
     fn reaching_box(&self, n: &Node, c: usize) -> u32 {
+        let corner = |a: usize| (n.lo()[a][c], n.hi()[a][c]);
+        self.reaching_corners([corner(0), corner(1), corner(2)])
+    }
+
+    /// [`MemberSides::reaching_box`] for the box whose `(low, high)` planes on each axis are `planes`.
+    #[inline(always)]
+    pub(crate) fn reaching_corners(&self, planes: [(f32, f32); 3]) -> u32 {
         let zero = f32x16::splat(0.0);
         let mut outside = 0;
         for (normal, offset) in self.normal.iter().zip(&self.offset) {
             let corner = |a: usize| {
-                let (lo, hi) = (f32x16::splat(n.lo()[a][c]), f32x16::splat(n.hi()[a][c]));
+                let (lo, hi) = (f32x16::splat(planes[a].0), f32x16::splat(planes[a].1));
                 Real::select(zero.le(normal[a]), hi, lo)
             };
             let s = corner(2)
@@ -102,7 +109,7 @@ impl MemberSides {
     /// Bit p set where member p's frustum may meet the ball of radius `r` around `centre`, as in
     /// [`Frustum`]'s sphere test.
     #[inline(always)]
-    fn reaching_ball(&self, centre: Vec3f, r: f32) -> u32 {
+    pub(crate) fn reaching_ball(&self, centre: Vec3f, r: f32) -> u32 {
         let (zero, r) = (f32x16::splat(0.0), f32x16::splat(r));
         let (x, y, z) = (f32x16::splat(centre.x), f32x16::splat(centre.y), f32x16::splat(centre.z));
         let mut outside = 0;
@@ -183,7 +190,7 @@ impl Bvh {
 /// room for the widest lane type (K ≤ 16): without [`f32::max`]'s NaN rule the compiler keeps the halving in
 /// vector registers (with it, lane by lane).
 #[inline(always)]
-fn farthest<F: Lanes>(t: F) -> f32 {
+pub(crate) fn farthest<F: Lanes>(t: F) -> f32 {
     let mut a = [f32::NEG_INFINITY; 16];
     a[..F::K].copy_from_slice(t.to_array().as_ref());
     debug_assert!(!a.iter().any(|v| v.is_nan()), "a NaN hit distance");
@@ -199,7 +206,7 @@ fn farthest<F: Lanes>(t: F) -> f32 {
 
 /// Whether every active lane's direction is unit length to within its rounding (the distance cull's
 /// premise).
-fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
+pub(crate) fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
     (0..F::K).filter(|&i| F::mask_lane(rays.active, i)).all(|i| {
         let d = [rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i)].map(f64::from);
         ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1.0).abs() <= 8.0 * f64::from(f32::EPSILON)

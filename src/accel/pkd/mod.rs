@@ -19,6 +19,7 @@
 //! index) order the closest hits are the BVH's and brute force's, bit for bit, at every packet width.
 
 mod build;
+mod large;
 mod walk;
 
 use glam::DVec3;
@@ -163,6 +164,9 @@ pub struct Particles {
     pad: f32,
     /// Some sphere has the eye within about its radius of its surface ([`crate::geometry::Spheres`]'s flag).
     eye_terms_help: bool,
+    /// Camera packets cull by their pyramids and tiles walk as large packets
+    /// ([`crate::accel::bvh::Bvh::frustum_culling`]'s setting for the tree).
+    pub frustum_culling: bool,
 }
 
 impl Particles {
@@ -201,6 +205,7 @@ impl Particles {
             bounds: [[0.0; 3]; 2],
             pad,
             eye_terms_help: false,
+            frustum_culling: true,
         };
         p.measure();
         p

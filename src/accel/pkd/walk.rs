@@ -30,7 +30,7 @@ struct Entry<F> {
 }
 
 /// A packet's query of the tree: the rays prepared for sphere and slab tests.
-struct Query<'a, F: Lanes, R> {
+pub(super) struct Query<'a, F: Lanes, R> {
     tree: &'a Particles,
     recs: &'a [R],
     terms: SphereRay<F>,
@@ -47,7 +47,7 @@ struct Query<'a, F: Lanes, R> {
 }
 
 impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
-    fn new(
+    pub(super) fn new(
         tree: &'a Particles,
         recs: &'a [R],
         rays: &RayPacket<F>,
@@ -76,7 +76,7 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
     /// `live`: the lanes it is hit in (the departure sphere excluded) and their t; `None` when no live
     /// lane's line meets it. The sphere kernel's operations, as [`crate::accel::SphereQuery`] runs them.
     #[inline(always)]
-    fn placed_sphere(&self, i: usize, c: Vec3f, r: f32, live: F::Mask) -> Option<(F::Mask, F)> {
+    pub(super) fn placed_sphere(&self, i: usize, c: Vec3f, r: f32, live: F::Mask) -> Option<(F::Mask, F)> {
         // A sphere wholly outside the packet's frustum is missed by every lane (the BVH's leaf test).
         if self.frustum.as_ref().is_some_and(|f| !f.may_meet(c, r + self.tree.pad)) {
             return None;
