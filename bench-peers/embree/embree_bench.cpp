@@ -560,6 +560,7 @@ void usage() {
       "output: --dump FILE   per-pixel t and id of the FIRST configuration run (see README)\n"
       "        --write-xyzr FILE  write the spheres ('%.9g', round-trips f32) and continue\n"
       "        --verbose     Embree device verbose=1 (prints the ISA chosen)\n"
+      "        --isa I       Embree device isa=I (sse2, sse4.2, avx, avx2, avx512; default: the best the CPU has)\n"
       "timing: --pregen      compute all ray directions once before timing (default: generated per ray,\n"
       "                      inside the timed loop, as a renderer does)");
 }
@@ -576,6 +577,7 @@ int main(int argc, char** argv) {
   RTCBuildQuality quality = RTC_BUILD_QUALITY_MEDIUM;
   std::string quality_name = "medium";
   bool user_f64 = false, verbose = false, pregen = false;
+  std::string isa;
   std::string user_kernel = "packet";
 
   for (int a = 1; a < argc; ++a) {
@@ -625,6 +627,7 @@ int main(int argc, char** argv) {
       if (user_kernel != "packet" && user_kernel != "scalar") die("--user-kernel packet|scalar");
     }
     else if (k == "--verbose") verbose = true;
+    else if (k == "--isa") isa = val();
     else if (k == "--pregen") pregen = true;
     else if (k == "-h" || k == "--help") { usage(); return 0; }
     else die("unknown option " + k + " (try --help)");
@@ -661,7 +664,8 @@ int main(int argc, char** argv) {
 
   for (int threads : thread_counts) {
     // One device per thread count: "threads=T" limits Embree's own (TBB) build threads to T as well.
-    std::string cfg = "threads=" + std::to_string(threads) + (verbose ? ",verbose=1" : "");
+    std::string cfg = "threads=" + std::to_string(threads) + (verbose ? ",verbose=1" : "") +
+                      (isa.empty() ? "" : ",isa=" + isa);
     RTCDevice dev = rtcNewDevice(cfg.c_str());
     if (!dev) die("rtcNewDevice failed");
     rtcSetDeviceMemoryMonitorFunction(dev, memory_monitor, nullptr);
