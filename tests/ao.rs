@@ -1,5 +1,5 @@
 //! Ambient occlusion (`--shade ao`): the same bits at every packet width and thread count under every
-//! sampling pattern, each packet lane the scalar tracer's value, and values checked against cases with
+//! sampling pattern, each packet lane the single-ray tracer's value, and values checked against cases with
 //! known answers (a point far from everything, a floor beside a wall, the inside of a closed sphere, a
 //! sphere resting on a floor against an f64 Monte Carlo estimate).
 
@@ -63,10 +63,10 @@ fn ao_is_the_same_bits_at_every_width_and_thread_count() {
     }
 }
 
-/// Every lane of an AO packet is what the scalar tracer (K = 1) computes for that ray alone, bit for bit,
+/// Every lane of an AO packet is what the single-ray tracer (K = 1) computes for that ray alone, bit for bit,
 /// with the same ray counts: random rays from the eye into a sphere field over a plane, some lanes off.
 #[test]
-fn packet_lanes_are_the_scalar_tracer() {
+fn packet_lanes_are_the_single_ray_tracer() {
     let mut desc = scene_file("scenes/field1k.xyzr", 32, 32);
     add_floor(&mut desc);
     // 7 directions: one per pixel's hit in each packet at K = 8 and 16, a hit's own packets at K = 4; 20:
@@ -93,7 +93,7 @@ fn add_floor(desc: &mut SceneDesc) {
 fn check_lanes<F: Lanes>(scene: &Scene, seed: u64) {
     let mut rng = SplitMix64::new(seed);
     let mut packets = Tracer::<F>::new(scene);
-    let mut scalar = Tracer::<f32>::new(scene);
+    let mut single = Tracer::<f32>::new(scene);
     let mut hits = 0;
     for p in 0..300 {
         let rays = RayPacket::<F>::from_fn(|i| {
@@ -110,12 +110,12 @@ fn check_lanes<F: Lanes>(scene: &Scene, seed: u64) {
                 assert_eq!(got, [0; 3], "inactive lane {i} of packet {p}");
                 continue;
             }
-            let one = scalar.primary(&RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true));
+            let one = single.primary(&RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true));
             assert_eq!(got, [one.x, one.y, one.z].map(f32::to_bits), "K = {} packet {p} lane {i}", F::K);
             hits += usize::from(one != V3::all(0.0));
         }
     }
-    assert_eq!(packets.counts, scalar.counts, "K = {}", F::K);
+    assert_eq!(packets.counts, single.counts, "K = {}", F::K);
     assert!(packets.counts.ao > 1000 && hits > 500, "{:?}, {hits} lanes shaded", packets.counts);
 }
 
