@@ -235,6 +235,30 @@ pub fn check_or_exit() {
     unsafe { libc::_exit(1) }
 }
 
+/// The features x86-64-v2 adds to x86-64's baseline (SSE4.2 and what comes with it).
+pub const X86_64_V2: &[&str] = &["sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "cmpxchg16b"];
+
+/// The features x86-64-v3 adds to x86-64-v2 (AVX2 and FMA, with their companions).
+pub const X86_64_V3: &[&str] = &["avx", "avx2", "fma", "bmi1", "bmi2", "lzcnt", "movbe", "f16c"];
+
+/// The features x86-64-v4 adds to x86-64-v3 (the AVX-512 subsets every AVX-512 CPU has had since Skylake-SP).
+pub const X86_64_V4: &[&str] = &["avx512f", "avx512bw", "avx512cd", "avx512dq", "avx512vl"];
+
+/// Which of `features` this CPU lacks (or [`ASSUME_LACKS_VAR`] names as lacking), whatever this binary was
+/// compiled for: for telling which other builds can run here (`bench --isa`). Reads CPUID, not
+/// `is_x86_feature_detected!`, which answers `true` for every feature this binary was compiled with. On
+/// other architectures every feature is lacking.
+pub fn lacking<'a>(features: &[&'a str]) -> Vec<&'a str> {
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    {
+        let assumed = std::env::var(ASSUME_LACKS_VAR).unwrap_or_default();
+        let cpu = detect::Cpu::read();
+        features.iter().copied().filter(|f| !cpu.has(f) || lists(assumed.as_bytes(), f)).collect()
+    }
+    #[cfg(not(any(target_arch = "x86", target_arch = "x86_64")))]
+    features.to_vec()
+}
+
 /// What the CPU reports, read once.
 #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
 pub mod detect {
@@ -368,6 +392,31 @@ mod tests {
         assert!(m.contains("`cargo build --release`") && m.contains("x86-64-v3"));
         assert!(m.contains("`cargo build-native`"));
         assert!(m.contains("RUSTFLAGS=\"-C target-cpu=x86-64-v2\" cargo build --release"));
+    }
+
+    /// Every level's features are ones the check reads from CPUID, so [`lacking`] can answer for them.
+    #[test]
+    fn level_features_are_known() {
+        for name in X86_64_V2.iter().chain(X86_64_V3).chain(X86_64_V4) {
+            assert!(FEATURES.iter().any(|f| f.name == *name), "{name}");
+        }
+    }
+
+    /// A CPU that runs this build has the levels it was compiled for; [`lacking`] answers from CPUID, not
+    /// from the build's features.
+    #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
+    #[test]
+    fn lacking_reads_the_cpu() {
+        if std::env::var_os(ASSUME_LACKS_VAR).is_some() {
+            return;
+        }
+        if cfg!(target_feature = "avx2") {
+            assert_eq!(lacking(X86_64_V3), Vec::<&str>::new());
+        }
+        let cpu = detect::Cpu::read();
+        let v4: Vec<&str> = X86_64_V4.iter().copied().filter(|f| !cpu.has(f)).collect();
+        assert_eq!(lacking(X86_64_V4), v4);
+        assert_eq!(lacking(&["no-such-feature"]), ["no-such-feature"]);
     }
 
     /// The machine running the tests runs the binary it built: nothing compiled for is missing.

@@ -1149,3 +1149,147 @@ fn convert_streams_text_into_binary() {
     assert!(stderr(&run).contains("bad.xyzr:5"), "{}", stderr(&run));
     assert!(!Path::new(&p("bad.f32r")).exists());
 }
+
+/// `bench --isa`: a level that is not v2, v3 or v4, a level listed twice, and `--isa-dir` without `--isa`
+/// are argument errors (exit 2) that name the problem, before anything runs.
+#[test]
+fn bench_isa_bad_levels_are_argument_errors() {
+    let cases: [(&[&str], &str); 4] = [
+        (&["--isa", "v5"], "`v5`"),
+        (&["--isa", "v3,avx2"], "levels are v2 (SSE4.2), v3 (AVX2 and FMA) and v4 (AVX-512)"),
+        (&["--isa", "v3,x86-64-v3"], "v3 is listed twice"),
+        (&["--isa-dir", "."], "--isa"),
+    ];
+    for (extra, needle) in cases {
+        let run = bareray(&[&["bench", "scenes/whitted.toml"], extra].concat());
+        let err = stderr(&run);
+        assert_eq!(run.status.code(), Some(2), "{extra:?}: {err}");
+        assert!(err.contains(needle) && !err.contains("panicked"), "{extra:?}: {err}");
+        assert!(run.stdout.is_empty(), "{extra:?}");
+    }
+}
+
+/// `bench --isa`: a build that is not there is an error (exit 1) naming where it was looked for and the
+/// command that builds it.
+#[test]
+fn bench_isa_missing_build_names_the_build_command() {
+    let dir = tempfile::tempdir().unwrap();
+    let run =
+        bareray(&["bench", "scenes/whitted.toml", "--isa", "v3", "--isa-dir", dir.path().to_str().unwrap()]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("no x86-64-v3 build") && err.contains("`cargo build-v3`"), "{err}");
+    assert!(err.contains(&dir.path().join("v3/release/bareray").display().to_string()), "{err}");
+    assert!(err.contains("bench-peers/build_isa.sh") && !err.contains("panicked"), "{err}");
+    assert!(run.stdout.is_empty());
+}
+
+/// A directory of per-ISA builds (`<level>/release/bareray`) in which each level is this test binary.
+#[cfg(all(unix, target_arch = "x86_64"))]
+fn isa_dir_of_this_binary(levels: &[&str]) -> tempfile::TempDir {
+    let dir = tempfile::tempdir().unwrap();
+    for level in levels {
+        let release = dir.path().join(level).join("release");
+        std::fs::create_dir_all(&release).unwrap();
+        std::os::unix::fs::symlink(env!("CARGO_BIN_EXE_bareray"), release.join("bareray")).unwrap();
+    }
+    dir
+}
+
+/// `bench --isa v2,v3,v4` end to end, with this binary standing in for the v2 and v3 builds: one row per
+/// (isa, lanes, threads) with the checksum of a plain bench at the same settings (the other arguments reach
+/// the builds), a level the CPU lacks skipped with a note, a build whose kernels are not its level's
+/// flagged, and the JSON lines carrying the level and the rounds.
+#[cfg(all(unix, target_arch = "x86_64"))]
+#[test]
+fn bench_isa_runs_the_builds_side_by_side() {
+    let dir = isa_dir_of_this_binary(&["v2", "v3"]);
+    let settings =
+        ["scenes/whitted.toml", "--lanes", "1,8", "--threads", "1", "--width", "16", "--height", "12"];
+    let plain = bench_json(&[&settings[..], &["--reps", "1"]].concat());
+    let isa = ["--isa", "v2,v3,v4", "--isa-dir", dir.path().to_str().unwrap(), "--reps", "2"];
+    let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+        .args([&["bench"], &settings[..], &isa[..]].concat())
+        .env("BARERAY_ASSUME_CPU_LACKS", "avx512bw")
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    let table = String::from_utf8_lossy(&run.stdout);
+    assert!(table.contains("note: x86-64-v4 skipped: CPU lacks avx512bw"), "{table}");
+    assert!(table.contains("2 rounds") && table.contains("vs v3"), "{table}");
+    assert!(table.contains("checksums: equal in every build for every row"), "{table}");
+    if cfg!(target_feature = "fma") {
+        // This binary is not a v2 build: the table says so.
+        assert!(
+            table.contains("warning: the v2 build") && table.contains("not an x86-64-v2 build"),
+            "{table}"
+        );
+    }
+    let rows: Vec<&str> = table.lines().filter(|l| l.starts_with("v2 ") || l.starts_with("v3 ")).collect();
+    assert_eq!(rows.len(), 4, "{table}");
+    for (row, (level, lanes)) in rows.iter().zip([("v2", 1), ("v3", 1), ("v2", 8), ("v3", 8)]) {
+        let fields: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!((fields[0], fields[2], fields[3]), (level, &*lanes.to_string(), "1"), "{table}");
+        let plain_row = plain.iter().find(|r| r["lanes"] == lanes).unwrap();
+        assert!(row.contains(plain_row["checksum"].as_str().unwrap()), "{row} vs {plain_row}");
+    }
+    // With --json: one line per (isa, lanes, threads), the level and the rounds in it; the note on stderr.
+    let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
+        .args([&["bench"], &settings[..], &isa[..], &["--json"]].concat())
+        .env("BARERAY_ASSUME_CPU_LACKS", "avx512bw")
+        .output()
+        .unwrap();
+    assert!(run.status.success(), "{}", stderr(&run));
+    assert!(stderr(&run).contains("x86-64-v4 skipped: CPU lacks avx512bw"), "{}", stderr(&run));
+    let lines: Vec<serde_json::Value> =
+        String::from_utf8_lossy(&run.stdout).lines().map(|l| serde_json::from_str(l).unwrap()).collect();
+    let levels: Vec<_> = lines.iter().map(|l| l["isa_level"].as_str().unwrap().to_owned()).collect();
+    assert_eq!(levels, ["v2", "v3", "v2", "v3"]);
+    for line in &lines {
+        assert_eq!(line["reps"], 2, "{line}");
+        assert_eq!(line["width"], 16, "{line}");
+        let plain_row = plain.iter().find(|r| r["lanes"] == line["lanes"]).unwrap();
+        assert_eq!(line["checksum"], plain_row["checksum"], "{line}");
+        assert!(line["min_s"].as_f64() <= line["seconds"].as_f64(), "{line}");
+        assert_eq!(line["software_fma"], !cfg!(target_feature = "fma"), "{line}");
+    }
+}
+
+/// `bench --isa`: builds whose checksums differ are an error (exit 1) naming both builds and both
+/// checksums. The v2 "build" is a script printing a row with another checksum.
+#[cfg(all(unix, target_arch = "x86_64"))]
+#[test]
+fn bench_isa_checksum_mismatch_is_an_error() {
+    use std::os::unix::fs::PermissionsExt;
+    let dir = isa_dir_of_this_binary(&["v3"]);
+    let fake = dir.path().join("v2/release/bareray");
+    std::fs::create_dir_all(fake.parent().unwrap()).unwrap();
+    let line =
+        r#"{"lanes":1,"threads":1,"rays":192,"seconds":0.001,"checksum":"00000000deadbeef","isa":"sse2"}"#;
+    std::fs::write(&fake, format!("#!/bin/sh\necho '{line}'\n")).unwrap();
+    std::fs::set_permissions(&fake, std::fs::Permissions::from_mode(0o755)).unwrap();
+    let run = bareray(&[
+        "bench",
+        "scenes/whitted.toml",
+        "--lanes",
+        "1",
+        "--threads",
+        "1",
+        "--width",
+        "16",
+        "--height",
+        "12",
+        "--reps",
+        "1",
+        "--isa",
+        "v2,v3",
+        "--isa-dir",
+        dir.path().to_str().unwrap(),
+    ]);
+    let err = stderr(&run);
+    assert_eq!(run.status.code(), Some(1), "{err}");
+    assert!(err.contains("checksums differ between builds at lanes 1, threads 1"), "{err}");
+    assert!(err.contains(&format!("v2 ({}) gave 00000000deadbeef", fake.display())), "{err}");
+    assert!(err.contains(&format!("v3 ({}", dir.path().join("v3/release/bareray").display())), "{err}");
+    assert!(!err.contains("panicked") && run.stdout.is_empty(), "{err}");
+}

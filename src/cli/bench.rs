@@ -27,7 +27,8 @@ build; `cargo build-native` builds for this CPU).\n\n\
 Examples:\n  bareray gen field --count 1000000 -o f.xyzr\n  \
 bareray bench f.xyzr --primary-only --eye 0,0,-4 --look 0,0,0 --up 0,1,0 --hfov 45 --width 1920 --height 1080\n  \
 bareray bench scenes/whitted.toml --lanes scalar,1,16 --threads 1,2 --json > old.json\n  \
-bareray bench scenes/whitted.toml --lanes scalar,1,16 --threads 1,2 --compare old.json")]
+bareray bench scenes/whitted.toml --lanes scalar,1,16 --threads 1,2 --compare old.json\n  \
+bench-peers/build_isa.sh && target/isa/v3/release/bareray bench scenes/whitted.toml --isa v2,v3,v4 --reps 3")]
 pub struct BenchArgs {
     /// Scene file (.toml, .nff or .xyzr).
     pub scene: PathBuf,
@@ -83,6 +84,18 @@ pub struct BenchArgs {
     /// In JSON, `lanes` is a packet width's number or the string `"scalar"`.
     #[arg(long, value_name = "OLD.json")]
     pub compare: Option<PathBuf>,
+    /// Run builds of this source for these x86-64 levels (a comma list of v2, v3, v4) side by side with
+    /// this command's other settings and print one table: `target/isa/<level>/release/bareray`, built by
+    /// `bench-peers/build_isa.sh` (docs/cli.md, "Per-ISA builds"). --reps is then the number of rounds, each
+    /// build running once per round in turn. A level this CPU lacks is skipped with a note; checksums that
+    /// differ between builds are an error.
+    #[arg(long, value_name = "LEVELS", value_delimiter = ',', value_parser = super::bench_isa::parse_level,
+          conflicts_with = "compare")]
+    pub isa: Option<Vec<super::bench_isa::Level>>,
+    /// The directory holding the per-ISA builds, as `DIR/<level>/release/bareray` [default: `isa/` in a
+    /// directory above this binary, such as target/isa/; or $BARERAY_ISA_DIR].
+    #[arg(long, value_name = "DIR", requires = "isa")]
+    pub isa_dir: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
 }
@@ -309,6 +322,11 @@ struct Setting {
 
 /// Runs `bareray bench`.
 pub fn run(args: BenchArgs) -> Result<()> {
+    if let Some(levels) = &args.isa {
+        // The builds get this command's own arguments, those after `bench`, less --isa's.
+        let raw: Vec<_> = std::env::args_os().skip_while(|a| a != "bench").skip(1).collect();
+        return super::bench_isa::run(levels, args.isa_dir.as_deref(), args.reps, args.json, &raw);
+    }
     let threads = match &args.threads {
         Some(t) => t.clone(),
         None => default_threads(cores()),

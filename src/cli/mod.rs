@@ -2,6 +2,7 @@
 
 mod accuracy;
 mod bench;
+mod bench_isa;
 mod camera_args;
 mod converge;
 mod convert;

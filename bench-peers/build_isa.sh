@@ -1,0 +1,27 @@
+#!/usr/bin/env bash
+# Builds the same source for x86-64-v2, v3 and v4 (or the levels given), one release build per level in a
+# target directory of its own, so that no build recompiles another: target/isa/<level>/release/bareray,
+# which `bareray bench --isa v2,v3,v4 SCENE` runs side by side. Each level is the cargo alias
+# `cargo build-<level>` of .cargo/config.toml; this script runs them one after another from the repository
+# root. `RUSTFLAGS` would replace every alias's `-C target-cpu` and make the builds identical, so it is
+# cleared (extra cargo flags such as --locked can go in CARGO_FLAGS).
+#
+# usage: bench-peers/build_isa.sh [v2] [v3] [v4]     (default: all three)
+set -euo pipefail
+cd "$(dirname "$0")/.."
+levels=("$@")
+[ ${#levels[@]} -gt 0 ] || levels=(v2 v3 v4)
+for level in "${levels[@]}"; do
+  case "$level" in
+    v2|v3|v4) ;;
+    *) echo "error: unknown level '$level' (expected v2, v3 or v4)" >&2; exit 2 ;;
+  esac
+done
+if [ -n "${RUSTFLAGS:-}" ]; then
+  echo "note: RUSTFLAGS ('$RUSTFLAGS') is ignored here: it would replace each level's -C target-cpu" >&2
+fi
+for level in "${levels[@]}"; do
+  echo "== cargo build-$level -> target/isa/$level/release/bareray" >&2
+  # shellcheck disable=SC2086
+  env -u RUSTFLAGS cargo "build-$level" ${CARGO_FLAGS:-}
+done
