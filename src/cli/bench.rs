@@ -10,7 +10,7 @@ use clap::Args;
 use serde::{Deserialize, Serialize};
 
 use super::camera_args::CameraArgs;
-use super::render::{load_scene, parse_lanes, parse_threads};
+use super::render::{parse_lanes, parse_threads};
 use super::values::{AccelArg, BvhPresetArg, LanesArg};
 use crate::compile::{Accel, CompileOptions, Scene};
 use crate::io::toml;
@@ -85,6 +85,8 @@ pub struct BenchArgs {
     pub compare: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
+    #[command(flatten)]
+    pub particles: super::particle_args::ParticleArgs,
 }
 
 /// One measured setting.
@@ -320,7 +322,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
     // 1-thread bench reads and builds on one thread, as a 1-thread peer run does.
     let build_pool = thread_pool(threads.iter().copied().max())?;
     let clock = Instant::now();
-    let mut desc = load_scene(&args.scene, &build_pool)?;
+    let mut desc =
+        super::particle_args::load_scene_with(&args.scene, &build_pool, &args.particles.options())?;
     args.camera.apply(&mut desc);
     if let Some(pattern) = args.aa {
         desc.render.pattern = pattern;

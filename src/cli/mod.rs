@@ -8,6 +8,7 @@ mod convert;
 mod diff;
 mod gen;
 mod merge;
+mod particle_args;
 mod render;
 mod values;
 
