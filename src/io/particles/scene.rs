@@ -117,6 +117,8 @@ fn by_kind(kind: &Kind, unit: f64) -> (f64, Rgb, bool) {
 
 /// The warning for particles of an element the table lacks, or lacks a radius for.
 fn unknown(kind: &Kind, count: usize, radius: f64) -> String {
+    // 0.15 nm, not the 0.15000000000000002 that 1.5 × 0.1 makes.
+    let radius = (radius * 1e9).round() / 1e9;
     let what = match kind.element {
         Some(_) => format!("has no van der Waals radius in the table: radius {radius}"),
         None => format!("is not an element the table knows: radius {radius}, colour #{FALLBACK_COLOR:06X}"),
