@@ -341,7 +341,8 @@ fn report(args: &RenderArgs, scene: &Scene, job: &Job, traced: &Traced, time: &T
 fn read_stdin_scene(args: &RenderArgs) -> Result<SceneDesc> {
     let Some(format) = args.format.as_deref().and_then(crate::io::SceneFormat::from_name) else {
         return Err(super::usage(
-            "a scene read from standard input (`-`) needs --format toml, nff, xyzr, f32r or a particle format",
+            "a scene read from standard input (`-`) needs --format toml, nff, xyzr or f32r, or a particle \
+             format: xyz, pdb, pqr, gro or lammpstrj",
         ));
     };
     let mut source = Vec::new();
