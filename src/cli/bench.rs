@@ -98,6 +98,8 @@ pub struct BenchArgs {
     pub isa_dir: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
+    #[command(flatten)]
+    pub particles: super::particle_args::ParticleArgs,
 }
 
 /// One measured setting.
@@ -340,8 +342,11 @@ pub fn run(args: BenchArgs) -> Result<()> {
     let clock = Instant::now();
     let accel = Accel::from(args.accel);
     // Read as `render` reads: an `.f32r` field bound for the particle tree is mapped, not read.
-    let mut loaded = build_pool
-        .install(|| crate::compile::load::load(&args.scene, accel, crate::compile::memory::available()))?;
+    let available = crate::compile::memory::available();
+    let load_options = args.particles.options();
+    let mut loaded =
+        build_pool.install(|| crate::compile::load::load(&args.scene, accel, available, &load_options))?;
+    super::particle_args::print_warnings(&args.scene, &loaded.warnings);
     let desc = &mut loaded.desc;
     args.camera.apply(desc);
     if let Some(pattern) = args.aa {

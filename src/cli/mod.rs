@@ -9,6 +9,7 @@ mod convert;
 mod diff;
 mod gen;
 mod merge;
+mod particle_args;
 mod render;
 mod values;
 

@@ -9,6 +9,7 @@ use clap::Args;
 use indicatif::{ProgressBar, ProgressStyle};
 
 use super::camera_args::CameraArgs;
+use super::particle_args::ParticleArgs;
 use super::values::{AccelArg, BvhPresetArg, LanesArg, TransferArg};
 use crate::aov::{self, AovList};
 use crate::compile::{load, Accel, CompileOptions, Scene};
@@ -34,11 +35,13 @@ Exit codes: 0 success; 2 argument errors (nothing rendered); 1 scene, render or 
 )]
 pub struct RenderArgs {
     /// Scene file: .toml (bareray's format), .nff (SPD's Neutral File Format), .xyzr (`x y z r` per
-    /// line) or .f32r (binary x y z r records); `-` reads the scene from standard input (name its format
-    /// with --format). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
+    /// line), .f32r (binary x y z r records), or a particle file: .xyz/.extxyz, .pdb/.ent, .pqr, .gro,
+    /// .dump/.lammpstrj, each maybe compressed (.gz, .bz2); `-` reads the scene from standard input (name
+    /// its format with --format). Without it, the built-in demo scene (scenes/whitted.toml) is rendered.
     pub scene: Option<PathBuf>,
-    /// The format of a scene read from standard input (`render -`): toml, nff, xyzr or f32r.
-    #[arg(long, value_parser = ["toml", "nff", "xyzr", "f32r"])]
+    /// The format of a scene read from standard input (`render -`): toml, nff, xyzr, f32r, or a particle
+    /// format: xyz, pdb, pqr, gro, lammpstrj (compressed input is recognised by its first bytes).
+    #[arg(long, value_parser = ["toml", "nff", "xyzr", "f32r", "xyz", "extxyz", "pdb", "ent", "pqr", "gro", "dump", "lammpstrj"])]
     pub format: Option<String>,
     /// Output image; the extension picks the format: .png (8-bit), .exr (linear float RGB), .ppm or .pnm
     /// (binary 8-bit PPM, P6), .hdr (Radiance), .tif/.tiff (uncompressed RGB), .jpg/.jpeg (quality 92);
@@ -48,6 +51,8 @@ pub struct RenderArgs {
     pub output: Option<PathBuf>,
     #[command(flatten)]
     pub camera: CameraArgs,
+    #[command(flatten)]
+    pub particles: ParticleArgs,
     /// Samples per pixel on a regular n×n grid (1, 4, 9, 16, ...); overrides the scene.
     #[arg(long, value_parser = parse_spp, conflicts_with = "aa")]
     pub spp: Option<u32>,
@@ -230,7 +235,14 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
         Some(path) if path == Path::new("-") => {
             (in_memory(pool.install(|| read_stdin_scene(args))?), "stdin".to_owned())
         }
-        Some(path) => (pool.install(|| load::load(path, args.accel.into(), memory))?, stem(path)),
+        Some(path) => {
+            let loaded =
+                pool.install(|| load::load(path, args.accel.into(), memory, &args.particles.options()))?;
+            if warn {
+                super::particle_args::print_warnings(path, &loaded.warnings);
+            }
+            (loaded, stem(path))
+        }
         None => (in_memory(toml::parse(Path::new("<built-in demo>"), DEMO_SCENE)?), "demo".to_owned()),
     };
     let desc = &mut loaded.desc;
@@ -329,13 +341,17 @@ fn report(args: &RenderArgs, scene: &Scene, job: &Job, traced: &Traced, time: &T
 fn read_stdin_scene(args: &RenderArgs) -> Result<SceneDesc> {
     let Some(format) = args.format.as_deref().and_then(crate::io::SceneFormat::from_name) else {
         return Err(super::usage(
-            "a scene read from standard input (`-`) needs --format toml, nff, xyzr or f32r",
+            "a scene read from standard input (`-`) needs --format toml, nff, xyzr or f32r, or a particle \
+             format: xyz, pdb, pqr, gro or lammpstrj",
         ));
     };
     let mut source = Vec::new();
     std::io::Read::read_to_end(&mut std::io::stdin(), &mut source)
         .context("<stdin>: cannot read the scene")?;
-    Ok(crate::io::parse(format, Path::new("<stdin>"), source)?)
+    let name = Path::new("<stdin>");
+    let read = crate::io::parse_with(format, name, source, &args.particles.options())?;
+    super::particle_args::print_warnings(name, &read.warnings);
+    Ok(read.desc)
 }
 
 /// What decides the output's bytes, hashed: the version, the scene after the command line's overrides
@@ -669,7 +685,7 @@ fn stem(path: &Path) -> String {
 /// Reads a scene file, choosing the reader by extension, on `pool`'s threads (the sphere lists are read in
 /// parallel).
 pub fn load_scene(path: &Path, pool: &rayon::ThreadPool) -> Result<SceneDesc> {
-    Ok(pool.install(|| crate::io::load(path))?)
+    super::particle_args::load_scene_with(path, pool, &crate::io::LoadOptions::default())
 }
 
 fn apply_overrides(desc: &mut SceneDesc, args: &RenderArgs) -> Result<()> {

@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use super::memory::{self, FieldChoice, TooLarge};
 use super::{Accel, CameraError, CompileOptions, Scene};
 use crate::io::f32r::{self, MappedRecords};
-use crate::io::{SceneError, SceneFormat};
+use crate::io::{LoadOptions, SceneError, SceneFormat};
 use crate::scene::desc::{Pattern, SceneDesc};
 
 /// A scene read for compiling.
@@ -21,6 +21,8 @@ pub struct Loaded {
     pub accel: Accel,
     /// Why the particle tree, when `auto` chose it.
     pub note: Option<String>,
+    /// The reader's warnings (unknown elements in a particle file, say).
+    pub warnings: Vec<String>,
 }
 
 /// Why a scene could not be loaded.
@@ -37,26 +39,31 @@ pub enum LoadError {
 /// Reads `path` for a render with `accel`, planning for `available` bytes of memory
 /// ([`memory::available`] by default). With [`Accel::Auto`] a sphere field too large for the BVH goes to the
 /// particle tree; an `.f32r` field bound for the tree is mapped, and one that fits neither is refused after
-/// reading only its header.
-pub fn load(path: &Path, accel: Accel, available: u64) -> Result<Loaded, LoadError> {
+/// reading only its header. `options` are the reader's ([`crate::io::load_with`]).
+pub fn load(path: &Path, accel: Accel, available: u64, options: &LoadOptions) -> Result<Loaded, LoadError> {
     let plan = |spheres: u64| match accel {
         Accel::Auto | Accel::Particles => memory::choose(spheres, accel == Accel::Particles, available),
         _ => Ok(FieldChoice::Bvh),
     };
-    if SceneFormat::from_extension(path) == Some(SceneFormat::F32r) && !path.is_dir() {
+    if SceneFormat::from_extension(path) == Some(SceneFormat::F32r)
+        && !path.is_dir()
+        && !options.chooses_particles()
+    {
         let count = f32r::header_count(path)?;
         match plan(count).map_err(|e| LoadError::TooLarge(path.to_owned(), e))? {
             FieldChoice::Bvh => {}
             FieldChoice::Particles { for_memory } => {
                 let mapped = f32r::map(path)?;
                 let [lo, hi] = mapped.bounds();
-                let desc = crate::io::xyzr::scene_framing(lo, hi);
+                let desc = crate::io::xyzr::scene_framing(lo, hi, options.view);
                 let note = for_memory.then(|| note(count, available));
-                return Ok(Loaded { desc, mapped: Some(mapped), accel: Accel::Particles, note });
+                let warnings = Vec::new();
+                return Ok(Loaded { desc, mapped: Some(mapped), accel: Accel::Particles, note, warnings });
             }
         }
     }
-    Ok(loaded_desc(crate::io::load(path)?, accel, available))
+    let read = crate::io::load_with(path, options)?;
+    Ok(Loaded { warnings: read.warnings, ..loaded_desc(read.desc, accel, available) })
 }
 
 /// A description read otherwise (standard input, built in) as [`load`] would give it: with [`Accel::Auto`],
@@ -70,7 +77,7 @@ pub fn loaded_desc(desc: SceneDesc, accel: Accel, available: u64) -> Loaded {
         }
         _ => (accel, None),
     };
-    Loaded { desc, mapped: None, accel, note }
+    Loaded { desc, mapped: None, accel, note, warnings: Vec::new() }
 }
 
 /// The reason `auto` gives for the particle tree.

@@ -142,28 +142,73 @@ impl std::fmt::Display for Shortest {
 
 /// A scene showing `spheres`: default material, a camera framing their bounds, one light.
 pub fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
-    let (lo, hi) = spheres.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), s| {
+    let (lo, hi) = bounds(&spheres);
+    SceneDesc { spheres, ..scene_framing(lo, hi, None) }
+}
+
+/// The box around `spheres`.
+pub fn bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
+    spheres.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), s| {
         (lo.min(s.center - s.radius), hi.max(s.center + s.radius))
-    });
-    SceneDesc { spheres, ..scene_framing(lo, hi) }
+    })
 }
 
 /// The scene [`scene_around`] makes for spheres within `[lo, hi]`, without the spheres (a mapped field's
-/// are compiled apart, [`crate::compile::Scene::compile_mapped`]).
-pub fn scene_framing(lo: DVec3, hi: DVec3) -> SceneDesc {
-    let camera = frame_box(lo, hi);
-    let reach = (camera.eye - (lo + hi) * 0.5).length();
+/// are compiled apart, [`crate::compile::Scene::compile_mapped`]). Without a `view`, the contract camera
+/// ([`frame_box`]) and a light above and left of it; with one, the box's bounding sphere seen from the
+/// side `view` points to ([`frame_sphere`]) and a headlight, a light at the eye.
+pub fn scene_framing(lo: DVec3, hi: DVec3, view: Option<DVec3>) -> SceneDesc {
+    let (camera, light) = match view {
+        None => {
+            let camera = frame_box(lo, hi);
+            let reach = (camera.eye - (lo + hi) * 0.5).length();
+            (camera, camera.eye + DVec3::new(0.5, 0.5, 0.0) * reach)
+        }
+        Some(view) => {
+            let camera = frame_sphere(lo, hi, view);
+            (camera, camera.eye)
+        }
+    };
     SceneDesc {
         camera,
         materials: vec![Material::default()],
-        lights: vec![LightDesc {
-            position: camera.eye + DVec3::new(0.5, 0.5, 0.0) * reach,
-            color: Rgb::all(1.0),
-            falloff: Falloff::None,
-        }],
+        lights: vec![LightDesc { position: light, color: Rgb::all(1.0), falloff: Falloff::None }],
         // Colours as in NFF: written as they are (see the NFF reader's module documentation).
         render: RenderDesc { transfer: Transfer::Linear, ..RenderDesc::default() },
         ..SceneDesc::default()
+    }
+}
+
+/// The share of the view's half-angle that the bounding sphere fills in [`frame_sphere`].
+pub const SPHERE_FILL: f64 = 0.95;
+
+/// A camera on the `view` side of the box `[lo, hi]`, looking at its centre along −`view`, backed off
+/// until the box's bounding sphere fits the image (1920×1080, horizontal angle 45°) in its tighter
+/// direction, with a margin ([`SPHERE_FILL`]). Up is +y, or −z looking down from +y and +z looking up
+/// from −y (a view within about 8° of the y axis).
+pub fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
+    let (width, height) = (1920u32, 1080u32);
+    let hfov = 45.0f64;
+    let tan_w = (hfov.to_radians() / 2.0).tan();
+    let tan_h = tan_w * f64::from(height) / f64::from(width);
+    let half_angle = tan_w.min(tan_h).atan() * SPHERE_FILL;
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo) * 0.5).length().max(1e-9);
+    let dir = view.try_normalize().unwrap_or(DVec3::Z);
+    let up = match dir.y {
+        y if y > 0.99 => DVec3::NEG_Z,
+        y if y < -0.99 => DVec3::Z,
+        _ => DVec3::Y,
+    };
+    CameraDesc {
+        eye: centre + dir * (radius / half_angle.sin()),
+        aim: Aim::LookAt(centre),
+        up,
+        distance: 1.0,
+        field: Field::HorizontalAngle(hfov),
+        width,
+        height,
+        sweep: Sweep::PixelCentre,
     }
 }
 
@@ -238,6 +283,23 @@ mod tests {
             assert_eq!(chunked, whole, "chunks of {size} bytes");
             assert_eq!(parse_in_chunks(path, &bad, size).unwrap_err(), first, "chunks of {size} bytes");
         }
+    }
+
+    #[test]
+    fn a_view_frames_the_bounding_sphere_from_its_side() {
+        let (lo, hi) = (DVec3::new(-1.0, -2.0, -2.0), DVec3::new(3.0, 2.0, 2.0));
+        let cam = frame_sphere(lo, hi, DVec3::new(-2.0, 0.0, 0.0));
+        let centre = DVec3::new(1.0, 0.0, 0.0);
+        assert_eq!(cam.aim, Aim::LookAt(centre));
+        assert!(cam.eye.x < -1.0 && cam.eye.y == 0.0 && cam.eye.z == 0.0, "{cam:?}");
+        // The bounding sphere (radius the half-diagonal) subtends the tighter half-angle, shrunk.
+        let r = ((hi - lo) * 0.5).length();
+        let tan_h = (22.5f64.to_radians()).tan() * 1080.0 / 1920.0;
+        let seen = (r / (cam.eye - centre).length()).asin();
+        assert!((seen - tan_h.atan() * SPHERE_FILL).abs() < 1e-12);
+        assert_eq!(frame_sphere(lo, hi, DVec3::Y).up, DVec3::NEG_Z);
+        let scene = scene_framing(lo, hi, Some(DVec3::Z));
+        assert_eq!(scene.lights[0].position, scene.camera.eye);
     }
 
     #[test]

@@ -1,0 +1,134 @@
+//! GROMACS `.gro` files: frames of a title line, a count line, one fixed-column line per atom and a box
+//! line (3 or 9 numbers). Atom lines are `%5d%-5s%5s%5d` (residue number and name, atom name and number)
+//! then x, y, z in nm, each as wide as the distance between the first two decimal points (8 characters at
+//! the usual 3 decimals); velocities after them are ignored. The element comes from the atom name (an ion
+//! named as its residue, `NA` in residue `NA`, else the name's first letter: `OW` is oxygen).
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::elements;
+use super::text::{self, columns, Lines};
+use super::{Frame, Kind, Particle, Unit};
+use crate::io::SceneError;
+
+/// Reads frame `wanted` (from 0) of a `.gro` text.
+pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+    let mut lines = Lines::new(path, source);
+    let mut index = 0;
+    while lines.more() {
+        lines.expect("a title line")?;
+        let count_line = lines.expect("an atom count")?;
+        let count = text::count(count_line, "an atom count").map_err(|m| lines.error(m))?;
+        if index == wanted {
+            return frame(&mut lines, count, source.len());
+        }
+        for _ in 0..count {
+            lines.expect(&format!("{count} atom lines (frame {index})"))?;
+        }
+        box_line(&mut lines)?;
+        index += 1;
+    }
+    match index {
+        0 => {
+            Err(SceneError::whole_file(path, "no particles: expected a title, an atom count and atom lines"))
+        }
+        n => Err(super::missing_frame(path, wanted, n)),
+    }
+}
+
+/// The atoms of a frame and its box line.
+fn frame(lines: &mut Lines, count: usize, bytes: usize) -> Result<Frame, SceneError> {
+    if count == 0 {
+        return Err(lines.error("a frame of 0 atoms"));
+    }
+    let mut frame = Frame::new(Unit::Nanometre);
+    frame.particles.reserve(text::capacity(count, bytes));
+    let mut kinds: HashMap<(&str, &str), u32> = HashMap::new();
+    let mut width = None;
+    for _ in 0..count {
+        let line = lines.expect(&format!("{count} atom lines"))?;
+        let w = *width.get_or_insert_with(|| field_width(line));
+        let v = |k: usize, what| text::number(columns(line, 20 + k * w, 20 + (k + 1) * w), what);
+        let xyz = (|| Ok::<_, String>(DVec3::new(v(0, "x")?, v(1, "y")?, v(2, "z")?)))();
+        let center = xyz.map_err(|m| lines.error(format!("{m} (columns from 21, {w} wide)")))?;
+        let (residue, name) = (columns(line, 5, 10), columns(line, 10, 15));
+        let kind = *kinds.entry((name, residue)).or_insert_with(|| {
+            match elements::from_atom_name(name, residue, false) {
+                Some(e) => frame.kind(Kind { name: e.0.to_owned(), element: Some(e), lammps_type: false }),
+                None => frame.element_kind(name.trim()),
+            }
+        });
+        frame.particles.push(Particle { center, kind, radius: None, color: None });
+    }
+    box_line(lines)?;
+    Ok(frame)
+}
+
+/// The width of the coordinate fields of an atom line: the distance between the decimal points of x and
+/// y, or 8 where that is not plausible.
+fn field_width(line: &str) -> usize {
+    let rest = columns(line, 20, line.len()).as_bytes();
+    let mut dots = rest.iter().enumerate().filter(|(_, &b)| b == b'.').map(|(i, _)| i);
+    match (dots.next(), dots.next()) {
+        (Some(a), Some(b)) if (4..=20).contains(&(b - a)) => b - a,
+        _ => 8,
+    }
+}
+
+/// A box line: 3 or 9 numbers (nm).
+fn box_line(lines: &mut Lines) -> Result<[f64; 3], SceneError> {
+    let line = lines.expect("the box line (3 or 9 numbers)")?;
+    let words: Vec<&str> = line.split_ascii_whitespace().collect();
+    if words.len() != 3 && words.len() != 9 {
+        return Err(
+            lines.error(format!("expected the box line (3 or 9 numbers), got {} fields", words.len()))
+        );
+    }
+    let mut v = [0.0; 3];
+    for (k, word) in words.iter().enumerate() {
+        let x = text::number(word, "a box length").map_err(|m| lines.error(m))?;
+        if k < 3 {
+            v[k] = x;
+        }
+    }
+    Ok(v)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    const WATER: &str = concat!(
+        "water\n    3\n",
+        "    1SOL     OW    1   0.126   1.624   1.679  0.1227 -0.0580  0.0434\n",
+        "    1SOL    HW1    2   0.190   1.661   1.747\n",
+        "    1SOL    HW2    3   0.177   1.568   1.613\n",
+        "   1.86206   1.86206   1.86206\n"
+    );
+
+    #[test]
+    fn atoms_in_nm_with_elements_from_names() {
+        let f = parse(Path::new("t.gro"), WATER, 0).unwrap();
+        assert_eq!(f.unit, Unit::Nanometre);
+        assert_eq!(f.particles[0].center, DVec3::new(0.126, 1.624, 1.679));
+        let names: Vec<&str> = f.particles.iter().map(|p| f.kinds[p.kind as usize].name.as_str()).collect();
+        assert_eq!(names, ["O", "H", "H"]);
+    }
+
+    #[test]
+    fn frames_and_wider_fields() {
+        let wide = "t\n1\n    1NA      NA    1   1.23456   2.00000  -3.00000\n 1 1 1\n";
+        let text = format!("{WATER}{wide}");
+        let f = parse(Path::new("t.gro"), &text, 1).unwrap();
+        assert_eq!(f.particles[0].center, DVec3::new(1.23456, 2.0, -3.0));
+        assert_eq!(f.kinds[0].name, "Na");
+        assert!(parse(Path::new("t.gro"), &text, 2).unwrap_err().message.contains("2 frames"));
+        let e = parse(Path::new("t.gro"), &WATER.replace("1.661", "1.6x1"), 0).unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        let e = parse(Path::new("t.gro"), &WATER.replace("    3\n", "    4\n"), 0).unwrap_err();
+        assert_eq!(e.line, 6, "{e}");
+    }
+}

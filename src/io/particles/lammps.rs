@@ -1,0 +1,222 @@
+//! LAMMPS text dumps (`dump atom` and `dump custom`): frames of `ITEM:` sections, `TIMESTEP`,
+//! `NUMBER OF ATOMS`, `BOX BOUNDS` (orthogonal, or triclinic with `xy xz yz` tilts) and `ATOMS`, whose
+//! header names its columns in any order. Centres come from `x y z`, else unwrapped `xu yu zu`, else
+//! scaled `xs ys zs` or `xsu ysu zsu` mapped through the box (triclinic too); an `element` column gives
+//! the kind, else `type` (a LAMMPS type number); `radius` or `diameter` give the radius. Other sections
+//! (`UNITS`, `TIME`) are skipped. Frames are counted in file order, whatever their timesteps.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::text::{self, Lines};
+use super::{Frame, Kind, KindCache, Particle, Unit};
+use crate::io::SceneError;
+
+/// The simulation box: lower corner, edge lengths and tilts `xy xz yz`.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cell {
+    /// The corner (xlo, ylo, zlo).
+    pub lo: DVec3,
+    /// Edge lengths (lx, ly, lz).
+    pub len: DVec3,
+    /// Tilt factors xy, xz, yz (zero for an orthogonal box).
+    pub tilt: DVec3,
+}
+
+impl Cell {
+    /// The point of scaled (fractional) coordinates `s`.
+    pub fn point(&self, s: DVec3) -> DVec3 {
+        let t = self.tilt;
+        self.lo
+            + DVec3::new(
+                s.x * self.len.x + s.y * t.x + s.z * t.y,
+                s.y * self.len.y + s.z * t.z,
+                s.z * self.len.z,
+            )
+    }
+}
+
+/// Where the columns of interest are.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Columns {
+    pos: [usize; 3],
+    scaled: bool,
+    element: Option<usize>,
+    kind: Option<usize>,
+    /// Radius column and the factor to a radius (½ for a diameter).
+    radius: Option<(usize, f64)>,
+    words: usize,
+}
+
+/// Reads frame `wanted` (from 0) of a LAMMPS dump.
+pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+    let mut lines = Lines::new(path, source);
+    let (mut index, mut count, mut cell) = (0usize, None, None);
+    while lines.more() {
+        let line = lines.expect("an ITEM: line")?;
+        let Some(item) = line.trim().strip_prefix("ITEM:").map(str::trim) else {
+            return Err(lines.error(format!("expected an `ITEM:` line, got `{}`", line.trim())));
+        };
+        if item.starts_with("NUMBER OF ATOMS") {
+            let n = lines.expect("the number of atoms")?;
+            count = Some(text::count(n, "the number of atoms").map_err(|m| lines.error(m))?);
+        } else if let Some(flags) = item.strip_prefix("BOX BOUNDS") {
+            cell = Some(read_cell(&mut lines, flags)?);
+        } else if let Some(names) = item.strip_prefix("ATOMS") {
+            let n = count.ok_or_else(|| lines.error("ITEM: ATOMS before ITEM: NUMBER OF ATOMS"))?;
+            if index == wanted {
+                let columns = columns(names, cell.is_some()).map_err(|m| lines.error(m))?;
+                return atoms(&mut lines, n, columns, cell, source.len());
+            }
+            for k in 0..n {
+                let line = lines.expect(&format!("{n} atom lines (frame {index})"))?;
+                if line.trim_start().starts_with("ITEM:") {
+                    return Err(
+                        lines.error(format!("NUMBER OF ATOMS said {n}, but only {k} atom lines follow"))
+                    );
+                }
+            }
+            index += 1;
+        } else {
+            // TIMESTEP, UNITS, TIME and the like: their values are not needed.
+            while lines.peek().is_some_and(|l| !l.trim_start().starts_with("ITEM:")) {
+                lines.next();
+            }
+        }
+    }
+    match index {
+        0 => Err(SceneError::whole_file(path, "no particles: no `ITEM: ATOMS` section")),
+        n => Err(super::missing_frame(path, wanted, n)),
+    }
+}
+
+/// The three lines of a `BOX BOUNDS` section; `flags` is the rest of its header.
+fn read_cell(lines: &mut Lines, flags: &str) -> Result<Cell, SceneError> {
+    let triclinic = flags.split_ascii_whitespace().any(|f| f == "xy");
+    if flags.split_ascii_whitespace().any(|f| f == "abc") {
+        return Err(lines.error("general triclinic boxes (`BOX BOUNDS abc origin`) are not supported"));
+    }
+    let mut v = [[0.0f64; 3]; 3];
+    for (axis, row) in ["x", "y", "z"].iter().zip(&mut v) {
+        let line = lines.expect(&format!("the box's {axis} bounds"))?;
+        let words: Vec<&str> = line.split_ascii_whitespace().collect();
+        let want = if triclinic { 3 } else { 2 };
+        if words.len() < want {
+            return Err(lines
+                .error(format!("expected {want} numbers for the box's {axis} bounds, got {}", words.len())));
+        }
+        for k in 0..want {
+            row[k] = text::number(words[k], "a box bound").map_err(|m| lines.error(m))?;
+        }
+    }
+    let (xy, xz, yz) = (v[0][2], v[1][2], v[2][2]);
+    // Triclinic bounds are those of the box's bounding box: the tilts are taken back out.
+    let x_low = 0f64.min(xy).min(xz).min(xy + xz);
+    let x_high = 0f64.max(xy).max(xz).max(xy + xz);
+    let lo = DVec3::new(v[0][0] - x_low, v[1][0] - 0f64.min(yz), v[2][0]);
+    let hi = DVec3::new(v[0][1] - x_high, v[1][1] - 0f64.max(yz), v[2][1]);
+    Ok(Cell { lo, len: hi - lo, tilt: DVec3::new(xy, xz, yz) })
+}
+
+/// The columns an `ITEM: ATOMS` header names.
+fn columns(names: &str, has_cell: bool) -> Result<Columns, String> {
+    let names: Vec<&str> = names.split_ascii_whitespace().collect();
+    let find = |name: &str| names.iter().position(|n| *n == name);
+    let sets = [
+        (["x", "y", "z"], false),
+        (["xu", "yu", "zu"], false),
+        (["xs", "ys", "zs"], true),
+        (["xsu", "ysu", "zsu"], true),
+    ];
+    let (pos, scaled) = sets
+        .iter()
+        .find_map(|(set, scaled)| Some(([find(set[0])?, find(set[1])?, find(set[2])?], *scaled)))
+        .ok_or("ITEM: ATOMS has no x y z, xu yu zu, xs ys zs or xsu ysu zsu columns")?;
+    if scaled && !has_cell {
+        return Err("scaled coordinates need the box, but no ITEM: BOX BOUNDS came before".to_owned());
+    }
+    let radius = find("radius").map(|i| (i, 1.0)).or_else(|| find("diameter").map(|i| (i, 0.5)));
+    Ok(Columns { pos, scaled, element: find("element"), kind: find("type"), radius, words: names.len() })
+}
+
+/// The `count` atom lines of the chosen frame.
+fn atoms(
+    lines: &mut Lines,
+    count: usize,
+    c: Columns,
+    cell: Option<Cell>,
+    bytes: usize,
+) -> Result<Frame, SceneError> {
+    if count == 0 {
+        return Err(lines.error("a frame of 0 atoms"));
+    }
+    let mut frame = Frame::new(Unit::Angstrom);
+    frame.particles.reserve(text::capacity(count, bytes));
+    let mut elements = KindCache::default();
+    let mut types: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
+    let mut words: Vec<&str> = Vec::with_capacity(c.words);
+    for k in 0..count {
+        let line = lines.expect(&format!("{count} atom lines"))?;
+        words.clear();
+        words.extend(line.split_ascii_whitespace());
+        if words.first().is_some_and(|w| *w == "ITEM:") {
+            return Err(lines.error(format!("NUMBER OF ATOMS said {count}, but only {k} atom lines follow")));
+        }
+        if words.len() < c.words {
+            return Err(lines.error(format!("expected {} columns, got {}", c.words, words.len())));
+        }
+        let v = |i: usize, what| text::number(words[i], what).map_err(|m| lines.error(m));
+        let mut center = DVec3::new(v(c.pos[0], "x")?, v(c.pos[1], "y")?, v(c.pos[2], "z")?);
+        if c.scaled {
+            center = cell.expect("checked with the columns").point(center);
+        }
+        let kind = match (c.element, c.kind) {
+            (Some(e), _) => elements.element(&mut frame, words[e]),
+            (None, Some(t)) => *types.entry(words[t]).or_insert_with(|| {
+                frame.kind(Kind { name: words[t].to_owned(), element: None, lammps_type: true })
+            }),
+            (None, None) => frame.kind(Kind { name: "1".to_owned(), element: None, lammps_type: true }),
+        };
+        let radius = match c.radius {
+            Some((i, factor)) => Some(text::radius(words[i], "radius").map_err(|m| lines.error(m))? * factor),
+            None => None,
+        };
+        frame.particles.push(Particle { center, kind, radius, color: None });
+    }
+    Ok(frame)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn triclinic_scaled_coordinates_map_through_the_box() {
+        // A box with xlo 0, lx 10, ly 8, lz 6 and tilts xy 2, xz 1, yz -1, as LAMMPS writes its bounds.
+        let text = "ITEM: TIMESTEP\n0\nITEM: NUMBER OF ATOMS\n2\nITEM: BOX BOUNDS xy xz yz pp pp pp\n\
+                    0 13 2\n-1 8 1\n0 6 -1\nITEM: ATOMS id type zs xs ys\n1 1 0 0 0\n2 2 1 1 1\n";
+        let f = parse(Path::new("t.dump"), text, 0).unwrap();
+        assert_eq!(f.particles[0].center, DVec3::ZERO);
+        // (1,1,1) is a + b + c = (10 + 2 + 1, 8 - 1, 6).
+        assert_eq!(f.particles[1].center, DVec3::new(13.0, 7.0, 6.0));
+        assert!(f.kinds.iter().all(|k| k.lammps_type));
+    }
+
+    #[test]
+    fn frames_columns_and_lies() {
+        let frame = |t: u32, x: f64| {
+            format!("ITEM: TIMESTEP\n{t}\nITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS pp pp pp\n0 1\n0 1\n0 1\nITEM: ATOMS element diameter xu yu zu\nO 3.0 {x} 0 0\n")
+        };
+        let text = frame(0, 1.0) + &frame(10, 2.0);
+        let path = Path::new("t.lammpstrj");
+        let f = parse(path, &text, 1).unwrap();
+        assert_eq!((f.particles[0].center.x, f.particles[0].radius), (2.0, Some(1.5)));
+        assert_eq!(f.kinds[0].name, "O");
+        assert!(parse(path, &text, 5).unwrap_err().message.contains("2 frames"));
+        let e = parse(path, &text.replacen("ATOMS\n1\n", "ATOMS\n2\n", 1), 0).unwrap_err();
+        assert_eq!(e.line, 11, "{e}");
+        let e = parse(path, &text.replace("xu yu zu", "a b c"), 0).unwrap_err();
+        assert_eq!(e.line, 9, "{e}");
+    }
+}

@@ -1,0 +1,180 @@
+//! PDB and PQR files: `ATOM` and `HETATM` records, other records skipped; `MODEL` … `ENDMDL` blocks are
+//! frames, and a file without them is one frame. PDB records have fixed columns: the atom name in 13–16,
+//! the residue in 18–20, x, y, z in 31–38, 39–46, 47–54 and the element in 77–78. Without an element
+//! there, it comes from the atom name: an ion named as its residue (`CA` in residue `CA`), else for
+//! `HETATM` records a two-letter element written from column 13 (`FE`), else the name's first letter
+//! (` CA ` is carbon, `HG21` hydrogen). PQR records are whitespace-separated,
+//! `ATOM serial name residue [chain] number x y z charge radius`, read from the end; their radius is used.
+
+use std::collections::HashMap;
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::elements;
+use super::text::{self, columns, Lines};
+use super::{Frame, Kind, Particle, Unit};
+use crate::io::SceneError;
+
+/// Reads frame `wanted` (from 0) of a PDB text, or of a PQR text when `pqr`.
+pub fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame, SceneError> {
+    let mut lines = Lines::new(path, source);
+    let mut frame = Frame::new(Unit::Angstrom);
+    let mut kinds: HashMap<(Key, bool), u32> = HashMap::new();
+    // The frame the next atoms belong to, and whether it has begun (an atom or a MODEL record seen).
+    let (mut current, mut open) = (0usize, false);
+    while let Some(line) = lines.next() {
+        // PDB's record name fills columns 1-6; a PQR's is its first word.
+        let record = match pqr {
+            true => line.split_ascii_whitespace().next().unwrap_or(""),
+            false => columns(line, 0, 6).trim_end(),
+        };
+        match record {
+            "ATOM" | "HETATM" => {
+                open = true;
+                if current == wanted {
+                    let hetatm = record == "HETATM";
+                    let read = if pqr { pqr_atom(line) } else { pdb_atom(line) };
+                    let (center, radius, key) = read.map_err(|m| lines.error(m))?;
+                    let kind =
+                        *kinds.entry((key, hetatm)).or_insert_with(|| kind_of(&mut frame, key, hetatm));
+                    frame.particles.push(Particle { center, kind, radius, color: None });
+                }
+            }
+            // A MODEL record also ends a frame its ENDMDL is missing from.
+            "MODEL" | "ENDMDL" => {
+                if open {
+                    if current == wanted {
+                        return finish(&lines, frame, wanted);
+                    }
+                    current += 1;
+                }
+                open = record == "MODEL";
+            }
+            "END" => break,
+            _ => {}
+        }
+    }
+    if open && current == wanted {
+        return finish(&lines, frame, wanted);
+    }
+    let count = current + usize::from(open);
+    match count {
+        0 => Err(SceneError::whole_file(path, "no particles: no ATOM or HETATM records")),
+        n => Err(super::missing_frame(path, wanted, n)),
+    }
+}
+
+/// The frame read, unless it has no atoms.
+fn finish(lines: &Lines, frame: Frame, wanted: usize) -> Result<Frame, SceneError> {
+    match frame.particles.is_empty() {
+        true => Err(lines.error(format!("frame {wanted} has no ATOM or HETATM records"))),
+        false => Ok(frame),
+    }
+}
+
+/// What decides an atom's kind: its element columns when they are filled, else its name and residue.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+enum Key<'a> {
+    Element(&'a str),
+    Name(&'a str, &'a str),
+}
+
+/// The kind of an atom.
+fn kind_of(frame: &mut Frame, key: Key, hetatm: bool) -> u32 {
+    let (name, residue) = match key {
+        Key::Name(name, residue) => (name, residue),
+        Key::Element(element) => return frame.element_kind(element),
+    };
+    let two = hetatm && !name.starts_with(' ');
+    match elements::from_atom_name(name, residue, two) {
+        Some(e) => frame.kind(Kind { name: e.0.to_owned(), element: Some(e), lammps_type: false }),
+        None => frame.element_kind(name.trim()),
+    }
+}
+
+/// A PDB `ATOM`/`HETATM` record: centre, no radius, and the key of its kind.
+fn pdb_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
+    if line.len() < 54 {
+        let record = columns(line, 0, 6).trim_end();
+        return Err(format!("{record} record of {} bytes: x, y, z are in columns 31-54", line.len()));
+    }
+    let v = |from, to, what| text::number(columns(line, from, to), what);
+    let center = DVec3::new(
+        v(30, 38, "x in columns 31-38")?,
+        v(38, 46, "y in columns 39-46")?,
+        v(46, 54, "z in columns 47-54")?,
+    );
+    let element = columns(line, 76, 78);
+    let key = match element.trim() {
+        "" => Key::Name(columns(line, 12, 16), columns(line, 17, 20)),
+        element => Key::Element(element),
+    };
+    Ok((center, None, key))
+}
+
+/// A PQR record, whitespace-separated and read from the end: centre, radius and key.
+fn pqr_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
+    let words: Vec<&str> = line.split_ascii_whitespace().collect();
+    let n = words.len();
+    if n < 10 {
+        return Err(format!(
+            "expected `ATOM serial name residue [chain] number x y z charge radius`, got {n} fields"
+        ));
+    }
+    let v = |i: usize, what| text::number(words[i], what);
+    let center = DVec3::new(v(n - 5, "x")?, v(n - 4, "y")?, v(n - 3, "z")?);
+    v(n - 2, "charge")?;
+    let radius = text::radius(words[n - 1], "radius")?;
+    Ok((center, Some(radius), Key::Name(words[2], words[3])))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn atom(record: &str, name: &str, residue: &str, xyz: [f64; 3], element: &str) -> String {
+        format!(
+            "{record:<6}{:>5} {name:<4} {residue:>3} A   1    {:>8.3}{:>8.3}{:>8.3}  1.00  0.00          {element:>2}",
+            1, xyz[0], xyz[1], xyz[2]
+        )
+    }
+
+    #[test]
+    fn fixed_columns_and_element_guesses() {
+        let text = [
+            atom("ATOM", " CA", "ALA", [1.0, 2.0, -3.5], ""),
+            atom("HETATM", "FE", "HEM", [0.0, 0.0, 0.0], ""),
+            atom("ATOM", "HG21", "THR", [0.0, 0.0, 0.0], ""),
+            atom("HETATM", "CL", "CL", [0.0, 0.0, 0.0], "CL"),
+        ]
+        .join("\n");
+        let f = parse(Path::new("t.pdb"), &text, 0, false).unwrap();
+        let names: Vec<&str> = f.particles.iter().map(|p| f.kinds[p.kind as usize].name.as_str()).collect();
+        assert_eq!(names, ["C", "Fe", "H", "Cl"]);
+        assert_eq!(f.particles[0].center, DVec3::new(1.0, 2.0, -3.5));
+    }
+
+    #[test]
+    fn models_are_frames() {
+        let a = atom("ATOM", " N", "GLY", [1.0, 0.0, 0.0], "N");
+        let text = format!("MODEL 1\n{a}\n{a}\nENDMDL\nMODEL 2\n{a}\nENDMDL\nEND\n");
+        let path = Path::new("t.pdb");
+        assert_eq!(parse(path, &text, 0, false).unwrap().particles.len(), 2);
+        assert_eq!(parse(path, &text, 1, false).unwrap().particles.len(), 1);
+        assert!(parse(path, &text, 2, false).unwrap_err().message.contains("2 frames"));
+        assert_eq!(parse(path, &a, 0, false).unwrap().particles.len(), 1);
+    }
+
+    #[test]
+    fn pqr_radius_is_read_from_the_end() {
+        let text = "ATOM      1  N   MET     1     -1.0   2.0   3.0 -0.3000 1.8240\n\
+                    ATOM      2  CA  MET A   1      0.0   0.0   0.0  0.1 1.9\n";
+        let f = parse(Path::new("t.pqr"), text, 0, true).unwrap();
+        assert_eq!(f.particles[0].radius, Some(1.824));
+        assert_eq!(f.particles[1].center, DVec3::ZERO);
+        let e = parse(Path::new("t.pqr"), "ATOM 1 N MET 1 0 0 0 0.1 -1\n", 0, true).unwrap_err();
+        assert_eq!(e.line, 1);
+        assert!(e.message.contains("positive"), "{e}");
+    }
+}

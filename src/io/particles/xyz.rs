@@ -1,0 +1,173 @@
+//! XYZ files: frames of a count line, a comment line and one `element x y z` line per particle (further
+//! columns ignored). Extended XYZ names its columns in the comment line, `Properties=NAME:TYPE:COUNT:...`
+//! (types `S` string, `R` real, `I` integer, `L` logical): `species` (or `element`) gives the kind, `Z` an
+//! atomic number, `pos` the centre, `radius` (or `radii`) a radius and `color` (or `colors`) an RGB colour
+//! with channels in [0, 1]; other columns are skipped. The element may be a symbol or an atomic number.
+
+use std::path::Path;
+
+use glam::DVec3;
+
+use super::text::{self, Lines};
+use super::{Frame, KindCache, Particle, Unit};
+use crate::io::SceneError;
+use crate::math::Rgb;
+
+/// Where the columns of interest are on a particle line.
+#[derive(Clone, Copy, Debug, PartialEq)]
+struct Columns {
+    kind: Option<usize>,
+    pos: usize,
+    radius: Option<usize>,
+    color: Option<usize>,
+    /// How many words a line has at least.
+    words: usize,
+}
+
+const PLAIN: Columns = Columns { kind: Some(0), pos: 1, radius: None, color: None, words: 4 };
+
+/// Reads frame `wanted` (from 0) of an XYZ text.
+pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+    let mut lines = Lines::new(path, source);
+    let mut index = 0;
+    while lines.more() {
+        let count_line = lines.expect("a particle count")?;
+        let count = text::count(count_line, "a particle count").map_err(|m| lines.error(m))?;
+        let comment = lines.expect("the comment line")?;
+        if index == wanted {
+            let columns = columns(comment).map_err(|m| lines.error(m))?;
+            return frame(&mut lines, count, columns, source.len());
+        }
+        for _ in 0..count {
+            lines.expect(&format!("{count} particle lines (frame {index})"))?;
+        }
+        index += 1;
+    }
+    match index {
+        0 => Err(SceneError::whole_file(
+            path,
+            "no particles: expected a count line, a comment and `element x y z` lines",
+        )),
+        n => Err(super::missing_frame(path, wanted, n)),
+    }
+}
+
+/// The columns a comment line names (extended XYZ), or the plain ones.
+fn columns(comment: &str) -> Result<Columns, String> {
+    let Some(at) = find_key(comment, "properties=") else { return Ok(PLAIN) };
+    let value = comment[at..].split_ascii_whitespace().next().unwrap_or("").trim_matches('"');
+    let parts: Vec<&str> = value.split(':').collect();
+    if !parts.len().is_multiple_of(3) || parts.is_empty() {
+        return Err(format!("Properties=`{value}`: expected NAME:TYPE:COUNT triples"));
+    }
+    let (mut kind, mut pos, mut radius, mut color, mut at) = (None, None, None, None, 0usize);
+    for triple in parts.chunks(3) {
+        let (name, kind_of, n) = (triple[0], triple[1].to_ascii_uppercase(), triple[2]);
+        let n: usize = match n.parse() {
+            Ok(n) if (1..=1000).contains(&n) => n,
+            _ => return Err(format!("Properties: column `{name}` has count `{n}`, expected 1 to 1000")),
+        };
+        let want = |ok: bool, spec: &str| match ok {
+            true => Ok(Some(at)),
+            false => Err(format!("Properties: column `{name}` is {}:{n}, expected {spec}", triple[1])),
+        };
+        match name.to_ascii_lowercase().as_str() {
+            "species" | "element" => kind = want(kind_of == "S" && n == 1, "S:1")?,
+            "z" if kind.is_none() => kind = want(kind_of == "I" && n == 1, "I:1")?,
+            "pos" => pos = want(kind_of == "R" && n == 3, "R:3")?,
+            "radius" | "radii" => radius = want(kind_of == "R" && n == 1, "R:1")?,
+            "color" | "colors" => color = want(kind_of == "R" && n == 3, "R:3")?,
+            _ => {}
+        }
+        at += n;
+    }
+    let pos = pos.ok_or("Properties has no `pos:R:3` column")?;
+    Ok(Columns { kind, pos, radius, color, words: at })
+}
+
+/// Byte offset just after `key` (matched without regard to case) in `text`.
+fn find_key(text: &str, key: &str) -> Option<usize> {
+    let lower = text.to_ascii_lowercase();
+    lower.find(key).map(|i| i + key.len())
+}
+
+/// The `count` particle lines of a frame.
+fn frame(lines: &mut Lines, count: usize, columns: Columns, bytes: usize) -> Result<Frame, SceneError> {
+    let mut frame = Frame::new(Unit::Angstrom);
+    frame.particles.reserve(text::capacity(count, bytes));
+    let mut cache = KindCache::default();
+    let unnamed = frame.element_kind("?");
+    let mut words: Vec<&str> = Vec::with_capacity(columns.words);
+    for _ in 0..count {
+        let line = lines.expect(&format!("{count} particle lines"))?;
+        words.clear();
+        words.extend(line.split_ascii_whitespace());
+        let particle =
+            particle(&words, columns, &mut frame, &mut cache, unnamed).map_err(|m| lines.error(m))?;
+        frame.particles.push(particle);
+    }
+    if count == 0 {
+        return Err(lines.error("a frame of 0 particles"));
+    }
+    Ok(frame)
+}
+
+/// One particle line, split into words.
+fn particle<'a>(
+    words: &[&'a str],
+    c: Columns,
+    frame: &mut Frame,
+    cache: &mut KindCache<'a>,
+    unnamed: u32,
+) -> Result<Particle, String> {
+    if words.len() < c.words {
+        return Err(format!("expected {} columns, got {}", c.words, words.len()));
+    }
+    let v = |i: usize, what: &str| text::number(words[i], what);
+    let center = DVec3::new(v(c.pos, "x")?, v(c.pos + 1, "y")?, v(c.pos + 2, "z")?);
+    let kind = c.kind.map_or(unnamed, |k| cache.element(frame, words[k]));
+    let radius = c.radius.map(|i| text::radius(words[i], "radius")).transpose()?;
+    let color = match c.color {
+        Some(i) => {
+            let rgb = [v(i, "red")?, v(i + 1, "green")?, v(i + 2, "blue")?];
+            if rgb.iter().any(|x| !(0.0..=1.0).contains(x)) {
+                return Err(format!("colour {rgb:?}: channels run from 0 to 1"));
+            }
+            Some(Rgb::new(rgb[0] as f32, rgb[1] as f32, rgb[2] as f32))
+        }
+        None => None,
+    };
+    Ok(Particle { center, kind, radius, color })
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn extended_columns_are_found_in_any_order() {
+        let c = columns(
+            r#"Lattice="1 0 0 0 1 0 0 0 1" Properties=id:I:1:pos:R:3:color:R:3:species:S:1:radius:R:1 t=0"#,
+        );
+        assert_eq!(c, Ok(Columns { kind: Some(7), pos: 1, radius: Some(8), color: Some(4), words: 9 }));
+        assert_eq!(columns("just a comment"), Ok(PLAIN));
+        assert!(columns("Properties=species:S:1").unwrap_err().contains("pos"));
+        assert!(columns("Properties=pos:R:2").is_err());
+        assert!(columns("Properties=pos:R").is_err());
+    }
+
+    #[test]
+    fn frames_are_chosen_and_counted() {
+        let text = "2\nfirst\nC 0 0 0\nO 1.2 0 0\n1\nsecond\nH 0 0 1\n";
+        let path = Path::new("t.xyz");
+        let f = parse(path, text, 1).unwrap();
+        assert_eq!(f.particles.len(), 1);
+        assert_eq!(f.kinds[f.particles[0].kind as usize].name, "H");
+        let e = parse(path, text, 2).unwrap_err();
+        assert!(e.message.contains("has 2 frames (0 to 1)"), "{e}");
+        let e = parse(path, "3\nc\nC 0 0 0\nC 1 x 0\n", 0).unwrap_err();
+        assert_eq!(e.line, 4, "{e}");
+        let e = parse(path, "3\nc\nC 0 0 0\n", 0).unwrap_err();
+        assert_eq!(e.line, 3, "{e}");
+    }
+}
