@@ -9,7 +9,7 @@
 //!    numbers are printed either way (`--nocapture`).
 //! 4. The twin's BVH returns brute force's hits bit for bit.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

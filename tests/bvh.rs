@@ -2,7 +2,7 @@
 //! width, for closest hits and occlusion, over random sphere fields and rays (including rays starting inside
 //! spheres, grazing rays and axis-parallel rays), and through whole renders.
 
-mod common;
+use crate::common;
 
 use bareray::accel::bvh::Bvh;
 use bareray::compile::{Accel, Scene};

@@ -2,7 +2,7 @@
 //! error, no panic, and never touches an existing output file; argument errors exit with 2, scene, render
 //! and file errors with 1.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 use std::process::Command;

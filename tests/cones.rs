@@ -2,7 +2,7 @@
 //! exactly), so the difference is the f32 arithmetic alone: many seeded random cones and rays, aimed at
 //! the surface, started inside, and sent through the open ends.
 
-mod common;
+use crate::common;
 
 use bareray::geometry::{intersect_cone, Cone, Cones, Ray};
 use bareray::math::SplitMix64;

@@ -8,9 +8,9 @@
 //! Each input is a function of (format, seed, index) alone: `BARERAY_FUZZ_SEED=S BARERAY_FUZZ_START=I
 //! BARERAY_FUZZ_INPUTS=1` reproduces one. The default test, which `cargo test` and CI run, takes
 //! [`CI_RUN`] inputs per format; the ignored test is the full run, 1 000 000 per format:
-//! `cargo test --release --test fuzz_merge -- --ignored --nocapture`. Each prints its count and outcome.
+//! `cargo test --release --test suite fuzz_merge:: -- --ignored --nocapture`. Each prints its count and outcome.
 
-mod common;
+use crate::common;
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};

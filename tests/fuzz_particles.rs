@@ -4,7 +4,7 @@
 //! and a line within the text (or the file as a whole); none may panic.
 //!
 //! Each input is a function of (sample, index) alone. The default test runs [`CI_RUN`] inputs per sample;
-//! the ignored one [`FULL_RUN`]: `cargo test --test fuzz_particles -- --ignored --nocapture`, which prints
+//! the ignored one [`FULL_RUN`]: `cargo test --test suite fuzz_particles:: -- --ignored --nocapture`, which prints
 //! the count per sample.
 
 use std::io::Write;

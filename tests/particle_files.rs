@@ -2,7 +2,7 @@
 //! samples read through `bareray::io::load_with`, with frames, overrides and the framing checked, errors
 //! checked for their file and line, and a few end-to-end renders through the binary.
 
-mod common;
+use crate::common;
 
 use std::io::Write;
 use std::path::{Path, PathBuf};

@@ -1,7 +1,7 @@
 //! Scene readers (NFF, xyzr, f32r), generators (contract field, SPD sphereflake) and the polygon primitive, through
 //! the library API.
 
-mod common;
+use crate::common;
 
 use std::path::Path;
 

@@ -1,6 +1,6 @@
 //! Whole renders checked against closed-form answers, and the image's independence of the thread count.
 
-mod common;
+use crate::common;
 
 use bareray::compile::Scene;
 use bareray::film::Image;

@@ -1,7 +1,7 @@
 //! Stills in bands: the streamed files are the bytes of the whole-image path, regions merge back into the
 //! full image byte for byte, and what cannot work is refused before any tracing.
 
-mod common;
+use crate::common;
 
 use std::path::{Path, PathBuf};
 

@@ -6,10 +6,10 @@
 //! proves the f32 kernels keep their accuracy where their formulas are stressed (ARCHITECTURE.md "Numerics").
 //!
 //! Bounds were set by measuring first (run with `--nocapture` to see the numbers printed by each test) and
-//! then leaving the margin stated in each test's comment. `STRESS_MEASURE=1 cargo test --test 'stress_*' --
+//! then leaving the margin stated in each test's comment. `STRESS_MEASURE=1 cargo test --test suite stress_ --
 //! --nocapture` prints the measurements without asserting the bounds.
 
-mod common;
+use crate::common;
 
 use bareray::compile::Scene;
 use bareray::geometry::{Departure, ShapeKind, NO_PRIM};

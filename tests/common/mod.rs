@@ -3,7 +3,7 @@
 //! oracle the stress tests measure the f32 kernels against ([`oracle`]) and the generated-input runs'
 //! hang watchdog ([`watchdog`]).
 
-// Each test binary compiles this module on its own and uses only part of it.
+// The test suite and the MPI tests each compile this module and use only part of it.
 #![allow(dead_code)]
 
 pub mod oracle;
