@@ -311,7 +311,8 @@ fn prepare(args: &RenderArgs, time: &mut Timings, warn: bool) -> Result<(Scene, 
         // A budget that gives exactly the rows asked for (band_rows rounds down to whole tiles).
         Some(rows) => {
             let rows = rows.div_ceil(TILE) * TILE;
-            Job { band_budget: rows as usize * job.window.width() as usize * size_of::<Rgb>(), ..job }
+            let band_budget = rows as usize * job.window.width() as usize * size_of::<Rgb>();
+            Job { band_budget, min_bands: 1, ..job }
         }
         None => job,
     };

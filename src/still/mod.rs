@@ -29,6 +29,11 @@ use resume::Resume;
 /// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.
 pub const BAND_BUDGET: usize = 32 << 20;
 
+/// The fewest bands an image is cut into by default, however small: one band is traced while the one before
+/// is encoded, so memory holds about two bands' pixels, not the whole image (a 1920×1080 image in one band
+/// held 32 MB beside the scene, in four 17 MB).
+pub const MIN_BANDS: u32 = 4;
+
 /// One still to render: where it goes, how it is written, which part of the image.
 #[derive(Clone, Debug)]
 pub struct Job {
@@ -46,6 +51,9 @@ pub struct Job {
     pub aov: Option<(Vec<Aov>, PathBuf)>,
     /// Bytes of linear RGB per band ([`BAND_BUDGET`] unless set).
     pub band_budget: usize,
+    /// The fewest bands the window is cut into where the budget would allow bigger ones ([`MIN_BANDS`]
+    /// unless set; 1 lets the budget alone decide).
+    pub min_bands: u32,
     /// Resumable ([`resume`]): the hash of everything that decides the files' bytes (scene, settings,
     /// window, format), which a side file must match to be used. `None`: no side file.
     pub resume: Option<u64>,
@@ -62,6 +70,7 @@ impl Job {
             lanes: 16,
             aov: None,
             band_budget: BAND_BUDGET,
+            min_bands: MIN_BANDS,
             resume: None,
         })
     }
@@ -79,10 +88,12 @@ impl Job {
         }
     }
 
-    /// Rows per band (no more than the window's height, in whole tiles).
+    /// Rows per band: what the budget holds, but no more than a [`Job::min_bands`]th of the window's height,
+    /// in whole tiles.
     pub fn band_rows(&self) -> u32 {
+        let tile = crate::render::TILE;
         let rows = crate::render::band_rows(self.window.width(), self.band_budget);
-        rows.min(self.window.height().div_ceil(16) * 16)
+        rows.min(self.window.height().div_ceil(self.min_bands.max(1)).div_ceil(tile) * tile)
     }
 }
 
