@@ -1,6 +1,6 @@
 //! The integration tests, compiled as one binary: each file of `tests/` is a module here, so the library's
-//! generic kernels are instantiated and optimised once for all of them, not once per file (what made the
-//! test build take most of CI's time). Run one file's tests with `cargo test --test suite NAME::`, e.g.
+//! generic kernels are instantiated and optimised once for all of them, not once per file, and one link
+//! serves every file. Run one file's tests with `cargo test --test suite NAME::`, e.g.
 //! `cargo test --test suite layers::`. The MPI tests (`tests/mpi.rs`, feature `mpi`) stay a binary of their own.
 
 mod common;
