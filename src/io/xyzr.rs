@@ -200,16 +200,7 @@ pub fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
         y if y < -0.99 => DVec3::Z,
         _ => DVec3::Y,
     };
-    CameraDesc {
-        eye: centre + dir * (radius / half_angle.sin()),
-        aim: Aim::LookAt(centre),
-        up,
-        distance: 1.0,
-        field: Field::HorizontalAngle(hfov),
-        width,
-        height,
-        sweep: Sweep::PixelCentre,
-    }
+    CameraDesc::looking_at(centre + dir * (radius / half_angle.sin()), centre, up, hfov, width, height)
 }
 
 /// The contract-oriented camera (see the module documentation) for the box `[lo, hi]`.
@@ -221,16 +212,7 @@ pub fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
     let centre = (lo + hi) * 0.5;
     let half = ((hi - lo) * 0.5).max(DVec3::splat(1e-9));
     let back = half.z + (half.x / tan_w).max(half.y / tan_h);
-    CameraDesc {
-        eye: centre - DVec3::new(0.0, 0.0, back),
-        aim: Aim::LookAt(centre),
-        up: DVec3::Y,
-        distance: 1.0,
-        field: Field::HorizontalAngle(hfov),
-        width,
-        height,
-        sweep: Sweep::PixelCentre,
-    }
+    CameraDesc::looking_at(centre - DVec3::new(0.0, 0.0, back), centre, DVec3::Y, hfov, width, height)
 }
 
 #[cfg(test)]

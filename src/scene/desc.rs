@@ -55,6 +55,23 @@ pub struct CameraDesc {
     pub sweep: Sweep,
 }
 
+impl CameraDesc {
+    /// A camera at `eye` looking at `look` with `up` up, a horizontal field of view of `hfov` degrees and
+    /// `width` × `height` pixels, rays through the pixel centres (image plane at distance 1).
+    pub fn looking_at(eye: DVec3, look: DVec3, up: DVec3, hfov: f64, width: u32, height: u32) -> Self {
+        Self {
+            eye,
+            aim: Aim::LookAt(look),
+            up,
+            distance: 1.0,
+            field: Field::HorizontalAngle(hfov),
+            width,
+            height,
+            sweep: Sweep::PixelCentre,
+        }
+    }
+}
+
 impl Default for CameraDesc {
     fn default() -> Self {
         Self {

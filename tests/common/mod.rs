@@ -19,7 +19,7 @@ use bareray::film::Image;
 use bareray::geometry::ShapeKind;
 use bareray::io::toml;
 use bareray::render::{render_lanes, thread_pool};
-use bareray::scene::desc::{Aim, CameraDesc, Field, SceneDesc, ShapeDesc, SphereDesc, Sweep};
+use bareray::scene::desc::{CameraDesc, SceneDesc, ShapeDesc, SphereDesc};
 use glam::{DAffine3, DVec3};
 use indicatif::ProgressBar;
 
@@ -35,16 +35,7 @@ pub fn measuring() -> bool {
 /// A camera looking from `eye` at `look` with a horizontal field of view of `hfov` degrees, rays through
 /// pixel centres.
 pub fn camera(eye: DVec3, look: DVec3, up: DVec3, hfov: f64, width: u32, height: u32) -> CameraDesc {
-    CameraDesc {
-        eye,
-        aim: Aim::LookAt(look),
-        up,
-        distance: 1.0,
-        field: Field::HorizontalAngle(hfov),
-        width,
-        height,
-        sweep: Sweep::PixelCentre,
-    }
+    CameraDesc::looking_at(eye, look, up, hfov, width, height)
 }
 
 /// A sphere of material 0.

@@ -156,15 +156,10 @@ impl Bvh {
         pyramid: &Pyramid,
         best: &mut [HitPacket<F>],
     ) {
-        let count = packets.len();
-        assert!(count <= MAX_PACKETS && count == best.len(), "{count} packets for a large packet");
-        let live: [F::Mask; MAX_PACKETS] =
-            std::array::from_fn(|p| packets.get(p).map_or(F::mask_from_bits(0), |rays| rays.active));
-        let alive = live.iter().enumerate().fold(0u32, |bits, (p, m)| bits | u32::from(m.any()) << p);
+        let (live, alive) = members(packets, best.len());
         if alive == 0 {
             return;
         }
-        debug_assert!(packets.iter().all(|rays| unit_directions(rays)), "large packets need unit directions");
         let lead = &packets[alive.trailing_zeros() as usize];
         let first = F::move_mask(lead.active).trailing_zeros() as usize;
         let negative = |d: F| usize::from(d.lane(first) < 0.0);
@@ -204,9 +199,23 @@ pub(crate) fn farthest<F: Lanes>(t: F) -> f32 {
     a[0]
 }
 
+/// The members of a large packet of `packets` (with `hits` hit packets to fill): each member's live lanes
+/// (none past the last packet) and bit p for each member with a live lane. Panics on more than
+/// [`MAX_PACKETS`] packets or a hit count that differs; the directions must be unit length (checked in
+/// debug builds).
+pub(crate) fn members<F: Lanes>(packets: &[RayPacket<F>], hits: usize) -> ([F::Mask; MAX_PACKETS], u32) {
+    let count = packets.len();
+    assert!(count <= MAX_PACKETS && count == hits, "{count} packets for a large packet");
+    debug_assert!(packets.iter().all(unit_directions), "large packets need unit directions");
+    let live: [F::Mask; MAX_PACKETS] =
+        std::array::from_fn(|p| packets.get(p).map_or(F::mask_from_bits(0), |rays| rays.active));
+    let alive = live.iter().enumerate().fold(0u32, |bits, (p, m)| bits | u32::from(m.any()) << p);
+    (live, alive)
+}
+
 /// Whether every active lane's direction is unit length to within its rounding (the distance cull's
 /// premise).
-pub(crate) fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
+fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
     (0..F::K).filter(|&i| F::mask_lane(rays.active, i)).all(|i| {
         let d = [rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i)].map(f64::from);
         ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1.0).abs() <= 8.0 * f64::from(f32::EPSILON)

@@ -45,7 +45,7 @@ use crate::simd::Lanes;
 use slab::SlabRay;
 
 // The slab test and the frustum, shared with the particle tree's walk (`crate::accel::pkd`).
-pub(crate) use large::{farthest, unit_directions, MemberSides};
+pub(crate) use large::{farthest, members, MemberSides};
 pub(crate) use packet::Frustum;
 pub(crate) use slab::{SlabRay as SlabRays, Stack, WIDEN};
 

@@ -18,7 +18,7 @@ use wide::f32x16;
 
 use super::walk::Query;
 use super::{place, with_records, Particles, Record, Records, LEAF};
-use crate::accel::bvh::{farthest, unit_directions, Frustum, MemberSides, Stack, MAX_PACKETS};
+use crate::accel::bvh::{farthest, members, Frustum, MemberSides, Stack, MAX_PACKETS};
 use crate::accel::count_work;
 use crate::geometry::{DeparturePacket, HitPacket, Pyramid, RayPacket};
 use crate::math::{Mask, Real, Vec3f};
@@ -128,7 +128,7 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
             spheres += self.test(mid, c, r, members, best);
             let axis = self.tree.axis(mid);
             let plane = [c.x, c.y, c.z][axis];
-            let reach = self.tree.r_max + 2.0 * self.tree.pad;
+            let reach = self.tree.split_reach();
             let (mut below_max, mut above_min) = (e.max, e.min);
             below_max[axis] = below_max[axis].min(plane + reach);
             above_min[axis] = above_min[axis].max(plane - reach);
@@ -156,16 +156,11 @@ impl Particles {
         base: u32,
         best: &mut [HitPacket<F>],
     ) {
-        let count = packets.len();
-        assert!(count <= MAX_PACKETS && count == best.len(), "{count} packets for a large packet");
-        let live: [F::Mask; MAX_PACKETS] =
-            std::array::from_fn(|p| packets.get(p).map_or(F::mask_from_bits(0), |rays| rays.active));
-        let alive = live.iter().enumerate().fold(0u32, |bits, (p, m)| bits | u32::from(m.any()) << p);
+        let (live, alive) = members(packets, best.len());
         if alive == 0 || self.is_empty() {
             return;
         }
-        debug_assert!(packets.iter().all(unit_directions), "large packets need unit directions");
-        let extent = self.bounds[0].iter().chain(&self.bounds[1]).fold(0.0f32, |m, v| m.max(v.abs()));
+        let extent = self.extent();
         with_records!(&self.records, |recs| Walk {
             tree: self,
             recs,

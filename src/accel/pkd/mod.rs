@@ -290,6 +290,17 @@ impl Particles {
         self.key[i] & INDEX_MASK
     }
 
+    /// The largest coordinate magnitude of the root's box: bounds the frustum tests' rounding (the BVH's
+    /// [`crate::accel::bvh::Bvh::extent`]).
+    pub(crate) fn extent(&self) -> f32 {
+        self.bounds[0].iter().chain(&self.bounds[1]).fold(0.0f32, |m, v| m.max(v.abs()))
+    }
+
+    /// How far a range's box reaches past its parent's split plane: the largest radius and twice the padding.
+    pub(crate) fn split_reach(&self) -> f32 {
+        self.r_max + 2.0 * self.pad
+    }
+
     /// Split axis of the node at position `i`.
     #[inline(always)]
     pub(crate) fn axis(&self, i: usize) -> usize {

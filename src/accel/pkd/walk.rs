@@ -57,7 +57,6 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
         let ray = rays.ray();
         let terms = SphereRay::new(ray);
         let eye = EyeLanes::of(terms.from_eye(), rays.active);
-        let reach = tree.bounds[0].iter().chain(&tree.bounds[1]).fold(0.0f32, |m, v| m.max(v.abs()));
         Self {
             tree,
             recs,
@@ -65,7 +64,7 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
             eye,
             eye_terms: tree.eye_terms_help || !matches!(eye, EyeLanes::None),
             slab: SlabRays::new(&ray),
-            frustum: rays.pyramid.map(|p| Frustum::new(&p, reach)),
+            frustum: rays.pyramid.map(|p| Frustum::new(&p, tree.extent())),
             t_max: rays.t_max,
             skip: from.prim,
             base,
@@ -144,7 +143,7 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
             1 => (c.y, self.slab.inv_dir.y, self.slab.neg_o_inv.y, self.terms.ray.dir.y),
             _ => (c.z, self.slab.inv_dir.z, self.slab.neg_o_inv.z, self.terms.ray.dir.z),
         };
-        let reach = self.tree.r_max + 2.0 * self.tree.pad;
+        let reach = self.tree.split_reach();
         let (top, bottom) = (plane + reach, plane - reach);
         // The lower child's upper plane and the upper child's lower plane, each inside the parent's box.
         let (mut below, mut above) = (*e, *e);
