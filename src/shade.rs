@@ -12,6 +12,7 @@ mod ao;
 use std::marker::PhantomData;
 use std::ops::AddAssign;
 
+use crate::accel::{traced, RayKind};
 use crate::compile::Scene;
 use crate::geometry::{at_eye, DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
@@ -70,6 +71,7 @@ fn is_sparse<F: Lanes>(active: F::Mask) -> bool {
 /// computes the same bits as the packet trace, so only the time changes.
 fn trace_lane_by_lane<F: Lanes>(
     scalar: &mut Tracer<'_, f32>,
+    kind: RayKind,
     rays: &RayPacket<F>,
     from: &DeparturePacket<F>,
     depth: u32,
@@ -80,8 +82,13 @@ fn trace_lane_by_lane<F: Lanes>(
         let (ray, t_max, _) = rays.lane(i);
         let one = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         let d = from.lane(i);
-        let c =
-            scalar.trace(&one, &DeparturePacket { prim: d.prim, inward: d.inward }, depth, weight.lane(i));
+        let c = scalar.trace(
+            kind,
+            &one,
+            &DeparturePacket { prim: d.prim, inward: d.inward },
+            depth,
+            weight.lane(i),
+        );
         (rgb[0].as_mut()[i], rgb[1].as_mut()[i], rgb[2].as_mut()[i]) = (c.x, c.y, c.z);
     }
     let channel = |k: usize| F::from_lanes(rgb[k].as_ref());
@@ -147,7 +154,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
 
     /// Radiance along each active camera ray (zero in inactive lanes), by the scene's shading mode.
     pub fn primary(&mut self, rays: &RayPacket<F>) -> V3<F> {
-        let hit = self.scene.geometry.intersect_k(rays, &DeparturePacket::camera());
+        let hit =
+            traced(RayKind::Camera, || self.scene.geometry.intersect_k(rays, &DeparturePacket::camera()));
         self.primary_from(rays, hit)
     }
 
@@ -161,15 +169,23 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         }
     }
 
-    fn trace(&mut self, rays: &RayPacket<F>, from: &DeparturePacket<F>, depth: u32, weight: F) -> V3<F> {
+    /// Radiance along secondary rays of `kind` (reflection or refraction) leaving `from`.
+    fn trace(
+        &mut self,
+        kind: RayKind,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+        depth: u32,
+        weight: F,
+    ) -> V3<F> {
         if depth > 0 && is_sparse::<F>(rays.active) {
             if let Some(scalar) = self.sparse.as_deref_mut() {
-                let color = trace_lane_by_lane(scalar, rays, from, depth, weight);
+                let color = trace_lane_by_lane(scalar, kind, rays, from, depth, weight);
                 self.counts += std::mem::take(&mut scalar.counts);
                 return color;
             }
         }
-        let hit = self.scene.geometry.intersect_k(rays, from);
+        let hit = traced(kind, || self.scene.geometry.intersect_k(rays, from));
         self.shade(rays, &hit, depth, weight)
     }
 
@@ -352,8 +368,9 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             }
             self.counts.shadow += lanes_set::<F>(lit);
             let shadow = RayPacket::new(s.point, l, dist, lit);
-            let visible =
-                lit & !self.scene.geometry.occluded_hinted_k(&shadow, from, &mut self.shadow_hints[k]);
+            let hint = &mut self.shadow_hints[k];
+            let geometry = &self.scene.geometry;
+            let visible = lit & !traced(RayKind::Shadow, || geometry.occluded_hinted_k(&shadow, from, hint));
             let intensity = match light.falloff {
                 Falloff::None => splat_rgb::<F>(light.color),
                 Falloff::InverseSquare => splat_rgb::<F>(light.color) * (F::splat_f32(1.0) / dist2),
@@ -418,7 +435,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             let dir = (d - s.normal * (F::splat_f32(2.0) * d.dot(s.normal))).normalize();
             let next = RayPacket::new(s.point, dir, F::splat_f32(f32::INFINITY), mirror);
             let from = DeparturePacket { prim, inward: s.inside };
-            let c = self.trace(&next, &from, depth + 1, weight * kr);
+            let c = self.trace(RayKind::Reflection, &next, &from, depth + 1, weight * kr);
             color = V3::select(mirror, color + c * kr, color);
         }
         if let Some((through, dir)) = refracted {
@@ -427,7 +444,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 self.counts.refraction += lanes_set::<F>(glass);
                 let next = RayPacket::new(s.point, dir, F::splat_f32(f32::INFINITY), glass);
                 let from = DeparturePacket { prim, inward: !s.inside };
-                let c = self.trace(&next, &from, depth + 1, weight * kt);
+                let c = self.trace(RayKind::Refraction, &next, &from, depth + 1, weight * kt);
                 color = V3::select(glass, color + c * kt, color);
             }
         }

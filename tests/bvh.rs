@@ -171,15 +171,13 @@ fn coincident_spheres_get_a_tree_the_walks_can_hold() {
 /// Box tests of `packets` (K = 16, closest hit) after `setting` the BVH's switches.
 fn packet_box_tests(bvh: &mut Scene, packets: &[Ray<f32>], setting: impl Fn(&mut Bvh)) -> u64 {
     setting(bvh.geometry.sphere_bvh.as_mut().unwrap());
-    bareray::accel::set_counting(true);
+    let _counting = bareray::accel::Probe::counting();
     bareray::accel::take_work();
     for chunk in packets.chunks(16) {
         let packet = RayPacket::<f32x16>::from_rays(chunk, f32::INFINITY);
         bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
     }
-    let tests = bareray::accel::take_work().box_tests;
-    bareray::accel::set_counting(false);
-    tests
+    bareray::accel::take_work().box_tests
 }
 
 #[test]
@@ -351,7 +349,7 @@ fn large_packets_share_the_walk() {
 /// thread.
 fn camera_work(scene: &Scene, large: bool) -> bareray::accel::Work {
     let pool = bareray::render::thread_pool(Some(1)).unwrap();
-    bareray::accel::set_counting(true);
+    let _counting = bareray::accel::Probe::counting();
     pool.install(|| {
         let _ = bareray::accel::take_work();
         let (w, h) = (scene.camera.width, scene.camera.height);
@@ -665,14 +663,12 @@ fn scalar_walk_is_taken_and_can_be_switched_off() {
     let mut scene = Scene::compile_with_options(&desc, options).unwrap();
     let rays = rays(&desc, 500, 105);
     let trace = |scene: &Scene| {
-        bareray::accel::set_counting(true);
+        let _counting = bareray::accel::Probe::counting();
         bareray::accel::take_work();
         for ray in &rays {
             scene.geometry.intersect(ray, Departure::CAMERA, f32::INFINITY);
         }
-        let work = bareray::accel::take_work();
-        bareray::accel::set_counting(false);
-        work
+        bareray::accel::take_work()
     };
     let scalar = trace(&scene);
     assert!(scene.geometry.set_scalar_walk(false));

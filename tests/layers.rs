@@ -45,6 +45,8 @@ const LAYERS: &[(&str, u32)] = &[
     ("huge_pages", 9),
     // Run time against error, over the renderer and the accuracy twin.
     ("converge", 10),
+    // Renders timed, repeated and split by ray kind (`bareray bench`'s measurements).
+    ("bench", 10),
     // Stills of any size: bands streamed into files, pre-checks, regions and their merge.
     ("still", 10),
     // The command line.

@@ -9,6 +9,8 @@ mod common;
 mod accuracy;
 #[path = "ao.rs"]
 mod ao;
+#[path = "bench_kinds.rs"]
+mod bench_kinds;
 #[path = "bvh.rs"]
 mod bvh;
 #[path = "camera.rs"]

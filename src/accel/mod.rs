@@ -17,6 +17,7 @@ mod polygons;
 mod shape_query;
 mod sphere_query;
 mod triangle_query;
+mod work;
 pub use cone_query::{ConeItems, ConeQuery};
 pub use item_query::{ItemQuery, ItemTest};
 pub use near_first::NearFirst;
@@ -25,6 +26,10 @@ pub use polygons::Polygons;
 pub use shape_query::{ShapeQuery, Shapes};
 pub use sphere_query::SphereQuery;
 pub use triangle_query::{TriangleQuery, Triangles};
+pub(crate) use work::{count_work, counting, traced};
+pub use work::{
+    probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
+};
 
 use bvh::{Bvh, LeafQuery};
 
@@ -33,58 +38,6 @@ use crate::geometry::{
 };
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
-
-thread_local! {
-    /// Intersection work done on this thread since the last [`take_work`]: (packet–primitive tests,
-    /// packet–box tests). A counter add per leaf or node is noise beside the K-lane tests it counts.
-    static WORK: std::cell::Cell<Work> = const { std::cell::Cell::new(Work { prim_tests: 0, box_tests: 0 }) };
-}
-
-/// Intersection tests done, each on a whole packet (K lanes at once; K = 1 counts single rays).
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Work {
-    /// Packet–primitive tests: spheres in visited BVH leaves (or all spheres without a BVH), shapes and
-    /// triangles.
-    pub prim_tests: u64,
-    /// Packet–box slab tests in BVH traversal (one per visited node and occupied child, fewer where frustum
-    /// culling rules children out; for single rays each node's 4-wide test counts as N).
-    pub box_tests: u64,
-}
-
-impl std::ops::AddAssign for Work {
-    fn add_assign(&mut self, o: Work) {
-        self.prim_tests += o.prim_tests;
-        self.box_tests += o.box_tests;
-    }
-}
-
-/// Returns and resets this thread's work counters.
-pub fn take_work() -> Work {
-    WORK.with(|w| w.replace(Work::default()))
-}
-
-/// Whether [`count_work`] counts: off unless `--stats` asks, so plain renders and benchmarks never touch the
-/// thread-local counters (a thread-local add per BVH node measured 40% slower on the 1e3 field).
-static COUNTING: std::sync::atomic::AtomicBool = std::sync::atomic::AtomicBool::new(false);
-
-/// Turns the work counters on or off for the whole process.
-pub fn set_counting(on: bool) {
-    COUNTING.store(on, std::sync::atomic::Ordering::Relaxed);
-}
-
-/// Adds to this thread's work counters when counting is on.
-#[inline(always)]
-pub(crate) fn count_work(prim_tests: usize, box_tests: usize) {
-    if !COUNTING.load(std::sync::atomic::Ordering::Relaxed) {
-        return;
-    }
-    WORK.with(|w| {
-        let mut v = w.get();
-        v.prim_tests += prim_tests as u64;
-        v.box_tests += box_tests as u64;
-        w.set(v);
-    });
-}
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the spheres of the particle tree (a scene has
 /// one or the other), then the shapes, then the polygons, then the cones.
@@ -132,7 +85,7 @@ fn intersect_items<F: Lanes, Q: LeafQuery<F>>(
     match bvh {
         Some(bvh) => bvh.intersect_k(q, live, best),
         None => {
-            count_work(n, 0);
+            count_work(Work::lanes(n, n * F::move_mask(live).count_ones() as usize, 0, 0));
             q.intersect(0..n, live, best);
         }
     }
@@ -336,7 +289,7 @@ impl Geometry {
             let q = self.sphere_query(rays, from);
             if (*hint as usize) < self.spheres.len() {
                 let h = *hint as usize;
-                count_work(1, 0);
+                count_work(Work::lanes(1, F::move_mask(live).count_ones() as usize, 0, 0));
                 blocked = q.occluded(h..h + 1, live, hint);
                 if (blocked | !live).all() {
                     return blocked;

@@ -12,9 +12,10 @@ use serde::{Deserialize, Serialize};
 use super::camera_args::CameraArgs;
 use super::render::{parse_lanes, parse_threads};
 use super::values::{AccelArg, BvhPresetArg, LanesArg};
+use crate::bench::{measure, profile, Measured, Trace};
 use crate::compile::{Accel, CompileOptions, Scene};
 use crate::io::toml;
-use crate::render::{fnv1a, render_lanes, thread_pool, trace_primary_lanes, PrimaryHits};
+use crate::render::thread_pool;
 use crate::scene::desc::Pattern;
 
 /// Arguments of `bareray bench`.
@@ -73,6 +74,12 @@ pub struct BenchArgs {
     /// (default: the measured switch, 2; 0 never switches). Here to measure the switch again.
     #[arg(long, value_name = "LANES", value_parser = clap::value_parser!(u32).range(0..=16))]
     pub single_ray_lanes: Option<u32>,
+    /// Split each full render by ray kind (camera, shadow, reflection, refraction, ambient occlusion):
+    /// rays, share of the time, Mrays/s, tests per ray and live rays per test, from two more runs per row
+    /// (one counting, one timing each geometry query); docs/cli.md, "Reading the per-ray-kind report".
+    /// `false` to skip them. Primary-only runs have one kind and never split.
+    #[arg(long, value_name = "BOOL", default_value_t = true, action = clap::ArgAction::Set)]
+    pub by_kind: bool,
     /// Timed repetitions per setting (min, median and max are reported), after one untimed warm-up.
     #[arg(long, default_value_t = 5, value_parser = clap::value_parser!(u32).range(1..=1000))]
     pub reps: u32,
@@ -100,18 +107,6 @@ pub struct BenchArgs {
     pub camera: CameraArgs,
     #[command(flatten)]
     pub particles: super::particle_args::ParticleArgs,
-}
-
-/// One measured setting.
-struct Row {
-    lanes: LanesArg,
-    threads: usize,
-    rays: u64,
-    /// Median, minimum and maximum of the timed runs.
-    seconds: f64,
-    min_s: f64,
-    max_s: f64,
-    checksum: u64,
 }
 
 /// What the numbers were measured on and built with: in the table's header and in every JSON object.
@@ -230,6 +225,9 @@ struct Record<'a> {
     bvh_preset: String,
     #[serde(flatten)]
     host: &'a Host,
+    /// The render split by ray kind (absent for primary-only runs and with `--by-kind false`).
+    #[serde(skip_serializing_if = "Option::is_none")]
+    by_kind: Option<super::bench_kinds::ByKind>,
     #[serde(skip_serializing_if = "Option::is_none")]
     compare: Option<CompareField>,
 }
@@ -456,12 +454,28 @@ pub fn run(args: BenchArgs) -> Result<()> {
     }
     let mut base_mrays: Option<f64> = None;
     let mut compared = Vec::new();
+    let trace = if args.primary_only { Trace::PrimaryOnly } else { Trace::Render };
+    let split = args.by_kind && !args.primary_only;
+    let mut split_rows = Vec::new();
     for &t in &threads {
+        // One thread pool for every repetition, as the peer harnesses reuse theirs.
+        let pool = thread_pool(Some(t))?;
         for &lanes in &args.lanes {
             // The scalar row walks the binary trees, every other row the wide nodes.
             scene.geometry.set_scalar_walk(lanes.is_scalar());
-            let row = measure(&scene, &args, lanes, t)?;
-            let mrays = row.rays as f64 / row.seconds / 1e6;
+            let row = measure(&scene, trace, lanes.k(), &pool, args.reps)
+                .map_err(|e| anyhow!("lanes {lanes}, {t} threads: {e}"))?;
+            let kinds = split.then(|| profile(&scene, lanes.k(), &pool));
+            if let Some(changed) =
+                kinds.as_ref().and_then(|p| p.checksums.iter().find(|&&c| c != row.checksum))
+            {
+                anyhow::bail!(
+                    "lanes {lanes}, {t} threads: a probed run's checksum {changed:016x} differs from the timed \
+                     runs' {:016x}",
+                    row.checksum
+                );
+            }
+            let mrays = row.mrays_per_s();
             if lanes == base && t == threads[0] {
                 base_mrays = Some(mrays);
             }
@@ -472,8 +486,8 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     tracer: "bareray",
                     scene: scene_name.clone(),
                     primary_only: args.primary_only,
-                    lanes: row.lanes,
-                    threads: row.threads,
+                    lanes,
+                    threads: t,
                     rays: row.rays,
                     seconds: row.seconds,
                     min_s: row.min_s,
@@ -491,6 +505,7 @@ pub fn run(args: BenchArgs) -> Result<()> {
                     frustum_culling: args.frustum_culling,
                     bvh_preset: super::values::name(args.bvh_preset),
                     host: &host,
+                    by_kind: kinds.as_ref().map(|p| super::bench_kinds::record(p, row.seconds)),
                     compare: old.as_ref().map(|o| CompareField {
                         file: o.path.display().to_string(),
                         old_mrays_per_s: old_mrays.map(|(m, _)| m),
@@ -499,22 +514,20 @@ pub fn run(args: BenchArgs) -> Result<()> {
                 };
                 writeln!(out, "{}", serde_json::to_string(&record)?)?;
             } else {
-                let ratio = base_mrays.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
-                writeln!(
-                    out,
-                    "{:>6} {:7} {:11} {:10.4} {:10.4} {:10.4} {:10.2} {:>10}  {:016x}",
-                    row.lanes,
-                    row.threads,
-                    row.rays,
-                    row.min_s,
-                    row.seconds,
-                    row.max_s,
-                    mrays,
-                    ratio,
-                    row.checksum
-                )?;
+                print_row(&mut out, lanes, t, &row, base_mrays)?;
+            }
+            if let Some(p) = kinds {
+                split_rows.push(super::bench_kinds::Split {
+                    lanes,
+                    threads: t,
+                    seconds: row.seconds,
+                    profile: p,
+                });
             }
         }
+    }
+    if !args.json && !split_rows.is_empty() {
+        super::bench_kinds::print_table(&mut out, &split_rows, base, threads[0])?;
     }
     if let Some(old) = &old {
         let unmatched: Vec<String> = old
@@ -562,54 +575,22 @@ fn default_threads(cores: usize) -> Vec<usize> {
     }
 }
 
-/// Minimum, median and maximum of `reps` timed runs after one warm-up. The checksum is taken from the
-/// warm-up and from the last run, which must agree (every path is deterministic); the runs between skip
-/// it, since hashing a frame byte by byte costs about as long as tracing a small field's.
-fn measure(scene: &Scene, args: &BenchArgs, lanes: LanesArg, threads: usize) -> Result<Row> {
-    let mut times = Vec::with_capacity(args.reps as usize);
-    let (mut rays, mut checksum) = (0, None);
-    // One thread pool for every repetition, and for primary rays one frame, as the peer harnesses do.
-    let pool = thread_pool(Some(threads))?;
-    let mut frame = args.primary_only.then(|| PrimaryHits::new(scene.camera.width, scene.camera.height));
-    for rep in 0..=args.reps {
-        let hashed = rep == 0 || rep == args.reps;
-        let (seconds, sum) = if let Some(hits) = &mut frame {
-            trace_primary_lanes(scene, lanes.k(), &pool, hits);
-            rays = hits.t.len() as u64;
-            (hits.seconds, hashed.then(|| hits.checksum(scene)))
-        } else {
-            let r = render_lanes(scene, lanes.k(), &pool, &());
-            rays = r.counts.total();
-            (r.seconds, hashed.then(|| image_checksum(&r.image)))
-        };
-        match (checksum, sum) {
-            (Some(first), Some(last)) if first != last => anyhow::bail!(
-                "lanes {lanes}, {threads} threads: the last run's checksum {last:016x} differs from the \
-                 warm-up's {first:016x}"
-            ),
-            (None, sum) => checksum = sum,
-            _ => {}
-        }
-        if rep > 0 {
-            times.push(seconds);
-        }
-    }
-    let checksum = checksum.expect("the warm-up run is hashed");
-    times.sort_by(f64::total_cmp);
-    Ok(Row {
-        lanes,
-        threads,
-        rays,
-        seconds: times[times.len() / 2],
-        min_s: times[0],
-        max_s: times[times.len() - 1],
-        checksum,
-    })
-}
-
-/// FNV-1a 64 over the image's f32 bits, row-major.
-fn image_checksum(img: &crate::film::Image) -> u64 {
-    fnv1a(img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(|v| v.to_bits().to_le_bytes()))
+/// One row of the table.
+fn print_row(
+    out: &mut impl Write,
+    lanes: LanesArg,
+    threads: usize,
+    row: &Measured,
+    base: Option<f64>,
+) -> Result<()> {
+    let mrays = row.mrays_per_s();
+    let ratio = base.map_or("-".to_owned(), |s| format!("{:.2}x", mrays / s));
+    writeln!(
+        out,
+        "{:>6} {:7} {:11} {:10.4} {:10.4} {:10.4} {:10.2} {:>10}  {:016x}",
+        lanes, threads, row.rays, row.min_s, row.seconds, row.max_s, mrays, ratio, row.checksum
+    )?;
+    Ok(())
 }
 
 #[cfg(test)]

@@ -3,6 +3,7 @@
 mod accuracy;
 mod bench;
 mod bench_isa;
+mod bench_kinds;
 mod camera_args;
 mod converge;
 mod convert;

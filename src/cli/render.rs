@@ -171,7 +171,7 @@ pub fn run(args: RenderArgs) -> Result<()> {
     let mut time = Timings::default();
     let (scene, pool, job) = prepare(&args, &mut time, true)?;
     still::check(&scene, &job, pool.current_num_threads())?;
-    crate::accel::set_counting(args.stats);
+    let _counting = args.stats.then(crate::accel::Probe::counting);
     let progress = progress_bar(args.quiet);
     let clock = Instant::now();
     still::catch_interrupts();
@@ -210,7 +210,7 @@ fn run_ranks(args: RenderArgs, ranks: still::mpi::Ranks) -> Result<()> {
         // this one.
         Err(e) => ranks.exit(super::report(&e).into()),
     };
-    crate::accel::set_counting(args.stats);
+    let _counting = args.stats.then(crate::accel::Probe::counting);
     let progress = progress_bar(args.quiet || !root);
     let clock = Instant::now();
     let traced = ranks.render(&scene, &pool, &progress, &job);

@@ -5,7 +5,7 @@
 
 use std::time::Instant;
 
-use crate::accel::Work;
+use crate::accel::{traced, RayKind, Work};
 use crate::camera::Camera;
 use crate::compile::Scene;
 use crate::film::Image;
@@ -327,7 +327,8 @@ pub fn for_each_camera_hit<F: Lanes>(
             }
         };
         large.hits.resize(large.packets.len(), HitPacket::miss());
-        scene.geometry.intersect_tile(&large.packets, pyramid.as_ref(), &mut large.hits);
+        let (packets, hits) = (&large.packets, &mut large.hits);
+        traced(RayKind::Camera, || scene.geometry.intersect_tile(packets, pyramid.as_ref(), hits));
         for ((rays, hit), b) in large.packets.iter().zip(&large.hits).zip(&large.blocks) {
             visit(rays, *hit, *b);
         }

@@ -14,6 +14,7 @@
 //! samples gets its own set. The seed and the directions in the tangent frame are scalar code per lane
 //! (`sin`, `cos`); the frame around the normal is lane arithmetic in the scalar operation order.
 
+use crate::accel::{traced, RayKind};
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, SplitMix64, V3};
 use crate::scene::desc::Ao;
@@ -65,7 +66,8 @@ impl<F: Lanes> Tracer<'_, F> {
                 let live = F::lanes_below(count);
                 let probe = RayPacket::new(point, around(normal, local), distance, live);
                 self.counts.ao += count as u64;
-                let blocked = self.scene.geometry.occluded_hinted_k(&probe, &from, &mut self.ao_hint);
+                let (geometry, hint) = (&self.scene.geometry, &mut self.ao_hint);
+                let blocked = traced(RayKind::Ao, || geometry.occluded_hinted_k(&probe, &from, hint));
                 open[i] += F::move_mask(live & !blocked).count_ones();
             }
         }
@@ -96,7 +98,8 @@ impl<F: Lanes> Tracer<'_, F> {
             let local = local_directions::<F>(set_bits(bits).map(|i| (i, shift[i], k)), ao.samples);
             let probe = RayPacket::new(s.point, around(s.normal, local), distance, found);
             self.counts.ao += u64::from(bits.count_ones());
-            let blocked = self.scene.geometry.occluded_hinted_k(&probe, &from, &mut self.ao_hint);
+            let (geometry, hint) = (&self.scene.geometry, &mut self.ao_hint);
+            let blocked = traced(RayKind::Ao, || geometry.occluded_hinted_k(&probe, &from, hint));
             open = F::select(found & !blocked, open + one, open);
         }
         open

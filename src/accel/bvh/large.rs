@@ -15,7 +15,7 @@
 
 use wide::{f32x16, f32x4};
 
-use super::super::count_work;
+use super::super::{count_work, counting, Work};
 use super::node::Node;
 use super::packet::{Frustum, Side};
 use super::slab::Stack;
@@ -241,8 +241,14 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
         // Per member, the farthest best hit of its live lanes (inf while one has none): it looks no farther.
         let mut far = f32x16::splat(f32::INFINITY);
         let mut stack = Stack::<Pending>::new();
-        let (mut boxes, mut prims) = (0, 0);
-        boxes += self.push_children(0, alive, far, &mut stack);
+        // Live rays a box test serves, summed only when counting (a loop over the members per node).
+        let counting = counting();
+        let (mut boxes, mut prims, mut box_lanes, mut prim_lanes) = (0, 0, 0, 0);
+        let tested = self.push_children(0, alive, far, &mut stack);
+        boxes += tested;
+        if counting {
+            box_lanes += tested * self.rays_of(alive);
+        }
         while let Some(e) = stack.pop() {
             // Members that found nearer hits since the push are done with this box.
             let members = u32::from(e.members) & !f32x16::move_mask(far.lt(f32x16::splat(e.near)));
@@ -253,17 +259,29 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             let slot = usize::from(e.slot);
             let (child, count) = (n.child[slot], n.count[slot]);
             if count == 0 {
-                boxes += self.push_children(child, members, far, &mut stack);
+                let tested = self.push_children(child, members, far, &mut stack);
+                boxes += tested;
+                if counting {
+                    box_lanes += tested * self.rays_of(members);
+                }
                 continue;
             }
             let first = child as usize;
-            prims += self.intersect_leaf(first..first + usize::from(count), members, best, &mut far);
+            let (tests, lanes) =
+                self.intersect_leaf(first..first + usize::from(count), members, best, &mut far);
+            prims += tests;
+            prim_lanes += lanes;
         }
-        count_work(prims, boxes);
+        count_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+    }
+
+    /// The live rays of `members`.
+    fn rays_of(&self, members: u32) -> usize {
+        set_bits(members).map(|p| F::move_mask(self.live[p]).count_ones() as usize).sum()
     }
 
     /// Each of `members`' closest hits among `items`, each member testing the items its frustum may meet;
-    /// updates the members' `far`. Returns the member–item tests made.
+    /// updates the members' `far`. Returns the member–item tests made and the live rays they served.
     #[inline(always)]
     fn intersect_leaf(
         &mut self,
@@ -271,8 +289,8 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
         members: u32,
         best: &mut [HitPacket<F>],
         far: &mut f32x16,
-    ) -> usize {
-        let mut tests = 0;
+    ) -> (usize, usize) {
+        let (mut tests, mut lanes) = (0, 0);
         let mut updated = far.to_array();
         // Leaves hold at most 8 spheres under every builder bareray uses; longer ones go 16 at a time.
         for start in items.clone().step_by(16) {
@@ -289,13 +307,15 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             }
             for p in set_bits(any) {
                 let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
-                tests += mine.clone().count();
+                let mine_count = mine.clone().count();
+                tests += mine_count;
+                lanes += mine_count * F::move_mask(self.live[p]).count_ones() as usize;
                 made(self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
                 updated[p] = farthest(F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)));
             }
         }
         *far = f32x16::from(updated);
-        tests
+        (tests, lanes)
     }
 
     /// Pushes the children of node `at` that some of `members` may reach before its best hits, farthest

@@ -16,7 +16,7 @@
 
 use obvhs::bvh2::node::Bvh2Node;
 
-use super::super::count_work;
+use super::super::{count_work, Work};
 use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
 use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Ray};
@@ -161,7 +161,7 @@ impl Bvh {
             }
             next = nearer;
         }
-        count_work(prims, 2 * visits);
+        count_work(Work::single(prims, 2 * visits));
     }
 
     /// Whether one ray is blocked within its `t_max` over the tree `nodes`; stops at the first blocker, left
@@ -189,7 +189,7 @@ impl Bvh {
             }
             next = nearer;
         }
-        count_work(prims, 2 * visits);
+        count_work(Work::single(prims, 2 * visits));
         blocked
     }
 

@@ -6,7 +6,7 @@
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
 //! merged back into its lane (Embree's "hybrid" traversal).
 
-use super::super::count_work;
+use super::super::{count_work, Work};
 use super::collapse::MAX_WIDTH;
 use super::node::{far_to_near, RayNode};
 use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
@@ -119,7 +119,7 @@ impl Bvh {
                 next = self.push_but_nearest(n, slab, best.t.min(q.t_max()), &mut stack);
             }
         }
-        count_work(prims, T::WIDTH * visits);
+        count_work(Work::single(prims, T::WIDTH * visits));
     }
 
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
@@ -155,7 +155,7 @@ impl Bvh {
                 stack.push(n.child(c).0);
             }
         }
-        count_work(prims, T::WIDTH * visits);
+        count_work(Work::single(prims, T::WIDTH * visits));
         blocked
     }
 

@@ -19,7 +19,7 @@ use wide::f32x16;
 use super::walk::Query;
 use super::{place, with_records, Particles, Record, Records, LEAF};
 use crate::accel::bvh::{farthest, members, Frustum, MemberSides, Stack, MAX_PACKETS};
-use crate::accel::count_work;
+use crate::accel::{count_work, counting, Work};
 use crate::geometry::{DeparturePacket, HitPacket, Pyramid, RayPacket};
 use crate::math::{Mask, Real, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -79,9 +79,17 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
     }
 
     /// The sphere at position `i` (centre `c`, radius `r` in rendering space) for each of `members` whose
-    /// frustum may meet it, merged into their best hits. Returns the member–sphere tests made.
+    /// frustum may meet it, merged into their best hits. Returns the member–sphere tests made and the live
+    /// rays they served.
     #[inline(always)]
-    fn test(&mut self, i: usize, c: Vec3f, r: f32, members: u32, best: &mut [HitPacket<F>]) -> usize {
+    fn test(
+        &mut self,
+        i: usize,
+        c: Vec3f,
+        r: f32,
+        members: u32,
+        best: &mut [HitPacket<F>],
+    ) -> (usize, usize) {
         let reach = self.sides.reaching_ball(c, r + self.tree.pad) & members;
         let mut far = None;
         for p in set_bits(reach) {
@@ -100,13 +108,21 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
         if let Some(f) = far {
             self.far = f32x16::from(f);
         }
-        reach.count_ones() as usize
+        (reach.count_ones() as usize, self.rays_of(reach))
+    }
+
+    /// The live rays of `members`.
+    fn rays_of(&self, members: u32) -> usize {
+        set_bits(members).map(|p| F::move_mask(self.live[p]).count_ones() as usize).sum()
     }
 
     fn run(&mut self, alive: u32, best: &mut [HitPacket<F>]) {
         let mut stack = Stack::<Pending>::new();
         let [min, max] = self.tree.bounds;
-        let (mut spheres, mut boxes) = (0, 1);
+        // Live rays a split serves, summed only when counting (a loop over the members per split).
+        let counting = counting();
+        let (mut spheres, mut boxes, mut sphere_lanes) = (0, 1, 0);
+        let mut box_lanes = if counting { self.rays_of(alive) } else { 0 };
         if let Some(root) = self.pending(0, self.recs.len() as u32, min, max, alive) {
             stack.push(root);
         }
@@ -119,13 +135,17 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
             if hi - lo <= LEAF {
                 for i in lo..hi {
                     let (c, r) = place(&self.recs[i], self.tree.origin);
-                    spheres += self.test(i, c, r, members, best);
+                    let (tests, lanes) = self.test(i, c, r, members, best);
+                    spheres += tests;
+                    sphere_lanes += lanes;
                 }
                 continue;
             }
             let mid = lo + (hi - lo) / 2;
             let (c, r) = place(&self.recs[mid], self.tree.origin);
-            spheres += self.test(mid, c, r, members, best);
+            let (tests, lanes) = self.test(mid, c, r, members, best);
+            spheres += tests;
+            sphere_lanes += lanes;
             let axis = self.tree.axis(mid);
             let plane = [c.x, c.y, c.z][axis];
             let reach = self.tree.split_reach();
@@ -133,6 +153,9 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
             below_max[axis] = below_max[axis].min(plane + reach);
             above_min[axis] = above_min[axis].max(plane - reach);
             boxes += 2;
+            if counting {
+                box_lanes += 2 * self.rays_of(members);
+            }
             let below = self.pending(e.lo, mid as u32, e.min, below_max, members);
             let above = self.pending(mid as u32 + 1, e.hi, above_min, e.max, members);
             let (near, far) = if self.origin[axis] < plane { (below, above) } else { (above, below) };
@@ -140,7 +163,7 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
                 stack.push(p);
             }
         }
-        count_work(spheres, boxes);
+        count_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
     }
 }
 

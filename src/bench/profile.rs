@@ -1,0 +1,173 @@
+//! A render split by ray kind: rays, queries, tests with their live rays, and the time spent in each
+//! kind's geometry queries.
+
+use std::time::Instant;
+
+use crate::accel::{
+    probe_overhead, take_kind_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
+};
+use crate::compile::Scene;
+use crate::render::render_lanes;
+use crate::shade::RayCounts;
+
+use super::image_checksum;
+
+/// The timed runs of [`profile`]; each kind's time is their median.
+pub const TIMED_RUNS: usize = 3;
+
+/// One ray kind's part of a render.
+#[derive(Clone, Copy, Debug)]
+pub struct KindProfile {
+    /// The kind.
+    pub kind: RayKind,
+    /// Rays of this kind the render traced (the render's own count).
+    pub rays: u64,
+    /// Geometry queries made for them: packets, or single rays where packets went lane by lane.
+    pub queries: u64,
+    /// Their box and primitive tests and the live rays those served (the counting run).
+    pub work: Work,
+    /// Thread-seconds inside their queries in the timed run, the probe's own ticks taken off.
+    pub seconds: f64,
+}
+
+impl KindProfile {
+    /// Mean live rays per box test: K when every lane of every packet is live, 1 for single rays; a large
+    /// packet's test serves all its members. `None` without box tests.
+    pub fn rays_per_box_test(&self) -> Option<f64> {
+        ratio(self.work.box_lanes, self.work.box_tests)
+    }
+
+    /// Mean live rays per primitive test, as [`KindProfile::rays_per_box_test`].
+    pub fn rays_per_prim_test(&self) -> Option<f64> {
+        ratio(self.work.prim_lanes, self.work.prim_tests)
+    }
+
+    /// Box tests per ray of this kind.
+    pub fn box_tests_per_ray(&self) -> Option<f64> {
+        ratio(self.work.box_tests, self.rays)
+    }
+
+    /// Primitive tests per ray of this kind.
+    pub fn prim_tests_per_ray(&self) -> Option<f64> {
+        ratio(self.work.prim_tests, self.rays)
+    }
+}
+
+fn ratio(a: u64, b: u64) -> Option<f64> {
+    (b > 0).then(|| a as f64 / b as f64)
+}
+
+/// A render split by ray kind ([`profile`]).
+#[derive(Clone, Debug)]
+pub struct Profile {
+    /// Every kind the render traced, in [`RayKind::ALL`]'s order.
+    pub kinds: Vec<KindProfile>,
+    /// Threads of the pool.
+    pub threads: usize,
+    /// Work done outside any tagged query (none in the renderer).
+    pub untagged: Work,
+    /// All the counting run's work, as the render itself summed it tile by tile.
+    pub total: Work,
+    /// Ticks one timed query of nothing reads: what each kind's time had taken off per query.
+    pub probe_ticks: u64,
+    /// The image checksums of the counting run and of the timed runs (the first that differs from the
+    /// others' if one does): the probes change no bits.
+    pub checksums: [u64; 2],
+}
+
+impl Profile {
+    /// The share of a clean render's thread time (`seconds` × threads, `seconds` its median wall time) that
+    /// `kind` spends in its queries: the timed run's time for the kind with the probe's ticks taken off, so
+    /// what the probes add elsewhere (their calls, the counter reads) does not count.
+    pub fn share(&self, kind: &KindProfile, seconds: f64) -> f64 {
+        kind.seconds / (seconds * self.threads as f64)
+    }
+
+    /// The share of a clean render taking `seconds` outside every query: shading, sampling, the film, and
+    /// threads waiting.
+    pub fn rest_share(&self, seconds: f64) -> f64 {
+        1.0 - self.kinds.iter().map(|k| self.share(k, seconds)).sum::<f64>()
+    }
+
+    /// The kind's millions of rays per second on all the pool's threads: its rays over its time per thread.
+    pub fn mrays_per_s(&self, kind: &KindProfile) -> f64 {
+        kind.rays as f64 * self.threads as f64 / kind.seconds / 1e6
+    }
+}
+
+/// Renders `scene` at `lanes` rays per packet on `pool` (a scalar run walks the binary trees, as in
+/// [`super::measure`]) once counting work per ray kind and [`TIMED_RUNS`] times timing each kind's
+/// geometry queries by the time-stamp counter.
+pub fn profile(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> Profile {
+    let take_all = || -> [KindWork; KIND_SLOTS] {
+        let mut sum = [KindWork::default(); KIND_SLOTS];
+        for per_thread in pool.broadcast(|_| take_kind_work()) {
+            for (s, k) in sum.iter_mut().zip(per_thread) {
+                *s += k;
+            }
+        }
+        sum
+    };
+    take_all();
+    let counting = Probe::counting();
+    let counted_run = render_lanes(scene, lanes, pool, &());
+    drop(counting);
+    let counted = take_all();
+    let probe_ticks = probe_overhead(10_001);
+    // Timed runs, each kind's time the median of them: one run on a shared host is too noisy to split.
+    let runs: Vec<([KindWork; KIND_SLOTS], f64, u64)> = (0..TIMED_RUNS)
+        .map(|_| {
+            take_all();
+            let timing = Probe::timing();
+            let (clock, start) = (Instant::now(), ticks());
+            let run = render_lanes(scene, lanes, pool, &());
+            let (wall, spent) = (clock.elapsed().as_secs_f64(), ticks().wrapping_sub(start));
+            drop(timing);
+            (take_all(), wall / spent.max(1) as f64, image_checksum(&run.image))
+        })
+        .collect();
+    let timed_checksum = runs.iter().map(|r| r.2).find(|&c| c != runs[0].2).unwrap_or(runs[0].2);
+    let median_seconds = |slot: usize| {
+        let mut s: Vec<f64> = runs
+            .iter()
+            .map(|(k, per_tick, _)| {
+                k[slot].ticks.saturating_sub(k[slot].queries * probe_ticks) as f64 * per_tick
+            })
+            .collect();
+        s.sort_by(f64::total_cmp);
+        s[s.len() / 2]
+    };
+    let kinds = RayKind::ALL
+        .iter()
+        .map(|&kind| {
+            let c = counted[kind as usize];
+            KindProfile {
+                kind,
+                rays: rays_of(&counted_run.counts, kind),
+                queries: c.queries,
+                work: c.work,
+                seconds: median_seconds(kind as usize),
+            }
+        })
+        .filter(|k| k.rays > 0 || k.queries > 0)
+        .collect();
+    Profile {
+        kinds,
+        threads: pool.current_num_threads(),
+        untagged: counted[UNTAGGED].work,
+        total: counted_run.work,
+        probe_ticks,
+        checksums: [image_checksum(&counted_run.image), timed_checksum],
+    }
+}
+
+/// The render's count of rays of `kind`.
+fn rays_of(counts: &RayCounts, kind: RayKind) -> u64 {
+    match kind {
+        RayKind::Camera => counts.primary,
+        RayKind::Shadow => counts.shadow,
+        RayKind::Reflection => counts.reflection,
+        RayKind::Refraction => counts.refraction,
+        RayKind::Ao => counts.ao,
+    }
+}

@@ -1,0 +1,138 @@
+//! `bareray bench`'s per-ray-kind report: the table after the main one, and the `by_kind` field of each
+//! JSON line. The figures come from [`crate::bench::profile`].
+
+use std::io::Write;
+
+use anyhow::Result;
+use serde::Serialize;
+
+use super::values::LanesArg;
+use crate::bench::{KindProfile, Profile};
+
+/// One measured setting with its split.
+pub(super) struct Split {
+    pub lanes: LanesArg,
+    pub threads: usize,
+    /// The median seconds of the setting's clean runs.
+    pub seconds: f64,
+    pub profile: Profile,
+}
+
+/// The `by_kind` field of a JSON line.
+#[derive(Serialize)]
+pub(super) struct ByKind {
+    kinds: Vec<KindRecord>,
+    /// Share of the median run's thread time outside every kind's queries (shading, sampling, film,
+    /// waiting).
+    rest_share: f64,
+    /// Ticks one probe reads, taken off each query's time.
+    probe_ticks: u64,
+}
+
+#[derive(Serialize)]
+struct KindRecord {
+    kind: &'static str,
+    rays: u64,
+    queries: u64,
+    /// This kind's query time in the timed run over the row's median seconds × threads.
+    share: f64,
+    /// The kind's rays over its query time per thread.
+    mrays_per_s: f64,
+    box_tests: u64,
+    prim_tests: u64,
+    /// Live rays summed over the box tests, and over the primitive tests.
+    box_lanes: u64,
+    prim_lanes: u64,
+    rays_per_box_test: Option<f64>,
+    rays_per_prim_test: Option<f64>,
+}
+
+/// The JSON form of `profile` for a row whose median is `seconds`.
+pub(super) fn record(profile: &Profile, seconds: f64) -> ByKind {
+    let kinds = profile
+        .kinds
+        .iter()
+        .map(|k| KindRecord {
+            kind: k.kind.name(),
+            rays: k.rays,
+            queries: k.queries,
+            share: profile.share(k, seconds),
+            mrays_per_s: profile.mrays_per_s(k),
+            box_tests: k.work.box_tests,
+            prim_tests: k.work.prim_tests,
+            box_lanes: k.work.box_lanes,
+            prim_lanes: k.work.prim_lanes,
+            rays_per_box_test: k.rays_per_box_test(),
+            rays_per_prim_test: k.rays_per_prim_test(),
+        })
+        .collect();
+    ByKind { kinds, rest_share: profile.rest_share(seconds), probe_ticks: profile.probe_ticks }
+}
+
+/// The per-kind table: kind by kind, each setting in the order measured, with its Mrays/s against the
+/// `base` width's at `base_threads` threads.
+pub(super) fn print_table(
+    out: &mut impl Write,
+    rows: &[Split],
+    base: LanesArg,
+    base_threads: usize,
+) -> Result<()> {
+    writeln!(
+        out,
+        "\nby ray kind (four more runs per row: one counting tests, three timing each query; share: the kind's \
+         query time over the\nmedian's thread time; Mrays/s: the kind's rays over its query time per thread; \
+         rays/box, rays/prim: live rays per test)"
+    )?;
+    writeln!(
+        out,
+        " kind        lanes threads        rays  share    Mrays/s {:>9}  boxes/ray prims/ray  rays/box rays/prim",
+        if base.is_scalar() { "vs scalar" } else { "vs 1 lane" }
+    )?;
+    let kinds = crate::accel::RayKind::ALL;
+    for kind in kinds {
+        let of = |r: &Split| r.profile.kinds.iter().find(|k| k.kind == kind).copied();
+        let base_mrays = rows
+            .iter()
+            .find(|r| r.lanes == base && r.threads == base_threads)
+            .and_then(|r| of(r).map(|k| r.profile.mrays_per_s(&k)));
+        for r in rows {
+            if let Some(k) = of(r) {
+                print_kind(out, r, &k, base_mrays)?;
+            }
+        }
+    }
+    for r in rows {
+        writeln!(
+            out,
+            " {:<10} {:>6} {:7} {:>11} {:>5.1}%",
+            "rest",
+            r.lanes,
+            r.threads,
+            "-",
+            100.0 * r.profile.rest_share(r.seconds)
+        )?;
+    }
+    writeln!(out, "each query's time has the probe's own {} ticks taken off", rows[0].profile.probe_ticks)?;
+    Ok(())
+}
+
+fn print_kind(out: &mut impl Write, r: &Split, k: &KindProfile, base_mrays: Option<f64>) -> Result<()> {
+    let mrays = r.profile.mrays_per_s(k);
+    let opt = |v: Option<f64>, p: usize| v.map_or("-".to_owned(), |v| format!("{v:.p$}"));
+    writeln!(
+        out,
+        " {:<10} {:>6} {:7} {:11} {:>5.1}% {:10.2} {:>9}  {:>9} {:>9} {:>9} {:>9}",
+        k.kind.name(),
+        r.lanes,
+        r.threads,
+        k.rays,
+        100.0 * r.profile.share(k, r.seconds),
+        mrays,
+        base_mrays.map_or("-".to_owned(), |b| format!("{:.2}x", mrays / b)),
+        opt(k.box_tests_per_ray(), 1),
+        opt(k.prim_tests_per_ray(), 1),
+        opt(k.rays_per_box_test(), 2),
+        opt(k.rays_per_prim_test(), 2),
+    )?;
+    Ok(())
+}
