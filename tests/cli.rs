@@ -1199,7 +1199,7 @@ fn isa_dir_of_this_binary(levels: &[&str]) -> tempfile::TempDir {
 /// `bench --isa v2,v3,v4` end to end, with this binary standing in for the v2 and v3 builds: one row per
 /// (isa, lanes, threads) with the checksum of a plain bench at the same settings (the other arguments reach
 /// the builds), a level the CPU lacks skipped with a note, a build whose kernels are not its level's
-/// flagged, and the JSON lines carrying the level and the rounds.
+/// flagged, each build's split by ray kind, and the JSON lines carrying the level, the rounds and the split.
 #[cfg(all(unix, target_arch = "x86_64"))]
 #[test]
 fn bench_isa_runs_the_builds_side_by_side() {
@@ -1233,6 +1233,12 @@ fn bench_isa_runs_the_builds_side_by_side() {
         let plain_row = plain.iter().find(|r| r["lanes"] == lanes).unwrap();
         assert!(row.contains(plain_row["checksum"].as_str().unwrap()), "{row} vs {plain_row}");
     }
+    // The first round's split by ray kind, per build: whitted.toml traces all but AO rays.
+    let split = table.split_once("\nby ray kind").map_or("", |(_, s)| s);
+    for kind in ["camera", "shadow", "reflection", "refraction"] {
+        let lines = split.lines().filter(|l| l.trim_start().starts_with(&format!("{kind} "))).count();
+        assert_eq!(lines, 4, "{kind}: {table}");
+    }
     // With --json: one line per (isa, lanes, threads), the level and the rounds in it; the note on stderr.
     let run = Command::new(env!("CARGO_BIN_EXE_bareray"))
         .args([&["bench"], &settings[..], &isa[..], &["--json"]].concat())
@@ -1252,6 +1258,7 @@ fn bench_isa_runs_the_builds_side_by_side() {
         assert_eq!(line["checksum"], plain_row["checksum"], "{line}");
         assert!(line["min_s"].as_f64() <= line["seconds"].as_f64(), "{line}");
         assert_eq!(line["software_fma"], !cfg!(target_feature = "fma"), "{line}");
+        assert_eq!(line["by_kind"]["kinds"][0]["kind"], "camera", "{line}");
     }
 }
 

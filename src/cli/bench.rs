@@ -325,7 +325,14 @@ pub fn run(args: BenchArgs) -> Result<()> {
     if let Some(levels) = &args.isa {
         // The builds get this command's own arguments, those after `bench`, less --isa's.
         let raw: Vec<_> = std::env::args_os().skip_while(|a| a != "bench").skip(1).collect();
-        return super::bench_isa::run(levels, args.isa_dir.as_deref(), args.reps, args.json, &raw);
+        return super::bench_isa::run(
+            levels,
+            args.isa_dir.as_deref(),
+            args.reps,
+            args.json,
+            args.by_kind,
+            &raw,
+        );
     }
     let threads = match &args.threads {
         Some(t) => t.clone(),

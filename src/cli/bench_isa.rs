@@ -146,10 +146,11 @@ fn find(level: Level, dir: Option<&Path>, exe: Option<&Path>) -> Result<PathBuf,
     ))
 }
 
-/// The arguments for a build's run: `args` (what followed `bench`) without `--isa`, `--isa-dir`, `--json`
-/// and `--reps` (as `--flag value` or `--flag=value`), after `--json --reps 1`.
+/// The arguments for a build's run: `args` (what followed `bench`) without `--isa`, `--isa-dir`, `--json`,
+/// `--reps` and `--by-kind` (as `--flag value` or `--flag=value`), after `--json --reps 1`. The split by ray
+/// kind is added per round ([`by_kind_args`]).
 fn child_args(args: &[OsString]) -> Vec<OsString> {
-    const WITH_VALUE: [&str; 3] = ["--isa", "--isa-dir", "--reps"];
+    const WITH_VALUE: [&str; 4] = ["--isa", "--isa-dir", "--reps", "--by-kind"];
     let mut out: Vec<OsString> = ["--json", "--reps", "1"].map(OsString::from).into();
     let mut it = args.iter();
     while let Some(arg) = it.next() {
@@ -167,6 +168,12 @@ fn child_args(args: &[OsString]) -> Vec<OsString> {
         }
     }
     out
+}
+
+/// `--by-kind` for a build's run in `round`: the first round splits its rows by ray kind (unless the
+/// command said `--by-kind false`), the later ones only time them.
+fn by_kind_args(round: usize, split: bool) -> [OsString; 2] {
+    ["--by-kind", if round == 0 && split { "true" } else { "false" }].map(OsString::from)
 }
 
 /// Runs one build's bench and parses its lines.
@@ -254,7 +261,14 @@ fn add_round(
 
 /// Runs `bench --isa`: `levels` in the given order, `rounds` rounds, the builds found in `dir` (else next to
 /// the running binary), each given `args` (what followed `bench` on the command line) for its own run.
-pub fn run(levels: &[Level], dir: Option<&Path>, rounds: u32, json: bool, args: &[OsString]) -> Result<()> {
+pub fn run(
+    levels: &[Level],
+    dir: Option<&Path>,
+    rounds: u32,
+    json: bool,
+    by_kind: bool,
+    args: &[OsString],
+) -> Result<()> {
     if !cfg!(target_arch = "x86_64") {
         bail!("--isa runs x86-64 builds, and this is not an x86-64 machine");
     }
@@ -296,7 +310,7 @@ pub fn run(levels: &[Level], dir: Option<&Path>, rounds: u32, json: bool, args: 
             if progress {
                 eprint!("\rround {}/{rounds}: {}  ", round + 1, builds[i].level.name());
             }
-            let rows = run_build(&builds[i], &child)?;
+            let rows = run_build(&builds[i], &[&child[..], &by_kind_args(round, by_kind)[..]].concat())?;
             add_round(&mut all, &builds, i, rows)?;
         }
     }
@@ -425,7 +439,12 @@ fn print_table(
         )?;
     }
     writeln!(out, "checksums: equal in every build for every row")?;
-    Ok(())
+    let split: Vec<_> = order(all)
+        .map(|(b, r)| {
+            (builds[b].level.name(), all[b].rows[r].0.lanes, all[b].rows[r].0.threads, &all[b].rows[r].1)
+        })
+        .collect();
+    super::bench_kinds::print_builds(out, &split, builds[base].level.name())
 }
 
 #[cfg(test)]
@@ -462,7 +481,7 @@ mod tests {
     }
 
     #[test]
-    fn child_args_drop_isa_json_and_reps() {
+    fn child_args_drop_isa_json_reps_and_by_kind() {
         let args = os(&[
             "s.toml",
             "--isa",
@@ -475,8 +494,11 @@ mod tests {
             "3",
             "--isa=v4",
             "--reps=2",
+            "--by-kind",
+            "false",
             "--threads",
             "1",
+            "--by-kind=true",
         ]);
         assert_eq!(
             child_args(&args),
@@ -484,6 +506,10 @@ mod tests {
         );
         // After `--` everything is a positional argument and passes as it is.
         assert_eq!(child_args(&os(&["--", "--json"])), os(&["--json", "--reps", "1", "--", "--json"]));
+        // The first round splits by kind unless told not to; the later ones never do.
+        assert_eq!(by_kind_args(0, true), os(&["--by-kind", "true"]).as_slice());
+        assert_eq!(by_kind_args(0, false), os(&["--by-kind", "false"]).as_slice());
+        assert_eq!(by_kind_args(3, true), os(&["--by-kind", "false"]).as_slice());
     }
 
     #[test]
