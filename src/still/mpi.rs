@@ -231,18 +231,20 @@ impl Ranks {
             counts.ao,
             work.prim_tests,
             work.box_tests,
+            work.prim_lanes,
+            work.box_lanes,
         ];
         let root = self.world.process_at_rank(0);
         if !self.is_root() {
             root.reduce_into(&mine[..], SystemOperation::sum());
             return None;
         }
-        let mut all = [0u64; 7];
+        let mut all = [0u64; 9];
         root.reduce_into_root(&mine[..], &mut all[..], SystemOperation::sum());
-        let [primary, shadow, reflection, refraction, ao, prim_tests, box_tests] = all;
+        let [primary, shadow, reflection, refraction, ao, prim_tests, box_tests, prim_lanes, box_lanes] = all;
         Some(Traced {
             counts: RayCounts { primary, shadow, reflection, refraction, ao },
-            work: Work { prim_tests, box_tests },
+            work: Work { prim_tests, box_tests, prim_lanes, box_lanes },
             seconds,
         })
     }
