@@ -26,7 +26,7 @@ pub use polygons::Polygons;
 pub use shape_query::{ShapeQuery, Shapes};
 pub use sphere_query::SphereQuery;
 pub use triangle_query::{TriangleQuery, Triangles};
-pub(crate) use work::{count_work, counting, traced};
+pub(crate) use work::{add_work, count_work, counting, traced};
 pub use work::{
     probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
 };
@@ -85,7 +85,7 @@ fn intersect_items<F: Lanes, Q: LeafQuery<F>>(
     match bvh {
         Some(bvh) => bvh.intersect_k(q, live, best),
         None => {
-            count_work(Work::lanes(n, n * F::move_mask(live).count_ones() as usize, 0, 0));
+            count_work(|| Work::lanes(n, n * F::move_mask(live).count_ones() as usize, 0, 0));
             q.intersect(0..n, live, best);
         }
     }
@@ -289,7 +289,7 @@ impl Geometry {
             let q = self.sphere_query(rays, from);
             if (*hint as usize) < self.spheres.len() {
                 let h = *hint as usize;
-                count_work(Work::lanes(1, F::move_mask(live).count_ones() as usize, 0, 0));
+                count_work(|| Work::lanes(1, F::move_mask(live).count_ones() as usize, 0, 0));
                 blocked = q.occluded(h..h + 1, live, hint);
                 if (blocked | !live).all() {
                     return blocked;

@@ -171,15 +171,20 @@ pub fn take_kind_work() -> [KindWork; KIND_SLOTS] {
     KINDS.with_borrow_mut(|k| std::mem::replace(k, [KindWork::default(); KIND_SLOTS]))
 }
 
-/// Adds to this thread's work counters, and to the running query's kind, when counting is on.
+/// Adds `work()` to this thread's work counters, and to the running query's kind, when counting is on;
+/// `work` is not evaluated otherwise.
 #[inline(always)]
-pub(crate) fn count_work(work: Work) {
+pub(crate) fn count_work(work: impl FnOnce() -> Work) {
     if counting() {
-        add_work(work);
+        add_work(work());
     }
 }
 
-fn add_work(work: Work) {
+/// Adds `work` to this thread's work counters and to the running query's kind: for a walk that has read
+/// [`counting`] already.
+#[cold]
+#[inline(never)]
+pub(crate) fn add_work(work: Work) {
     WORK.with(|w| {
         let mut v = w.get();
         v += work;

@@ -15,7 +15,7 @@
 
 use wide::{f32x16, f32x4};
 
-use super::super::{count_work, counting, Work};
+use super::super::{add_work, counting, Work};
 use super::node::Node;
 use super::packet::{Frustum, Side};
 use super::slab::Stack;
@@ -272,7 +272,9 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             prims += tests;
             prim_lanes += lanes;
         }
-        count_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+        if counting {
+            add_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+        }
     }
 
     /// The live rays of `members`.

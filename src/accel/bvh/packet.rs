@@ -12,7 +12,7 @@
 
 use wide::f32x4;
 
-use super::super::{count_work, Work};
+use super::super::{add_work, counting, Work};
 use super::node::{Node, N};
 use super::slab::{slab_entry, slab_entry_ordered, SlabRay, Stack};
 use super::{Bvh, LeafQuery};
@@ -310,6 +310,8 @@ impl Bvh {
             F::select(lanes, best.t.min_of(q.t_max()), F::splat_f32(f32::NEG_INFINITY))
         };
         // Counted locally and reported once per packet: a shared counter per node costs measurably.
+        // Live rays are summed only when counting (a mask count per node and leaf otherwise spent).
+        let counting = counting();
         let (mut boxes, mut prims, mut box_lanes, mut prim_lanes) = (0, 0, 0, 0);
         stack.push(Entry::root());
         while let Some(e) = stack.pop() {
@@ -318,12 +320,13 @@ impl Bvh {
             if !lanes.any() {
                 continue;
             }
-            let lane_count = F::move_mask(lanes).count_ones();
             if e.count > 0 {
                 let first = e.child as usize;
                 let items = first..first + usize::from(e.count);
                 prims += usize::from(e.count);
-                prim_lanes += usize::from(e.count) * lane_count as usize;
+                if counting {
+                    prim_lanes += usize::from(e.count) * F::move_mask(lanes).count_ones() as usize;
+                }
                 match &rays.frustum {
                     Some(f) => q.intersect(
                         items.filter(|&i| q.ball(i).is_none_or(|(c, r)| f.may_meet(c, r + self.pad))),
@@ -332,16 +335,20 @@ impl Bvh {
                     ),
                     None => q.intersect(items, lanes, best),
                 }
-            } else if lane_count <= self.single_ray_lanes {
+            } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
                 self.intersect_lanes(&self.nodes, e.child, q, &rays.slab, lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
                 let before = boxes;
                 self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
-                box_lanes += (boxes - before) * lane_count as usize;
+                if counting {
+                    box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
+                }
             }
         }
-        count_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+        if counting {
+            add_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+        }
     }
 
     /// Lanes of `live` blocked by a leaf item within their `t_max`, by packet traversal (subtrees entered by at
@@ -356,6 +363,8 @@ impl Bvh {
         let mut stack = Stack::<Entry<F>>::new();
         let mut blocked = F::mask_from_bits(0);
         let limit = |lanes: F::Mask| F::select(lanes, q.t_max(), F::splat_f32(f32::NEG_INFINITY));
+        // Live rays are summed only when counting (a mask count per node and leaf otherwise spent).
+        let counting = counting();
         let (mut boxes, mut prims, mut box_lanes, mut prim_lanes) = (0, 0, 0, 0);
         stack.push(Entry::root());
         while let Some(e) = stack.pop() {
@@ -363,26 +372,31 @@ impl Bvh {
             if !lanes.any() {
                 continue;
             }
-            let lane_count = F::move_mask(lanes).count_ones();
             if e.count > 0 {
                 let first = e.child as usize;
                 prims += usize::from(e.count);
-                prim_lanes += usize::from(e.count) * lane_count as usize;
+                if counting {
+                    prim_lanes += usize::from(e.count) * F::move_mask(lanes).count_ones() as usize;
+                }
                 blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
-            } else if lane_count <= self.single_ray_lanes {
+            } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
                 blocked = blocked | self.occluded_lanes(&self.nodes, e.child, q, &rays.slab, lanes, blocker);
             } else {
                 let n = &self.nodes[e.child as usize];
                 let before = boxes;
                 self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);
-                box_lanes += (boxes - before) * lane_count as usize;
+                if counting {
+                    box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
+                }
                 continue;
             }
             if (blocked | !live).all() {
                 break;
             }
         }
-        count_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+        if counting {
+            add_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
+        }
         blocked
     }
 }

@@ -161,7 +161,7 @@ impl Bvh {
             }
             next = nearer;
         }
-        count_work(Work::single(prims, 2 * visits));
+        count_work(|| Work::single(prims, 2 * visits));
     }
 
     /// Whether one ray is blocked within its `t_max` over the tree `nodes`; stops at the first blocker, left
@@ -189,7 +189,7 @@ impl Bvh {
             }
             next = nearer;
         }
-        count_work(Work::single(prims, 2 * visits));
+        count_work(|| Work::single(prims, 2 * visits));
         blocked
     }
 

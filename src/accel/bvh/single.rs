@@ -119,7 +119,7 @@ impl Bvh {
                 next = self.push_but_nearest(n, slab, best.t.min(q.t_max()), &mut stack);
             }
         }
-        count_work(Work::single(prims, T::WIDTH * visits));
+        count_work(|| Work::single(prims, T::WIDTH * visits));
     }
 
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
@@ -155,7 +155,7 @@ impl Bvh {
                 stack.push(n.child(c).0);
             }
         }
-        count_work(Work::single(prims, T::WIDTH * visits));
+        count_work(|| Work::single(prims, T::WIDTH * visits));
         blocked
     }
 

@@ -19,7 +19,7 @@ use wide::f32x16;
 use super::walk::Query;
 use super::{place, with_records, Particles, Record, Records, LEAF};
 use crate::accel::bvh::{farthest, members, Frustum, MemberSides, Stack, MAX_PACKETS};
-use crate::accel::{count_work, counting, Work};
+use crate::accel::{add_work, counting, Work};
 use crate::geometry::{DeparturePacket, HitPacket, Pyramid, RayPacket};
 use crate::math::{Mask, Real, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -163,7 +163,9 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
                 stack.push(p);
             }
         }
-        count_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
+        if counting {
+            add_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
+        }
     }
 }
 

@@ -10,7 +10,7 @@
 
 use super::{eye_term_of, place, with_records, Particles, Record, Records, LEAF};
 use crate::accel::bvh::{Frustum, SlabRays, Stack, WIDEN};
-use crate::accel::{count_work, Work};
+use crate::accel::{add_work, counting, Work};
 use crate::geometry::{
     first_root, sphere_approach, sphere_roots_of, DeparturePacket, EyeLanes, HitPacket, RayPacket, SphereRay,
 };
@@ -174,13 +174,15 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
         let mut stack = Stack::new();
         stack.push_some(self.root(live));
         let (mut spheres, mut boxes) = (0, 1);
+        // Live rays are summed only when counting (a mask count per visit otherwise spent).
+        let counting = counting();
         let (mut sphere_lanes, mut box_lanes) = (0, F::move_mask(live).count_ones() as usize);
         while let Some(e) = stack.pop() {
             let open = live & e.enter.lt(F::splat_f32(f32::INFINITY)) & e.enter.le(best.t);
             if !open.any() {
                 continue;
             }
-            let lane_count = F::move_mask(open).count_ones() as usize;
+            let lane_count = if counting { F::move_mask(open).count_ones() as usize } else { 0 };
             let (lo, hi) = (e.lo as usize, e.hi as usize);
             let mut test = |i: usize, c: Vec3f, r: f32| {
                 if let Some((hit, t)) = self.placed_sphere(i, c, r, open) {
@@ -206,7 +208,9 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
             box_lanes += 2 * lane_count;
             self.children(&e, mid, c, best.t.fast_min(self.t_max), open, &mut stack);
         }
-        count_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
+        if counting {
+            add_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
+        }
     }
 
     /// Lanes of `live` blocked by some sphere; stops when every live lane is.
@@ -215,13 +219,15 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
         let mut stack = Stack::new();
         stack.push_some(self.root(live));
         let (mut spheres, mut boxes) = (0, 1);
+        // Live rays are summed only when counting (a mask count per visit otherwise spent).
+        let counting = counting();
         let (mut sphere_lanes, mut box_lanes) = (0, F::move_mask(live).count_ones() as usize);
         while let Some(e) = stack.pop() {
             let open = live & !blocked & e.enter.lt(F::splat_f32(f32::INFINITY));
             if !open.any() {
                 continue;
             }
-            let lane_count = F::move_mask(open).count_ones() as usize;
+            let lane_count = if counting { F::move_mask(open).count_ones() as usize } else { 0 };
             let (lo, hi) = (e.lo as usize, e.hi as usize);
             let leaf = hi - lo <= LEAF;
             let mid = lo + (hi - lo) / 2;
@@ -241,11 +247,14 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
             }
             if let (false, Some(c)) = (leaf, centre) {
                 boxes += 2;
-                box_lanes += 2 * F::move_mask(live & !blocked).count_ones() as usize;
+                box_lanes +=
+                    2 * if counting { F::move_mask(live & !blocked).count_ones() as usize } else { 0 };
                 self.children(&e, mid, c, self.t_max, live & !blocked, &mut stack);
             }
         }
-        count_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
+        if counting {
+            add_work(Work::lanes(spheres, sphere_lanes, boxes, box_lanes));
+        }
         blocked
     }
 }
