@@ -106,7 +106,11 @@ fn occluded_items<F: Lanes, Q: LeafQuery<F>>(
     }
     match bvh {
         Some(bvh) => bvh.occluded_k(q, live, blocker),
-        None => q.occluded(0..n, live, blocker),
+        None => {
+            // Counted as every item, as a visited BVH leaf counts all of its items (the test may stop early).
+            count_work(|| Work::lanes(n, n * F::move_mask(live).count_ones() as usize, 0, 0));
+            q.occluded(0..n, live, blocker)
+        }
     }
 }
 
