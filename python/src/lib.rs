@@ -173,10 +173,6 @@ fn to_numpy<'py>(py: Python<'py>, image: &Image) -> PyResult<Bound<'py, PyArrayD
     PyArray1::from_vec(py, values).reshape(shape.to_vec())
 }
 
-/// render(centers, radii, colors=None, *, width, height, eye=None, look=None, up=None, hfov=None,
-///        view=None, shade="whitted", spp=1, threads=None, lanes=16)
-/// --
-///
 /// Renders spheres: `centers` of shape (n, 3), `radii` of shape (n,) or one number, `colors` of shape
 /// (n, 3) with channels in [0, 1] (default: grey). Without a camera the spheres are framed as bareray frames
 /// a particle file: seen from `view` ("+z" by default; "-x", … or a direction), a light at the eye, on
@@ -243,9 +239,6 @@ fn render<'py>(
     to_numpy(py, &picture.rendered.image)
 }
 
-/// to_uint8(image, transfer="linear")
-/// --
-///
 /// 8-bit codes of a float image of shape (height, width, 3) as bareray writes PNG and PPM: "linear" clamps to
 /// [0, 1], multiplies by 255 and rounds (particle files, xyzr and NFF scenes); "srgb" encodes with the sRGB
 /// curve (TOML scenes; `Scene.transfer` names a file's).
@@ -290,10 +283,6 @@ struct PyScene {
 
 #[pymethods]
 impl PyScene {
-    /// render(*, width=None, height=None, eye=None, look=None, up=None, hfov=None, shade=None, spp=None,
-    ///        threads=None, lanes=16)
-    /// --
-    ///
     /// Renders the scene, with the file's camera, shading and samples unless given; float32 linear RGB of
     /// shape (height, width, 3) (`to_uint8(image, scene.transfer)` gives the command line's 8-bit image).
     #[pyo3(signature = (*, width=None, height=None, eye=None, look=None, up=None, hfov=None, shade=None,
@@ -320,9 +309,6 @@ impl PyScene {
         to_numpy(py, &picture.rendered.image)
     }
 
-    /// accuracy(*, secondary=False, width=None, height=None, threads=None, lanes=16)
-    /// --
-    ///
     /// `bareray accuracy`: every pixel centre's f32 primary ray against the f64 twin's (and with `secondary`
     /// the shadow and mirror rays); the report as a dict (the command's `--json` object).
     #[pyo3(signature = (*, secondary=false, width=None, height=None, threads=None, lanes=None))]
@@ -342,9 +328,6 @@ impl PyScene {
         py.import("json")?.call_method1("loads", (report.to_json(),))
     }
 
-    /// bench(*, reps=3, width=None, height=None, threads=None, lanes=16)
-    /// --
-    ///
     /// Times `reps` renders after one untimed, as `bareray bench` does for one setting: a dict of the build
     /// seconds, the min, median and max tracing seconds, rays per render and Mrays/s at the median.
     #[pyo3(signature = (*, reps=3, width=None, height=None, threads=None, lanes=None))]
@@ -403,9 +386,6 @@ impl PyScene {
     }
 }
 
-/// load(path, frame=0)
-/// --
-///
 /// Reads a scene file (TOML, NFF, xyzr, f32r, or a particle file: XYZ, PDB/PQR, GRO, LAMMPS dump, maybe .gz
 /// or .bz2), frame `frame` of a file with several. A reader's error raises ValueError naming the file and
 /// the line.
