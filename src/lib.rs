@@ -63,6 +63,7 @@
 pub mod accel;
 pub mod accuracy;
 pub mod aov;
+pub mod api;
 pub mod bench;
 pub mod camera;
 pub mod cli;

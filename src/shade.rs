@@ -270,11 +270,19 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let outward = V3::select(found, (point - center).normalize(), zero);
         let (normal, inside) = facing(outward, rays.dir, from_eye, eye_inside);
         let splat = F::splat_f32;
+        // The spheres' own colours, when they have them, replace the material's.
+        let base = match spheres.color.is_empty() {
+            true => splat_rgb::<F>(m.color),
+            false => {
+                let rgb = |i: usize| spheres.color[index(i)].to_rgb();
+                V3::new(F::from_fn(|i| rgb(i).x), F::from_fn(|i| rgb(i).y), F::from_fn(|i| rgb(i).z))
+            }
+        };
         Some(Surface {
             point,
             normal,
             inside,
-            base: splat_rgb::<F>(m.color),
+            base,
             ambient: splat(m.ambient),
             diffuse: splat(m.diffuse),
             specular: splat(m.specular),
@@ -307,7 +315,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 eye_inside |= u32::from(side) << i;
             }
             let m = &self.scene.materials[sp.material as usize];
-            let base = surface_color(m, sp.object_point);
+            let own = geometry.sphere_color(hit.prim.lane(i)).map(|c| c.to_rgb());
+            let base = surface_color(m, own.unwrap_or(m.color), sp.object_point);
             let row = [
                 sp.point.x,
                 sp.point.y,
@@ -452,15 +461,16 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 }
 
-/// The material's colour at an object-space point: plain, or a solid checkerboard.
-fn surface_color(mat: &Material, object_point: Vec3f) -> Rgb {
+/// The surface's colour at an object-space point: `color` (the material's, or the sphere's own), or a solid
+/// checkerboard of it and the checker's colour.
+fn surface_color(mat: &Material, color: Rgb, object_point: Vec3f) -> Rgb {
     match mat.checker {
-        None => mat.color,
+        None => color,
         Some(ch) => {
             let cell = |v: f32| (v / ch.size).floor() as i64;
             let parity = cell(object_point.x) + cell(object_point.y) + cell(object_point.z);
             if parity.rem_euclid(2) == 0 {
-                mat.color
+                color
             } else {
                 ch.color
             }
@@ -655,8 +665,8 @@ mod tests {
             checker: Some(crate::scene::desc::Checker { color: Rgb::all(0.0), size: 1.0 }),
             ..Material::default()
         };
-        assert_eq!(surface_color(&m, V3::new(0.5, 0.5, 0.0)), m.color);
-        assert_eq!(surface_color(&m, V3::new(1.5, 0.5, 0.0)), Rgb::all(0.0));
-        assert_eq!(surface_color(&m, V3::new(-0.5, 0.5, 0.0)), Rgb::all(0.0));
+        assert_eq!(surface_color(&m, m.color, V3::new(0.5, 0.5, 0.0)), m.color);
+        assert_eq!(surface_color(&m, m.color, V3::new(1.5, 0.5, 0.0)), Rgb::all(0.0));
+        assert_eq!(surface_color(&m, m.color, V3::new(-0.5, 0.5, 0.0)), Rgb::all(0.0));
     }
 }

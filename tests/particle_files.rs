@@ -70,8 +70,10 @@ fn radii(read: &SceneRead) -> Vec<f64> {
     read.desc.spheres.iter().map(|s| s.radius).collect()
 }
 
+/// A particle's colour: its entry in the per-sphere colour store (every particle has one).
 fn colour(read: &SceneRead, sphere: usize) -> Rgb {
-    read.desc.materials[read.desc.spheres[sphere].material as usize].color
+    assert_eq!(read.desc.sphere_colors.len(), read.desc.spheres.len(), "a colour per particle");
+    read.desc.sphere_colors[sphere].to_rgb()
 }
 
 #[test]
@@ -80,7 +82,7 @@ fn each_format_reads_its_sample() {
     let none = LoadOptions::default();
     let xyz = read(dir.path(), "w.xyz", XYZ, &none);
     assert_eq!(radii(&xyz), [1.5, 1.2, 1.2], "Alvarez 2013: O 1.50, H 1.20");
-    assert_eq!(xyz.desc.materials.len(), 2, "one material per element");
+    assert_eq!(xyz.desc.materials.len(), 1, "one material; colours per particle");
     assert_eq!(colour(&xyz, 0), Rgb::new(1.0, 13.0 / 255.0, 13.0 / 255.0), "Jmol oxygen #FF0D0D");
     assert!(xyz.warnings.is_empty(), "{:?}", xyz.warnings);
 
@@ -104,7 +106,7 @@ fn each_format_reads_its_sample() {
 
     let dump = read(dir.path(), "d.lammpstrj", DUMP, &none);
     assert_eq!(radii(&dump), [0.5, 0.5, 0.5], "LAMMPS types get 0.5");
-    assert_eq!(dump.desc.materials.len(), 2, "one material per type");
+    assert_eq!(dump.desc.materials.len(), 1, "one material; colours per particle");
     assert_ne!(colour(&dump, 0), colour(&dump, 1));
 }
 

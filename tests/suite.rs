@@ -41,6 +41,8 @@ mod readers;
 mod render;
 #[path = "scene_toml.rs"]
 mod scene_toml;
+#[path = "sphere_colors.rs"]
+mod sphere_colors;
 #[path = "stills.rs"]
 mod stills;
 #[path = "stress_acne.rs"]

@@ -8,6 +8,7 @@
 //! walk exactly as it is without other kinds.
 
 pub mod bvh;
+mod colors;
 mod cone_query;
 mod departure;
 mod item_query;

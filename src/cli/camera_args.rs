@@ -3,7 +3,7 @@
 use clap::Args;
 use glam::DVec3;
 
-use crate::scene::desc::{Aim, Field, SceneDesc, Sweep};
+use crate::scene::desc::{CameraOverrides, SceneDesc};
 
 /// `--eye --look --up --hfov --width --height`.
 #[derive(Args, Debug, Clone, Default)]
@@ -52,27 +52,13 @@ pub fn parse_hfov(s: &str) -> Result<f64, String> {
 impl CameraArgs {
     /// Applies the overrides to a scene.
     pub fn apply(&self, desc: &mut SceneDesc) {
-        let cam = &mut desc.camera;
-        if let Some(eye) = self.eye {
-            cam.eye = eye;
-        }
-        if let Some(look) = self.look {
-            cam.aim = Aim::LookAt(look);
-        }
-        if let Some(up) = self.up {
-            cam.up = up;
-        }
-        if let Some(hfov) = self.hfov {
-            cam.field = Field::HorizontalAngle(hfov);
-            cam.sweep = Sweep::PixelCentre;
-        }
-        let aspect = f64::from(cam.width) / f64::from(cam.height);
-        match (self.width, self.height) {
-            (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
-            (Some(w), None) => (cam.width, cam.height) = (w, ((f64::from(w) / aspect).round() as u32).max(1)),
-            (None, Some(h)) => (cam.width, cam.height) = (((f64::from(h) * aspect).round() as u32).max(1), h),
-            (None, None) => {}
-        }
+        self.overrides().apply(&mut desc.camera);
+    }
+
+    /// The overrides as the library takes them.
+    pub fn overrides(&self) -> CameraOverrides {
+        let CameraArgs { eye, look, up, hfov, width, height } = self.clone();
+        CameraOverrides { eye, look, up, hfov, width, height }
     }
 }
 

@@ -486,7 +486,7 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     let n = features.counts;
     let _ = writeln!(
         out,
-        "scene: {} ({}, {}, {}, {}, {}), {}, {}",
+        "scene: {} ({}, {}, {}, {}, {}), {}, {}{}",
         plural(g.len(), "primitive"),
         plural(n.spheres, "sphere"),
         plural(n.ellipsoids, "ellipsoid"),
@@ -494,7 +494,11 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
         plural(n.polygons, "polygon"),
         plural(n.cones, "cone"),
         plural(scene.lights.len(), "light"),
-        plural(scene.materials.len(), "material")
+        plural(scene.materials.len(), "material"),
+        match g.sphere_colors() {
+            0 => String::new(),
+            c => format!(", {} (3 bytes each)", plural(c, "sphere colour")),
+        }
     );
     let w = job.window;
     let region = if w == Window::whole(scene.camera.width, scene.camera.height) {

@@ -263,12 +263,18 @@ impl Scene {
         let mut geometry = Geometry { origin: V3::from(origin).to_f32(), ..Geometry::default() };
         let pad = bvh::padding(reach(desc, extra));
         let mut build = BuildStats::default();
+        // Per-sphere colours go with the spheres, whichever structure holds them; a list of another length
+        // (a description built by hand) is ignored, as `SceneDesc::sphere_colors` says.
+        let colors = match desc.sphere_colors.len() == desc.spheres.len() {
+            true => desc.sphere_colors.clone(),
+            false => Vec::new(),
+        };
         if accel == Accel::Particles {
             let clock = std::time::Instant::now();
             let records =
                 desc.spheres.iter().map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect();
             let material = desc.spheres.iter().map(|s| s.material).collect();
-            geometry.particles = Particles::from_f64(records, material, origin, pad);
+            geometry.particles = Particles::from_f64(records, material, colors, origin, pad);
             geometry.particles.frustum_culling = frustum_culling;
             build.seconds = clock.elapsed().as_secs_f64();
             build.node_bytes = geometry.particles.overhead_bytes();
@@ -277,6 +283,7 @@ impl Scene {
             for s in &desc.spheres {
                 geometry.spheres.push_exact(V3::from(s.center - origin), s.radius, s.material);
             }
+            geometry.spheres.color = colors;
         }
         let to_rendering = DAffine3::from_translation(-origin);
         geometry.shapes = desc

@@ -1,7 +1,7 @@
 //! Spheres in structure-of-arrays layout, the form every sphere kernel and traversal reads, and the exact eye
 //! term each sphere carries.
 
-use crate::math::{Vec3f, V3};
+use crate::math::{Rgb8, Vec3f, V3};
 
 /// Spheres in structure-of-arrays layout: one array per coordinate, so lanes load contiguous values.
 #[derive(Clone, Debug, Default)]
@@ -20,6 +20,10 @@ pub struct Spheres {
     pub c_eye: Vec<f32>,
     /// Material index.
     pub material: Vec<u32>,
+    /// Per-sphere colours, replacing the material's colour: empty (no sphere has its own), or one per
+    /// sphere, in the same order as the other arrays (permuted with them). Three bytes a sphere
+    /// ([`Rgb8`]), allocated only for scenes that give colours.
+    pub color: Vec<Rgb8>,
     /// Scene-file index (the identity until [`Spheres::permuted`]): breaks ties in t and names the sphere
     /// in reports.
     pub key: Vec<u32>,
@@ -42,7 +46,14 @@ impl Spheres {
     /// Bytes of the arrays' contents.
     pub fn bytes(&self) -> usize {
         let floats = [&self.cx, &self.cy, &self.cz, &self.r, &self.c_eye].map(Vec::len).iter().sum::<usize>();
-        floats * size_of::<f32>() + (self.material.len() + self.key.len()) * size_of::<u32>()
+        floats * size_of::<f32>()
+            + (self.material.len() + self.key.len()) * size_of::<u32>()
+            + self.color.len() * size_of::<Rgb8>()
+    }
+    /// The colour of sphere `i` when the spheres have colours of their own.
+    #[inline]
+    pub fn color_of(&self, i: usize) -> Option<Rgb8> {
+        self.color.get(i).copied()
     }
     /// Centre of sphere `i`.
     #[inline(always)]
@@ -62,6 +73,7 @@ impl Spheres {
             r: pick(&self.r, order),
             c_eye: pick(&self.c_eye, order),
             material: pick(&self.material, order),
+            color: if self.color.is_empty() { Vec::new() } else { pick(&self.color, order) },
             key: pick(&self.key, order),
             eye_terms_help: self.eye_terms_help,
         }

@@ -3,7 +3,7 @@
 
 use glam::{DAffine3, DVec3};
 
-use crate::math::Rgb;
+use crate::math::{Rgb, Rgb8};
 
 /// Where the camera looks.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +68,50 @@ impl CameraDesc {
             width,
             height,
             sweep: Sweep::PixelCentre,
+        }
+    }
+}
+
+/// Changes to a camera: the command line's `--eye --look --up --hfov --width --height`, and the Python
+/// module's keywords of the same names.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct CameraOverrides {
+    /// Eye point.
+    pub eye: Option<DVec3>,
+    /// A point to look at.
+    pub look: Option<DVec3>,
+    /// Up vector.
+    pub up: Option<DVec3>,
+    /// Horizontal field of view in degrees (pixel-centre sweep).
+    pub hfov: Option<f64>,
+    /// Width in pixels; given alone, the height follows the camera's aspect ratio.
+    pub width: Option<u32>,
+    /// Height in pixels; given alone, the width follows the camera's aspect ratio.
+    pub height: Option<u32>,
+}
+
+impl CameraOverrides {
+    /// Applies the changes to `cam`.
+    pub fn apply(&self, cam: &mut CameraDesc) {
+        if let Some(eye) = self.eye {
+            cam.eye = eye;
+        }
+        if let Some(look) = self.look {
+            cam.aim = Aim::LookAt(look);
+        }
+        if let Some(up) = self.up {
+            cam.up = up;
+        }
+        if let Some(hfov) = self.hfov {
+            cam.field = Field::HorizontalAngle(hfov);
+            cam.sweep = Sweep::PixelCentre;
+        }
+        let aspect = f64::from(cam.width) / f64::from(cam.height);
+        match (self.width, self.height) {
+            (Some(w), Some(h)) => (cam.width, cam.height) = (w, h),
+            (Some(w), None) => (cam.width, cam.height) = (w, ((f64::from(w) / aspect).round() as u32).max(1)),
+            (None, Some(h)) => (cam.width, cam.height) = (((f64::from(h) * aspect).round() as u32).max(1), h),
+            (None, None) => {}
         }
     }
 }
@@ -463,6 +507,12 @@ pub struct SceneDesc {
     pub lights: Vec<LightDesc>,
     /// Plain spheres: ids 0.. in this order.
     pub spheres: Vec<SphereDesc>,
+    /// Per-sphere colours: empty, or one per sphere of `spheres` in its order, each replacing its sphere's
+    /// material colour (the ambient and diffuse base; a checker's odd cells keep theirs). Particle files
+    /// and arrays of spheres give every sphere its colour this way, beside one shared material, rather
+    /// than a material per colour. Compile ignores a list of another length (a description built by hand),
+    /// as it degrades other inconsistent hand-built input: the spheres keep their materials' colours.
+    pub sphere_colors: Vec<Rgb8>,
     /// Transformed shapes: ids after the spheres.
     pub shapes: Vec<ShapeDesc>,
     /// Planar polygons: ids after the shapes, one per polygon however it is triangulated.

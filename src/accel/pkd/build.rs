@@ -5,6 +5,7 @@
 use glam::DVec3;
 
 use super::Record;
+use crate::math::Rgb8;
 
 /// Ranges of at most this many spheres are leaves, tested one after another without further boxes: fewer
 /// box tests per sphere than single-sphere nodes, at a few more sphere tests.
@@ -13,15 +14,16 @@ pub const LEAF: usize = 8;
 /// Ranges at least this long build their halves on two rayon tasks.
 const PARALLEL: usize = 1 << 15;
 
-/// Builds the tree over `recs`, reordering `key` (file indices below [`super::MAX_PARTICLES`]) and `material`
-/// (empty, or one per record) alike, and writing each node's split axis into the top bits of its key.
-pub(super) fn build<R: Record>(recs: &mut [R], key: &mut [u32], material: &mut [u32]) {
+/// Builds the tree over `recs`, reordering `key` (file indices below [`super::MAX_PARTICLES`]), `material`
+/// and `color` (each empty, or one per record) alike, and writing each node's split axis into the top bits
+/// of its key.
+pub(super) fn build<R: Record>(recs: &mut [R], key: &mut [u32], material: &mut [u32], color: &mut [Rgb8]) {
     let n = recs.len();
     if n == 0 {
         return;
     }
     let (lo, hi) = centre_box(recs);
-    node(Slices { recs, key, material }, lo, hi);
+    node(Slices { recs, key, material, color }, lo, hi);
 }
 
 /// The arrays of one range, reordered together.
@@ -30,6 +32,8 @@ struct Slices<'a, R> {
     key: &'a mut [u32],
     /// Empty when the spheres share one material.
     material: &'a mut [u32],
+    /// Empty when the spheres have no colours of their own.
+    color: &'a mut [Rgb8],
 }
 
 impl<'a, R: Record> Slices<'a, R> {
@@ -39,6 +43,9 @@ impl<'a, R: Record> Slices<'a, R> {
         self.key.swap(a, b);
         if !self.material.is_empty() {
             self.material.swap(a, b);
+        }
+        if !self.color.is_empty() {
+            self.color.swap(a, b);
         }
     }
 
@@ -52,18 +59,22 @@ impl<'a, R: Record> Slices<'a, R> {
     fn split_at(self, mid: usize) -> (Slices<'a, R>, Slices<'a, R>) {
         let (recs_lo, recs_hi) = self.recs.split_at_mut(mid);
         let (key_lo, key_hi) = self.key.split_at_mut(mid);
-        let (mat_lo, mat_hi) = match self.material.is_empty() {
-            true => (&mut [][..], &mut [][..]),
-            false => {
-                let (a, b) = self.material.split_at_mut(mid);
-                (a, &mut b[1..])
-            }
-        };
+        let (mat_lo, mat_hi) = split_optional(self.material, mid);
+        let (color_lo, color_hi) = split_optional(self.color, mid);
         (
-            Slices { recs: recs_lo, key: key_lo, material: mat_lo },
-            Slices { recs: &mut recs_hi[1..], key: &mut key_hi[1..], material: mat_hi },
+            Slices { recs: recs_lo, key: key_lo, material: mat_lo, color: color_lo },
+            Slices { recs: &mut recs_hi[1..], key: &mut key_hi[1..], material: mat_hi, color: color_hi },
         )
     }
+}
+
+/// An optional per-record array (empty, or one per record) cut before and after position `mid`.
+fn split_optional<T>(v: &mut [T], mid: usize) -> (&mut [T], &mut [T]) {
+    if v.is_empty() {
+        return (&mut [], &mut []);
+    }
+    let (a, b) = v.split_at_mut(mid);
+    (a, &mut b[1..])
 }
 
 /// The box of the centres of `recs` (radii aside), in world space.
@@ -173,7 +184,7 @@ mod tests {
     }
 
     /// Random fields, duplicated centres and collinear sorted runs all build into a valid tree that keeps
-    /// every record with its key and material.
+    /// every record with its key, material and colour.
     #[test]
     fn builds_a_valid_tree_that_keeps_records_together() {
         let mut rng = SplitMix64::new(9);
@@ -188,12 +199,15 @@ mod tests {
             let mut tree = recs.clone();
             let mut key: Vec<u32> = (0..n as u32).collect();
             let mut material: Vec<u32> = (0..n as u32).map(|i| i * 3).collect();
-            build(&mut tree, &mut key, &mut material);
+            let colour = |k: u32| Rgb8([k as u8, (k >> 8) as u8, (k >> 16) as u8]);
+            let mut color: Vec<Rgb8> = (0..n as u32).map(colour).collect();
+            build(&mut tree, &mut key, &mut material, &mut color);
             check(&tree, &key, 0..n);
             for i in 0..n {
                 let k = key[i] & crate::accel::pkd::INDEX_MASK;
                 assert_eq!(tree[i], recs[k as usize], "record {i} kept its key");
                 assert_eq!(material[i], k * 3, "record {i} kept its material");
+                assert_eq!(color[i], colour(k), "record {i} kept its colour");
             }
         }
     }

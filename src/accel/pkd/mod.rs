@@ -26,7 +26,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use crate::geometry::eye_term;
-use crate::math::{Vec3f, V3};
+use crate::math::{Rgb8, Vec3f, V3};
 
 pub use build::LEAF;
 
@@ -154,6 +154,9 @@ pub struct Particles {
     material: Vec<u32>,
     /// The material of every sphere when `material` is empty.
     material0: u32,
+    /// Colour of the sphere at each position, replacing its material's; empty when the spheres have none
+    /// of their own ([`crate::geometry::Spheres::color`]).
+    color: Vec<Rgb8>,
     /// The rendering space's origin (the eye) in world space.
     origin: DVec3,
     /// The largest radius, as the kernel sees it (rounded to f32).
@@ -170,36 +173,53 @@ pub struct Particles {
 }
 
 impl Particles {
-    /// Spheres given in f64 (world space: `x, y, z, r`) and their materials in a particle tree, in rendering
-    /// space about `origin` (the eye), culling with padding `pad`.
-    pub fn from_f64(records: Vec<[f64; 4]>, material: Vec<u32>, origin: DVec3, pad: f32) -> Particles {
+    /// Spheres given in f64 (world space: `x, y, z, r`), their materials and their colours (empty, or one
+    /// per sphere) in a particle tree, in rendering space about `origin` (the eye), culling with padding
+    /// `pad`.
+    pub fn from_f64(
+        records: Vec<[f64; 4]>,
+        material: Vec<u32>,
+        color: Vec<Rgb8>,
+        origin: DVec3,
+        pad: f32,
+    ) -> Particles {
         let material0 = material.first().copied().unwrap_or(0);
         let varied = material.iter().any(|&m| m != material0);
-        Self::build(Records::F64(records), if varied { material } else { Vec::new() }, material0, origin, pad)
+        let material = if varied { material } else { Vec::new() };
+        Self::build(Records::F64(records), material, color, material0, origin, pad)
     }
 
     /// The records of a store (a mapped `.f32r` file) in a particle tree, built in the store's own memory,
     /// every sphere with material 0.
     pub fn from_store(records: Box<dyn RecordStore>, origin: DVec3, pad: f32) -> Particles {
-        Self::build(Records::Mapped(records), Vec::new(), 0, origin, pad)
+        Self::build(Records::Mapped(records), Vec::new(), Vec::new(), 0, origin, pad)
     }
 
-    /// Builds the tree over `records` (reordering them, their keys and `material` alike), then finds the
-    /// bounds and flags the walk needs.
-    fn build(mut records: Records, mut material: Vec<u32>, material0: u32, origin: DVec3, pad: f32) -> Self {
+    /// Builds the tree over `records` (reordering them, their keys, `material` and `color` alike), then
+    /// finds the bounds and flags the walk needs.
+    fn build(
+        mut records: Records,
+        mut material: Vec<u32>,
+        mut color: Vec<Rgb8>,
+        material0: u32,
+        origin: DVec3,
+        pad: f32,
+    ) -> Self {
         let n = records.len();
         assert!(n <= MAX_PARTICLES, "{n} spheres: a particle tree holds at most {MAX_PARTICLES}");
+        assert!(color.is_empty() || color.len() == n, "{} colours for {n} spheres", color.len());
         let mut key: Vec<u32> = (0..n as u32).into_par_iter().with_min_len(1 << 16).collect();
         match &mut records {
-            Records::Mapped(m) => build::build(m.records_mut(), &mut key, &mut material),
-            Records::F32(v) => build::build(v, &mut key, &mut material),
-            Records::F64(v) => build::build(v, &mut key, &mut material),
+            Records::Mapped(m) => build::build(m.records_mut(), &mut key, &mut material, &mut color),
+            Records::F32(v) => build::build(v, &mut key, &mut material, &mut color),
+            Records::F64(v) => build::build(v, &mut key, &mut material, &mut color),
         }
         let mut p = Particles {
             records,
             key,
             material,
             material0,
+            color,
             origin,
             r_max: 0.0,
             bounds: [[0.0; 3]; 2],
@@ -256,9 +276,9 @@ impl Particles {
         matches!(self.records, Records::Mapped(_))
     }
 
-    /// Bytes beside the records: keys and materials (the tree's whole cost).
+    /// Bytes beside the records: keys, materials and colours (the tree's whole cost, and the colours').
     pub fn overhead_bytes(&self) -> usize {
-        (self.key.len() + self.material.len()) * size_of::<u32>()
+        (self.key.len() + self.material.len()) * size_of::<u32>() + self.color.len() * size_of::<Rgb8>()
     }
 
     /// Bytes of the records.
@@ -282,6 +302,17 @@ impl Particles {
     /// Material of the sphere at position `i`.
     pub fn material(&self, i: usize) -> u32 {
         self.material.get(i).copied().unwrap_or(self.material0)
+    }
+
+    /// The colour of the sphere at position `i`, when the spheres have colours of their own.
+    #[inline]
+    pub fn color(&self, i: usize) -> Option<Rgb8> {
+        self.color.get(i).copied()
+    }
+
+    /// How many spheres have a colour of their own (0 or all).
+    pub fn colors(&self) -> usize {
+        self.color.len()
     }
 
     /// Scene-file index of the sphere at position `i`.

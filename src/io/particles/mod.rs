@@ -2,9 +2,11 @@
 //! GROMACS `.gro` ([`gro`]) and LAMMPS dumps ([`lammps`]), each also gzip- or bzip2-compressed. A reader
 //! turns one frame of a file into a [`Frame`]: centres, a kind per particle (an element or a LAMMPS type)
 //! and the radii or colours the file gives. [`scene`] then chooses radii and colours by kind (the tables in
-//! [`elements`] and the overrides of [`ParticleOptions`]), makes one material per distinct colour and frames
-//! the particles. Every error names the file and, where there is one, the line (of the decompressed text).
+//! [`elements`] and the overrides of [`ParticleOptions`]), gives every particle one material and its own
+//! colour ([`crate::scene::SceneDesc::sphere_colors`]) and frames the particles; [`arrays`] does the same for
+//! spheres given as arrays. Every error names the file and, where there is one, the line (of the decompressed text).
 
+pub mod arrays;
 pub mod elements;
 pub mod gro;
 pub mod lammps;

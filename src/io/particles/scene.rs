@@ -1,19 +1,19 @@
-//! A frame of particles made a scene: radii and colours by kind, one material per distinct colour, and
-//! the framing of [`crate::io::xyzr::scene_framing`] from the chosen view, with a white background.
+//! A frame of particles made a scene: radii and colours by kind, one material for every particle and each
+//! particle's colour in the per-sphere colour store ([`SceneDesc::sphere_colors`], 8 bits a channel), and
+//! the framing of [`crate::io::xyzr::scene_framing`] from the chosen view, with a white background
+//! ([`particle_scene`], which spheres given as arrays share).
 //!
 //! A radius is, first to last: `--radius` for the kind, the file's radius for the particle, the table's
 //! for the element (÷ 10 in a file in nm), 0.5 for a LAMMPS type, [`elements::FALLBACK_RADIUS`] (÷ 10 in
 //! nm); then times the radius scale. A colour is `--color` for the kind, the file's colour for the
 //! particle, the table's for the element, [`TYPE_COLORS`] for a LAMMPS type, [`elements::FALLBACK_COLOR`].
 
-use std::collections::HashMap;
-
 use glam::DVec3;
 
 use super::elements::{self, FALLBACK_COLOR, FALLBACK_RADIUS};
 use super::{Frame, Kind, ParticleOptions, Unit};
 use crate::io::xyzr;
-use crate::math::Rgb;
+use crate::math::{Rgb, Rgb8};
 use crate::scene::desc::{Material, SceneDesc, SphereDesc};
 
 /// Colours of LAMMPS types 1, 2, … (repeating): red, blue, yellow, green, orange, violet, cyan, grey.
@@ -22,9 +22,6 @@ pub const TYPE_COLORS: [u32; 8] =
 
 /// The radius of a LAMMPS type without a radius column or an override (half the unit length).
 pub const TYPE_RADIUS: f64 = 0.5;
-
-/// The most distinct colours (so materials) a scene of particles may have.
-pub const MAX_COLORS: usize = 4096;
 
 /// The view when none is chosen: from +z.
 pub const DEFAULT_VIEW: DVec3 = DVec3::Z;
@@ -64,40 +61,33 @@ pub fn scene(frame: Frame, options: &ParticleOptions) -> Result<(SceneDesc, Vec<
         defaults.push((radius_over[i].unwrap_or(radius), color_over[i].unwrap_or(color)));
     }
     let scale = options.radius_scale.unwrap_or(1.0);
-    let mut materials: Vec<Material> = Vec::new();
-    let mut by_color: HashMap<[u32; 3], u32> = HashMap::new();
     let mut spheres = Vec::with_capacity(frame.particles.len());
-    let (mut lo, mut hi) = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let mut colors = Vec::with_capacity(frame.particles.len());
     for p in &frame.particles {
         let k = p.kind as usize;
         let radius = radius_over[k].or(p.radius).unwrap_or(defaults[k].0) * scale;
         let color = color_over[k].or(p.color).unwrap_or(defaults[k].1);
-        let key = [color.x, color.y, color.z].map(f32::to_bits);
-        let material = match by_color.get(&key) {
-            Some(&m) => m,
-            None if materials.len() == MAX_COLORS => {
-                return Err(format!(
-                    "more than {MAX_COLORS} distinct colours: each becomes a material, and {MAX_COLORS} is the most"
-                ))
-            }
-            None => {
-                materials.push(material_of(color));
-                by_color.insert(key, materials.len() as u32 - 1);
-                materials.len() as u32 - 1
-            }
-        };
-        lo = lo.min(p.center - radius);
-        hi = hi.max(p.center + radius);
-        spheres.push(SphereDesc { center: p.center, radius, material });
+        spheres.push(SphereDesc { center: p.center, radius, material: 0 });
+        colors.push(Rgb8::quantize(color));
     }
     if spheres.is_empty() {
         return Err("no particles".to_owned());
     }
-    let mut desc = xyzr::scene_framing(lo, hi, Some(options.view.unwrap_or(DEFAULT_VIEW)));
+    Ok((particle_scene(spheres, colors, options.view.unwrap_or(DEFAULT_VIEW)), warnings))
+}
+
+/// The scene of particles: `spheres` (each with material 0) and their colours (empty, or one per sphere),
+/// seen from the side `view` points to ([`xyzr::scene_framing`]: the bounding sphere framed at 1920×1080,
+/// a headlight), on a white background, with one material ([`material_of`] bareray's default grey, which
+/// shows only without colours).
+pub fn particle_scene(spheres: Vec<SphereDesc>, colors: Vec<Rgb8>, view: DVec3) -> SceneDesc {
+    let (lo, hi) = xyzr::bounds(&spheres);
+    let mut desc = xyzr::scene_framing(lo, hi, Some(view));
     desc.render.background = Rgb::all(1.0);
-    desc.materials = materials;
+    desc.materials = vec![material_of(Material::default().color)];
     desc.spheres = spheres;
-    Ok((desc, warnings))
+    desc.sphere_colors = colors;
+    desc
 }
 
 /// A kind's radius and colour by default, and whether the table knew it.
