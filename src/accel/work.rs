@@ -10,7 +10,7 @@
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};
 
-/// The kind of ray a query serves, as [`traced`] tags it.
+/// The kind of ray a query serves, as `traced` tags it.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
 pub enum RayKind {
     /// Rays from the eye through the image.
@@ -42,10 +42,10 @@ impl RayKind {
     }
 }
 
-/// The slots of the per-kind sums: one per [`RayKind`], then one for work done outside any [`traced`] query
+/// The slots of the per-kind sums: one per [`RayKind`], then one for work done outside any `traced` query
 /// (none in the renderer: a test checks it).
 pub const KIND_SLOTS: usize = 6;
-/// The slot of work done outside any [`traced`] query.
+/// The slot of work done outside any `traced` query.
 pub const UNTAGGED: usize = 5;
 
 /// Intersection tests done, each on a whole packet (K lanes at once; K = 1 counts single rays), and the
@@ -97,7 +97,7 @@ impl std::ops::AddAssign for Work {
 pub struct KindWork {
     /// Tests made for this kind (counting on).
     pub work: Work,
-    /// [`traced`] queries made for this kind (counting or timing on).
+    /// `traced` queries made for this kind (counting or timing on).
     pub queries: u64,
     /// Time-stamp counter ticks inside them (timing on), [`ticks`]' unit.
     pub ticks: u64,
@@ -141,7 +141,7 @@ impl Probe {
         Probe(COUNTING)
     }
 
-    /// Times each [`traced`] query by [`ticks`] ([`take_kind_work`]).
+    /// Times each `traced` query by [`ticks`] ([`take_kind_work`]).
     pub fn timing() -> Probe {
         PROBES.fetch_add(TIMING, Relaxed);
         Probe(TIMING)
@@ -236,7 +236,7 @@ pub fn ticks() -> u64 {
     }
 }
 
-/// The ticks a [`traced`] query of nothing reads with timing on: the probe's own share of each timed query,
+/// The ticks a `traced` query of nothing reads with timing on: the probe's own share of each timed query,
 /// which the per-kind times subtract: the median of `samples` tries.
 pub fn probe_overhead(samples: usize) -> u64 {
     let _timing = Probe::timing();

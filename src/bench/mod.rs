@@ -8,7 +8,7 @@
 
 mod profile;
 
-pub use profile::{profile, KindProfile, Profile};
+pub use profile::{profile, KindProfile, Profile, TIMED_RUNS};
 
 use crate::compile::Scene;
 use crate::film::Image;
