@@ -255,19 +255,16 @@ impl FileScene {
         let clock = Instant::now();
         let scene = pool.install(|| Scene::compile_loaded(loaded, options.compile_options()))?;
         let build_seconds = clock.elapsed().as_secs_f64();
-        let warm = render::render_lanes(&scene, options.lanes, &pool, &());
-        let mut seconds: Vec<f64> = (0..reps.max(1))
-            .map(|_| render::render_lanes(&scene, options.lanes, &pool, &()).seconds)
-            .collect();
-        seconds.sort_by(f64::total_cmp);
-        let rays = warm.counts.total();
+        let reps = u32::try_from(reps.max(1)).unwrap_or(u32::MAX);
+        let m = crate::bench::measure(&scene, crate::bench::Trace::Render, options.lanes, &pool, reps)
+            .map_err(Error::Other)?;
         Ok(Bench {
             build_seconds,
-            min: seconds[0],
-            median: seconds[seconds.len() / 2],
-            max: seconds[seconds.len() - 1],
-            rays,
-            mrays_per_s: rays as f64 / seconds[seconds.len() / 2] / 1e6,
+            min: m.min_s,
+            median: m.seconds,
+            max: m.max_s,
+            rays: m.rays,
+            mrays_per_s: m.mrays_per_s(),
             threads: pool.current_num_threads(),
             lanes: options.lanes,
         })
