@@ -4,7 +4,7 @@
 
 use crate::common;
 
-use bareray::accel::bvh::Bvh;
+use bareray::bvh::Bvh;
 use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
 use bareray::math::{Rgb, V3};

@@ -17,43 +17,47 @@ const LAYERS: &[(&str, u32)] = &[
     ("simd", 1),
     // Primitives, rays, packets, Spheres and their intersection kernels.
     ("geometry", 2),
-    // Geometry, BVH and the packet queries over them.
-    ("accel", 3),
-    // The plain scene description (SceneDesc).
-    ("scene", 3),
+    // The generic tree: boxes and item ranges, its walks over a leaf-query trait, the probes that count them.
+    ("bvh", 3),
     // The image buffer.
     ("film", 3),
+    // The primitive kinds of the registry, one folder each, and the list of them.
+    ("kinds", 4),
+    // The scene's geometry over the kinds (Geometry) and the packet queries over it.
+    ("accel", 5),
+    // The plain scene description (SceneDesc).
+    ("scene", 5),
     // The camera from its description: frames and rays.
-    ("camera", 4),
+    ("camera", 6),
     // Sample offsets and the postfilter on a film.
-    ("sample", 4),
+    ("sample", 6),
     // Readers and generators: files and parameters into a SceneDesc (they build a Camera to validate it).
-    ("io", 5),
+    ("io", 7),
     // The compiled runtime Scene and what it uses.
-    ("compile", 6),
+    ("compile", 8),
     // Whitted shading over the queries.
-    ("shade", 7),
+    ("shade", 9),
     // Image files from a film.
-    ("output", 7),
+    ("output", 9),
     // Tiles, packets, threads: the renderer.
-    ("render", 8),
+    ("render", 10),
     // Tools over the renderer and images, and the platform pieces the binary starts with.
-    ("aov", 9),
-    ("accuracy", 9),
-    ("imagediff", 9),
-    ("cpu", 9),
-    ("huge_pages", 9),
+    ("aov", 11),
+    ("accuracy", 11),
+    ("imagediff", 11),
+    ("cpu", 11),
+    ("huge_pages", 11),
     // Run time against error, over the renderer and the accuracy twin.
-    ("converge", 10),
+    ("converge", 12),
     // Renders timed, repeated and split by ray kind (`bareray bench`'s measurements).
-    ("bench", 10),
+    ("bench", 12),
     // Stills of any size: bands streamed into files, pre-checks, regions and their merge.
-    ("still", 10),
+    ("still", 12),
     // Whole renders in memory for programs and bindings: arrays or a file in, an image out; its bench is
     // `bench`'s measurement. Beside the command line, which does not use it.
-    ("api", 11),
+    ("api", 13),
     // The command line.
-    ("cli", 11),
+    ("cli", 13),
 ];
 
 /// Files that belong to no layer: the crate root declares the modules.

@@ -5,7 +5,7 @@
 use crate::geometry::{intersect_cone, Cones, Ray};
 use crate::simd::Lanes;
 
-use super::item_query::{ItemQuery, ItemTest};
+use crate::bvh::item_query::{ItemQuery, ItemTest};
 
 /// The cones `order` lists (item j is cone `order[j]`, primitive `base + order[j]`; without a list, cone j).
 #[derive(Clone, Copy)]

@@ -16,11 +16,10 @@ impl Geometry {
         from: &DeparturePacket<F>,
     ) -> (F::Mask, F) {
         let inward = F::move_mask(from.inward & rays.active);
-        let cones = self.cone_base() as u32..self.len() as u32;
-        let on_cone = match self.cones.is_empty() {
+        let on_cone = match self.cones.is_empty() && self.kinds.is_empty() {
             true => 0,
             false => set_bits(F::move_mask(rays.active))
-                .filter(|&i| cones.contains(&from.prim.lane(i)))
+                .filter(|&i| self.meets_again(from.prim.lane(i)))
                 .fold(0u32, |bits, i| bits | 1 << i),
         };
         if inward | on_cone == 0 {
@@ -36,6 +35,14 @@ impl Geometry {
             }
         }
         (F::mask_from_bits(found), F::from_lanes(t.as_ref()))
+    }
+
+    /// Whether a ray leaving primitive `prim` can meet it again whichever side it heads to: open cones, and
+    /// the registered kinds that say so ([`crate::kinds::Kind::MEETS_AGAIN`]).
+    fn meets_again(&self, prim: u32) -> bool {
+        let i = prim as usize;
+        (self.cone_base()..self.kinds_base()).contains(&i)
+            || (i >= self.kinds_base() && self.kinds.meets_again(i - self.kinds_base()))
     }
 
     /// For a ray that leaves a solid primitive toward its inside: where it leaves the primitive again.
@@ -54,6 +61,7 @@ impl Geometry {
                 let (hit, t) = rehit_cone(&self.cones.cone(k), ray, t_max);
                 return hit.then_some(t);
             }
+            PrimRef::Kind(k) => return self.kinds.rehit(k, ray, t_max),
             PrimRef::Shape(_) | PrimRef::Polygon(_) => return None,
         };
         let (hit, t) = far_root(&roots, t_max);

@@ -7,32 +7,30 @@
 //! shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
 //! walk exactly as it is without other kinds.
 
-pub mod bvh;
 mod colors;
 mod cone_query;
 mod departure;
-mod item_query;
 mod near_first;
 pub mod pkd;
 mod polygons;
 mod shape_query;
 mod sphere_query;
 mod triangle_query;
-mod work;
+pub use crate::bvh::item_query::{ItemQuery, ItemTest};
+pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
+pub use crate::bvh::work::{
+    probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
+};
 pub use cone_query::{ConeItems, ConeQuery};
-pub use item_query::{ItemQuery, ItemTest};
 pub use near_first::NearFirst;
 pub use pkd::Particles;
 pub use polygons::Polygons;
 pub use shape_query::{ShapeQuery, Shapes};
 pub use sphere_query::SphereQuery;
 pub use triangle_query::{TriangleQuery, Triangles};
-pub(crate) use work::{add_work, count_work, counting, traced};
-pub use work::{
-    probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
-};
 
-use bvh::{Bvh, LeafQuery};
+use crate::bvh::{Bvh, LeafQuery};
+use crate::kinds::{Kind, KindItems, KindStores, VisitItems};
 
 use crate::geometry::{
     Cones, Departure, DeparturePacket, Hit, HitPacket, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
@@ -68,6 +66,8 @@ pub struct Geometry {
     pub cone_bvh: Option<Bvh>,
     /// With a cone BVH: its items, the cones' indices in its leaf order.
     pub cone_order: Vec<u32>,
+    /// The registered kinds' items and trees ([`crate::kinds`]), ids after the cones.
+    pub kinds: KindStores,
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
     pub origin: Vec3f,
@@ -128,6 +128,8 @@ pub enum PrimRef<'a> {
     Polygon(usize),
     /// Index into [`Geometry::cones`].
     Cone(usize),
+    /// Index over the registered kinds' items in id order ([`Geometry::kinds`]).
+    Kind(usize),
 }
 
 /// What shading needs to know about a hit point.
@@ -231,7 +233,10 @@ impl Geometry {
 
     /// Whether the scene has primitives other than spheres and particles.
     fn has_other_kinds(&self) -> bool {
-        !(self.polygons.is_empty() && self.shapes.is_empty() && self.cones.is_empty())
+        !(self.polygons.is_empty()
+            && self.shapes.is_empty()
+            && self.cones.is_empty()
+            && self.kinds.is_empty())
     }
 
     /// The closest hits of every kind but spheres (and particles unless `particles`), merged into `best`.
@@ -265,6 +270,10 @@ impl Geometry {
         if !self.cones.is_empty() {
             let q = self.cone_query(rays, from);
             intersect_items(self.cone_bvh.as_ref(), &q, self.cones.len(), rays.active, best);
+        }
+        if !self.kinds.is_empty() {
+            let base = self.kinds_base() as u32;
+            self.kinds.visit(&mut IntersectKinds { rays, from, best, base });
         }
     }
 
@@ -337,6 +346,12 @@ impl Geometry {
             let n = self.cones.len();
             blocked = blocked | occluded_items(self.cone_bvh.as_ref(), &q, n, live & !blocked, &mut cone);
         }
+        if !self.kinds.is_empty() && !(blocked | !live).all() {
+            let base = self.kinds_base() as u32;
+            let mut visit = OccludedKinds { rays, from, live, blocked, base };
+            self.kinds.visit(&mut visit);
+            blocked = visit.blocked;
+        }
         blocked | self.departure_exits_k(rays, from).0
     }
 
@@ -396,7 +411,10 @@ impl Geometry {
 
     /// The BVHs the scene has.
     pub fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
-        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh, &self.cone_bvh].into_iter().flatten()
+        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh, &self.cone_bvh]
+            .into_iter()
+            .flatten()
+            .chain(self.kinds.bvhs())
     }
 
     /// The BVHs the scene has, to change their walk settings.
@@ -404,6 +422,7 @@ impl Geometry {
         [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh, &mut self.cone_bvh]
             .into_iter()
             .flatten()
+            .chain(self.kinds.bvhs_mut())
     }
 
     /// Sets whether single rays (K = 1: [`Geometry::intersect`], [`Geometry::occluded`] and the `_k` queries
@@ -490,7 +509,7 @@ impl Geometry {
 
     /// Total number of primitives.
     pub fn len(&self) -> usize {
-        self.cone_base() + self.cones.len()
+        self.kinds_base() + self.kinds.len()
     }
     /// True when the scene has no primitives.
     pub fn is_empty(&self) -> bool {
@@ -512,6 +531,12 @@ impl Geometry {
         self.polygon_base() + self.polygons.len()
     }
 
+    /// The id of the registered kinds' first item (their items are numbered on from it in the registry's
+    /// order).
+    pub fn kinds_base(&self) -> usize {
+        self.cone_base() + self.cones.len()
+    }
+
     /// What primitive id `prim` (< `len()`) refers to.
     pub fn prim(&self, prim: u32) -> PrimRef<'_> {
         let i = prim as usize;
@@ -523,8 +548,10 @@ impl Geometry {
             PrimRef::Shape(&self.shapes[i - self.shape_base()])
         } else if i < self.cone_base() {
             PrimRef::Polygon(i - self.polygon_base())
-        } else {
+        } else if i < self.kinds_base() {
             PrimRef::Cone(i - self.cone_base())
+        } else {
+            PrimRef::Kind(i - self.kinds_base())
         }
     }
 
@@ -580,6 +607,11 @@ impl Geometry {
                     material: self.cones.material[k],
                 }
             }
+            PrimRef::Kind(k) => {
+                let (normal, object_point, material) =
+                    self.kinds.surface(k, point).expect("an id below len() is an item");
+                SurfacePoint { point, normal, object_point, material }
+            }
             PrimRef::Shape(shape) => {
                 let mut object_point = shape.to_object(ray).at(t);
                 if !shape.kind.is_solid() {
@@ -593,5 +625,48 @@ impl Geometry {
                 }
             }
         }
+    }
+}
+
+/// The registered kinds' closest hits for a packet, merged into `best`, kind by kind.
+struct IntersectKinds<'a, F: Lanes> {
+    rays: &'a RayPacket<F>,
+    from: &'a DeparturePacket<F>,
+    best: &'a mut HitPacket<F>,
+    /// The id of the next kind's first item.
+    base: u32,
+}
+
+impl<F: Lanes> VisitItems for IntersectKinds<'_, F> {
+    fn visit<K: Kind>(&mut self, items: &KindItems<K>) {
+        let n = items.len();
+        if n > 0 {
+            let q = Geometry::item_query(items.items(self.base), self.rays, self.from);
+            intersect_items(items.bvh.as_ref(), &q, n, self.rays.active, self.best);
+        }
+        self.base += n as u32;
+    }
+}
+
+/// The lanes of a packet the registered kinds block, added to `blocked`, kind by kind until all are.
+struct OccludedKinds<'a, F: Lanes> {
+    rays: &'a RayPacket<F>,
+    from: &'a DeparturePacket<F>,
+    live: F::Mask,
+    blocked: F::Mask,
+    /// The id of the next kind's first item.
+    base: u32,
+}
+
+impl<F: Lanes> VisitItems for OccludedKinds<'_, F> {
+    fn visit<K: Kind>(&mut self, items: &KindItems<K>) {
+        let n = items.len();
+        let open = self.live & !self.blocked;
+        if n > 0 && open.any() {
+            let q = Geometry::item_query(items.items(self.base), self.rays, self.from);
+            let mut item = 0;
+            self.blocked = self.blocked | occluded_items(items.bvh.as_ref(), &q, n, open, &mut item);
+        }
+        self.base += n as u32;
     }
 }

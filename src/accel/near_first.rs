@@ -6,7 +6,7 @@
 use std::cmp::Ordering;
 use std::collections::BinaryHeap;
 
-use super::bvh::Bvh;
+use crate::bvh::Bvh;
 
 /// What a queue entry stands for.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -128,7 +128,7 @@ impl NearFirst {
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::bvh::{build, BuildOptions};
+    use crate::bvh::{build, BuildOptions};
     use crate::math::SplitMix64;
 
     /// Points on a line, keyed by their coordinate: the walk gives them in order, with or without a tree,
@@ -139,7 +139,7 @@ mod tests {
         let xs: Vec<f32> = (0..500).map(|_| (rng.unit() * 100.0) as f32).collect();
         let options = BuildOptions {
             pad: 0.0,
-            builder: crate::accel::bvh::Builder::SAH_SPHERES,
+            builder: crate::bvh::Builder::SAH_SPHERES,
             single_ray_tree: false,
             scalar_tree: false,
             frustum_culling: true,

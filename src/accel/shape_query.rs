@@ -4,7 +4,7 @@
 use crate::geometry::{Ray, Shape};
 use crate::simd::Lanes;
 
-use super::item_query::{ItemQuery, ItemTest};
+use crate::bvh::item_query::{ItemQuery, ItemTest};
 
 /// The shapes `order` lists (item j is shape `order[j]`, primitive `base + order[j]`; without a list, shape
 /// j).

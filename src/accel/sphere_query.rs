@@ -7,7 +7,7 @@ use crate::geometry::{first_root, sphere_approach, EyeLanes, HitPacket, Pyramid,
 use crate::math::{Mask, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};
 
-use super::bvh::{LeafQuery, SingleLeafQuery};
+use crate::bvh::{LeafQuery, SingleLeafQuery};
 
 /// A sphere query as every kernel and traversal takes it: the spheres, the rays, each ray's exclusive end
 /// `t_max`, and the sphere each ray leaves (`skip`, never reported).

@@ -4,8 +4,8 @@
 use crate::geometry::{intersect_triangle, stays_off_plane, Ray};
 use crate::simd::Lanes;
 
-use super::item_query::{ItemQuery, ItemTest};
 use super::Polygons;
+use crate::bvh::item_query::{ItemQuery, ItemTest};
 
 /// The triangles of [`Polygons`], polygon k being primitive `base + k`.
 #[derive(Clone, Copy)]

@@ -25,6 +25,7 @@ use crate::geometry::{
     far_root, first_root, intersect_cone, intersect_sphere, intersect_triangle, rehit_cone, sphere_roots,
     Cone, Departure, Ray, Shape, ShapeKind, NO_PRIM,
 };
+use crate::kinds::KindTwins;
 use crate::math::{Affine, V3};
 use crate::scene::desc::SceneDesc;
 
@@ -40,20 +41,7 @@ pub const TWIN_BVH_MIN_SPHERES: usize = 16;
 /// How far the f32 ray under test may stray from the twin's f64 ray, measured per ray: the explanations
 /// widen their tolerances by it (a secondary ray starts from each precision's own hit point, along its own
 /// normal). Zero for camera rays.
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Slack {
-    /// Distance between the two origins.
-    pub origin: f64,
-    /// Distance between the two unit directions.
-    pub dir: f64,
-}
-
-impl Slack {
-    /// How far apart the two rays can be at distance `s` along them.
-    pub fn at(&self, s: f64) -> f64 {
-        self.origin + self.dir * s.abs()
-    }
-}
+pub use crate::kinds::Stray as Slack;
 
 /// One triangle of a polygon, camera-relative.
 #[derive(Clone, Copy, Debug)]
@@ -92,6 +80,8 @@ pub struct Twin {
     tris: Vec<Tri64>,
     polygons: Vec<Polygon64>,
     cones: Vec<Cone<f64>>,
+    /// The registered kinds' items, ids after the cones.
+    kinds: KindTwins,
     bvh: Option<Bvh64>,
 }
 
@@ -190,19 +180,33 @@ impl Twin {
             tris,
             polygons,
             cones,
+            kinds: desc.kinds.twins(eye),
             bvh,
         })
     }
 
     /// Number of primitives.
     pub fn len(&self) -> usize {
-        self.cone_base() + self.cones.len()
+        self.kinds_base() + self.kinds.len()
     }
 
     /// Whether a ray leaving primitive `prim` can meet it again away from its origin whichever way it heads:
-    /// an open cone's far wall (a solid's exit needs the ray to head inward).
+    /// an open cone's far wall, or a registered kind's that says so (a solid's exit needs the ray to head
+    /// inward).
     pub fn meets_again(&self, prim: u32) -> bool {
-        (prim as usize) >= self.cone_base() && (prim as usize) < self.len()
+        let i = prim as usize;
+        (self.cone_base()..self.kinds_base()).contains(&i)
+            || self.kind(prim).is_some_and(|k| self.kinds.meets_again(k))
+    }
+
+    /// The id of the registered kinds' first item.
+    fn kinds_base(&self) -> usize {
+        self.cone_base() + self.cones.len()
+    }
+
+    /// Primitive `prim`'s index over the registered kinds' items, when it is one.
+    fn kind(&self, prim: u32) -> Option<usize> {
+        (prim as usize).checked_sub(self.kinds_base()).filter(|&k| k < self.kinds.len())
     }
 
     /// The id of the first cone (cone k has id `cone_base() + k`).
@@ -270,6 +274,9 @@ impl Twin {
                 }
             }
         }
+        let mut kinds = (best.prim, best.t);
+        self.kinds.intersect(self.kinds_base() as u32, from.prim, ray, t_max, &mut kinds);
+        best.update(kinds.0, kinds.1);
         if let Some(t) = self.departure_hit(from, ray, t_max) {
             best.update(from.prim, t);
         }
@@ -279,6 +286,9 @@ impl Twin {
     /// Where `ray` meets the primitive it leaves again, in `[0, t_max)`: for a solid left toward its inside,
     /// its exit root; for an open cone, left to either side, where it meets the cone again ([`rehit_cone`]).
     fn departure_hit(&self, from: Departure, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+        if let Some(k) = self.kind(from.prim) {
+            return self.kinds.rehit(k, ray, t_max);
+        }
         match self.cone(from.prim) {
             Some(cone) => {
                 let (hit, t) = rehit_cone(cone, ray, t_max);
@@ -323,6 +333,9 @@ impl Twin {
         }
         if prim == from.prim {
             return self.departure_hit(from, ray, f64::INFINITY);
+        }
+        if let Some(k) = self.kind(prim) {
+            return self.kinds.hit_of(k, ray);
         }
         let ns = self.spheres.len();
         let (hit, t) = if i < ns {
@@ -379,6 +392,8 @@ impl Twin {
             s.normal_to_world.vector(n).normalize()
         } else if let Some(cone) = self.cone(prim) {
             cone.normal(point)
+        } else if let Some(n) = self.kind(prim).and_then(|k| self.kinds.normal(k, point)) {
+            n
         } else {
             self.polygon_normal(i - ns - self.shapes.len(), point)
         };
@@ -426,6 +441,8 @@ impl Twin {
         } else if let Some(cone) = self.cone(prim) {
             let apex_radius = cone.base_radius + cone.slope * cone.height;
             o + len(cone.base - origin) + cone.height + cone.base_radius.max(apex_radius)
+        } else if let Some(scale) = self.kind(prim).and_then(|k| self.kinds.scale(k, origin)) {
+            o + scale
         } else {
             o
         }
@@ -486,6 +503,10 @@ impl Twin {
         if let Some(cone) = self.cone(prim) {
             return cone_grazing(cone, ray, tol * self.magnitude(prim, ray.origin), slack);
         }
+        if let Some(k) = self.kind(prim) {
+            let nudge = tol * self.magnitude(prim, ray.origin);
+            return self.kinds.grazing(k, ray, nudge, slack).unwrap_or(false);
+        }
         let poly = &self.polygons[i - ns - self.shapes.len()];
         let (n, d) = (poly.normal, ray.dir);
         let cos = n.dot(d).abs() / len(d);
@@ -543,6 +564,9 @@ impl Twin {
             } else {
                 (q.z - z).hypot(radial - rho)
             };
+            return off <= tol * self.magnitude(prim, p) + slack;
+        }
+        if let Some(off) = self.kind(prim).and_then(|k| self.kinds.distance(k, p)) {
             return off <= tol * self.magnitude(prim, p) + slack;
         }
         let poly = &self.polygons[i - ns - self.shapes.len()];

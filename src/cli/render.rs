@@ -486,13 +486,14 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     let n = features.counts;
     let _ = writeln!(
         out,
-        "scene: {} ({}, {}, {}, {}, {}), {}, {}{}",
+        "scene: {} ({}, {}, {}, {}, {}{}), {}, {}{}",
         plural(g.len(), "primitive"),
         plural(n.spheres, "sphere"),
         plural(n.ellipsoids, "ellipsoid"),
         plural(n.planes, "plane"),
         plural(n.polygons, "polygon"),
         plural(n.cones, "cone"),
+        g.kinds.counted().iter().map(|c| format!(", {c}")).collect::<String>(),
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material"),
         match g.sphere_colors() {
@@ -520,7 +521,7 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
         job.band_rows()
     );
     let _ = writeln!(out, "features: {features}");
-    let search = |bvh: &Option<crate::accel::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
+    let search = |bvh: &Option<crate::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
     let spheres = match (&scene.accel_note, g.particles.is_empty()) {
         (_, true) => {
             format!("{} ({:.1} bytes/sphere with the nodes)", search(&g.sphere_bvh), scene.bytes_per_sphere())
@@ -535,10 +536,14 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     };
     let _ = writeln!(
         out,
-        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}, cones by {}",
+        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}, cones by {}{}",
         search(&g.polygon_bvh),
         search(&g.shape_bvh),
         search(&g.cone_bvh),
+        (crate::kinds::NAMES.iter().zip(g.kinds.trees()).zip(g.kinds.counts()))
+            .filter(|(_, n)| *n > 0)
+            .map(|((name, tree), _)| format!(", {name} by {}", if tree { "BVH" } else { "brute force" }))
+            .collect::<String>(),
     );
     let c = r.counts;
     let _ = writeln!(
@@ -610,7 +615,11 @@ fn pattern_name(pattern: Pattern) -> String {
 /// while some material has a diffuse or specular term (which only lights light).
 pub fn scene_warnings(desc: &SceneDesc) -> Vec<&'static str> {
     let mut warnings = Vec::new();
-    if desc.spheres.is_empty() && desc.shapes.is_empty() && desc.polygons.is_empty() && desc.cones.is_empty()
+    if desc.spheres.is_empty()
+        && desc.shapes.is_empty()
+        && desc.polygons.is_empty()
+        && desc.cones.is_empty()
+        && desc.kinds.is_empty()
     {
         warnings.push("no objects");
     }

@@ -19,6 +19,8 @@ pub struct Counts {
     pub polygons: usize,
     /// Open cones and cylinders.
     pub cones: usize,
+    /// The registered kinds' items ([`crate::kinds`]), in the registry's order.
+    pub kinds: [usize; crate::kinds::COUNT],
 }
 
 /// The parts of the tracer a scene needs.
@@ -55,6 +57,7 @@ impl Features {
                 planes: kind(ShapeKind::Plane),
                 polygons: g.polygons.len(),
                 cones: g.cones.len(),
+                kinds: g.kinds.counts(),
             },
             bvh: g.bvhs().next().is_some(),
             direct: !ao && lights_shade(!scene.lights.is_empty(), m),
@@ -66,8 +69,9 @@ impl Features {
         }
     }
 
-    fn list(&self) -> [(&'static str, bool); 11] {
-        [
+    fn list(&self) -> Vec<(&'static str, bool)> {
+        let kinds = crate::kinds::NAMES.iter().zip(self.counts.kinds).map(|(&name, n)| (name, n > 0));
+        let mut list = vec![
             ("spheres", self.counts.spheres > 0),
             ("bvh", self.bvh),
             ("ellipsoids", self.counts.ellipsoids > 0),
@@ -79,7 +83,9 @@ impl Features {
             ("refraction", self.refraction),
             ("antialiasing", self.antialiasing),
             ("ambient occlusion rays", self.ao),
-        ]
+        ];
+        list.splice(6..6, kinds);
+        list
     }
 }
 

@@ -13,8 +13,8 @@ pub mod features;
 pub mod load;
 pub mod memory;
 
-use crate::accel::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::accel::{Geometry, Particles, Polygons};
+use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::Shape;
@@ -70,10 +70,10 @@ pub struct CompileOptions {
     /// obvhs's build preset.
     pub preset: BvhPreset,
     /// Packet walks first test nodes and leaf items against a shared-origin packet's frustum
-    /// ([`crate::accel::bvh::Bvh::frustum_culling`]).
+    /// ([`crate::bvh::Bvh::frustum_culling`]).
     pub frustum_culling: bool,
     /// Subtrees entered by at most this many live lanes are walked one ray at a time
-    /// ([`crate::accel::bvh::SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
+    /// ([`crate::bvh::SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
     pub single_ray_lanes: u32,
     /// Keep each BVH's binary tree and have single rays (K = 1) walk it one box and one primitive at a time:
     /// the scalar path (`--lanes scalar`, [`crate::accel::Geometry::set_scalar_walk`]). Off by default, so
@@ -157,7 +157,8 @@ fn reach(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> f32 {
     let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| (*v - eye).abs().max_element());
     let shapes =
         shape_boxes(desc).into_iter().map(|(_, b)| b.min.abs().max(b.max.abs()).max_element() as f64);
-    spheres.chain(lights).chain(vertices).chain(shapes).fold(0.0, f64::max) as f32
+    let kinds = desc.kinds.world_boxes().into_iter().flatten().map(|p| (p - eye).abs().max_element());
+    spheres.chain(lights).chain(vertices).chain(shapes).chain(kinds).fold(0.0, f64::max) as f32
 }
 
 impl Scene {
@@ -311,11 +312,8 @@ impl Scene {
         let finite_polygons = [&pg.v0, &pg.e1, &pg.e2]
             .iter()
             .all(|v| v.iter().all(|p| [p.x, p.y, p.z].iter().all(|x| x.is_finite())));
-        let wants = |items: usize| match accel {
-            Accel::Auto | Accel::Particles => items >= BVH_MIN_SPHERES,
-            Accel::Bvh => items > 0,
-            Accel::Brute => false,
-        };
+        geometry.kinds = desc.kinds.compile(origin);
+        let wants = |items: usize| wants_tree(accel, items);
         let mut materials = desc.materials.clone();
         if materials.is_empty() {
             materials.push(Material::default());
@@ -323,6 +321,7 @@ impl Scene {
         let bounded = shape_boxes(desc);
         let cones_finite = geometry.cones.height.iter().all(|h| h.is_finite());
         let job = BvhJob {
+            accel,
             cones: cones_finite && wants(geometry.cones.len()),
             shapes: wants(bounded.len()).then_some(bounded),
             spheres: finite && wants(geometry.spheres.len()),
@@ -408,6 +407,16 @@ impl Scene {
             (g.cone_order, g.cone_bvh) = (order, Some(tree));
             self.build += stats;
         }
+        let build = &mut self.build;
+        g.kinds.build_trees(
+            |n| wants_tree(job.accel, n),
+            |n, bounds| {
+                let item_box = |j: usize| padded(bounds(j), job.options.pad);
+                let (tree, order, stats) = bvh::build(n, item_box, dearer, |order| order.to_vec());
+                *build += stats;
+                (tree, order)
+            },
+        );
     }
 }
 
@@ -438,7 +447,9 @@ fn bounded_diagonal(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> f64 {
     // Shape boxes are in rendering space: moved back by the eye.
     let eye = desc.camera.eye;
     let shapes = shape_boxes(desc).into_iter().flat_map(|(_, b)| [b.min, b.max].map(|p| p.as_dvec3() + eye));
+    let kinds = desc.kinds.world_boxes().into_iter().flatten();
     let (lo, hi) = spheres
+        .chain(kinds)
         .chain(extra.into_iter().flatten())
         .chain(vertices)
         .chain(cones)
@@ -477,8 +488,19 @@ fn shape_boxes(desc: &SceneDesc) -> Vec<(u32, Aabb)> {
         .collect()
 }
 
+/// Whether a kind with `items` items gets a BVH under `accel`.
+fn wants_tree(accel: Accel, items: usize) -> bool {
+    match accel {
+        Accel::Auto | Accel::Particles => items >= BVH_MIN_SPHERES,
+        Accel::Bvh => items > 0,
+        Accel::Brute => false,
+    }
+}
+
 /// The BVH builds that [`Scene::assemble`] found the scene needs.
 struct BvhJob {
+    /// The acceleration asked for: the registered kinds' trees follow it.
+    accel: Accel,
     /// Whether to build the cones' BVH.
     cones: bool,
     /// The bounded shapes' indices and boxes, when they get a BVH.

@@ -11,6 +11,9 @@ use serde::Deserialize;
 
 use crate::camera::Camera;
 use crate::geometry::ShapeKind;
+use crate::kinds::placement::{self, TransformOp};
+#[allow(unused_imports)] // used per registered kind
+use crate::kinds::{Kind, KindDescs, KindError};
 use crate::math::Rgb;
 
 use super::error::SceneError;
@@ -18,22 +21,53 @@ use crate::scene::desc::*;
 
 type Vec3 = [f64; 3];
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct File {
-    camera: Option<Spanned<CameraToml>>,
-    render: Option<RenderToml>,
-    #[serde(default)]
-    materials: BTreeMap<String, MaterialToml>,
-    #[serde(default)]
-    lights: Vec<LightToml>,
-    #[serde(default)]
-    spheres: Vec<SphereToml>,
-    #[serde(default)]
-    planes: Vec<PlaneToml>,
-    #[serde(default)]
-    cones: Vec<ConeToml>,
+/// The file's tables, with an array of tables per registered kind ([`crate::kinds::registry!`]), and
+/// the reading of those arrays into the description.
+macro_rules! file_with_kinds {
+    ($($field:ident: $kind:ty),* $(,)?) => {
+        #[derive(Deserialize)]
+        #[serde(deny_unknown_fields)]
+        struct File {
+            camera: Option<Spanned<CameraToml>>,
+            render: Option<RenderToml>,
+            #[serde(default)]
+            materials: BTreeMap<String, MaterialToml>,
+            #[serde(default)]
+            lights: Vec<LightToml>,
+            #[serde(default)]
+            spheres: Vec<SphereToml>,
+            #[serde(default)]
+            planes: Vec<PlaneToml>,
+            #[serde(default)]
+            cones: Vec<ConeToml>,
+            $(
+                #[serde(default)]
+                $field: Vec<<$kind as Kind>::Toml>,
+            )*
+        }
+
+        // With no kind registered, the loop expands to nothing.
+        #[allow(unused_variables, unused_mut)]
+        impl Reader<'_> {
+            /// The registered kinds' tables, each with its material index from `material`.
+            fn kinds(
+                &self,
+                file: &File,
+                material: impl Fn(Option<&Spanned<String>>) -> Result<u32, SceneError>,
+            ) -> Result<KindDescs, SceneError> {
+                let mut kinds = KindDescs::default();
+                $(
+                    for t in &file.$field {
+                        let m = material(<$kind as Kind>::toml_material(t))?;
+                        kinds.$field.push(<$kind as Kind>::from_toml(t, m).map_err(|e| self.kind_err(e))?);
+                    }
+                )*
+                Ok(kinds)
+            }
+        }
+    };
 }
+crate::kinds::registry!(file_with_kinds);
 
 #[derive(Deserialize, Default)]
 #[serde(deny_unknown_fields)]
@@ -173,28 +207,6 @@ struct ConeToml {
     material: Option<Spanned<String>>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields, rename_all = "lowercase")]
-enum TransformOp {
-    Translate(Vec3),
-    Scale(Scale),
-    Rotate(Rotation),
-}
-
-#[derive(Deserialize)]
-#[serde(untagged, expecting = "a number or an array of three numbers")]
-enum Scale {
-    Uniform(f64),
-    Axes(Vec3),
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct Rotation {
-    axis: Vec3,
-    degrees: f64,
-}
-
 /// Reads a TOML scene from a file.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     let source = super::error::read_text(path, "scene")?;
@@ -272,7 +284,7 @@ impl Reader<'_> {
 
     fn build(&self, file: File) -> Result<SceneDesc, SceneError> {
         let (names, materials) = self.materials(&file.materials)?;
-        let material = |m: &Option<Spanned<String>>| -> Result<u32, SceneError> {
+        let material = |m: Option<&Spanned<String>>| -> Result<u32, SceneError> {
             match m {
                 None => Ok(0),
                 Some(name) => names.get(name.get_ref().as_str()).copied().ok_or_else(|| {
@@ -288,6 +300,7 @@ impl Reader<'_> {
                 }),
             }
         };
+        let kinds = self.kinds(&file, material)?;
         let mut desc = SceneDesc {
             camera: self.camera(file.camera)?,
             render: self.render(file.render)?,
@@ -307,7 +320,7 @@ impl Reader<'_> {
                 ));
             }
             let center = DVec3::from(s.center);
-            let mat = material(&s.material)?;
+            let mat = material(s.material.as_ref())?;
             match &s.transform {
                 None => desc.spheres.push(SphereDesc { center, radius: *s.radius.get_ref(), material: mat }),
                 Some(ops) => {
@@ -340,12 +353,13 @@ impl Reader<'_> {
             desc.shapes.push(ShapeDesc {
                 kind: ShapeKind::Plane,
                 world_from_object,
-                material: material(&p.material)?,
+                material: material(p.material.as_ref())?,
             });
         }
         for c in &file.cones {
-            desc.cones.push(self.cone(c, material(&c.material)?)?);
+            desc.cones.push(self.cone(c, material(c.material.as_ref())?)?);
         }
+        desc.kinds = kinds;
         Ok(desc)
     }
 
@@ -558,27 +572,11 @@ impl Reader<'_> {
 
     /// The ops composed in list order: the first applies first.
     fn transform(&self, ops: &[Spanned<TransformOp>]) -> Result<DAffine3, SceneError> {
-        let mut m = DAffine3::IDENTITY;
-        for op in ops {
-            let step = match op.get_ref() {
-                TransformOp::Translate(t) => DAffine3::from_translation((*t).into()),
-                TransformOp::Scale(Scale::Uniform(s)) => DAffine3::from_scale(DVec3::splat(*s)),
-                TransformOp::Scale(Scale::Axes(s)) => DAffine3::from_scale((*s).into()),
-                TransformOp::Rotate(r) => {
-                    let axis = DVec3::from(r.axis);
-                    if axis.length().is_nan() || axis.length() <= 0.0 {
-                        return Err(self.err(op.span(), "rotation axis must be a non-zero vector"));
-                    }
-                    DAffine3::from_axis_angle(axis.normalize(), r.degrees.to_radians())
-                }
-            };
-            let det = step.matrix3.determinant();
-            if !(det.abs() > 1e-12 && det.is_finite() && step.translation.is_finite()) {
-                return Err(self.err(op.span(), "transform step is singular or not finite (zero scale?)"));
-            }
-            m = step * m;
-        }
-        Ok(m)
+        placement::transform(ops).map_err(|e| self.kind_err(e))
+    }
+
+    fn kind_err(&self, e: KindError) -> SceneError {
+        self.err(e.span, e.message)
     }
 }
 

@@ -261,12 +261,12 @@ pub fn for_each_packet<F: Lanes>(
     for_each_packet_at(camera, tile, &Offsets::Shared(dx, dy), pyramids, visit);
 }
 
-/// `tile` cut into the pieces one large packet covers ([`crate::accel::bvh::MAX_PACKETS`] packets of
+/// `tile` cut into the pieces one large packet covers ([`crate::bvh::MAX_PACKETS`] packets of
 /// [`block`]`::<F>()` pixels: 16×16 pixels at K = 16, 16×8 at K = 8, 8×8 at K = 4), row by row, in image
 /// coordinates.
 pub fn large_packets<F: Lanes>(tile: Tile) -> impl Iterator<Item = Tile> {
     let (bw, bh) = block::<F>();
-    let (w, h) = (bw * 4, bh * crate::accel::bvh::MAX_PACKETS as u32 / 4);
+    let (w, h) = (bw * 4, bh * crate::bvh::MAX_PACKETS as u32 / 4);
     (0..tile.h).step_by(h as usize).flat_map(move |y0| {
         (0..tile.w).step_by(w as usize).map(move |x0| Tile {
             x0: tile.x0 + x0,
@@ -293,7 +293,7 @@ pub struct LargePacket<F: Lanes> {
 
 impl<F: Lanes> Default for LargePacket<F> {
     fn default() -> Self {
-        let n = crate::accel::bvh::MAX_PACKETS;
+        let n = crate::bvh::MAX_PACKETS;
         Self { packets: Vec::with_capacity(n), blocks: Vec::with_capacity(n), hits: Vec::with_capacity(n) }
     }
 }

@@ -3,6 +3,7 @@
 
 use glam::{DAffine3, DVec3};
 
+use crate::kinds::KindDescs;
 use crate::math::{Rgb, Rgb8};
 
 /// Where the camera looks.
@@ -519,4 +520,7 @@ pub struct SceneDesc {
     pub polygons: Vec<PolygonDesc>,
     /// Open cones and cylinders, in file order.
     pub cones: Vec<ConeDesc>,
+    /// The registered kinds' items ([`crate::kinds`]): ids after the cones, kind by kind in the registry's
+    /// order.
+    pub kinds: KindDescs,
 }

@@ -1,6 +1,6 @@
 //! Large packets through the particle tree: up to [`MAX_PACKETS`] packets of K camera rays that share an
 //! origin, each with its pyramid, walk the tree once together, as they walk the BVH
-//! ([`crate::accel::bvh::Bvh::intersect_large`]). The walk looks at the members' frusta, never at their
+//! ([`crate::bvh::Bvh::intersect_large`]). The walk looks at the members' frusta, never at their
 //! lanes:
 //!
 //! - a range's box (its ancestors' split planes widened, as in the packet walk) is first tested against the
@@ -18,8 +18,8 @@ use wide::f32x16;
 
 use super::walk::Query;
 use super::{place, with_records, Particles, Record, Records, LEAF};
-use crate::accel::bvh::{farthest, members, Frustum, MemberSides, Stack, MAX_PACKETS};
 use crate::accel::{add_work, counting, Work};
+use crate::bvh::{farthest, members, Frustum, MemberSides, Stack, MAX_PACKETS};
 use crate::geometry::{DeparturePacket, HitPacket, Pyramid, RayPacket};
 use crate::math::{Mask, Real, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};

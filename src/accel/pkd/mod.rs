@@ -163,12 +163,12 @@ pub struct Particles {
     r_max: f32,
     /// The root's box in rendering space: every centre's box widened by `r_max + 2·pad`.
     bounds: [[f32; 3]; 2],
-    /// The culling padding (the BVH's, [`crate::accel::bvh::padding`]).
+    /// The culling padding (the BVH's, [`crate::bvh::padding`]).
     pad: f32,
     /// Some sphere has the eye within about its radius of its surface ([`crate::geometry::Spheres`]'s flag).
     eye_terms_help: bool,
     /// Camera packets cull by their pyramids and tiles walk as large packets
-    /// ([`crate::accel::bvh::Bvh::frustum_culling`]'s setting for the tree).
+    /// ([`crate::bvh::Bvh::frustum_culling`]'s setting for the tree).
     pub frustum_culling: bool,
 }
 
@@ -322,7 +322,7 @@ impl Particles {
     }
 
     /// The largest coordinate magnitude of the root's box: bounds the frustum tests' rounding (the BVH's
-    /// [`crate::accel::bvh::Bvh::extent`]).
+    /// [`crate::bvh::Bvh::extent`]).
     pub(crate) fn extent(&self) -> f32 {
         self.bounds[0].iter().chain(&self.bounds[1]).fold(0.0f32, |m, v| m.max(v.abs()))
     }

@@ -9,8 +9,8 @@
 //! live lane's direction on the node's axis.
 
 use super::{eye_term_of, place, with_records, Particles, Record, Records, LEAF};
-use crate::accel::bvh::{Frustum, SlabRays, Stack, WIDEN};
 use crate::accel::{add_work, counting, Work};
+use crate::bvh::{Frustum, SlabRays, Stack, WIDEN};
 use crate::geometry::{
     first_root, sphere_approach, sphere_roots_of, DeparturePacket, EyeLanes, HitPacket, RayPacket, SphereRay,
 };

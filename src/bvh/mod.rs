@@ -22,6 +22,7 @@
 mod binary;
 pub mod build;
 mod collapse;
+pub mod item_query;
 mod large;
 mod median;
 pub mod node;
@@ -32,6 +33,7 @@ mod scalar;
 mod single;
 mod slab;
 pub mod wide_node;
+pub mod work;
 
 pub use build::{build, BuildOptions, Builder};
 pub use large::MAX_PACKETS;

@@ -6,7 +6,7 @@ use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Vec3f, V3};
 use crate::simd::{IdLanes, Lanes};
 
-use super::bvh::{LeafQuery, SingleLeafQuery};
+use super::{LeafQuery, SingleLeafQuery};
 
 /// How one kind tests its items.
 pub trait ItemTest: Copy {

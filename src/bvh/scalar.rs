@@ -16,8 +16,8 @@
 
 use obvhs::bvh2::node::Bvh2Node;
 
-use super::super::{count_work, Work};
 use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
+use super::work::{count_work, Work};
 use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Ray};
 use crate::simd::{set_bits, IdLanes, Lanes};

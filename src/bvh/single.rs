@@ -6,10 +6,10 @@
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
 //! merged back into its lane (Embree's "hybrid" traversal).
 
-use super::super::{count_work, Work};
 use super::collapse::MAX_WIDTH;
 use super::node::{far_to_near, RayNode};
 use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
+use super::work::{count_work, Work};
 use super::{Bvh, LeafQuery, SingleLeafQuery};
 use crate::geometry::HitPacket;
 use crate::math::{Real, V3};

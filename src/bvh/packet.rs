@@ -12,9 +12,9 @@
 
 use wide::f32x4;
 
-use super::super::{add_work, counting, Work};
 use super::node::{Node, N};
 use super::slab::{slab_entry, slab_entry_ordered, SlabRay, Stack};
+use super::work::{add_work, counting, Work};
 use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Real, V3};

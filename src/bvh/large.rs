@@ -15,10 +15,10 @@
 
 use wide::{f32x16, f32x4};
 
-use super::super::{add_work, counting, Work};
 use super::node::Node;
 use super::packet::{Frustum, Side};
 use super::slab::Stack;
+use super::work::{add_work, counting, Work};
 use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Pyramid, RayPacket};
 use crate::math::{Mask, Real, Vec3f};

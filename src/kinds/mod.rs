@@ -1,0 +1,447 @@
+//! The primitive kinds of the registry: each kind lives in one folder that holds everything about it (its
+//! description and TOML form, its f32 store, its kernel generic over lanes, bounds, surface, departure rule
+//! and its f64 form for the accuracy twin), behind the [`Kind`] trait. One list, [`registry!`], names the
+//! kinds; the scene description ([`KindDescs`]), the TOML reader, compile, the queries over the geometry
+//! ([`KindStores`]) and the twin ([`KindTwins`]) are written once over it.
+//!
+//! Adding a kind: a folder here with a type implementing [`Kind`], and its name in [`registry!`]. Its
+//! primitive ids follow the built-in kinds' (spheres, shapes, polygons, cones) in the list's order.
+//!
+//! ```
+//! use bareray::kinds::{KindDescs, COUNT, NAMES};
+//! // Every registered kind has a list of descriptions, empty by default, and a name.
+//! let descs = KindDescs::default();
+//! assert_eq!(descs.len(), 0);
+//! assert_eq!(NAMES.len(), COUNT);
+//! ```
+
+use std::fmt::Debug;
+use std::ops::Range;
+
+use glam::DVec3;
+use serde::de::DeserializeOwned;
+
+use crate::bvh::item_query::ItemTest;
+use crate::bvh::Bvh;
+use crate::geometry::Ray;
+use crate::math::{Vec3f, V3};
+use crate::simd::Lanes;
+
+pub mod placement;
+
+/// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in
+/// the description. Called with the name of a macro, it calls that macro with the list; the structures
+/// below and the TOML reader are generated that way, so this line is the only place a kind is registered.
+macro_rules! registry {
+    ($then:ident) => {
+        $then! {}
+    };
+}
+pub(crate) use registry;
+
+/// A TOML or description error of one kind's entry: the byte range of the offending value in the file and
+/// the message (the reader adds the file, line and column).
+#[derive(Clone, Debug, PartialEq)]
+pub struct KindError {
+    /// Byte range of the value in the file.
+    pub span: Range<usize>,
+    /// What is wrong and what was expected.
+    pub message: String,
+}
+
+/// Where a primitive is measured from in the accuracy twin: the scale its f32 rounding is proportional to,
+/// and how far the f32 ray may stray from the f64 one (see `accuracy::twin::Slack`).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Stray {
+    /// Distance between the two rays' origins.
+    pub origin: f64,
+    /// Distance between the two unit directions.
+    pub dir: f64,
+}
+
+impl Stray {
+    /// How far apart the two rays can be at distance `s` along them.
+    pub fn at(&self, s: f64) -> f64 {
+        self.origin + self.dir * s.abs()
+    }
+}
+
+/// What a primitive kind provides. Everything is per item `k` of the kind's store; ids, trees, the loops
+/// over items and the twin's bookkeeping are the registry's.
+pub trait Kind: Clone + Debug + Default + Send + Sync + 'static {
+    /// One item, in messages and statistics ("torus").
+    const SINGULAR: &'static str;
+    /// Several items ("tori"): also the TOML array's name.
+    const PLURAL: &'static str;
+    /// Whether a ray leaving an item can meet it again (open or non-convex surfaces): then the queries ask
+    /// [`Kind::rehit`] for every ray departing from it, whichever side it heads to.
+    const MEETS_AGAIN: bool;
+
+    /// The item as described, in world space and f64, validated by its reader.
+    type Desc: Clone + Debug + PartialEq + Send + Sync;
+    /// The TOML table of one item.
+    type Toml: DeserializeOwned;
+    /// The compiled items in rendering space, rounded to f32 once (structure of arrays where it pays).
+    type Store: Clone + Debug + Default + Send + Sync;
+    /// One item in f64, camera-relative, for the accuracy twin.
+    type Twin: Clone + Debug + Send + Sync;
+
+    /// The description of a TOML table, given its material index.
+    fn from_toml(toml: &Self::Toml, material: u32) -> Result<Self::Desc, KindError>;
+    /// The material a TOML table names.
+    fn toml_material(toml: &Self::Toml) -> Option<&::toml::Spanned<String>>;
+    /// The material index of a description.
+    fn material(desc: &Self::Desc) -> u32;
+    /// A world box around the item, `[lo, hi]` (AO's default reach and the BVH's padding scale).
+    fn world_box(desc: &Self::Desc) -> [DVec3; 2];
+
+    /// Appends the item, moved to rendering space by `−origin` in f64 and rounded once. A description the
+    /// reader would have rejected still gets an item (one no ray can see), so that ids never shift.
+    fn push(store: &mut Self::Store, desc: &Self::Desc, origin: DVec3);
+    /// The number of items.
+    fn len(store: &Self::Store) -> usize;
+    /// A box `(lo, hi)` around item `k` covering every hit the f32 kernel can report.
+    fn bounds(store: &Self::Store, k: usize) -> (Vec3f, Vec3f);
+    /// Item `k` against the rays in `[0, t_max)`: the lanes it is hit in and their t (`t_max` elsewhere).
+    /// Lane `i` of the result must be the bits of the one-lane call with lane `i`'s ray.
+    fn test<F: Lanes>(store: &Self::Store, k: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F);
+    /// For a ray that starts on item `k` (the departure primitive, which [`Kind::test`] is not asked
+    /// about): where it meets the item again in `[0, t_max)`. Only asked when [`Kind::MEETS_AGAIN`].
+    fn rehit(store: &Self::Store, k: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32>;
+    /// The outward unit normal at a point of item `k` (rendering space), and the point in the item's own
+    /// frame (for solid textures).
+    fn surface(store: &Self::Store, k: usize, point: Vec3f) -> (Vec3f, Vec3f);
+    /// Item `k`'s material index.
+    fn item_material(store: &Self::Store, k: usize) -> u32;
+
+    /// The item in f64, moved by `−origin` (the twin's camera-relative space).
+    fn twin(desc: &Self::Desc, origin: DVec3) -> Self::Twin;
+    /// The closest hit in `[0, t_max)`, by a method independent of [`Kind::test`]'s where one exists (so
+    /// that a miss of the f32 method shows).
+    fn intersect64(item: &Self::Twin, ray: &Ray<f64>, t_max: f64) -> Option<f64>;
+    /// [`Kind::rehit`] in f64.
+    fn rehit64(item: &Self::Twin, ray: &Ray<f64>, t_max: f64) -> Option<f64>;
+    /// The outward unit normal at a point on the item.
+    fn normal64(item: &Self::Twin, point: V3<f64>) -> V3<f64>;
+    /// The scale the f32 values of the item and of a ray's coordinates relative to it are rounded at, for
+    /// a ray from `origin` (without `|origin|` itself, which the twin adds).
+    fn scale64(item: &Self::Twin, origin: V3<f64>) -> f64;
+    /// Whether moving `ray`'s line by `nudge` plus `stray` can change whether (or where, across a
+    /// boundary) it hits the item: where an f32 and an f64 kernel may disagree on hit or miss.
+    fn grazing64(item: &Self::Twin, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool;
+    /// The distance from point `p` to the item's surface (exact up to f64 rounding, or a bound on it from
+    /// above that is tight near the surface).
+    fn distance64(item: &Self::Twin, p: V3<f64>) -> f64;
+}
+
+/// One kind's compiled items, the tree over them (`None`: brute force) and, with a tree, its leaf order.
+#[derive(Clone, Debug, Default)]
+pub struct KindItems<K: Kind> {
+    /// The items in description order (their ids).
+    pub store: K::Store,
+    /// The BVH over the items, if any.
+    pub bvh: Option<Bvh>,
+    /// With a BVH: the items' indices in its leaf order.
+    pub order: Vec<u32>,
+}
+
+impl<K: Kind> KindItems<K> {
+    /// The number of items.
+    pub fn len(&self) -> usize {
+        K::len(&self.store)
+    }
+    /// True when the kind has none.
+    pub fn is_empty(&self) -> bool {
+        self.len() == 0
+    }
+    /// The leaf test over these items for a query: the tree's items in leaf order, or all in order.
+    pub fn items(&self, base: u32) -> Items<'_, K> {
+        let order = self.bvh.as_ref().map(|_| self.order.as_slice());
+        Items { store: &self.store, order, base }
+    }
+}
+
+/// The items of one kind as a leaf query's items ([`ItemTest`]): item `j` is `order[j]` (without a list,
+/// `j`), primitive `base + order[j]`.
+pub struct Items<'a, K: Kind> {
+    /// The kind's store.
+    pub store: &'a K::Store,
+    /// The tree's leaf order, or `None` for every item in order.
+    pub order: Option<&'a [u32]>,
+    /// The id of item 0.
+    pub base: u32,
+}
+
+impl<K: Kind> Clone for Items<'_, K> {
+    fn clone(&self) -> Self {
+        *self
+    }
+}
+impl<K: Kind> Copy for Items<'_, K> {}
+
+impl<K: Kind> ItemTest for Items<'_, K> {
+    #[inline(always)]
+    fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32) {
+        let k = self.order.map_or(j as u32, |order| order[j]);
+        let (hit, t) = K::test(self.store, k as usize, ray, t_max);
+        (hit, t, self.base + k)
+    }
+}
+
+/// Something done to each kind's compiled items, in the registry's order (the order of their ids).
+pub trait VisitItems {
+    /// Kind `K`'s items.
+    fn visit<K: Kind>(&mut self, items: &KindItems<K>);
+}
+
+/// Calls `$then` with the kind that holds item `$id` (numbered over every kind's items in id order) as
+/// `$then!(field, Type, index within the kind)`; `$none` when no kind holds it.
+macro_rules! dispatch {
+    ($self:ident, $id:expr, $none:expr, |$items:ident, $K:ident, $k:ident| $body:expr; $($field:ident: $kind:ty),*) => {{
+        #[allow(unused_mut, unused_assignments)]
+        let mut $k: usize = $id;
+        $(
+            #[allow(unused_assignments)]
+            {
+                type $K = $kind;
+                let $items = &$self.$field;
+                if $k < $items.len() {
+                    return $body;
+                }
+                $k -= $items.len();
+            }
+        )*
+        $none
+    }};
+}
+
+macro_rules! per_kind {
+    ($($field:ident: $kind:ty),* $(,)?) => {
+        /// The registered kinds' TOML names, in id order.
+        pub const NAMES: &[&str] = &[$(<$kind as Kind>::PLURAL),*];
+        /// The number of registered kinds.
+        pub const COUNT: usize = NAMES.len();
+
+        /// Every registered kind's descriptions, in file order (ids in the registry's order).
+        #[derive(Clone, Debug, Default, PartialEq)]
+        pub struct KindDescs {
+            $(
+                #[doc = concat!("The `", stringify!($field), "` of the scene.")]
+                pub $field: Vec<<$kind as Kind>::Desc>,
+            )*
+        }
+
+        /// Every registered kind's compiled items and trees.
+        #[derive(Clone, Debug, Default)]
+        pub struct KindStores {
+            $(
+                #[doc = concat!("The compiled `", stringify!($field), "`.")]
+                pub $field: KindItems<$kind>,
+            )*
+        }
+
+        /// Every registered kind's items in f64, for the accuracy twin.
+        #[derive(Clone, Debug, Default)]
+        pub struct KindTwins {
+            $(
+                #[doc = concat!("The `", stringify!($field), "` in f64.")]
+                pub $field: Vec<<$kind as Kind>::Twin>,
+            )*
+        }
+
+        // With no kind registered, the per-kind parts expand to nothing and leave arguments unused.
+        #[allow(unused_variables, unused_mut)]
+        impl KindDescs {
+            /// The number of items of every kind.
+            pub fn len(&self) -> usize {
+                0 $(+ self.$field.len())*
+            }
+            /// True when there are none.
+            pub fn is_empty(&self) -> bool {
+                self.len() == 0
+            }
+            /// The items compiled: each description moved by `−origin` and rounded ([`Kind::push`]).
+            pub fn compile(&self, origin: DVec3) -> KindStores {
+                #[allow(unused_mut)]
+                let mut stores = KindStores::default();
+                $(
+                    for d in &self.$field {
+                        <$kind as Kind>::push(&mut stores.$field.store, d, origin);
+                    }
+                )*
+                let _ = origin;
+                stores
+            }
+            /// The items in f64, moved by `−origin`.
+            pub fn twins(&self, origin: DVec3) -> KindTwins {
+                let _ = origin;
+                KindTwins {
+                    $($field: self.$field.iter().map(|d| <$kind as Kind>::twin(d, origin)).collect(),)*
+                }
+            }
+            /// Every item's world box.
+            pub fn world_boxes(&self) -> Vec<[DVec3; 2]> {
+                #[allow(unused_mut)]
+                let mut boxes = Vec::new();
+                $(boxes.extend(self.$field.iter().map(<$kind as Kind>::world_box));)*
+                boxes
+            }
+            /// Each item's material index, in id order.
+            pub fn materials(&self) -> Vec<u32> {
+                #[allow(unused_mut)]
+                let mut out = Vec::new();
+                $(out.extend(self.$field.iter().map(<$kind as Kind>::material));)*
+                out
+            }
+        }
+
+        // With no kind registered, the per-kind parts expand to nothing and leave arguments unused.
+        #[allow(unused_variables, unused_mut)]
+        impl KindStores {
+            /// Calls `v` with each kind's items in id order.
+            pub fn visit(&self, v: &mut impl VisitItems) {
+                $(v.visit::<$kind>(&self.$field);)*
+                let _ = v;
+            }
+            /// The number of items of every kind.
+            pub fn len(&self) -> usize {
+                0 $(+ self.$field.len())*
+            }
+            /// True when there are none.
+            pub fn is_empty(&self) -> bool {
+                self.len() == 0
+            }
+            /// Each kind's number of items, in id order.
+            pub fn counts(&self) -> [usize; COUNT] {
+                [$(self.$field.len()),*]
+            }
+            /// The number of items of each kind that has some, in words ("1 torus", "2 tori"), in id order.
+            pub fn counted(&self) -> Vec<String> {
+                let word = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
+                let all: [(usize, &str, &str); COUNT] =
+                    [$((self.$field.len(), <$kind as Kind>::SINGULAR, <$kind as Kind>::PLURAL)),*];
+                all.iter().filter(|(n, _, _)| *n > 0).map(|&(n, one, many)| word(n, one, many)).collect()
+            }
+            /// Whether each kind has a tree, in id order.
+            pub fn trees(&self) -> [bool; COUNT] {
+                [$(self.$field.bvh.is_some()),*]
+            }
+            /// The kinds' trees.
+            pub fn bvhs(&self) -> Vec<&Bvh> {
+                let trees: Vec<Option<&Bvh>> = vec![$(self.$field.bvh.as_ref()),*];
+                trees.into_iter().flatten().collect()
+            }
+            /// The kinds' trees, to change their walk settings.
+            pub fn bvhs_mut(&mut self) -> Vec<&mut Bvh> {
+                let trees: Vec<Option<&mut Bvh>> = vec![$(self.$field.bvh.as_mut()),*];
+                trees.into_iter().flatten().collect()
+            }
+            /// Builds a tree for each kind that `wants` one (given its number of items), where every
+            /// item's box is finite: `build(n, box of item k)` returns the tree and its leaf order.
+            pub fn build_trees(
+                &mut self,
+                wants: impl Fn(usize) -> bool,
+                mut build: impl FnMut(usize, &(dyn Fn(usize) -> (Vec3f, Vec3f) + Sync)) -> (Bvh, Vec<u32>),
+            ) {
+                $(
+                    let items = &mut self.$field;
+                    let n = items.len();
+                    let store = &items.store;
+                    let bounds = |k: usize| <$kind as Kind>::bounds(store, k);
+                    let finite = (0..n).all(|k| {
+                        let (lo, hi) = bounds(k);
+                        [lo.x, lo.y, lo.z, hi.x, hi.y, hi.z].iter().all(|v| v.is_finite())
+                    });
+                    if finite && wants(n) {
+                        let (tree, order) = build(n, &bounds);
+                        (items.bvh, items.order) = (Some(tree), order);
+                    }
+                )*
+                let _ = (wants, &mut build);
+            }
+            /// Whether a ray leaving item `id` (numbered over every kind's items in id order) can meet it
+            /// again ([`Kind::MEETS_AGAIN`]).
+            pub fn meets_again(&self, id: usize) -> bool {
+                dispatch!(self, id, false, |_items, K, _k| K::MEETS_AGAIN; $($field: $kind),*)
+            }
+            /// [`Kind::rehit`] of item `id`, for a kind whose items a ray can meet again.
+            pub fn rehit(&self, id: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32> {
+                dispatch!(self, id, None, |items, K, k| match K::MEETS_AGAIN {
+                    true => K::rehit(&items.store, k, ray, t_max),
+                    false => None,
+                }; $($field: $kind),*)
+            }
+            /// Item `id`'s outward unit normal at `point`, the point in its frame, and its material.
+            pub fn surface(&self, id: usize, point: Vec3f) -> Option<(Vec3f, Vec3f, u32)> {
+                dispatch!(self, id, None, |items, K, k| {
+                    let (normal, object) = K::surface(&items.store, k, point);
+                    Some((normal, object, K::item_material(&items.store, k)))
+                }; $($field: $kind),*)
+            }
+        }
+
+        // With no kind registered, the per-kind parts expand to nothing and leave arguments unused.
+        #[allow(unused_variables, unused_mut)]
+        impl KindTwins {
+            /// The number of items of every kind.
+            pub fn len(&self) -> usize {
+                0 $(+ self.$field.len())*
+            }
+            /// True when there are none.
+            pub fn is_empty(&self) -> bool {
+                self.len() == 0
+            }
+            /// The closest hit in `[0, t_max)` over every item but `skip` (ids from `base`), as `(id, t)`
+            /// merged into `best` where nearer (ties to the lower id).
+            pub fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
+                #[allow(unused_mut)]
+                let mut id = base;
+                $(
+                    for item in &self.$field {
+                        if id != skip {
+                            if let Some(t) = <$kind as Kind>::intersect64(item, ray, t_max) {
+                                if t < best.1 || (t == best.1 && id < best.0) {
+                                    *best = (id, t);
+                                }
+                            }
+                        }
+                        id += 1;
+                    }
+                )*
+                let _ = (skip, ray, t_max, best, id);
+            }
+            /// Whether a ray leaving item `id` can meet it again.
+            pub fn meets_again(&self, id: usize) -> bool {
+                dispatch!(self, id, false, |_items, K, _k| K::MEETS_AGAIN; $($field: $kind),*)
+            }
+            /// [`Kind::rehit64`] of item `id`.
+            pub fn rehit(&self, id: usize, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+                dispatch!(self, id, None, |items, K, k| match K::MEETS_AGAIN {
+                    true => K::rehit64(&items[k], ray, t_max),
+                    false => None,
+                }; $($field: $kind),*)
+            }
+            /// Item `id`'s hit along `ray` in `[0, inf)`.
+            pub fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
+                dispatch!(self, id, None, |items, K, k| K::intersect64(&items[k], ray, f64::INFINITY); $($field: $kind),*)
+            }
+            /// Item `id`'s outward unit normal at `point`.
+            pub fn normal(&self, id: usize, point: V3<f64>) -> Option<V3<f64>> {
+                dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], point)); $($field: $kind),*)
+            }
+            /// [`Kind::scale64`] of item `id`.
+            pub fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
+                dispatch!(self, id, None, |items, K, k| Some(K::scale64(&items[k], origin)); $($field: $kind),*)
+            }
+            /// [`Kind::grazing64`] of item `id`.
+            pub fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
+                dispatch!(self, id, None, |items, K, k| Some(K::grazing64(&items[k], ray, nudge, stray)); $($field: $kind),*)
+            }
+            /// [`Kind::distance64`] of item `id` from `p`.
+            pub fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
+                dispatch!(self, id, None, |items, K, k| Some(K::distance64(&items[k], p)); $($field: $kind),*)
+            }
+        }
+    };
+}
+registry!(per_kind);
