@@ -53,3 +53,5 @@ mod stress_departure;
 mod stress_discriminant;
 #[path = "stress_f64_oracle.rs"]
 mod stress_f64_oracle;
+#[path = "tori.rs"]
+mod tori;

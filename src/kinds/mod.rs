@@ -28,13 +28,14 @@ use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
 pub mod placement;
+pub mod torus;
 
 /// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in
 /// the description. Called with the name of a macro, it calls that macro with the list; the structures
 /// below and the TOML reader are generated that way, so this line is the only place a kind is registered.
 macro_rules! registry {
     ($then:ident) => {
-        $then! {}
+        $then! { tori: $crate::kinds::torus::Torus }
     };
 }
 pub(crate) use registry;
