@@ -80,6 +80,7 @@ pub mod output;
 pub mod render;
 pub mod sample;
 pub mod scene;
+pub mod settings;
 pub mod shade;
 pub mod simd;
 pub mod still;

@@ -31,6 +31,8 @@ const LAYERS: &[(&str, u32)] = &[
     ("io", 5),
     // The compiled runtime Scene and what it uses.
     ("compile", 6),
+    // Changes to a description's settings (the command line's and the Python module's) and their names.
+    ("settings", 6),
     // Whitted shading over the queries.
     ("shade", 7),
     // Image files from a film.
