@@ -54,9 +54,8 @@ pub use bands::{
 use bands::{trace_rows, TileCounter};
 pub use coverage::{coverage_parts, CoveragePart};
 
-pub(crate) use primary::fnv1a;
 pub use primary::{
-    primary_hits_lanes, primary_window_lanes, trace_primary, trace_primary_lanes, trace_primary_window,
+    fnv1a, primary_hits_lanes, primary_window_lanes, trace_primary, trace_primary_lanes, trace_primary_window,
     PrimaryHits,
 };
 use tile::trace_tile;
