@@ -79,7 +79,12 @@ pub fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool)
 }
 
 /// [`trace_primary`] at a packet width chosen at run time.
-pub fn trace_primary_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
+pub(crate) fn trace_primary_lanes(
+    scene: &Scene,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    hits: &mut PrimaryHits,
+) {
     with_lanes!(lanes, F => trace_primary::<F>(scene, pool, hits))
 }
 
@@ -133,7 +138,7 @@ pub fn trace_primary_window<F: Lanes>(
 }
 
 /// [`trace_primary_window`] into a new frame, at a packet width chosen at run time (1, 4, 8 or 16).
-pub fn primary_window_lanes(
+pub(crate) fn primary_window_lanes(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,
