@@ -17,7 +17,7 @@ pub struct Errors {
 
 /// The edge pixels of an image whose primary hits (pixel centres) are `prims` (row-major, `width` columns):
 /// a pixel is an edge pixel when one of its 4 neighbours sees another primitive (or background).
-pub(crate) fn edge_mask(prims: &[u32], width: u32) -> Vec<bool> {
+pub fn edge_mask(prims: &[u32], width: u32) -> Vec<bool> {
     let w = width as usize;
     let h = prims.len() / w.max(1);
     (0..prims.len())

@@ -141,7 +141,7 @@ impl std::fmt::Display for Shortest {
 }
 
 /// A scene showing `spheres`: default material, a camera framing their bounds, one light.
-pub(crate) fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
+pub fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
     let (lo, hi) = bounds(&spheres);
     SceneDesc { spheres, ..scene_framing(lo, hi, None) }
 }
@@ -157,7 +157,7 @@ pub fn bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
 /// are compiled apart, [`crate::compile::Scene::compile_mapped`]). Without a `view`, the contract camera
 /// ([`frame_box`]) and a light above and left of it; with one, the box's bounding sphere seen from the
 /// side `view` points to ([`frame_sphere`]) and a headlight, a light at the eye.
-pub(crate) fn scene_framing(lo: DVec3, hi: DVec3, view: Option<DVec3>) -> SceneDesc {
+pub fn scene_framing(lo: DVec3, hi: DVec3, view: Option<DVec3>) -> SceneDesc {
     let (camera, light) = match view {
         None => {
             let camera = frame_box(lo, hi);
@@ -186,7 +186,7 @@ pub const SPHERE_FILL: f64 = 0.95;
 /// until the box's bounding sphere fits the image (1920×1080, horizontal angle 45°) in its tighter
 /// direction, with a margin ([`SPHERE_FILL`]). Up is +y, or −z looking down from +y and +z looking up
 /// from −y (a view within about 8° of the y axis).
-pub(crate) fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
+pub fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
     let (width, height) = (1920u32, 1080u32);
     let hfov = 45.0f64;
     let tan_w = (hfov.to_radians() / 2.0).tan();
@@ -204,7 +204,7 @@ pub(crate) fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
 }
 
 /// The contract-oriented camera (see the module documentation) for the box `[lo, hi]`.
-pub(crate) fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
+pub fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
     let (width, height) = (1920u32, 1080u32);
     let hfov = 45.0f64;
     let tan_w = (hfov.to_radians() / 2.0).tan();

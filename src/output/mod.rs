@@ -24,7 +24,7 @@ mod radiance;
 mod srgb;
 
 pub use netpbm::REGION_COMMENT as PPM_REGION_COMMENT;
-pub use srgb::{linear8, srgb8, to_rgb8, to_srgb8};
+pub use srgb::{linear8, srgb8, srgb8_formula, to_rgb8, to_srgb8};
 
 /// An image file format bareray writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -399,7 +399,7 @@ pub fn write_rows(
 /// Writes an EXR of `channels` to `path` atomically from rows of their samples (per pixel one little-endian
 /// 4-byte sample per channel, in the order of `channels`), streamed as [`write_rows`] streams; `text` as
 /// [`WriteOptions::text`].
-pub(crate) fn write_channels(
+pub fn write_channels(
     path: &Path,
     frame: Frame,
     channels: &[exr::Channel],

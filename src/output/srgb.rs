@@ -8,7 +8,7 @@ use crate::scene::desc::Transfer;
 
 /// Linear to sRGB-encoded 8-bit, clamped: the definition, one `powf` per value. [`srgb8`] gives the same
 /// bits from a table.
-pub(crate) fn srgb8_formula(linear: f32) -> u8 {
+pub fn srgb8_formula(linear: f32) -> u8 {
     let c = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
     let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
     (s * 255.0 + 0.5) as u8

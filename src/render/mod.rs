@@ -53,8 +53,10 @@ pub use bands::{band_rows, render_window, trace_band_lanes, Bands, RowStage, Tra
 use bands::{trace_rows, TileCounter};
 pub use coverage::{coverage_parts, CoveragePart};
 
-pub use primary::{fnv1a, primary_hits_lanes, trace_primary, trace_primary_window, PrimaryHits};
-pub(crate) use primary::{primary_window_lanes, trace_primary_lanes};
+pub(crate) use primary::primary_window_lanes;
+pub use primary::{
+    fnv1a, primary_hits_lanes, trace_primary, trace_primary_lanes, trace_primary_window, PrimaryHits,
+};
 use tile::trace_tile;
 
 /// Tile edge in pixels: small enough to balance two threads on small images, large enough to amortise.
@@ -298,7 +300,7 @@ impl<F: Lanes> Default for LargePacket<F> {
 /// [`large_packets`] cuts are traced together ([`crate::accel::Geometry::intersect_tile`], with the piece's
 /// pyramid), then `visit` gets each packet, its hits and its block (in `tile`'s coordinates). Offsets must
 /// lie in the pixel (`[0, 1]`), as every sampling pattern's do.
-pub(crate) fn for_each_camera_hit<F: Lanes>(
+pub fn for_each_camera_hit<F: Lanes>(
     scene: &Scene,
     tile: Tile,
     offsets: &Offsets,
@@ -341,7 +343,7 @@ pub enum Offsets<'a> {
 
 /// [`for_each_packet`] with an offset per pixel: lane i's position is `(column + lane column) + dx_i`, the sums
 /// a one-lane packet of that pixel computes, so every width gives the same rays.
-pub(crate) fn for_each_packet_at<F: Lanes>(
+pub fn for_each_packet_at<F: Lanes>(
     camera: &Camera<f64>,
     tile: Tile,
     offsets: &Offsets,

@@ -79,12 +79,7 @@ pub fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool)
 }
 
 /// [`trace_primary`] at a packet width chosen at run time.
-pub(crate) fn trace_primary_lanes(
-    scene: &Scene,
-    lanes: usize,
-    pool: &rayon::ThreadPool,
-    hits: &mut PrimaryHits,
-) {
+pub fn trace_primary_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
     with_lanes!(lanes, F => trace_primary::<F>(scene, pool, hits))
 }
 

@@ -7,7 +7,7 @@ use crate::math::SplitMix64;
 /// The random bits of pixel `(x, y)`'s sample `k`, stream `s` (0 and 1 for the two coordinates, more for
 /// other uses): one splitmix64 step over the packed arguments, so neighbouring pixels and indices get
 /// unrelated values.
-pub(crate) fn pixel_hash(x: u32, y: u32, k: u32, s: u32) -> u64 {
+pub fn pixel_hash(x: u32, y: u32, k: u32, s: u32) -> u64 {
     let packed = (u64::from(x) << 32 | u64::from(y)) ^ (u64::from(k) << 20 | u64::from(s)).rotate_left(45);
     SplitMix64::new(packed).next_u64()
 }
@@ -51,7 +51,7 @@ const SOBOL_BITS: u32 = 24;
 /// `i`, counted from the top, is `C(i, r)` mod 2; by Lucas's theorem it is odd exactly when the bits of `r`
 /// are a subset of those of `i`). Together they are a (0, 2)-sequence in base 2: each aligned block of 2^m
 /// points, the first one included, is a (0, m, 2)-net.
-pub(crate) fn sobol_point(k: u32) -> (u32, u32) {
+pub fn sobol_point(k: u32) -> (u32, u32) {
     let (mut second, mut bits) = (0u32, k);
     while bits != 0 {
         second ^= SOBOL_PASCAL[bits.trailing_zeros() as usize];
@@ -89,7 +89,7 @@ const SOBOL_PASCAL: [u32; 32] = {
 /// subtree take their flips from the bits of one splitmix64 step over the seed XOR the subtree root's heap
 /// index (`2^top + prefix`, distinct for every root), node `2^r + q` (relative depth `r`, the next `r` bits
 /// `q`) from bit `2^r + q`. So every node's flip is its own random bit, at four hashes a coordinate.
-pub(crate) fn owen_scramble(v: u32, seed: u64) -> u32 {
+pub fn owen_scramble(v: u32, seed: u64) -> u32 {
     const _: () = assert!(SOBOL_BITS == 4 * 6, "four subtrees of six levels");
     let mut flips = 0u32;
     for top in [0, 6, 12, 18] {
