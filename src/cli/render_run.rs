@@ -272,7 +272,7 @@ fn overrides(args: &RenderArgs) -> Overrides {
         filter: args.filter,
         shade: args.shade,
         postfilter: args.postfilter.as_deref().map(|p| match p {
-            "lecture" => PostFilter::Lecture3x3,
+            "lecture" | "lecture-3x3" => PostFilter::Lecture3x3,
             _ => PostFilter::None,
         }),
         max_depth: args.depth,
