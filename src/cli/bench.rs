@@ -2,13 +2,14 @@
 //! is [`bareray::bench`]'s; [`super::bench_print`] prints it and [`super::bench_compare`] sets it beside an
 //! earlier run.
 
+use std::io::Write;
 use std::path::PathBuf;
 use std::time::Instant;
 
 use anyhow::{anyhow, Result};
 use clap::Args;
 
-use super::bench_compare::{Old, Setting};
+use super::bench_compare::{Compared, Old, Setting};
 use super::bench_print::{print_header, print_json, print_row, RunInfo};
 use super::camera_args::CameraArgs;
 use super::values::{parse_lanes, parse_threads, AccelArg, BvhPresetArg, LanesArg};
@@ -127,6 +128,42 @@ pub(super) fn run(args: BenchArgs) -> Result<()> {
     // Read the old results first: a bad file fails before minutes of measuring.
     let old = args.compare.as_deref().map(Old::read).transpose()?;
     let host = Host::detect();
+    let (mut scene, info, what) = prepare(&args, &threads, &host, old.as_ref())?;
+    if let Some(old) = &old {
+        let now = Setting {
+            scene: info.scene.clone(),
+            primary_only: args.primary_only,
+            width: info.width,
+            height: info.height,
+            pattern: info.pattern.clone(),
+            max_depth: info.max_depth,
+        };
+        let d = old.differences(&now);
+        if !d.is_empty() {
+            eprintln!("note: {} was measured with other settings: {}", old.path.display(), d.join(", "));
+        }
+    }
+    let mut out = std::io::stdout().lock();
+    // The row every other is compared with: scalar when it is measured, else one lane.
+    let base = if args.lanes.contains(&LanesArg::Scalar) { LanesArg::Scalar } else { LanesArg::Packet(1) };
+    if !args.json {
+        print_header(&mut out, &info, &what, base)?;
+    }
+    let compared = measure_rows(&args, &mut scene, &info, (&threads, base), &mut out)?;
+    if let Some(old) = &old {
+        super::bench_compare::print(&mut out, old, compared, args.json)?;
+    }
+    Ok(())
+}
+
+/// Reads the scene, applies the command line and compiles it: the scene, what every row shares, and the
+/// table header's first line.
+fn prepare<'a>(
+    args: &BenchArgs,
+    threads: &[usize],
+    host: &'a Host,
+    old: Option<&'a Old>,
+) -> Result<(Scene, RunInfo<'a>, String)> {
     // Reading and the build run on as many threads as the largest setting measured, not on every core: a
     // 1-thread bench reads and builds on one thread, as a 1-thread peer run does.
     let build_pool = thread_pool(threads.iter().copied().max())?;
@@ -138,7 +175,7 @@ pub(super) fn run(args: BenchArgs) -> Result<()> {
     let mut loaded =
         build_pool.install(|| bareray::compile::load::load(&args.scene, accel, available, &load_options))?;
     super::particle_args::print_warnings(&args.scene, &loaded.warnings);
-    overrides(&args).apply(&mut loaded.desc).map_err(super::render_run::settings_error)?;
+    overrides(args).apply(&mut loaded.desc).map_err(super::render_run::settings_error)?;
     let render = loaded.desc.render;
     let name = PatternName::of(render.pattern);
     let (spp, pattern) = match args.primary_only {
@@ -159,7 +196,7 @@ pub(super) fn run(args: BenchArgs) -> Result<()> {
         single_ray_lanes: args.single_ray_lanes.unwrap_or(CompileOptions::default().single_ray_lanes),
         scalar: args.lanes.contains(&LanesArg::Scalar),
     };
-    let mut scene = build_pool.install(|| Scene::compile_loaded(loaded, options))?;
+    let scene = build_pool.install(|| Scene::compile_loaded(loaded, options))?;
     drop(build_pool);
     let compile_s = clock.elapsed().as_secs_f64();
     let info = RunInfo {
@@ -175,70 +212,62 @@ pub(super) fn run(args: BenchArgs) -> Result<()> {
         height: scene.camera.height,
         frustum_culling: args.frustum_culling,
         bvh_preset: super::values::name(args.bvh_preset),
-        host: &host,
-        old: old.as_ref(),
+        host,
+        old,
     };
-    if let Some(old) = &old {
-        let now = Setting {
-            scene: info.scene.clone(),
-            primary_only: args.primary_only,
-            width: info.width,
-            height: info.height,
-            pattern: info.pattern.clone(),
-            max_depth: info.max_depth,
-        };
-        let d = old.differences(&now);
-        if !d.is_empty() {
-            eprintln!("note: {} was measured with other settings: {}", old.path.display(), d.join(", "));
+    let what = match (args.primary_only, render.shade) {
+        (true, _) => "primary rays only".to_owned(),
+        (false, Shade::Whitted) => {
+            format!("full Whitted render, {}, depth {}", info.pattern, info.max_depth)
         }
-    }
-    let mut out = std::io::stdout().lock();
-    // The row every other is compared with: scalar when it is measured, else one lane.
-    let base = if args.lanes.contains(&LanesArg::Scalar) { LanesArg::Scalar } else { LanesArg::Packet(1) };
-    if !args.json {
-        let what = match (args.primary_only, render.shade) {
-            (true, _) => "primary rays only".to_owned(),
-            (false, Shade::Whitted) => {
-                format!("full Whitted render, {}, depth {}", info.pattern, info.max_depth)
-            }
-            (false, Shade::Ao(_)) => format!("full render, {}", info.pattern),
-        };
-        let what = format!(
-            "{}: {} primitives ({} spheres), {}x{}; parse {parse_s:.3} s, compile {compile_s:.3} s (BVH build \
-             {:.3} s, {:.1} bytes/sphere); {what}",
-            info.scene,
-            scene.geometry.len(),
-            info.spheres,
-            info.width,
-            info.height,
-            info.build_s,
-            scene.bytes_per_sphere(),
-        );
-        print_header(&mut out, &info, &what, base)?;
-    }
+        (false, Shade::Ao(_)) => format!("full render, {}", info.pattern),
+    };
+    let what = format!(
+        "{}: {} primitives ({} spheres), {}x{}; parse {parse_s:.3} s, compile {compile_s:.3} s (BVH build \
+         {:.3} s, {:.1} bytes/sphere); {what}",
+        info.scene,
+        scene.geometry.len(),
+        info.spheres,
+        info.width,
+        info.height,
+        info.build_s,
+        scene.bytes_per_sphere(),
+    );
+    Ok((scene, info, what))
+}
+
+/// Measures and prints each setting, threads by lanes, then the split by ray kind; the rows for
+/// `--compare`.
+fn measure_rows(
+    args: &BenchArgs,
+    scene: &mut Scene,
+    info: &RunInfo,
+    (threads, base): (&[usize], LanesArg),
+    out: &mut impl Write,
+) -> Result<Vec<Compared>> {
     let mut base_mrays: Option<f64> = None;
     let mut compared = Vec::new();
     let trace = if args.primary_only { Trace::PrimaryOnly } else { Trace::Render };
     let split = args.by_kind && !args.primary_only;
     let mut split_rows = Vec::new();
-    for &t in &threads {
+    for &t in threads {
         // One thread pool for every repetition, as the peer harnesses reuse theirs.
         let pool = thread_pool(Some(t))?;
         for &lanes in &args.lanes {
             // The scalar row walks the binary trees, every other row the wide nodes.
             let setting =
-                measure_setting(&mut scene, trace, (lanes.k(), lanes.is_scalar()), &pool, args.reps, split)
+                measure_setting(scene, trace, (lanes.k(), lanes.is_scalar()), &pool, args.reps, split)
                     .map_err(|e| anyhow!("lanes {lanes}, {t} threads: {e}"))?;
             let row = &setting.measured;
             let mrays = row.mrays_per_s();
             if lanes == base && t == threads[0] {
                 base_mrays = Some(mrays);
             }
-            compared.push((lanes, t, mrays, old.as_ref().and_then(|o| o.mrays(lanes, t))));
+            compared.push((lanes, t, mrays, info.old.and_then(|o| o.mrays(lanes, t))));
             if args.json {
-                print_json(&mut out, &info, (lanes, t), row, setting.kinds.as_ref())?;
+                print_json(out, info, (lanes, t), row, setting.kinds.as_ref())?;
             } else {
-                print_row(&mut out, lanes, t, row, base_mrays)?;
+                print_row(out, lanes, t, row, base_mrays)?;
             }
             if let Some(profile) = setting.kinds {
                 let seconds = row.seconds;
@@ -247,12 +276,9 @@ pub(super) fn run(args: BenchArgs) -> Result<()> {
         }
     }
     if !args.json && !split_rows.is_empty() {
-        super::bench_kinds::print_table(&mut out, &split_rows, base, threads[0])?;
+        super::bench_kinds::print_table(out, &split_rows, base, threads[0])?;
     }
-    if let Some(old) = &old {
-        super::bench_compare::print(&mut out, old, compared, args.json)?;
-    }
-    Ok(())
+    Ok(compared)
 }
 
 /// The scene changes the command line asks for.

@@ -1,5 +1,5 @@
-//! The command line's value enums for choices the library names in its own types: clap stays in `cli`, and
-//! each enum converts to the library's type.
+//! The command line's value enums for choices the library names in its own types (clap stays in `cli`, and
+//! each enum converts to the library's type), and the parsers of counts: lanes, threads, samples, bytes.
 
 use bareray::compile::{Accel, BvhPreset};
 use bareray::scene::desc::Transfer;
