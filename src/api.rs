@@ -16,8 +16,8 @@ use crate::compile::{memory, Accel, CompileOptions, Scene};
 use crate::io::particles::arrays::{ArrayError, SphereArrays};
 use crate::io::{LoadOptions, SceneError};
 use crate::render::{self, Rendered, LANE_CHOICES};
-use crate::scene::desc::{CameraOverrides, Pattern, Shade};
 use crate::scene::SceneDesc;
+use crate::settings::{Overrides, SettingsError};
 
 /// Why a render could not be made.
 #[derive(Debug, thiserror::Error)]
@@ -39,22 +39,24 @@ pub enum Error {
     Other(String),
 }
 
+impl From<SettingsError> for Error {
+    fn from(e: SettingsError) -> Self {
+        Error::Options(e.to_string())
+    }
+}
+
 impl From<SceneError> for Error {
     fn from(e: SceneError) -> Self {
         Error::Load(LoadError::Scene(e))
     }
 }
 
-/// How to render: the camera's changes, shading, samples, threads and packet width. The default keeps the
-/// scene's camera, shading and samples, on every core, in packets of 16.
-#[derive(Clone, Copy, Debug, PartialEq)]
+/// How to render: the changes to the scene's settings (camera, shading, samples, …), threads and packet
+/// width. The default keeps the scene's settings, on every core, in packets of 16.
+#[derive(Clone, Debug, PartialEq)]
 pub struct RenderOptions {
-    /// Changes to the scene's camera (eye, look, up, field of view, resolution).
-    pub camera: CameraOverrides,
-    /// Shading, replacing the scene's.
-    pub shade: Option<Shade>,
-    /// Samples per pixel on a regular grid (a square: 1, 4, 9, …), replacing the scene's pattern.
-    pub spp: Option<u32>,
+    /// Changes to the scene's camera and render settings.
+    pub overrides: Overrides,
     /// Worker threads (`None`: every core).
     pub threads: Option<usize>,
     /// Rays per packet: 1, 4, 8 or 16; every width gives the same bits.
@@ -65,19 +67,12 @@ pub struct RenderOptions {
 
 impl Default for RenderOptions {
     fn default() -> Self {
-        Self {
-            camera: CameraOverrides::default(),
-            shade: None,
-            spp: None,
-            threads: None,
-            lanes: 16,
-            scalar: false,
-        }
+        Self { overrides: Overrides::default(), threads: None, lanes: 16, scalar: false }
     }
 }
 
 impl RenderOptions {
-    /// Applies the camera, shading and samples to `desc`; checks the settings.
+    /// Checks the settings and applies the overrides to `desc`.
     pub fn apply(&self, desc: &mut SceneDesc) -> Result<(), Error> {
         if !LANE_CHOICES.contains(&self.lanes) || (self.scalar && self.lanes != 1) {
             let scalar = if self.scalar { " (the scalar path takes 1)" } else { "" };
@@ -86,14 +81,7 @@ impl RenderOptions {
         if self.threads == Some(0) {
             return Err(Error::Options("threads must be at least 1".to_owned()));
         }
-        self.camera.apply(&mut desc.camera);
-        if let Some(spp) = self.spp {
-            desc.render.pattern = Pattern::Grid(crate::io::toml::grid_side(spp).map_err(Error::Options)?);
-        }
-        if let Some(shade) = self.shade {
-            desc.render.shade = shade;
-        }
-        Ok(())
+        Ok(self.overrides.apply(desc)?)
     }
 
     fn compile_options(&self) -> CompileOptions {
@@ -118,6 +106,7 @@ pub struct Picture {
 /// use bareray::api::{self, RenderOptions};
 /// use bareray::io::particles::arrays::{Floats, SphereArrays};
 /// use bareray::scene::desc::CameraOverrides;
+/// use bareray::settings::Overrides;
 ///
 /// let centers = [0.0f32, 0.0, 0.0, 1.5, 0.0, 0.0];
 /// let arrays = SphereArrays {
@@ -126,7 +115,8 @@ pub struct Picture {
 ///     colors: Some(Floats::F32(&[1.0, 0.0, 0.0, 0.0, 0.0, 1.0])),
 /// };
 /// let camera = CameraOverrides { width: Some(64), height: Some(36), ..Default::default() };
-/// let options = RenderOptions { camera, threads: Some(1), ..Default::default() };
+/// let overrides = Overrides { camera, ..Default::default() };
+/// let options = RenderOptions { overrides, threads: Some(1), ..Default::default() };
 /// let picture = api::render_spheres(&arrays, None, &options)?;
 /// let image = &picture.rendered.image;
 /// assert_eq!((image.width, image.height), (64, 36));

@@ -6,7 +6,7 @@
 //! SIGILL, without a word: a default build on a CPU older than Haswell, a native build on any CPU that lacks
 //! one of the build machine's features. In the `bareray` binary [`check_or_exit`] runs as an ELF
 //! constructor, before Rust's runtime and clap, and turns that into an error naming what is missing and how
-//! to build for this CPU (elsewhere than Linux, [`check`] runs first thing in [`crate::cli::main`]).
+//! to build for this CPU (elsewhere than Linux, [`check`] runs first thing in `cli::main`).
 //!
 //! Detection reads CPUID (and XCR0, for whether the OS saves the AVX and AVX-512 registers) directly:
 //! `is_x86_feature_detected!` answers `true` for any feature the binary was compiled with, without asking
@@ -15,7 +15,7 @@
 
 /// The variable naming features the check treats as missing (comma-separated, such as `avx512f,fma`): lets
 /// a test exercise the error path on any machine.
-pub const ASSUME_LACKS_VAR: &str = "BARERAY_ASSUME_CPU_LACKS";
+pub(crate) const ASSUME_LACKS_VAR: &str = "BARERAY_ASSUME_CPU_LACKS";
 
 /// Which CPUID output holds a feature's bit.
 #[derive(Clone, Copy, Debug)]
@@ -112,7 +112,7 @@ features! {
 
 /// The x86 features this binary was compiled for, among those the check knows (the `target_feature`s
 /// enabled by `-C target-cpu=...`), in the order of CPUID's registers and bits. Empty on other architectures.
-pub fn required_features() -> Vec<&'static str> {
+pub(crate) fn required_features() -> Vec<&'static str> {
     FEATURES.iter().filter(|f| f.compiled).map(|f| f.name).collect()
 }
 
@@ -140,7 +140,7 @@ fn names(mask: u64) -> impl Iterator<Item = &'static str> {
 
 /// Whether the comma-separated `list` (an [`ASSUME_LACKS_VAR`] value, such as `avx512f,fma`; blanks
 /// around names ignored) names `feature`.
-pub fn lists(list: &[u8], feature: &str) -> bool {
+pub(crate) fn lists(list: &[u8], feature: &str) -> bool {
     list.split(|&b| b == b',').any(|name| name.trim_ascii() == feature.as_bytes())
 }
 
@@ -175,7 +175,9 @@ fn emit_message<'a>(
 
 /// The message that names the features the CPU lacks and how to build for it, as one string (ending in a
 /// newline).
-pub fn message(required: &[&str], missing: &[&str]) -> String {
+// Called first thing in `cli::main` where the ELF constructor does not run (and by the tests).
+#[cfg_attr(all(target_os = "linux", any(target_arch = "x86", target_arch = "x86_64")), allow(dead_code))]
+pub(crate) fn message(required: &[&str], missing: &[&str]) -> String {
     let mut out = String::new();
     emit_message(required.iter().copied(), missing.iter().copied(), |s| out.push_str(s));
     out
@@ -184,7 +186,9 @@ pub fn message(required: &[&str], missing: &[&str]) -> String {
 /// The startup check: `Err` with [`message`] when the CPU (or [`ASSUME_LACKS_VAR`]) lacks a feature this
 /// binary was compiled for. Always `Ok` on other architectures. Uses the standard library (the environment,
 /// a `String`): where that is compiled for the build machine too (LTO), use [`check_or_exit`].
-pub fn check() -> Result<(), String> {
+// Called first thing in `cli::main` where the ELF constructor does not run (and by the tests).
+#[cfg_attr(all(target_os = "linux", any(target_arch = "x86", target_arch = "x86_64")), allow(dead_code))]
+pub(crate) fn check() -> Result<(), String> {
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     {
         let assumed = std::env::var(ASSUME_LACKS_VAR).unwrap_or_default();
@@ -203,7 +207,7 @@ pub fn check() -> Result<(), String> {
 /// with `getenv`, writes [`message`] to stderr with `write` and leaves with `_exit(1)`: libc calls,
 /// compiled for any x86-64; no allocation, no formatting.
 #[cfg(all(target_os = "linux", any(target_arch = "x86", target_arch = "x86_64")))]
-pub fn check_or_exit() {
+pub(crate) fn check_or_exit() {
     // SAFETY: the name is NUL-terminated; a non-null result is a NUL-terminated string that lives as long
     // as the environment, which nothing changes before `main`.
     let assumed = unsafe {
@@ -236,19 +240,19 @@ pub fn check_or_exit() {
 }
 
 /// The features x86-64-v2 adds to x86-64's baseline (SSE4.2 and what comes with it).
-pub const X86_64_V2: &[&str] = &["sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "cmpxchg16b"];
+pub(crate) const X86_64_V2: &[&str] = &["sse3", "ssse3", "sse4.1", "sse4.2", "popcnt", "cmpxchg16b"];
 
 /// The features x86-64-v3 adds to x86-64-v2 (AVX2 and FMA, with their companions).
-pub const X86_64_V3: &[&str] = &["avx", "avx2", "fma", "bmi1", "bmi2", "lzcnt", "movbe", "f16c"];
+pub(crate) const X86_64_V3: &[&str] = &["avx", "avx2", "fma", "bmi1", "bmi2", "lzcnt", "movbe", "f16c"];
 
 /// The features x86-64-v4 adds to x86-64-v3 (the AVX-512 subsets every AVX-512 CPU has had since Skylake-SP).
-pub const X86_64_V4: &[&str] = &["avx512f", "avx512bw", "avx512cd", "avx512dq", "avx512vl"];
+pub(crate) const X86_64_V4: &[&str] = &["avx512f", "avx512bw", "avx512cd", "avx512dq", "avx512vl"];
 
 /// Which of `features` this CPU lacks (or [`ASSUME_LACKS_VAR`] names as lacking), whatever this binary was
 /// compiled for: for telling which other builds can run here (`bench --isa`). Reads CPUID, not
 /// `is_x86_feature_detected!`, which answers `true` for every feature this binary was compiled with. On
 /// other architectures every feature is lacking.
-pub fn lacking<'a>(features: &[&'a str]) -> Vec<&'a str> {
+pub(crate) fn lacking<'a>(features: &[&'a str]) -> Vec<&'a str> {
     #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
     {
         let assumed = std::env::var(ASSUME_LACKS_VAR).unwrap_or_default();
@@ -261,7 +265,7 @@ pub fn lacking<'a>(features: &[&'a str]) -> Vec<&'a str> {
 
 /// What the CPU reports, read once.
 #[cfg(any(target_arch = "x86", target_arch = "x86_64"))]
-pub mod detect {
+pub(crate) mod detect {
     use super::{Reg, State, FEATURES};
     #[cfg(target_arch = "x86")]
     use core::arch::x86::{__cpuid, __cpuid_count};
@@ -270,7 +274,7 @@ pub mod detect {
 
     /// The CPUID registers that hold the features the check knows, and the register state the OS saves.
     #[derive(Clone, Copy, Debug, Default)]
-    pub struct Cpu {
+    pub(crate) struct Cpu {
         l1_ecx: u32,
         l7_ebx: u32,
         l7_ecx: u32,
@@ -283,7 +287,7 @@ pub mod detect {
 
     impl Cpu {
         /// Reads CPUID (leaves 1, 7.0, 7.1 and 0x8000_0001, where the CPU has them) and XCR0.
-        pub fn read() -> Cpu {
+        pub(crate) fn read() -> Cpu {
             let mut cpu = Cpu::default();
             let max_leaf = __cpuid(0).eax;
             if max_leaf >= 1 {
@@ -310,7 +314,7 @@ pub mod detect {
 
         /// Whether the CPU has the feature `name` and the OS saves its registers; `false` for names the
         /// check does not know.
-        pub fn has(&self, name: &str) -> bool {
+        pub(crate) fn has(&self, name: &str) -> bool {
             let Some(f) = FEATURES.iter().find(|f| f.name == name) else { return false };
             let reg = match f.reg {
                 Reg::L1Ecx => self.l1_ecx,

@@ -12,7 +12,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 /// faults (docs/perf-log/2026-11.md). Fresh mappings are zero, so zeroed blocks cost no writes on the allocating
 /// thread. Installed in the `bareray` binary only (`main.rs`): tests and benchmarks use the plain system
 /// allocator.
-pub struct HugePages;
+pub(crate) struct HugePages;
 
 // SAFETY: small blocks are forwarded to `System` with the same arguments; large ones are whole private
 // anonymous mappings of at least the requested size at the requested alignment (a huge page is stricter

@@ -161,7 +161,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
 
     /// [`Tracer::primary`] for camera rays whose closest hits `hit` are known: from
     /// [`crate::accel::Geometry::intersect_tile`], which finds a tile's camera hits as one large packet.
-    pub fn primary_from(&mut self, rays: &RayPacket<F>, hit: HitPacket<F>) -> V3<F> {
+    pub(crate) fn primary_from(&mut self, rays: &RayPacket<F>, hit: HitPacket<F>) -> V3<F> {
         self.counts.primary += lanes_set::<F>(rays.active);
         match self.scene.render.shade {
             Shade::Whitted => self.shade(rays, &hit, 0, F::splat_f32(1.0)),

@@ -12,7 +12,6 @@ use bareray::scene::desc::{Falloff, LightDesc, Material, Pattern, SphereDesc};
 use bareray::scene::SceneDesc;
 use common::{camera, compile, sphere};
 use glam::DVec3;
-use indicatif::ProgressBar;
 
 /// A material of one colour whatever the lighting: ambient 1 under an ambient light of 1, nothing else.
 fn flat(color: Rgb) -> Material {
@@ -20,7 +19,7 @@ fn flat(color: Rgb) -> Material {
 }
 
 fn image(scene: &Scene, lanes: usize) -> Image {
-    render_lanes(scene, lanes, &thread_pool(Some(2)).unwrap(), &ProgressBar::hidden()).image
+    render_lanes(scene, lanes, &thread_pool(Some(2)).unwrap(), &()).image
 }
 
 /// One sphere of a flat colour on a black background, seen by a 64×48 camera from (0, 0, −5).

@@ -35,18 +35,18 @@ const LAYERS: &[(&str, u32)] = &[
     ("io", 7),
     // The compiled runtime Scene and what it uses.
     ("compile", 8),
+    // Changes to a description's settings (the command line's and the Python module's) and their names.
+    ("settings", 8),
     // Whitted shading over the queries.
     ("shade", 9),
     // Image files from a film.
     ("output", 9),
     // Tiles, packets, threads: the renderer.
     ("render", 10),
-    // Tools over the renderer and images, and the platform pieces the binary starts with.
+    // Tools over the renderer and images.
     ("aov", 11),
     ("accuracy", 11),
     ("imagediff", 11),
-    ("cpu", 11),
-    ("huge_pages", 11),
     // Run time against error, over the renderer and the accuracy twin.
     ("converge", 12),
     // Renders timed, repeated and split by ray kind (`bareray bench`'s measurements).
@@ -54,10 +54,13 @@ const LAYERS: &[(&str, u32)] = &[
     // Stills of any size: bands streamed into files, pre-checks, regions and their merge.
     ("still", 12),
     // Whole renders in memory for programs and bindings: arrays or a file in, an image out; its bench is
-    // `bench`'s measurement. Beside the command line, which does not use it.
+    // `bench`'s measurement. The command line does not use it.
     ("api", 13),
-    // The command line.
-    ("cli", 13),
+    // The binary crate (declared by src/main.rs; the library is `bareray::` there, which this check does not
+    // rank): the platform pieces it starts with, and the command line over them.
+    ("cpu", 14),
+    ("huge_pages", 14),
+    ("cli", 15),
 ];
 
 /// Files that belong to no layer: the crate root declares the modules.

@@ -6,7 +6,6 @@ use bareray::compile::Scene;
 use bareray::film::Image;
 use bareray::render::{render_lanes, thread_pool};
 use common::{compile, parse_toml, render, scene_files};
-use indicatif::ProgressBar;
 
 fn render_toml(src: &str, threads: usize) -> Image {
     render(&compile(&parse_toml(src)), threads)
@@ -167,11 +166,10 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
         let mut scene = Scene::compile_with_options(&desc, options).unwrap();
         scalar_trees += scene.geometry.bvhs().filter(|b| b.scalar.is_some() && b.scalar_walk).count();
         // The scalar path: K = 1 on the binary trees.
-        let reference = render_lanes(&scene, 1, &thread_pool(Some(2)).unwrap(), &ProgressBar::hidden());
+        let reference = render_lanes(&scene, 1, &thread_pool(Some(2)).unwrap(), &());
         assert!(scene.geometry.set_scalar_walk(false));
         for (lanes, threads) in [(1, 1), (1, 2), (4, 1), (4, 2), (8, 1), (8, 2), (16, 1), (16, 2)] {
-            let rendered =
-                render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
+            let rendered = render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &());
             assert_eq!(
                 rendered.counts, reference.counts,
                 "{path:?} counts at lanes {lanes}, threads {threads}"
@@ -194,8 +192,7 @@ fn every_scene_is_identical_at_every_width_and_thread_count() {
             let scene = Scene::compile_with_options(&desc, options).unwrap();
             assert_eq!(scene.geometry.particles.len(), desc.spheres.len());
             for (lanes, threads) in [(1, 1), (4, 2), (8, 1), (16, 2)] {
-                let rendered =
-                    render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
+                let rendered = render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &());
                 assert_eq!(rendered.counts, reference.counts, "{path:?} particle tree counts, lanes {lanes}");
                 let same = rendered
                     .image
@@ -230,7 +227,7 @@ fn per_pixel_patterns_are_deterministic_and_converge() {
         let mut d = desc.clone();
         d.render.pattern = pattern;
         let scene = Scene::compile(&d).unwrap();
-        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden()).image
+        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &()).image
     };
     let bits =
         |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
@@ -273,7 +270,7 @@ fn filters_are_deterministic_and_normalised() {
     desc.camera.height = 50;
     let image = |desc: &bareray::scene::SceneDesc, lanes: usize, threads: usize| {
         let scene = Scene::compile(desc).unwrap();
-        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden()).image
+        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &()).image
     };
     let bits =
         |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
@@ -332,7 +329,7 @@ fn adaptive_sampling_is_deterministic_and_splits_only_at_edges() {
         let mut d = desc.clone();
         d.render.pattern = pattern;
         let scene = Scene::compile(&d).unwrap();
-        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden())
+        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &())
     };
     let bits =
         |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
@@ -394,11 +391,11 @@ fn coverage_is_identical_at_every_width_and_thread_count() {
         (desc.camera.width, desc.camera.height) = (72, 40);
         desc.render.pattern = Pattern::Coverage;
         let scene = Scene::compile(&desc).unwrap();
-        let reference = render_lanes(&scene, 1, &thread_pool(Some(1)).unwrap(), &ProgressBar::hidden());
+        let reference = render_lanes(&scene, 1, &thread_pool(Some(1)).unwrap(), &());
         let pixels = 72 * 40;
         assert!(reference.counts.primary >= pixels, "{path:?}: at least one ray a pixel");
         for (lanes, threads) in [(1, 2), (4, 1), (8, 2), (16, 1), (16, 2)] {
-            let r = render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &ProgressBar::hidden());
+            let r = render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &());
             assert_eq!(r.counts, reference.counts, "{path:?} counts at lanes {lanes}, threads {threads}");
             assert!(
                 bits(&r.image) == bits(&reference.image),
@@ -424,9 +421,9 @@ fn per_pixel_patterns_are_identical_at_every_width_with_frustum_culling() {
         let scene = Scene::compile(&desc).unwrap();
         assert!(scene.geometry.culls_by_pyramid());
         let pool = thread_pool(Some(2)).unwrap();
-        let reference = bits(&render_lanes(&scene, 1, &pool, &ProgressBar::hidden()).image);
+        let reference = bits(&render_lanes(&scene, 1, &pool, &()).image);
         for lanes in [4, 8, 16] {
-            let image = render_lanes(&scene, lanes, &pool, &ProgressBar::hidden()).image;
+            let image = render_lanes(&scene, lanes, &pool, &()).image;
             assert!(bits(&image) == reference, "{pattern:?} at {lanes} lanes");
         }
     }

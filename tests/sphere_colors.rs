@@ -122,7 +122,8 @@ fn arrays_render_as_the_command_line_renders_their_file() {
     assert!(read == from_arrays, "the file's scene and the arrays' differ");
 
     let camera = CameraOverrides { width: Some(160), height: Some(90), ..Default::default() };
-    let options = RenderOptions { camera, threads: Some(2), ..Default::default() };
+    let overrides = bareray::settings::Overrides { camera, ..Default::default() };
+    let options = RenderOptions { overrides, threads: Some(2), ..Default::default() };
     let picture = api::render_spheres(&arrays(&f), None, &options).expect("render");
     let exr = dir.path().join("field.exr");
     let out = common::bareray(&[

@@ -391,8 +391,8 @@ fn tiff_and_jpeg_hold_the_pngs_values() {
     assert!(!dir.path().join("f.jpg").exists());
 }
 
-/// `--postfilter lecture` renders what the scene key `postfilter = "lecture-3x3"` renders, and `--postfilter
-/// none` takes a scene's postfilter away (what the scene without the key renders).
+/// `--postfilter lecture` (or `lecture-3x3`) renders what the scene key `postfilter = "lecture-3x3"` renders,
+/// and `--postfilter none` takes a scene's postfilter away (what the scene without the key renders).
 #[test]
 fn postfilter_flag_is_the_scene_key() {
     let dir = tempfile::tempdir().unwrap();
@@ -414,6 +414,8 @@ fn postfilter_flag_is_the_scene_key() {
     let key = run(&p("keyed.toml"), &p("key.png"), &[]);
     let plain = run(whitted.to_str().unwrap(), &p("plain.png"), &[]);
     assert!(flag == key, "--postfilter lecture differs from the scene key");
+    let spelled = run(whitted.to_str().unwrap(), &p("spelled.png"), &["--postfilter", "lecture-3x3"]);
+    assert!(spelled == key, "--postfilter lecture-3x3, the key's spelling, differs from the scene key");
     assert!(flag != plain, "--postfilter lecture changed nothing");
     let none = run(&p("keyed.toml"), &p("none.png"), &["--postfilter", "none"]);
     assert!(none == plain, "--postfilter none left the scene's postfilter on");

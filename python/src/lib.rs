@@ -11,6 +11,7 @@ use bareray::api::{self, FileScene, Picture, RenderOptions};
 use bareray::film::Image;
 use bareray::io::particles::arrays::{Floats, SphereArrays};
 use bareray::scene::desc::{CameraOverrides, Shade, Transfer};
+use bareray::settings::Overrides;
 use glam::DVec3;
 use numpy::{
     PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
@@ -156,7 +157,8 @@ fn options(
         }
         Err(_) => (lanes.extract::<usize>()?, false),
     };
-    Ok(RenderOptions { camera, shade, spp, threads, lanes, scalar })
+    let overrides = Overrides { camera, shade, spp, ..Overrides::default() };
+    Ok(RenderOptions { overrides, threads, lanes, scalar })
 }
 
 fn api_error(e: api::Error) -> PyErr {

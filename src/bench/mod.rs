@@ -6,8 +6,10 @@
 //! geometry query (time per kind, the probe's own ticks taken off); the timed run's shares are then
 //! applied to the median of the clean runs.
 
+mod host;
 mod profile;
 
+pub use host::{cores, default_threads, Host};
 pub use profile::{profile, KindProfile, Profile, TIMED_RUNS};
 
 use crate::compile::Scene;
@@ -87,17 +89,64 @@ pub fn measure(
         }
     }
     let checksum = checksum.expect("the warm-up run is hashed");
-    times.sort_by(f64::total_cmp);
-    Ok(Measured {
-        rays,
-        seconds: times[times.len() / 2],
-        min_s: times[0],
-        max_s: times[times.len() - 1],
-        checksum,
-    })
+    let (min_s, seconds, max_s) = min_median_max(&times);
+    Ok(Measured { rays, seconds, min_s, max_s, checksum })
+}
+
+/// The smallest, the median (the upper one of an even count) and the largest of `values`, which must not be
+/// empty.
+pub fn min_median_max(values: &[f64]) -> (f64, f64, f64) {
+    let mut v = values.to_vec();
+    v.sort_by(f64::total_cmp);
+    (v[0], v[v.len() / 2], v[v.len() - 1])
+}
+
+/// What [`measure_setting`] found: the timed runs and, when asked, the render split by ray kind.
+#[derive(Clone, Debug)]
+pub struct Setting {
+    /// The timed runs.
+    pub measured: Measured,
+    /// The split by ray kind ([`profile`]), whose runs gave the timed runs' checksum.
+    pub kinds: Option<Profile>,
+}
+
+/// [`measure`]s `scene` at `lanes` rays per packet, on the scalar path when `scalar` (the geometry then
+/// walks its binary trees, which the scene must have been compiled with), and with `split` also
+/// [`profile`]s it, checking that the probed runs traced the timed runs' bits.
+pub fn measure_setting(
+    scene: &mut Scene,
+    trace: Trace,
+    (lanes, scalar): (usize, bool),
+    pool: &rayon::ThreadPool,
+    reps: u32,
+    split: bool,
+) -> Result<Setting, String> {
+    scene.geometry.set_scalar_walk(scalar);
+    let measured = measure(scene, trace, lanes, pool, reps)?;
+    let kinds = split.then(|| profile(scene, lanes, pool));
+    if let Some(changed) = kinds.as_ref().and_then(|p| p.checksums.iter().find(|&&c| c != measured.checksum))
+    {
+        return Err(format!(
+            "a probed run's checksum {changed:016x} differs from the timed runs' {:016x}",
+            measured.checksum
+        ));
+    }
+    Ok(Setting { measured, kinds })
 }
 
 /// FNV-1a 64 over the image's f32 bits, row-major.
-pub fn image_checksum(img: &Image) -> u64 {
+pub(crate) fn image_checksum(img: &Image) -> u64 {
     fnv1a(img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).flat_map(|v| v.to_bits().to_le_bytes()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn min_median_max_of_odd_and_single_counts() {
+        assert_eq!(min_median_max(&[3.0, 1.0, 2.0]), (1.0, 2.0, 3.0));
+        assert_eq!(min_median_max(&[5.0]), (5.0, 5.0, 5.0));
+        assert_eq!(min_median_max(&[4.0, 1.0]), (1.0, 4.0, 4.0));
+    }
 }

@@ -1,5 +1,5 @@
 //! `bareray bench`'s per-ray-kind report: the table after the main one, and the `by_kind` field of each
-//! JSON line. The figures come from [`crate::bench::profile`].
+//! JSON line. The figures come from [`bareray::bench::profile`].
 
 use std::io::Write;
 
@@ -7,15 +7,15 @@ use anyhow::Result;
 use serde::Serialize;
 
 use super::values::LanesArg;
-use crate::bench::{KindProfile, Profile};
+use bareray::bench::{KindProfile, Profile};
 
 /// One measured setting with its split.
 pub(super) struct Split {
-    pub lanes: LanesArg,
-    pub threads: usize,
+    pub(super) lanes: LanesArg,
+    pub(super) threads: usize,
     /// The median seconds of the setting's clean runs.
-    pub seconds: f64,
-    pub profile: Profile,
+    pub(super) seconds: f64,
+    pub(super) profile: Profile,
 }
 
 /// The `by_kind` field of a JSON line.
@@ -88,7 +88,7 @@ pub(super) fn print_table(
         " kind        lanes threads        rays  share    Mrays/s {:>9}  boxes/ray prims/ray  rays/box rays/prim",
         if base.is_scalar() { "vs scalar" } else { "vs 1 lane" }
     )?;
-    let kinds = crate::accel::RayKind::ALL;
+    let kinds = bareray::accel::RayKind::ALL;
     for kind in kinds {
         let of = |r: &Split| r.profile.kinds.iter().find(|k| k.kind == kind).copied();
         let base_mrays = rows
@@ -160,7 +160,7 @@ pub(super) fn print_builds(
         " kind        isa  lanes threads        rays  share    Mrays/s {:>8}  rays/box rays/prim",
         format!("vs {base}")
     )?;
-    for kind in crate::accel::RayKind::ALL.map(crate::accel::RayKind::name) {
+    for kind in bareray::accel::RayKind::ALL.map(bareray::accel::RayKind::name) {
         for &(build, lanes, threads, v) in rows {
             let Some(k) = kind_of(v, kind) else { continue };
             let base_mrays = rows

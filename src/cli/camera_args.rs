@@ -3,36 +3,36 @@
 use clap::Args;
 use glam::DVec3;
 
-use crate::scene::desc::{CameraOverrides, SceneDesc};
+use bareray::scene::desc::CameraOverrides;
 
 /// `--eye --look --up --hfov --width --height`.
 #[derive(Args, Debug, Clone, Default)]
-pub struct CameraArgs {
+pub(super) struct CameraArgs {
     /// Eye point, `x,y,z`.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub eye: Option<DVec3>,
+    pub(super) eye: Option<DVec3>,
     /// Point to look at, `x,y,z`.
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub look: Option<DVec3>,
+    pub(super) look: Option<DVec3>,
     /// Up vector, `x,y,z` (need be neither unit nor perpendicular to the view).
     #[arg(long, value_parser = parse_vec3, allow_hyphen_values = true)]
-    pub up: Option<DVec3>,
+    pub(super) up: Option<DVec3>,
     /// Horizontal field of view in degrees, across the outer pixel edges (pixel-centre sampling).
     #[arg(long, value_parser = parse_hfov)]
-    pub hfov: Option<f64>,
+    pub(super) hfov: Option<f64>,
     /// Image width in pixels. Given alone, the height follows the scene's aspect ratio. On a scene that sets
     /// the camera's `pixel_size` the pixels keep their size, so the view widens or narrows with the
     /// resolution (the framing changes); add --hfov to keep a fixed view.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub width: Option<u32>,
+    pub(super) width: Option<u32>,
     /// Image height in pixels. Given alone, the width follows the scene's aspect ratio. On a scene that sets
     /// `pixel_size` the framing changes with the resolution, as for --width.
     #[arg(long, value_parser = clap::value_parser!(u32).range(1..=65536))]
-    pub height: Option<u32>,
+    pub(super) height: Option<u32>,
 }
 
 /// Parses `x,y,z`.
-pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
+pub(super) fn parse_vec3(s: &str) -> Result<DVec3, String> {
     let parts: Vec<&str> = s.split(',').map(str::trim).collect();
     let nums: Result<Vec<f64>, _> = parts.iter().map(|p| p.parse::<f64>()).collect();
     match nums {
@@ -42,7 +42,7 @@ pub fn parse_vec3(s: &str) -> Result<DVec3, String> {
 }
 
 /// Parses a horizontal field of view in degrees, in (0, 180).
-pub fn parse_hfov(s: &str) -> Result<f64, String> {
+pub(super) fn parse_hfov(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(h) if h > 0.0 && h < 180.0 => Ok(h),
         _ => Err("the field of view must be a number of degrees in (0, 180)".to_owned()),
@@ -50,13 +50,8 @@ pub fn parse_hfov(s: &str) -> Result<f64, String> {
 }
 
 impl CameraArgs {
-    /// Applies the overrides to a scene.
-    pub fn apply(&self, desc: &mut SceneDesc) {
-        self.overrides().apply(&mut desc.camera);
-    }
-
     /// The overrides as the library takes them.
-    pub fn overrides(&self) -> CameraOverrides {
+    pub(super) fn overrides(&self) -> CameraOverrides {
         let CameraArgs { eye, look, up, hfov, width, height } = self.clone();
         CameraOverrides { eye, look, up, hfov, width, height }
     }

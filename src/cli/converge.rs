@@ -1,5 +1,5 @@
 //! `bareray converge`: run time against error for the sampling methods; the study itself is
-//! [`crate::converge`].
+//! [`bareray::converge`].
 
 use std::io::Write as _;
 use std::path::{Path, PathBuf};
@@ -9,14 +9,17 @@ use clap::Args;
 use indicatif::ProgressBar;
 
 use super::camera_args::CameraArgs;
-use super::render::{load_scene, parse_lanes, parse_threads};
-use super::values::{FilterChoice, LanesArg};
-use crate::compile::{CompileOptions, Scene};
-use crate::converge::{csv, curves, ladder, plot, study, Reference, METHODS};
-use crate::film::Image;
-use crate::math::Rgb;
-use crate::output::{write_atomic_with, write_image};
-use crate::scene::desc::{Pattern, Transfer};
+use super::render_run::load_scene;
+use super::sampling_values::FilterChoice;
+use super::values::LanesArg;
+use super::values::{parse_lanes, parse_threads};
+use bareray::compile::{CompileOptions, Scene};
+use bareray::converge::{csv, curves, ladder, plot, study, Reference, METHODS};
+use bareray::film::Image;
+use bareray::math::Rgb;
+use bareray::output::{write_atomic_with, write_image};
+use bareray::scene::desc::{Pattern, Transfer};
+use bareray::settings::Overrides;
 
 /// Arguments of `bareray converge`.
 #[derive(Args, Debug)]
@@ -30,72 +33,70 @@ Examples:\n  bareray converge scenes/whitted.toml --width 320 --height 240 --csv
 bareray converge scenes/balls3.nff --methods grid,r2 --max-spp 16\n  \
 bareray converge scenes/field.toml --methods stratified,sobol --filters none,gaussian,mitchell --csv f.csv"
 )]
-pub struct ConvergeArgs {
+pub(super) struct ConvergeArgs {
     /// Scene file (.toml, .nff or .xyzr).
-    pub scene: PathBuf,
+    pub(super) scene: PathBuf,
     /// Methods to compare, comma-separated: grid, stratified, r2, sobol, adaptive, lecture, coverage.
     #[arg(long, value_delimiter = ',', default_values_t = METHODS.map(String::from), value_parser = parse_method)]
-    pub methods: Vec<String>,
+    pub(super) methods: Vec<String>,
     /// Largest samples per pixel of a method's runs.
     #[arg(long, default_value_t = 64, value_parser = clap::value_parser!(u32).range(1..=4096))]
-    pub max_spp: u32,
+    pub(super) max_spp: u32,
     /// Reconstruction filters to compare, comma-separated: `none` (each pixel averages its own samples) or
     /// `KIND[:RADIUS]` as `render --filter` takes it (box, tent, gaussian, mitchell). Each (method, filter)
     /// pair is a series of its own (CSV: a `filter` column after `method`; plot: `method, filter`), measured
     /// against a reference rendered with the same filter. Adaptive, lecture and coverage ignore filters and
     /// run under `none` only. Default: the scene's own filter, one series per method.
-    #[arg(long, value_delimiter = ',', value_parser = super::values::parse_filter_choice, conflicts_with = "precision")]
-    pub filters: Option<Vec<FilterChoice>>,
+    #[arg(long, value_delimiter = ',', value_parser = super::sampling_values::parse_filter_choice, conflicts_with = "precision")]
+    pub(super) filters: Option<Vec<FilterChoice>>,
     /// Samples per pixel of the reference, a square number (stratified √N×√N).
-    #[arg(long, default_value_t = 1024, value_parser = super::render::parse_spp)]
-    pub reference_spp: u32,
+    #[arg(long, default_value_t = 1024, value_parser = super::values::parse_spp)]
+    pub(super) reference_spp: u32,
     /// Write the runs as CSV (`method,spp,seconds,rays,rmse,rmse_edges,psnr`); the reference is cached
     /// beside it.
     #[arg(long)]
-    pub csv: Option<PathBuf>,
+    pub(super) csv: Option<PathBuf>,
     /// Write the log-log plot of RMSE against time as SVG.
     #[arg(long)]
-    pub plot: Option<PathBuf>,
+    pub(super) plot: Option<PathBuf>,
     /// Compare precision paths instead of sampling methods: primary hits at pixel centres by f32 packets,
     /// f32 single-ray SIMD, the f32 scalar path and the f64 twin, each timed, the f32 ones measured against
     /// the f64 one.
     #[arg(long)]
-    pub precision: bool,
+    pub(super) precision: bool,
     /// Shading of the reference and of every run, overriding the scene: `whitted` or
     /// `ao[:SAMPLES[,DISTANCE]]` (as `render --shade`). Each camera sample gets its own SAMPLES occlusion
     /// rays, so a run at N samples per pixel traces N×SAMPLES of them per pixel, and the reference
     /// reference-spp×SAMPLES: the ambient occlusion's noise falls with the samples per pixel too.
-    #[arg(long, value_name = "MODE", value_parser = super::values::parse_shade)]
-    pub shade: Option<crate::scene::desc::Shade>,
+    #[arg(long, value_name = "MODE", value_parser = super::sampling_values::parse_shade)]
+    pub(super) shade: Option<bareray::scene::desc::Shade>,
     /// Rays per packet: 1 (single-ray SIMD), 4, 8 or 16; or `scalar` (one ray against one box and one
     /// primitive at a time, over binary BVHs). With --precision, the packet path's width (the scalar path
     /// is always one of the paths compared).
     #[arg(long, default_value = "16", value_parser = parse_lanes)]
-    pub lanes: LanesArg,
+    pub(super) lanes: LanesArg,
     /// Worker threads (default: all cores).
     #[arg(long, value_parser = parse_threads)]
-    pub threads: Option<usize>,
+    pub(super) threads: Option<usize>,
     #[command(flatten)]
-    pub camera: CameraArgs,
+    pub(super) camera: CameraArgs,
 }
 
 /// Runs `bareray converge`.
-pub fn run(args: ConvergeArgs) -> Result<()> {
+pub(super) fn run(args: ConvergeArgs) -> Result<()> {
     let methods = args
         .methods
         .iter()
         .map(|m| Ok((m.clone(), ladder(m, args.max_spp).map_err(|e| anyhow!("--methods: {e}"))?)))
         .collect::<Result<Vec<_>>>()?;
     for out in [&args.csv, &args.plot].into_iter().flatten() {
-        crate::output::check_writable(out)?;
+        bareray::output::check_writable(out)?;
     }
     let source = std::fs::read(&args.scene).with_context(|| format!("{}", args.scene.display()))?;
-    let pool = crate::render::thread_pool(args.threads)?;
+    let pool = bareray::render::thread_pool(args.threads)?;
     let mut desc = load_scene(&args.scene, &pool)?;
-    args.camera.apply(&mut desc);
-    if let Some(shade) = args.shade {
-        desc.render.shade = shade;
-    }
+    let overrides = Overrides { camera: args.camera.overrides(), shade: args.shade, ..Overrides::default() };
+    overrides.apply(&mut desc).map_err(super::render_run::settings_error)?;
     // The scalar path needs each BVH's binary tree; --precision compares it with the others.
     let options =
         CompileOptions { scalar: args.lanes.is_scalar() || args.precision, ..CompileOptions::default() };
@@ -104,7 +105,7 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
         return run_precision(&args, &desc, &mut scene, &pool);
     }
     let lanes = args.lanes.k();
-    let side = crate::io::toml::grid_side(args.reference_spp).map_err(|e| anyhow!(e))?;
+    let side = bareray::io::toml::grid_side(args.reference_spp).map_err(|e| anyhow!(e))?;
     // One pass with the scene's own filter, or one per filter of --filters, each with its own reference.
     let passes: Vec<Option<FilterChoice>> = match &args.filters {
         None => vec![None],
@@ -158,9 +159,9 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
             .filter(|(_, p)| pass.is_none_or(|c| c.0.is_none() || p.iter().all(|p| p.takes_filter())))
             .cloned()
             .collect();
-        let bar = ProgressBar::new(0);
+        let bar = super::render_report::TileBar(ProgressBar::new(0));
         let mut part = study(&mut scene, &here, &reference, lanes, &pool, &bar);
-        bar.finish_and_clear();
+        bar.0.finish_and_clear();
         part.iter_mut().for_each(|r| r.filter.clone_from(&label));
         runs.extend(part);
     }
@@ -190,7 +191,7 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
             .with_context(|| format!("{}", path.display()))?;
     }
     if let Some(path) = &args.plot {
-        let shading = super::values::shade_name(desc.render.shade);
+        let shading = bareray::settings::shade_name(desc.render.shade);
         let title = format!("{}, {shading}: error against time", args.scene.display());
         let svg = plot::svg(&title, "RMSE against the reference", &curves(&runs));
         write_atomic_with(path, |w| w.write_all(svg.as_bytes()))
@@ -202,12 +203,12 @@ pub fn run(args: ConvergeArgs) -> Result<()> {
 /// `converge --precision`: the primary-hit paths, a table, and the CSV and plot when asked.
 fn run_precision(
     args: &ConvergeArgs,
-    desc: &crate::scene::SceneDesc,
+    desc: &bareray::scene::SceneDesc,
     scene: &mut Scene,
     pool: &rayon::ThreadPool,
 ) -> Result<()> {
     let runs =
-        crate::converge::precision::primary_paths(desc, scene, args.lanes.k(), pool).context("camera")?;
+        bareray::converge::precision::primary_paths(desc, scene, args.lanes.k(), pool).context("camera")?;
     let mut out = std::io::stdout().lock();
     writeln!(
         out,
@@ -261,9 +262,9 @@ fn parse_method(s: &str) -> Result<String, String> {
 
 /// What the cached reference depends on: the scene file's bytes, the description after the command line's
 /// camera changes (its debug form), the reference's sample count and the version.
-fn reference_key(source: &[u8], desc: &crate::scene::SceneDesc, spp: u32) -> String {
+fn reference_key(source: &[u8], desc: &bareray::scene::SceneDesc, spp: u32) -> String {
     let text = format!("{:?}|{spp}|{}", desc, env!("CARGO_PKG_VERSION"));
-    let hash = crate::render::fnv1a(source.iter().copied().chain(text.bytes()));
+    let hash = bareray::render::fnv1a(source.iter().copied().chain(text.bytes()));
     format!("bareray converge reference {hash:016x}\n")
 }
 
@@ -272,7 +273,7 @@ fn read_cached(path: &Path, key: &str, scene: &Scene) -> Option<Image> {
     if std::fs::read_to_string(path.with_extension("key")).ok()? != key {
         return None;
     }
-    let img = crate::imagediff::load(path).ok()?.to_rgb32f();
+    let img = bareray::imagediff::load(path).ok()?.to_rgb32f();
     if (img.width(), img.height()) != (scene.camera.width, scene.camera.height) {
         return None;
     }

@@ -7,30 +7,31 @@ use anyhow::{Context, Result};
 use clap::Args;
 
 use super::gen::check_extension;
-use super::render::{load_scene, parse_threads};
+use super::render_run::load_scene;
 use super::usage;
-use crate::io::{f32r, xyzr, SceneFormat};
-use crate::output::{write_atomic, write_atomic_with};
-use crate::scene::desc::SphereDesc;
+use super::values::parse_threads;
+use bareray::io::{f32r, xyzr, SceneFormat};
+use bareray::output::{write_atomic, write_atomic_with};
+use bareray::scene::desc::SphereDesc;
 
 /// Arguments of `bareray convert`.
 #[derive(Args, Debug)]
 #[command(after_help = "Examples:\n  bareray convert field1m.xyzr -o field1m.f32r\n  \
                         bareray convert field1m.f32r -o field1m.xyzr")]
-pub struct ConvertArgs {
+pub(super) struct ConvertArgs {
     /// The sphere list read: .xyzr or .f32r.
-    pub input: PathBuf,
+    pub(super) input: PathBuf,
     /// Output file; its extension picks the format written: .xyzr or .f32r. Written atomically. Values
     /// written to .f32r are rounded to the nearest f32.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(super) output: PathBuf,
     /// Worker threads for reading (default: all cores).
     #[arg(long, value_parser = parse_threads)]
-    pub threads: Option<usize>,
+    pub(super) threads: Option<usize>,
 }
 
 /// Runs `bareray convert`.
-pub fn run(args: ConvertArgs) -> Result<()> {
+pub(super) fn run(args: ConvertArgs) -> Result<()> {
     let start = Instant::now();
     let binary = check_extension(&args.output, &["xyzr", "f32r"])? == "f32r";
     if !matches!(SceneFormat::from_extension(&args.input), Some(SceneFormat::Xyzr | SceneFormat::F32r)) {
@@ -60,7 +61,7 @@ pub fn run(args: ConvertArgs) -> Result<()> {
         println!("{}: {count} spheres in {:.3} s", args.output.display(), start.elapsed().as_secs_f64());
         return Ok(());
     }
-    let desc = load_scene(&args.input, &crate::render::thread_pool(args.threads)?)?;
+    let desc = load_scene(&args.input, &bareray::render::thread_pool(args.threads)?)?;
     let spheres = &desc.spheres;
     let values = if binary { singles(&args.input, spheres)? } else { Vec::new() };
     let comment = format!("bareray convert: {} spheres from {}", spheres.len(), args.input.display());

@@ -1,4 +1,4 @@
-//! `bareray diff`: compares two images (the comparison is [`crate::imagediff`]); argument parsing and
+//! `bareray diff`: compares two images (the comparison is [`bareray::imagediff`]); argument parsing and
 //! printing only.
 
 use std::io::Write;
@@ -9,8 +9,8 @@ use anyhow::{anyhow, Result};
 use clap::Args;
 use image::ImageFormat;
 
-use crate::imagediff::{diff_files, Diff};
-use crate::output::write_atomic;
+use bareray::imagediff::{diff_files, Diff};
+use bareray::output::write_atomic;
 
 /// Arguments of `bareray diff`.
 #[derive(Args, Debug)]
@@ -21,19 +21,19 @@ decoding, so a PNG and an EXR of one render differ. RGB is compared, and alpha w
 \"inf\" when the images are identical.\n\n\
 Exit status: 0 identical, 1 different, 2 error (unreadable file, different sizes).\n\n\
 Examples:\n  bareray diff before.png after.png\n  bareray diff a.exr b.exr --heatmap d.png")]
-pub struct DiffArgs {
+pub(super) struct DiffArgs {
     /// First image (.png, .exr or .ppm; the decoder is chosen by the file's contents).
-    pub a: PathBuf,
+    pub(super) a: PathBuf,
     /// Second image; any of the formats, in any mix with the first.
-    pub b: PathBuf,
+    pub(super) b: PathBuf,
     /// Also write a grey PNG of each pixel's largest channel difference, scaled so the largest difference
     /// is white and any difference at least grey level 1 (black: equal pixels).
     #[arg(long, value_name = "OUT.png")]
-    pub heatmap: Option<PathBuf>,
+    pub(super) heatmap: Option<PathBuf>,
 }
 
 /// Runs `bareray diff`: exit code 0 when the images are identical, 1 when they differ, 2 on an error.
-pub fn run(args: DiffArgs) -> ExitCode {
+pub(super) fn run(args: DiffArgs) -> ExitCode {
     match compare(&args) {
         Ok(true) => ExitCode::SUCCESS,
         Ok(false) => ExitCode::from(1),

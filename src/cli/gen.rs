@@ -7,12 +7,12 @@ use anyhow::{Context, Result};
 use clap::{Args, Subcommand};
 
 use super::usage;
-use crate::io::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
-use crate::output::write_atomic_with;
+use bareray::io::generate::{flake_count, write_flake_nff, FieldParams, MAX_FLAKE_LEVEL};
+use bareray::output::write_atomic_with;
 
 /// Arguments of `bareray gen`.
 #[derive(Args, Debug)]
-pub struct GenArgs {
+pub(super) struct GenArgs {
     #[command(subcommand)]
     what: GenCommand,
 }
@@ -30,41 +30,41 @@ enum GenCommand {
 
 /// Arguments of `bareray gen field`.
 #[derive(Args, Debug)]
-pub struct FieldArgs {
+pub(super) struct FieldArgs {
     /// Number of spheres (at least 1): an integer, or a power-of-ten form such as `1e6`.
     #[arg(long, value_parser = parse_count)]
-    pub count: u64,
+    pub(super) count: u64,
     /// splitmix64 seed.
     #[arg(long, default_value_t = 1)]
-    pub seed: u64,
+    pub(super) seed: u64,
     /// The box the centres fill: x0,y0,z0,x1,y1,z1.
     #[arg(long = "box", value_name = "x0,y0,z0,x1,y1,z1", allow_hyphen_values = true, value_parser = parse_box)]
-    pub bounds: Option<([f64; 3], [f64; 3])>,
+    pub(super) bounds: Option<([f64; 3], [f64; 3])>,
     /// Smallest radius [default: 0.1·s, s = (x1 − x0)/cbrt(count)].
     #[arg(long, allow_negative_numbers = true)]
-    pub rmin: Option<f64>,
+    pub(super) rmin: Option<f64>,
     /// Largest radius [default: 0.25·s].
     #[arg(long, allow_negative_numbers = true)]
-    pub rmax: Option<f64>,
+    pub(super) rmax: Option<f64>,
     /// Output file; its extension picks the format written: .xyzr (text) or .f32r (binary). Written
     /// atomically.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(super) output: PathBuf,
 }
 
 /// Arguments of `bareray gen flake`.
 #[derive(Args, Debug)]
-pub struct FlakeArgs {
+pub(super) struct FlakeArgs {
     /// Size factor: (9^(L+1) − 1)/8 spheres (2: 91, 3: 820, 4: 7381, 5: 66430, 6: 597871).
     #[arg(long, value_parser = clap::value_parser!(u32).range(0..=MAX_FLAKE_LEVEL as i64))]
-    pub level: u32,
+    pub(super) level: u32,
     /// Output file; must end in .nff (the format written). Written atomically.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(super) output: PathBuf,
 }
 
 /// Runs `bareray gen`.
-pub fn run(args: GenArgs) -> Result<()> {
+pub(super) fn run(args: GenArgs) -> Result<()> {
     match args.what {
         GenCommand::Field(a) => field(a),
         GenCommand::Flake(a) => flake(a),

@@ -1,11 +1,11 @@
-//! `bareray merge`: pastes regions rendered apart into one image ([`crate::still::merge`]).
+//! `bareray merge`: pastes regions rendered apart into one image ([`bareray::still::merge`]).
 
 use std::path::PathBuf;
 
 use anyhow::Result;
 use clap::Args;
 
-use crate::still::merge::merge;
+use bareray::still::merge::merge;
 
 /// Arguments of `bareray merge`.
 #[derive(Args, Debug)]
@@ -17,20 +17,20 @@ Example (four quarters of a 2048x2048 image, e.g. as four jobs of a job array):\
 bareray render balls.nff --width 2048 --region 0,0,1024,1024 -o q1.png\n  ...\n  \
 bareray merge q1.png q2.png q3.png q4.png -o balls.png"
 )]
-pub struct MergeArgs {
+pub(super) struct MergeArgs {
     /// The parts, in any order.
     #[arg(required = true)]
-    pub parts: Vec<PathBuf>,
+    pub(super) parts: Vec<PathBuf>,
     /// The merged image; its extension must name the parts' format.
     #[arg(short, long)]
-    pub output: PathBuf,
+    pub(super) output: PathBuf,
     /// No summary line.
     #[arg(short, long)]
-    pub quiet: bool,
+    pub(super) quiet: bool,
 }
 
 /// Runs `bareray merge`.
-pub fn run(args: MergeArgs) -> Result<()> {
+pub(super) fn run(args: MergeArgs) -> Result<()> {
     let full = merge(&args.parts, &args.output)?;
     if !args.quiet {
         println!(

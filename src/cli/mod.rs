@@ -2,8 +2,13 @@
 
 mod accuracy;
 mod bench;
+mod bench_compare;
 mod bench_isa;
+mod bench_isa_level;
+mod bench_isa_print;
+mod bench_isa_runs;
 mod bench_kinds;
+mod bench_print;
 mod camera_args;
 mod converge;
 mod convert;
@@ -12,6 +17,9 @@ mod gen;
 mod merge;
 mod particle_args;
 mod render;
+mod render_report;
+mod render_run;
+mod sampling_values;
 mod values;
 
 use std::process::ExitCode;
@@ -33,7 +41,7 @@ use clap::{CommandFactory, FromArgMatches, Parser, Subcommand};
     after_help = "Exit codes: 0 success; 2 argument or usage errors (a bad flag or value, a wrong \
                   extension), nothing done; 1 errors reading the scene, rendering or writing files."
 )]
-pub struct Cli {
+pub(crate) struct Cli {
     #[command(subcommand)]
     command: Command,
 }
@@ -66,7 +74,7 @@ enum Command {
 /// An argument error found after clap parsed the command line (a value clap cannot check alone, such as
 /// an output extension that does not match what the command writes): exit code 2, as clap's own.
 #[derive(Debug)]
-pub struct UsageError(pub String);
+pub(crate) struct UsageError(pub String);
 
 impl std::fmt::Display for UsageError {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
@@ -85,7 +93,7 @@ pub(super) fn usage(message: impl Into<String>) -> anyhow::Error {
 /// argument errors (clap's and [`UsageError`]), 1 for the rest. The CPU check ([`crate::cpu`]: exit code 1
 /// and nothing done when the CPU lacks an instruction set the binary was compiled for) has run before, as
 /// an ELF constructor, on Linux; elsewhere it runs here first, before clap.
-pub fn main() -> ExitCode {
+pub(crate) fn main() -> ExitCode {
     #[cfg(not(all(target_os = "linux", any(target_arch = "x86", target_arch = "x86_64"))))]
     if let Err(message) = crate::cpu::check() {
         eprintln!("{message}");
@@ -93,7 +101,7 @@ pub fn main() -> ExitCode {
     }
     let cli = parse_args();
     let result = match cli.command {
-        Command::Render(args) => render::run(args),
+        Command::Render(args) => render_run::run(args),
         Command::Gen(args) => gen::run(args),
         Command::Convert(args) => convert::run(args),
         Command::Bench(args) => bench::run(args),
@@ -128,8 +136,8 @@ pub(super) fn exit_code(e: &anyhow::Error) -> u8 {
     if e.downcast_ref::<UsageError>().is_some() {
         2
     } else if matches!(
-        e.downcast_ref::<crate::still::StillError>(),
-        Some(crate::still::StillError::Interrupted(_))
+        e.downcast_ref::<bareray::still::StillError>(),
+        Some(bareray::still::StillError::Interrupted(_))
     ) {
         130
     } else {
@@ -161,7 +169,7 @@ fn parse_args() -> Cli {
 /// a rank whose command line rank 0 accepted waits it out, and then prints its error itself.
 fn exit_once(e: clap::Error) -> ! {
     #[cfg(feature = "mpi")]
-    if crate::still::mpi::launched_rank().is_some_and(|rank| rank != 0) {
+    if bareray::still::mpi::launched_rank().is_some_and(|rank| rank != 0) {
         if e.exit_code() == 0 {
             std::process::exit(0);
         }

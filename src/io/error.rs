@@ -18,23 +18,23 @@ pub struct SceneError {
 
 impl SceneError {
     /// An error at a byte offset of `source`.
-    pub fn at_offset(path: &Path, source: &str, offset: usize, message: impl Into<String>) -> Self {
+    pub(crate) fn at_offset(path: &Path, source: &str, offset: usize, message: impl Into<String>) -> Self {
         let (line, column) = line_column(source, offset);
         Self { path: path.to_owned(), line, column, message: message.into() }
     }
     /// An error at a 1-based line (column unknown).
-    pub fn at_line(path: &Path, line: usize, message: impl Into<String>) -> Self {
+    pub(crate) fn at_line(path: &Path, line: usize, message: impl Into<String>) -> Self {
         Self { path: path.to_owned(), line, column: 0, message: message.into() }
     }
     /// An error about the whole file.
-    pub fn whole_file(path: &Path, message: impl Into<String>) -> Self {
+    pub(crate) fn whole_file(path: &Path, message: impl Into<String>) -> Self {
         Self { path: path.to_owned(), line: 0, column: 0, message: message.into() }
     }
 }
 
 /// The text of a scene file. Bytes that are not UTF-8 are an error at the line and column where they start;
 /// `what` names the file's kind in the error when it cannot be read at all.
-pub fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
+pub(crate) fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
     let bytes =
         std::fs::read(path).map_err(|e| SceneError::whole_file(path, format!("cannot read {what}: {e}")))?;
     text(path, bytes)

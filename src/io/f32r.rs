@@ -90,7 +90,7 @@ impl MappedRecords {
     }
 
     /// The records, to reorder them (in private pages: the file is not changed).
-    pub fn records_mut(&mut self) -> &mut [[f32; 4]] {
+    pub(crate) fn records_mut(&mut self) -> &mut [[f32; 4]] {
         // SAFETY: as in `records`, and the map is private to this process.
         unsafe { std::slice::from_raw_parts_mut(self.map.as_mut_ptr().add(HEADER_BYTES).cast(), self.count) }
     }
@@ -172,7 +172,7 @@ pub fn map(path: &Path) -> Result<MappedRecords, SceneError> {
 
 /// The count an `.f32r` file's header states, read from its first 16 bytes alone (for a memory check before
 /// loading); the header is checked as [`load`] checks it, the length and records are not.
-pub fn header_count(path: &Path) -> Result<u64, SceneError> {
+pub(crate) fn header_count(path: &Path) -> Result<u64, SceneError> {
     use std::io::Read;
     let fail = |m: String| SceneError::whole_file(path, m);
     let mut head = Vec::with_capacity(HEADER_BYTES);
@@ -311,7 +311,7 @@ pub enum StreamError {
 
 /// Writes the 16-byte header of an `.f32r` file of `count` records (a streaming writer writes it again
 /// once it knows the count).
-pub fn write_header(w: &mut impl Write, count: u32) -> io::Result<()> {
+pub(crate) fn write_header(w: &mut impl Write, count: u32) -> io::Result<()> {
     w.write_all(&MAGIC)?;
     w.write_all(&VERSION.to_le_bytes())?;
     w.write_all(&count.to_le_bytes())

@@ -54,7 +54,7 @@ impl SceneFormat {
     }
 
     /// Whether the format's files carry no camera, so that the view chooses one.
-    pub fn framed_by_view(self) -> bool {
+    pub(crate) fn framed_by_view(self) -> bool {
         matches!(self, Self::Xyzr | Self::F32r | Self::Particles(_))
     }
 }

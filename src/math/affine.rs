@@ -24,7 +24,7 @@ impl<F: Real> Affine<F> {
 
 impl Affine<f64> {
     /// From glam's f64 affine map.
-    pub fn from_glam(a: &glam::DAffine3) -> Self {
+    pub(crate) fn from_glam(a: &glam::DAffine3) -> Self {
         Self {
             cols: [a.matrix3.x_axis.into(), a.matrix3.y_axis.into(), a.matrix3.z_axis.into()],
             translation: a.translation.into(),

@@ -66,12 +66,12 @@ impl<F: Real> V3<F> {
     }
     /// Component-wise product (colour filtering).
     #[inline(always)]
-    pub fn mul_elem(self, o: Self) -> Self {
+    pub(crate) fn mul_elem(self, o: Self) -> Self {
         Self::new(self.x * o.x, self.y * o.y, self.z * o.z)
     }
     /// Component-wise choice between two vectors.
     #[inline(always)]
-    pub fn select(mask: F::Mask, a: Self, b: Self) -> Self {
+    pub(crate) fn select(mask: F::Mask, a: Self, b: Self) -> Self {
         Self::new(F::select(mask, a.x, b.x), F::select(mask, a.y, b.y), F::select(mask, a.z, b.z))
     }
 }

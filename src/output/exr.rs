@@ -29,7 +29,7 @@ pub struct Channel {
 }
 
 /// R, G, B as 32-bit floats: the channels of a rendered image.
-pub fn rgb_channels() -> Vec<Channel> {
+pub(crate) fn rgb_channels() -> Vec<Channel> {
     ["R", "G", "B"].into_iter().map(|name| Channel { name, float: true }).collect()
 }
 

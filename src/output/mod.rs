@@ -105,7 +105,7 @@ impl Format {
     }
 
     /// Whether the file is encoded whole at the end (its rows held in memory until then): TIFF and JPEG.
-    pub fn held_whole(self) -> bool {
+    pub(crate) fn held_whole(self) -> bool {
         matches!(self, Format::Tiff | Format::Jpeg)
     }
 
@@ -276,9 +276,9 @@ pub struct Frame {
     /// The file's first row in the full image.
     pub y0: u32,
     /// Columns of the full image.
-    pub full_width: u32,
+    pub(crate) full_width: u32,
     /// Rows of the full image.
-    pub full_height: u32,
+    pub(crate) full_height: u32,
 }
 
 impl Frame {
@@ -288,18 +288,18 @@ impl Frame {
     }
 
     /// Whether the file holds less than the full image.
-    pub fn is_region(&self) -> bool {
+    pub(crate) fn is_region(&self) -> bool {
         *self != Self::whole(self.full_width, self.full_height)
     }
 
     /// `X0,Y0,X1,Y1 of WxH` (X1, Y1 exclusive): the text of PNG's `Region` chunk and of PPM's header comment.
-    pub fn region_text(&self) -> String {
+    pub(crate) fn region_text(&self) -> String {
         let (x1, y1) = (self.x0 + self.width, self.y0 + self.height);
         format!("{},{},{x1},{y1} of {}x{}", self.x0, self.y0, self.full_width, self.full_height)
     }
 
     /// Reads [`Frame::region_text`] back; `None` unless it is one, of a rectangle inside its image.
-    pub fn parse_region_text(text: &str) -> Option<Self> {
+    pub(crate) fn parse_region_text(text: &str) -> Option<Self> {
         let (corners, full) = text.trim().split_once(" of ")?;
         let c: Vec<u32> = corners.split(',').map(|v| v.trim().parse().ok()).collect::<Option<_>>()?;
         let (w, h) = full.split_once('x')?;
@@ -330,7 +330,7 @@ pub fn pixel_bytes(format: Format, depth: BitDepth) -> usize {
 
 /// Whole rows of linear pixels (`width` each) as the bytes `format` stores ([`pixel_bytes`]), under the
 /// options' transfer and bit depth; rows in parallel on the current rayon pool.
-pub fn to_samples(pixels: &[Rgb], width: u32, format: Format, options: &WriteOptions) -> Vec<u8> {
+pub(crate) fn to_samples(pixels: &[Rgb], width: u32, format: Format, options: &WriteOptions) -> Vec<u8> {
     use rayon::prelude::*;
     let size = pixel_bytes(format, options.bit_depth);
     let width = (width as usize).max(1);
@@ -434,7 +434,7 @@ impl<'a> Rows<'a> {
     }
 
     /// The next row, or an error if the source ended before the image did or gave a partial row.
-    pub fn next_row(&mut self) -> Result<&[u8], BoxError> {
+    pub(crate) fn next_row(&mut self) -> Result<&[u8], BoxError> {
         if self.taken == self.height {
             return Err("the image has no more rows".into());
         }

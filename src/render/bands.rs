@@ -49,7 +49,7 @@ impl Window {
         self.y1 - self.y0
     }
     /// The window grown by `apron` pixels on every side, clipped to a `width × height` image.
-    pub fn grown(&self, apron: u32, width: u32, height: u32) -> Self {
+    pub(crate) fn grown(&self, apron: u32, width: u32, height: u32) -> Self {
         Self {
             x0: self.x0.saturating_sub(apron),
             y0: self.y0.saturating_sub(apron),
@@ -168,7 +168,7 @@ impl Bands {
         self.traced.height().div_ceil(self.rows)
     }
     /// The image rows band `i` traces.
-    pub fn rows_of(&self, i: u32) -> Range<u32> {
+    pub(crate) fn rows_of(&self, i: u32) -> Range<u32> {
         let y = self.traced.y0 + i * self.rows;
         y..(y + self.rows).min(self.traced.y1)
     }
@@ -214,7 +214,7 @@ impl Progress for EachTile<'_> {
 }
 
 /// [`render_window`] at a packet width chosen at run time (1, 4, 8 or 16; panics on another).
-pub fn render_window_lanes<E>(
+pub(crate) fn render_window_lanes<E>(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,

@@ -48,16 +48,14 @@ mod coverage;
 mod primary;
 mod tile;
 
-pub use bands::{
-    band_rows, render_window, render_window_lanes, trace_band_lanes, Bands, RowStage, Traced, Window,
-};
+pub(crate) use bands::render_window_lanes;
+pub use bands::{band_rows, render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
 use bands::{trace_rows, TileCounter};
 pub use coverage::{coverage_parts, CoveragePart};
 
-pub(crate) use primary::fnv1a;
+pub(crate) use primary::primary_window_lanes;
 pub use primary::{
-    primary_hits_lanes, primary_window_lanes, trace_primary, trace_primary_lanes, trace_primary_window,
-    PrimaryHits,
+    fnv1a, primary_hits_lanes, trace_primary, trace_primary_lanes, trace_primary_window, PrimaryHits,
 };
 use tile::trace_tile;
 
@@ -236,7 +234,7 @@ pub struct Block {
     /// Rows covered.
     pub h: u32,
     /// Columns of a whole block (lanes per row).
-    pub bw: u32,
+    pub(crate) bw: u32,
 }
 
 impl Block {

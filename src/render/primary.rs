@@ -42,7 +42,7 @@ impl PrimaryHits {
 }
 
 /// FNV-1a 64 of a byte stream (offset basis 0xcbf29ce484222325, prime 0x100000001b3).
-pub(crate) fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
+pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
     bytes.into_iter().fold(0xcbf2_9ce4_8422_2325u64, |h, b| (h ^ u64::from(b)).wrapping_mul(0x100_0000_01b3))
 }
 
@@ -133,7 +133,7 @@ pub fn trace_primary_window<F: Lanes>(
 }
 
 /// [`trace_primary_window`] into a new frame, at a packet width chosen at run time (1, 4, 8 or 16).
-pub fn primary_window_lanes(
+pub(crate) fn primary_window_lanes(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,

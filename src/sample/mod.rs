@@ -5,10 +5,10 @@ pub mod filter;
 mod postfilter;
 pub mod sequence;
 
-pub use postfilter::{lecture_3x3, lecture_3x3_pixel};
+pub(crate) use postfilter::{lecture_3x3, lecture_3x3_pixel};
 
 /// Offsets in [0, 1)² of an n×n regular grid: the centres of the n² equal sub-squares, row by row.
-pub fn grid_offsets(n: u32) -> Vec<(f32, f32)> {
+pub(crate) fn grid_offsets(n: u32) -> Vec<(f32, f32)> {
     let step = 1.0 / n as f32;
     (0..n).flat_map(|b| (0..n).map(move |a| ((a as f32 + 0.5) * step, (b as f32 + 0.5) * step))).collect()
 }

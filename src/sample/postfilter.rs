@@ -5,7 +5,7 @@ use crate::math::Rgb;
 
 /// The lecture's 3×3 kernel, ½ at the centre and 1/16 at each neighbour. At the image border the missing
 /// neighbours' weights are dropped and the rest renormalised, so a flat image stays flat.
-pub fn lecture_3x3(img: &Image) -> Image {
+pub(crate) fn lecture_3x3(img: &Image) -> Image {
     let (w, h) = (img.width as i64, img.height as i64);
     let mut out = Image::new(img.width, img.height);
     for y in 0..h {
@@ -21,7 +21,7 @@ pub fn lecture_3x3(img: &Image) -> Image {
 
 /// One pixel of [`lecture_3x3`]: `at(x, y)` gives a pixel's value, `None` outside the image. Every caller
 /// (the whole image, rows streamed band by band) sums the same terms in this order, so gets the same bits.
-pub fn lecture_3x3_pixel(x: i64, y: i64, at: impl Fn(i64, i64) -> Option<Rgb>) -> Rgb {
+pub(crate) fn lecture_3x3_pixel(x: i64, y: i64, at: impl Fn(i64, i64) -> Option<Rgb>) -> Rgb {
     let mut sum = Rgb::default();
     let mut weight = 0.0f32;
     for dy in -1..=1 {

@@ -13,7 +13,7 @@ pub fn pixel_hash(x: u32, y: u32, k: u32, s: u32) -> u64 {
 }
 
 /// A uniform number in [0, 1) with 24 random bits (exact in f32) from `pixel_hash`.
-pub fn pixel_unit(x: u32, y: u32, k: u32, s: u32) -> f32 {
+pub(crate) fn pixel_unit(x: u32, y: u32, k: u32, s: u32) -> f32 {
     (pixel_hash(x, y, k, s) >> 40) as f32 * (1.0 / 16_777_216.0)
 }
 

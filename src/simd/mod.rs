@@ -155,7 +155,7 @@ pub trait Lanes: Real {
 /// The indices of the set bits of `bits`, lowest first: a loop over the lanes of a mask that branches once
 /// per set lane, not once per lane on whether it is set.
 #[inline(always)]
-pub fn set_bits(mut bits: u32) -> impl Iterator<Item = usize> {
+pub(crate) fn set_bits(mut bits: u32) -> impl Iterator<Item = usize> {
     std::iter::from_fn(move || {
         let j = bits.trailing_zeros() as usize;
         bits &= bits.wrapping_sub(1);

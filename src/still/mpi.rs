@@ -89,7 +89,7 @@ pub fn launched_rank() -> Option<u32> {
 
 /// Whether a launcher started this process as one of several ranks: the first of [`SIZE_VARIABLES`]
 /// that is set holds a number above 1.
-pub fn launched() -> bool {
+pub(crate) fn launched() -> bool {
     launched_in(|name| std::env::var(name).ok())
 }
 

@@ -24,7 +24,7 @@ pub struct Resume {
 }
 
 /// The side file of `output`: `.NAME.resume` in the same directory.
-pub fn side_path(output: &Path) -> PathBuf {
+pub(crate) fn side_path(output: &Path) -> PathBuf {
     let name = output.file_name().map(|n| n.to_string_lossy().into_owned()).unwrap_or_default();
     let dir = output.parent().filter(|p| !p.as_os_str().is_empty()).unwrap_or(Path::new("."));
     dir.join(format!(".{name}.resume"))

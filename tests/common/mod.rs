@@ -21,7 +21,6 @@ use bareray::io::toml;
 use bareray::render::{render_lanes, thread_pool};
 use bareray::scene::desc::{CameraDesc, SceneDesc, ShapeDesc, SphereDesc};
 use glam::{DAffine3, DVec3};
-use indicatif::ProgressBar;
 
 /// f32 unit roundoff (half an ulp of 1).
 pub const EPS32: f64 = f32::EPSILON as f64 / 2.0;
@@ -58,7 +57,7 @@ pub fn parse_toml(src: &str) -> SceneDesc {
 
 /// The one place the renderer is called (8 lanes), so an API change (lanes, options) is adapted here only.
 pub fn render(scene: &Scene, threads: usize) -> Image {
-    render_lanes(scene, 8, &thread_pool(Some(threads)).expect("thread pool"), &ProgressBar::hidden()).image
+    render_lanes(scene, 8, &thread_pool(Some(threads)).expect("thread pool"), &()).image
 }
 
 /// Runs the `bareray` binary built with the tests.
