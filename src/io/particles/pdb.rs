@@ -116,7 +116,8 @@ fn pdb_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
     Ok((center, None, key))
 }
 
-/// A `CRYST1` record's box: `None` for the unit cube of 90° that PDB writes when there is no box.
+/// A `CRYST1` record's box: `None` for the unit cube of 90° that PDB writes when there is no box, and for
+/// zero lengths or angles that close no box, which other writers put there.
 fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
     const FIELDS: [(usize, usize, &str); 6] =
         [(6, 15, "a"), (15, 24, "b"), (24, 33, "c"), (33, 40, "alpha"), (40, 47, "beta"), (47, 54, "gamma")];
@@ -135,10 +136,8 @@ fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
     if lengths == [1.0; 3] && angles == [90.0; 3] {
         return Ok(None);
     }
-    match Cell::from_lengths_angles(lengths, angles) {
-        Some(cell) if lengths.iter().all(|&l| l > 0.0) => Ok(Some(cell)),
-        _ => Err(format!("CRYST1 cell {lengths:?} with angles {angles:?} closes no box")),
-    }
+    // Writers without a box also put zeros here (NAMD, MDAnalysis): a cell that closes no box is none.
+    Ok(Cell::from_lengths_angles(lengths, angles).filter(|_| lengths.iter().all(|&l| l > 0.0)))
 }
 
 /// A PQR record, whitespace-separated and read from the end: centre, radius and key.
@@ -209,13 +208,12 @@ mod tests {
         assert_eq!(parse(path, &format!("{none}\n{a}\n"), 0, false).unwrap().cell, None);
         let e = parse(path, &format!("{a}\n{}\n", cryst.replace("20.000", "20.0x0")), 0, false).unwrap_err();
         assert!(e.line == 2 && e.message.contains("columns 16-24"), "{e}");
-        let e = parse(
-            path,
-            &format!("{}\n{a}\n", cryst.replace(" 90.00  90.00  90.00", "  0.00   0.00   0.00")),
-            0,
-            false,
-        );
-        assert!(e.unwrap_err().message.contains("closes no box"));
+        // Zeros, as NAMD and MDAnalysis write them for no box, are no box.
+        for zeros in
+            [cryst.replace(" 90.00  90.00  90.00", "  0.00   0.00   0.00"), cryst.replace("10.000", " 0.000")]
+        {
+            assert_eq!(parse(path, &format!("{zeros}\n{a}\n"), 0, false).unwrap().cell, None, "{zeros}");
+        }
         let pqr = "CRYST1 5 5 5 90 90 90\nATOM 1 N MET 1 0 0 0 0.1 1\n";
         let cell = parse(Path::new("t.pqr"), pqr, 0, true).unwrap().cell.unwrap();
         assert_eq!(cell.edges[1], DVec3::Y * 5.0);
