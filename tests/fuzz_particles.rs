@@ -1,7 +1,8 @@
 //! Mutated particle files: small valid samples of each particle format (XYZ, extended XYZ, PDB, PQR, GRO,
 //! LAMMPS dump, and a gzip-compressed XYZ) with bytes flipped, lines cut, duplicated or dropped, and the
-//! whole cut short, parsed with a random frame. Every input must give a scene or an error naming the file
-//! and a line within the text (or the file as a whole); none may panic.
+//! whole cut short, parsed with a random frame and with or without the periodic box drawn; and mutated types
+//! sidecars. Every input must give a scene or an error naming the file and a line within the text (or the
+//! file as a whole); none may panic.
 //!
 //! Each input is a function of (sample, index) alone. The default test runs [`CI_RUN`] inputs per sample;
 //! the ignored one [`FULL_RUN`]: `cargo test --test suite fuzz_particles:: -- --ignored --nocapture`, which prints
@@ -19,16 +20,16 @@ const CI_RUN: u64 = 2_000;
 
 const SAMPLES: &[(&str, &str)] = &[
     ("s.xyz", "3\nwater\nO 0.0 0.0 0.0\nH 0.96 0.0 0.0\nH -0.24 0.93 0.0\n2\nnext\nC 0 0 0\nCl 1.8 0 0\n"),
-    ("s.extxyz", "2\nProperties=species:S:1:pos:R:3:radius:R:1:color:R:3 t=1\nSi 0 0 0 0.5 1 0 0\nXq 1 2 3 0.25 0 0 1\n"),
+    ("s.extxyz", "2\nLattice=\"5 0 0 1 5 0 0 0 5\" Origin=\"0 0 -1\" Properties=species:S:1:pos:R:3:radius:R:1:color:R:3 t=1\nSi 0 0 0 0.5 1 0 0\nXq 1 2 3 0.25 0 0 1\n"),
     (
         "s.pdb",
-        "MODEL        1\n\
+        "CRYST1   10.000   20.000   30.000  90.00 100.00  90.00 P 1           1\nMODEL        1\n\
          ATOM      1  N   GLY A   1      -1.000   2.000   3.000  1.00  0.00           N\n\
          HETATM    3 FE   HEM A   2       5.000   5.000   5.000  1.00  0.00\n\
          ENDMDL\nMODEL        2\n\
          ATOM      1  N   GLY A   1       1.000   1.000   1.000  1.00  0.00           N\nENDMDL\nEND\n",
     ),
-    ("s.pqr", "ATOM      1  N   MET     1      1.0   2.0   3.0 -0.30 1.824\nATOM      2  O   MET A   1      0.0   0.0   0.0 -0.50 1.7\n"),
+    ("s.pqr", "CRYST1 5 5 5 90 90 120\nATOM      1  N   MET     1      1.0   2.0   3.0 -0.30 1.824\nATOM      2  O   MET A   1      0.0   0.0   0.0 -0.50 1.7\n"),
     (
         "s.gro",
         "water\n    2\n    1SOL     OW    1   0.126   1.624   1.679\n    1SOL    HW1    2   0.190   1.661   1.747\n   1.86206   1.86206   1.86206\n",
@@ -94,8 +95,9 @@ fn run(inputs: u64) {
         for i in 0..inputs {
             let mut rng = SplitMix64::new(0x5EED_0000 ^ (k as u64) << 40 ^ i);
             let input = mutate(sample, &mut rng);
+            let frame = Some((rng.next_u64() % 3) as usize);
             let options =
-                LoadOptions { frame: Some((rng.next_u64() % 3) as usize), ..LoadOptions::default() };
+                LoadOptions { frame, draw_box: rng.next_u64().is_multiple_of(2), ..LoadOptions::default() };
             let text_lines = input.iter().filter(|&&b| b == b'\n').count() + 1;
             let result = catch_unwind(AssertUnwindSafe(|| parse_with(format, path, input.clone(), &options)));
             match result {
@@ -115,6 +117,23 @@ fn run(inputs: u64) {
         }
         println!("fuzz: {name}: {inputs} inputs, {read} read, {errors} errors, no panic");
     }
+    let sidecar = b"[1]\nradius = 0.5\ncolor = [0.9, 0.2, 0.2]\n\n[O]\ncolor = [1, 0, 0]\n";
+    let path = Path::new("s.types.toml");
+    let (mut read, mut errors) = (0u64, 0u64);
+    for i in 0..inputs {
+        let mut rng = SplitMix64::new(0x5EED_7000 ^ i);
+        let input = String::from_utf8_lossy(&mutate(sidecar, &mut rng)).into_owned();
+        let text_lines = input.matches('\n').count() + 1;
+        match catch_unwind(|| bareray::io::particles::types::parse(path, &input)) {
+            Err(_) => panic!("s.types.toml: input {i} panicked: {input:?}"),
+            Ok(Ok(_)) => read += 1,
+            Ok(Err(e)) => {
+                errors += 1;
+                assert!(e.path == path && e.line <= text_lines, "s.types.toml: input {i}: {e}");
+            }
+        }
+    }
+    println!("fuzz: s.types.toml: {inputs} inputs, {read} read, {errors} errors, no panic");
 }
 
 #[test]

@@ -251,3 +251,134 @@ fn particle_files_render_framed_on_white_from_the_command_line() {
     assert_eq!(run.status.code(), Some(1));
     assert!(stderr(&run).contains("the file has 2 frames"), "{}", stderr(&run));
 }
+
+#[test]
+fn a_types_sidecar_sits_between_the_file_and_the_flags() {
+    let dir = tempfile::tempdir().unwrap();
+    let none = LoadOptions::default();
+    // Found beside the file: type 1 gets the sidecar's radius and colour, type 2 its radius only.
+    let sidecar = "[1]\nradius = 0.3\ncolor = [0, 1, 0]\n\n[2]\nradius = 0.8\n\n[7]\nradius = 9\n";
+    write(dir.path(), "d.dump.types.toml", sidecar.as_bytes());
+    let dump = read(dir.path(), "d.dump", DUMP, &none);
+    assert_eq!(radii(&dump), [0.3, 0.8, 0.3]);
+    assert_eq!(colour(&dump, 0), Rgb::new(0.0, 1.0, 0.0));
+    assert_eq!(colour(&dump, 1), Rgb::new(50.0 / 255.0, 100.0 / 255.0, 230.0 / 255.0), "type 2's default");
+    assert!(dump.warnings.is_empty(), "a kind the frame lacks is no warning: {:?}", dump.warnings);
+    // The flags beat it; a compressed file finds the plain name's sidecar.
+    let flags = LoadOptions { radius: vec![("1".to_owned(), 0.4)], ..LoadOptions::default() };
+    let packed = write(dir.path(), "d.dump.gz", &gzip(DUMP.as_bytes()));
+    assert_eq!(radii(&load_with(&packed, &flags).unwrap()), [0.4, 0.8, 0.4]);
+    // A sidecar named with `types` replaces the one beside the file, and beats the file's own radius.
+    let other = write(dir.path(), "other.toml", b"[Si]\nradius = 2\n[XQ]\ncolor = [1, 1, 1]\n");
+    let named = LoadOptions { types: Some(other.clone()), ..LoadOptions::default() };
+    assert_eq!(radii(&load_with(&dir.path().join("d.dump"), &named).unwrap()), [0.5, 0.5, 0.5]);
+    let ext = read(dir.path(), "e.extxyz", EXTXYZ, &named);
+    assert_eq!(radii(&ext), [2.0, 0.25]);
+    assert_eq!(colour(&ext, 1), Rgb::all(1.0), "kinds match in any case");
+
+    // Its errors name it and the line; a named sidecar that is missing is an error too.
+    write(dir.path(), "w.xyz.types.toml", b"[O]\nradius = 1\n[H]\ncolour = [1, 0, 0]\n");
+    let e = load_with(&write(dir.path(), "w.xyz", XYZ.as_bytes()), &none).unwrap_err();
+    assert_eq!((e.path.file_name().unwrap().to_str(), e.line), (Some("w.xyz.types.toml"), 4), "{e}");
+    assert!(e.message.contains("unknown field `colour`"), "{e}");
+    let gone = LoadOptions { types: Some(dir.path().join("gone.toml")), ..LoadOptions::default() };
+    let e = load_with(&dir.path().join("d.dump"), &gone).unwrap_err();
+    assert!(e.path.ends_with("gone.toml") && e.message.starts_with("cannot read types file"), "{e}");
+    // Like every particle choice, a sidecar is an error for other formats.
+    let xyzr = write(dir.path(), "s.xyzr", b"0 0 0 1\n");
+    assert!(load_with(&xyzr, &named).is_err());
+}
+
+#[test]
+fn the_periodic_box_is_drawn_as_cylinders_and_framed() {
+    let dir = tempfile::tempdir().unwrap();
+    let boxed = LoadOptions { draw_box: true, ..LoadOptions::default() };
+    let cryst = "CRYST1   20.000   20.000   20.000  90.00  90.00  90.00 P 1           1\n";
+    let triclinic = "ITEM: NUMBER OF ATOMS\n1\nITEM: BOX BOUNDS xy xz yz pp pp pp\n0 13 2\n-1 8 1\n0 6 -1\n\
+                     ITEM: ATOMS type x y z\n1 1 1 1\n";
+    let cases: [(&str, String, usize, [DVec3; 2]); 5] = [
+        ("w.gro", GRO.to_owned(), 3, [DVec3::ZERO, DVec3::splat(1.86206)]),
+        ("d.dump", DUMP.to_owned(), 3, [DVec3::ZERO, DVec3::splat(10.0)]),
+        ("e.extxyz", EXTXYZ.to_owned(), 2, [DVec3::ZERO, DVec3::splat(10.0)]),
+        ("p.pdb", format!("{cryst}{PDB}"), 3, [DVec3::ZERO, DVec3::splat(20.0)]),
+        // a = (10,0,0), b = (2,8,0), c = (1,-1,6) from (0,0,0): the far corner is a + b + c.
+        ("t.dump", triclinic.to_owned(), 1, [DVec3::ZERO, DVec3::new(13.0, 7.0, 6.0)]),
+    ];
+    for (name, text, particles, [near, far]) in cases {
+        let plain = read(dir.path(), name, &text, &LoadOptions::default()).desc;
+        assert!(plain.cones.is_empty() && plain.spheres.len() == particles, "{name}: no box unless asked");
+        let read = read(dir.path(), name, &text, &boxed);
+        let desc = &read.desc;
+        assert!(read.warnings.is_empty(), "{name}: {:?}", read.warnings);
+        assert_eq!(
+            (desc.cones.len(), desc.spheres.len()),
+            (12, particles + 8),
+            "{name}: 12 edges, 8 corners"
+        );
+        assert_eq!(desc.sphere_colors.len(), desc.spheres.len(), "{name}: the corners have colours too");
+        let corners: Vec<DVec3> = desc.spheres[particles..].iter().map(|s| s.center).collect();
+        for corner in [near, far] {
+            assert!(corners.iter().any(|c| (*c - corner).length() < 1e-9), "{name}: {corner} in {corners:?}");
+        }
+        let r = desc.cones[0].base_radius;
+        let diagonal = (far - near).length();
+        assert!(
+            (r - 0.0015 * diagonal).abs() < 1e-9 * diagonal,
+            "{name}: radius {r} for diagonal {diagonal}"
+        );
+        for cone in &desc.cones {
+            assert_eq!((cone.base_radius, cone.apex_radius, cone.material), (r, r, 1), "{name}");
+            let on_corner = |p: DVec3| corners.iter().any(|c| (*c - p).length() < 1e-9);
+            assert!(on_corner(cone.base) && on_corner(cone.apex), "{name}: an edge between corners");
+        }
+        assert_eq!(desc.materials.len(), 2, "{name}: the particles' material and the box's");
+        // Seen from +z, the eye is over the centre of what is drawn: the particles and the box's corners.
+        let lo = desc.spheres.iter().fold(DVec3::INFINITY, |lo, s| lo.min(s.center - s.radius));
+        let hi = desc.spheres.iter().fold(DVec3::NEG_INFINITY, |hi, s| hi.max(s.center + s.radius));
+        let centre = (lo + hi) * 0.5;
+        assert!(lo.cmple(near).all() && hi.cmpge(far).all(), "{name}: the box is framed");
+        let eye = desc.camera.eye;
+        assert!((eye.x - centre.x).abs() < 1e-9 && (eye.y - centre.y).abs() < 1e-9, "{name}: {eye}");
+    }
+    // A file without a box, or with an empty one, draws none and says so.
+    for (name, text) in
+        [("q.pqr", PQR.to_owned()), ("z.gro", GRO.replace("   1.86206   1.86206   1.86206", "0 0 0"))]
+    {
+        let read = read(dir.path(), name, &text, &boxed);
+        assert!(read.desc.cones.is_empty(), "{name}");
+        assert_eq!(read.warnings.len(), 1, "{name}: {:?}", read.warnings);
+        assert!(read.warnings[0].starts_with("--box: "), "{:?}", read.warnings);
+    }
+}
+
+#[test]
+fn box_and_types_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let gro = write(dir.path(), "w.gro", GRO.as_bytes());
+    let out = dir.path().join("w.png");
+    let (gro_s, out_s) = (gro.to_str().unwrap(), out.to_str().unwrap());
+    let size = ["--width", "96", "--height", "54", "-q"];
+    let run = bareray(&[&["render", gro_s, "-o", out_s, "--box"][..], &size].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&out).unwrap().into_rgb8();
+    // The box fills the image's tighter direction: its front face, nearer, spans about 62% of it.
+    let grey = |p: &image::Rgb<u8>| p.0[0] < 200 && p.0[0] == p.0[1] && p.0[1] == p.0[2];
+    let rows_with_grey = (0..54).filter(|&y| (0..96).any(|x| grey(img.get_pixel(x, y)))).count();
+    assert!(rows_with_grey > 25, "the front face spans about 33 of 54 rows: {rows_with_grey}");
+
+    let types = write(dir.path(), "t.toml", b"[O]\nradius = 0.5\ncolor = [0, 0, 1]\n[H]\nradius = -0.1\n");
+    let before = std::fs::read(&out).unwrap();
+    let run =
+        bareray(&[&["render", gro_s, "-o", out_s, "--types", types.to_str().unwrap()][..], &size].concat());
+    assert_eq!(run.status.code(), Some(1), "{}", stderr(&run));
+    assert!(stderr(&run).contains(&format!("{}:5:", types.display())), "{}", stderr(&run));
+    assert!(!stderr(&run).contains("panicked"), "{}", stderr(&run));
+    assert_eq!(std::fs::read(&out).unwrap(), before, "a failed run leaves the output as it was");
+    std::fs::write(&types, "[O]\nradius = 0.5\ncolor = [0, 0, 1]\n").unwrap();
+    let run =
+        bareray(&[&["render", gro_s, "-o", out_s, "--types", types.to_str().unwrap()][..], &size].concat());
+    assert!(run.status.success(), "{}", stderr(&run));
+    let img = image::open(&out).unwrap().into_rgb8();
+    let px = img.get_pixel(48, 27).0;
+    assert!(px[2] > 200 && px[0] < 100 && px[1] < 100, "the big blue oxygen fills the middle: {px:?}");
+}

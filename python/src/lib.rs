@@ -16,7 +16,7 @@ use glam::DVec3;
 use numpy::{
     PyArray1, PyArrayDyn, PyArrayMethods, PyReadonlyArrayDyn, PyUntypedArray, PyUntypedArrayMethods,
 };
-use pyo3::exceptions::{PyRuntimeError, PyValueError};
+use pyo3::exceptions::{PyFileNotFoundError, PyRuntimeError, PyValueError};
 use pyo3::prelude::*;
 use pyo3::types::{PyDict, PyString};
 
@@ -389,11 +389,20 @@ impl PyScene {
 }
 
 /// Reads a scene file (TOML, NFF, xyzr, f32r, or a particle file: XYZ, PDB/PQR, GRO, LAMMPS dump, maybe .gz
-/// or .bz2), frame `frame` of a file with several. A reader's error raises ValueError naming the file and
-/// the line.
+/// or .bz2), frame `frame` of a file with several; a particle file's types sidecar (`FILE.types.toml`) is
+/// read when it exists. A file that does not exist raises FileNotFoundError (errno and filename set, as
+/// `open` raises it); a reader's error raises ValueError naming the file and the line.
 #[pyfunction]
 #[pyo3(signature = (path, frame=0))]
 fn load(py: Python<'_>, path: PathBuf, frame: usize) -> PyResult<PyScene> {
+    // Told apart before reading, as Python code tells a missing file from a bad one by its exception.
+    if let Err(e) = std::fs::metadata(&path) {
+        if e.kind() == std::io::ErrorKind::NotFound {
+            let errno = e.raw_os_error().unwrap_or(2);
+            let filename = path.to_string_lossy().into_owned();
+            return Err(PyFileNotFoundError::new_err((errno, "No such file or directory", filename)));
+        }
+    }
     let inner = py.detach(|| FileScene::open(&path, Some(frame))).map_err(api_error)?;
     Ok(PyScene { inner })
 }

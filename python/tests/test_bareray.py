@@ -5,6 +5,7 @@ The command-line comparison runs the `bareray` binary: $BARERAY_BIN, else target
 target/release/bareray of this repository (.ci/run sets $BARERAY_BIN).
 """
 
+import errno
 import os
 import pathlib
 import subprocess
@@ -198,5 +199,17 @@ def test_load_errors_name_the_file_and_line(tmp_path):
     with pytest.raises(ValueError) as error:
         bareray.load(str(path), frame=1)
     assert "bad.xyz" in str(error.value)
-    with pytest.raises(ValueError):
-        bareray.load(str(tmp_path / "missing.pdb"))
+    # A missing file is told apart from a bad one, as open() tells it.
+    missing = tmp_path / "missing.pdb"
+    with pytest.raises(FileNotFoundError) as error:
+        bareray.load(str(missing))
+    assert error.value.errno == errno.ENOENT and error.value.filename == str(missing)
+    assert not isinstance(error.value, ValueError)
+    with pytest.raises(FileNotFoundError):
+        bareray.load(tmp_path / "missing" / "water.xyz")  # a path object, in a missing directory
+    # A missing sidecar named nowhere is no error; a bad one beside the file is, with its line.
+    (tmp_path / "bad.xyz.types.toml").write_text("[O]\nradius = 0\n")
+    path.write_text(WATER)
+    with pytest.raises(ValueError) as error:
+        bareray.load(str(path))
+    assert "bad.xyz.types.toml:2" in str(error.value)

@@ -1,7 +1,7 @@
-//! `--frame --view --radius --color --radius-scale`: how a particle file is read and seen, shared by the
+//! `--frame --view --radius --color --radius-scale --types --box`: how a particle file is read and seen, shared by the
 //! commands that load scenes to render them.
 
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use anyhow::Result;
 use clap::Args;
@@ -35,6 +35,15 @@ pub struct ParticleArgs {
     /// Multiplies every particle radius (after the overrides).
     #[arg(long, value_name = "S", value_parser = parse_scale)]
     pub radius_scale: Option<f64>,
+    /// A types sidecar: a TOML file of radii and colours by kind (`[C]`, `[1]`, each with `radius = R`
+    /// and `color = [R, G, B]`), beaten by `--radius` and `--color`. Without it, `FILE.types.toml` beside
+    /// the particle file is read when it exists.
+    #[arg(long, value_name = "FILE.toml")]
+    pub types: Option<PathBuf>,
+    /// Draw the particle file's periodic box (GRO box line, LAMMPS box bounds, extended XYZ `Lattice=`,
+    /// PDB `CRYST1`) as thin grey cylinders.
+    #[arg(long = "box")]
+    pub draw_box: bool,
 }
 
 impl ParticleArgs {
@@ -46,6 +55,8 @@ impl ParticleArgs {
             radius: self.radius.clone(),
             color: self.color.clone(),
             radius_scale: self.radius_scale,
+            types: self.types.clone(),
+            draw_box: self.draw_box,
         }
     }
 }

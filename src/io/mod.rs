@@ -105,7 +105,8 @@ fn check_options(
     if options.chooses_particles() && !matches!(format, SceneFormat::Particles(_)) {
         return Err(SceneError::whole_file(
             path,
-            "a frame, radii and colours are chosen for particle files (.xyz, .pdb, .pqr, .gro, .dump, .lammpstrj)",
+            "a frame, radii, colours, a types sidecar and a box are for particle files (.xyz, .pdb, .pqr, .gro, \
+             .dump, .lammpstrj)",
         ));
     }
     if options.view.is_some() && !format.framed_by_view() {

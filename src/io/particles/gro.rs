@@ -1,6 +1,6 @@
 //! GROMACS `.gro` files: frames of a title line, a count line, one fixed-column line per atom and a box
-//! line (3 or 9 numbers). Atom lines are `%5d%-5s%5s%5d` (residue number and name, atom name and number)
-//! then x, y, z in nm, each as wide as the distance between the first two decimal points (8 characters at
+//! line (3 or 9 numbers, kept as the frame's box). Atom lines are `%5d%-5s%5s%5d` (residue number and
+//! name, atom name and number) then x, y, z in nm, each as wide as the distance between the first two decimal points (8 characters at
 //! the usual 3 decimals); velocities after them are ignored. The element comes from the atom name (an ion
 //! named as its residue, `NA` in residue `NA`, else the name's first letter: `OW` is oxygen).
 
@@ -11,7 +11,7 @@ use glam::DVec3;
 
 use super::elements;
 use super::text::{self, columns, Lines};
-use super::{Frame, Kind, Particle, Unit};
+use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Reads frame `wanted` (from 0) of a `.gro` text.
@@ -63,7 +63,7 @@ fn frame(lines: &mut Lines, count: usize, bytes: usize) -> Result<Frame, SceneEr
         });
         frame.particles.push(Particle { center, kind, radius: None, color: None });
     }
-    box_line(lines)?;
+    frame.cell = Some(box_line(lines)?);
     Ok(frame)
 }
 
@@ -78,23 +78,48 @@ fn field_width(line: &str) -> usize {
     }
 }
 
-/// A box line: 3 or 9 numbers (nm).
-fn box_line(lines: &mut Lines) -> Result<[f64; 3], SceneError> {
+/// A box line: 3 or 9 numbers (nm), `v1(x) v2(y) v3(z)` and then `v1(y) v1(z) v2(x) v2(z) v3(x) v3(y)`,
+/// the box vectors from the origin; separated by spaces, or run together ([`run_together`]).
+fn box_line(lines: &mut Lines) -> Result<Cell, SceneError> {
     let line = lines.expect("the box line (3 or 9 numbers)")?;
-    let words: Vec<&str> = line.split_ascii_whitespace().collect();
+    let mut words: Vec<&str> = line.split_ascii_whitespace().collect();
+    if words.len() != 3 && words.len() != 9 {
+        words = run_together(line).unwrap_or(words);
+    }
     if words.len() != 3 && words.len() != 9 {
         return Err(
             lines.error(format!("expected the box line (3 or 9 numbers), got {} fields", words.len()))
         );
     }
-    let mut v = [0.0; 3];
+    let mut v = [0.0; 9];
     for (k, word) in words.iter().enumerate() {
-        let x = text::number(word, "a box length").map_err(|m| lines.error(m))?;
-        if k < 3 {
-            v[k] = x;
-        }
+        v[k] = text::number(word, "a box length").map_err(|m| lines.error(m))?;
     }
-    Ok(v)
+    let edges = [DVec3::new(v[0], v[3], v[4]), DVec3::new(v[5], v[1], v[6]), DVec3::new(v[7], v[8], v[2])];
+    Ok(Cell { origin: DVec3::ZERO, edges })
+}
+
+/// The fields of a box line whose numbers run together, as GROMACS' `%10.5f` writes them from 10 000 nm
+/// on (`40000.0000040000.0000040000.00000`): each ends as many digits after its decimal point as the last
+/// one has. `None` unless that cuts the line into 3 or 9 fields exactly.
+fn run_together(line: &str) -> Option<Vec<&str>> {
+    let t = line.trim();
+    let dots: Vec<usize> = t.match_indices('.').map(|(i, _)| i).collect();
+    if !t.is_ascii() || !matches!(dots.len(), 3 | 9) {
+        return None;
+    }
+    let decimals = t.len() - dots[dots.len() - 1] - 1;
+    let mut fields = Vec::with_capacity(dots.len());
+    let mut start = 0;
+    for dot in dots {
+        let end = dot + decimals + 1;
+        if dot < start || end > t.len() {
+            return None;
+        }
+        fields.push(&t[start..end]);
+        start = end;
+    }
+    (start == t.len()).then_some(fields)
 }
 
 #[cfg(test)]
@@ -116,6 +141,18 @@ mod tests {
         assert_eq!(f.particles[0].center, DVec3::new(0.126, 1.624, 1.679));
         let names: Vec<&str> = f.particles.iter().map(|p| f.kinds[p.kind as usize].name.as_str()).collect();
         assert_eq!(names, ["O", "H", "H"]);
+        assert_eq!(f.cell.unwrap().edges, [DVec3::X, DVec3::Y, DVec3::Z].map(|e| e * 1.86206));
+    }
+
+    #[test]
+    fn triclinic_box_lines() {
+        let text = WATER.replace("   1.86206   1.86206   1.86206", " 1 2 3 0.1 0.2 0.3 0.4 0.5 0.6");
+        let cell = parse(Path::new("t.gro"), &text, 0).unwrap().cell.unwrap();
+        let edges = [DVec3::new(1.0, 0.1, 0.2), DVec3::new(0.3, 2.0, 0.4), DVec3::new(0.5, 0.6, 3.0)];
+        assert_eq!(cell.edges, edges);
+        let huge = WATER.replace("   1.86206   1.86206   1.86206", "40000.0000040000.0000040000.00000");
+        let cell = parse(Path::new("t.gro"), &huge, 0).unwrap().cell.unwrap();
+        assert_eq!(cell.edges, [DVec3::X, DVec3::Y, DVec3::Z].map(|e| e * 40000.0));
     }
 
     #[test]

@@ -3,39 +3,16 @@
 //! header names its columns in any order. Centres come from `x y z`, else unwrapped `xu yu zu`, else
 //! scaled `xs ys zs` or `xsu ysu zsu` mapped through the box (triclinic too); an `element` column gives
 //! the kind, else `type` (a LAMMPS type number); `radius` or `diameter` give the radius. Other sections
-//! (`UNITS`, `TIME`) are skipped. Frames are counted in file order, whatever their timesteps.
+//! (`UNITS`, `TIME`) are skipped. Frames are counted in file order, whatever their timesteps. The box of
+//! the chosen frame is kept ([`Frame::cell`]).
 
 use std::path::Path;
 
 use glam::DVec3;
 
 use super::text::{self, Lines};
-use super::{Frame, Kind, KindCache, Particle, Unit};
+use super::{Cell, Frame, Kind, KindCache, Particle, Unit};
 use crate::io::SceneError;
-
-/// The simulation box: lower corner, edge lengths and tilts `xy xz yz`.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cell {
-    /// The corner (xlo, ylo, zlo).
-    pub lo: DVec3,
-    /// Edge lengths (lx, ly, lz).
-    pub len: DVec3,
-    /// Tilt factors xy, xz, yz (zero for an orthogonal box).
-    pub tilt: DVec3,
-}
-
-impl Cell {
-    /// The point of scaled (fractional) coordinates `s`.
-    pub fn point(&self, s: DVec3) -> DVec3 {
-        let t = self.tilt;
-        self.lo
-            + DVec3::new(
-                s.x * self.len.x + s.y * t.x + s.z * t.y,
-                s.y * self.len.y + s.z * t.z,
-                s.z * self.len.z,
-            )
-    }
-}
 
 /// Where the columns of interest are.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -116,7 +93,10 @@ fn read_cell(lines: &mut Lines, flags: &str) -> Result<Cell, SceneError> {
     let x_high = 0f64.max(xy).max(xz).max(xy + xz);
     let lo = DVec3::new(v[0][0] - x_low, v[1][0] - 0f64.min(yz), v[2][0]);
     let hi = DVec3::new(v[0][1] - x_high, v[1][1] - 0f64.max(yz), v[2][1]);
-    Ok(Cell { lo, len: hi - lo, tilt: DVec3::new(xy, xz, yz) })
+    let len = hi - lo;
+    // LAMMPS' restricted triclinic box: a along x, b in the xy plane.
+    let edges = [DVec3::new(len.x, 0.0, 0.0), DVec3::new(xy, len.y, 0.0), DVec3::new(xz, yz, len.z)];
+    Ok(Cell { origin: lo, edges })
 }
 
 /// The columns an `ITEM: ATOMS` header names.
@@ -152,6 +132,7 @@ fn atoms(
         return Err(lines.error("a frame of 0 atoms"));
     }
     let mut frame = Frame::new(Unit::Angstrom);
+    frame.cell = cell;
     frame.particles.reserve(text::capacity(count, bytes));
     let mut elements = KindCache::default();
     let mut types: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
@@ -201,6 +182,12 @@ mod tests {
         // (1,1,1) is a + b + c = (10 + 2 + 1, 8 - 1, 6).
         assert_eq!(f.particles[1].center, DVec3::new(13.0, 7.0, 6.0));
         assert!(f.kinds.iter().all(|k| k.lammps_type));
+        let cell = f.cell.unwrap();
+        assert_eq!(cell.origin, DVec3::ZERO);
+        assert_eq!(
+            cell.edges,
+            [DVec3::new(10.0, 0.0, 0.0), DVec3::new(2.0, 8.0, 0.0), DVec3::new(1.0, -1.0, 6.0)]
+        );
     }
 
     #[test]
@@ -213,6 +200,7 @@ mod tests {
         let f = parse(path, &text, 1).unwrap();
         assert_eq!((f.particles[0].center.x, f.particles[0].radius), (2.0, Some(1.5)));
         assert_eq!(f.kinds[0].name, "O");
+        assert_eq!(f.cell, Some(Cell { origin: DVec3::ZERO, edges: [DVec3::X, DVec3::Y, DVec3::Z] }));
         assert!(parse(path, &text, 5).unwrap_err().message.contains("2 frames"));
         let e = parse(path, &text.replacen("ATOMS\n1\n", "ATOMS\n2\n", 1), 0).unwrap_err();
         assert_eq!(e.line, 11, "{e}");

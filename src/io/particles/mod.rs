@@ -1,10 +1,12 @@
 //! Particle files as simulation codes write them: XYZ and extended XYZ ([`xyz`]), PDB and PQR ([`pdb`]),
 //! GROMACS `.gro` ([`gro`]) and LAMMPS dumps ([`lammps`]), each also gzip- or bzip2-compressed. A reader
 //! turns one frame of a file into a [`Frame`]: centres, a kind per particle (an element or a LAMMPS type)
-//! and the radii or colours the file gives. [`scene`] then chooses radii and colours by kind (the tables in
-//! [`elements`] and the overrides of [`ParticleOptions`]), gives every particle one material and its own
-//! colour ([`crate::scene::SceneDesc::sphere_colors`]) and frames the particles; [`arrays`] does the same for
-//! spheres given as arrays. Every error names the file and, where there is one, the line (of the decompressed text).
+//! the radii or colours the file gives, and its periodic box ([`Cell`]) if it has one. [`scene`] then
+//! chooses radii and colours by kind (the tables in [`elements`], a types sidecar ([`types`]) and the
+//! overrides of [`ParticleOptions`]), gives every particle one material and its own colour
+//! ([`crate::scene::SceneDesc::sphere_colors`]), draws the box if asked and frames the particles; [`arrays`]
+//! does the same for spheres given as arrays. Every error names the file and, where there is one, the line
+//! (of the decompressed text).
 
 pub mod arrays;
 pub mod elements;
@@ -13,10 +15,11 @@ pub mod lammps;
 pub mod pdb;
 pub mod scene;
 pub mod text;
+pub mod types;
 pub mod xyz;
 
 use std::io::Read;
-use std::path::Path;
+use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
@@ -68,6 +71,11 @@ pub struct ParticleOptions {
     pub color: Vec<(String, Rgb)>,
     /// Every radius is multiplied by this (1 when `None`).
     pub radius_scale: Option<f64>,
+    /// A types sidecar ([`types`]) to read radii and colours by kind from, beaten by `radius` and `color`;
+    /// when `None`, [`load`] reads the particle file's own sidecar if there is one ([`types::sidecar_of`]).
+    pub types: Option<PathBuf>,
+    /// Draw the file's periodic box as thin cylinders ([`scene::box_radius`]).
+    pub draw_box: bool,
 }
 
 impl ParticleOptions {
@@ -77,6 +85,8 @@ impl ParticleOptions {
             || !self.radius.is_empty()
             || !self.color.is_empty()
             || self.radius_scale.is_some()
+            || self.types.is_some()
+            || self.draw_box
     }
 }
 
@@ -122,12 +132,83 @@ pub struct Frame {
     pub kinds: Vec<Kind>,
     /// The unit of the file's lengths.
     pub unit: Unit,
+    /// The periodic box the file gives for this frame, if any.
+    pub cell: Option<Cell>,
+}
+
+/// A periodic box: a parallelepiped with a corner and three edge vectors, in the file's unit.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Cell {
+    /// The corner the edges start from.
+    pub origin: DVec3,
+    /// The edge vectors a, b, c.
+    pub edges: [DVec3; 3],
+}
+
+impl Cell {
+    /// The point of scaled (fractional) coordinates `s`: origin + s.x·a + s.y·b + s.z·c.
+    pub fn point(&self, s: DVec3) -> DVec3 {
+        self.origin + s.x * self.edges[0] + s.y * self.edges[1] + s.z * self.edges[2]
+    }
+
+    /// The eight corners, corner `i` at the scaled coordinates of `i`'s bits (bit 0 for a, 1 for b, 2 for c).
+    pub fn corners(&self) -> [DVec3; 8] {
+        std::array::from_fn(|i| self.point(DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2) as f64)))
+    }
+
+    /// The twelve edges as pairs of [`Cell::corners`] indices.
+    pub fn edge_corners() -> [(usize, usize); 12] {
+        let mut out = [(0, 0); 12];
+        let mut n = 0;
+        for i in 0..8 {
+            for bit in [1, 2, 4] {
+                if i & bit == 0 {
+                    out[n] = (i, i | bit);
+                    n += 1;
+                }
+            }
+        }
+        out
+    }
+
+    /// Whether the box can be drawn: finite, with a volume that is not vanishingly small next to its edges
+    /// (a GRO box line of zeros, say, gives none).
+    pub fn is_solid(&self) -> bool {
+        let [a, b, c] = self.edges;
+        let volume = a.dot(b.cross(c)).abs();
+        let scale = a.length() * b.length() * c.length();
+        self.origin.is_finite() && volume.is_finite() && scale.is_finite() && volume > 1e-6 * scale
+    }
+
+    /// The box of the crystallographic cell lengths `a, b, c` and angles `alpha, beta, gamma` (degrees), with
+    /// a along x and b in the xy plane, as PDB's CRYST1 record gives them; `None` for angles that close no
+    /// box.
+    pub fn from_lengths_angles(lengths: [f64; 3], angles: [f64; 3]) -> Option<Cell> {
+        let [a, b, c] = lengths;
+        // Right angles exactly, so that an orthogonal cell's edges lie on the axes.
+        let [cos_a, cos_b, cos_g] = angles.map(|d| if d == 90.0 { 0.0 } else { d.to_radians().cos() });
+        let sin_g = if angles[2] == 90.0 { 1.0 } else { angles[2].to_radians().sin() };
+        if sin_g.abs() < 1e-9 {
+            return None;
+        }
+        let cy = (cos_a - cos_b * cos_g) / sin_g;
+        let cz2 = 1.0 - cos_b * cos_b - cy * cy;
+        if cz2.is_nan() || cz2 <= 0.0 {
+            return None;
+        }
+        let edges = [
+            DVec3::new(a, 0.0, 0.0),
+            DVec3::new(b * cos_g, b * sin_g, 0.0),
+            DVec3::new(c * cos_b, c * cy, c * cz2.sqrt()),
+        ];
+        Some(Cell { origin: DVec3::ZERO, edges })
+    }
 }
 
 impl Frame {
-    /// An empty frame in `unit`.
+    /// An empty frame in `unit`, without a box.
     pub fn new(unit: Unit) -> Self {
-        Self { particles: Vec::new(), kinds: Vec::new(), unit }
+        Self { particles: Vec::new(), kinds: Vec::new(), unit, cell: None }
     }
 
     /// The index of `kind`, added on first sight (kinds are few, so a search is enough).
@@ -149,7 +230,8 @@ impl Frame {
     }
 }
 
-/// Reads frame `options.frame` of a particle file and makes its scene; the strings are warnings.
+/// Reads frame `options.frame` of a particle file and makes its scene; the strings are warnings. The types
+/// sidecar is `options.types`, else the file's own ([`types::sidecar_of`]) when it exists.
 pub fn load(
     path: &Path,
     format: ParticleFormat,
@@ -157,15 +239,32 @@ pub fn load(
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
     let bytes = std::fs::read(path)
         .map_err(|e| SceneError::whole_file(path, format!("cannot read particle file: {e}")))?;
-    parse(path, format, bytes, options)
+    let sidecar = match &options.types {
+        Some(types) => Some(types::read(types)?),
+        None => types::sidecar_of(path).map(|p| types::read(&p)).transpose()?,
+    };
+    build(path, format, bytes, options, sidecar.as_ref())
 }
 
-/// [`load`] of a file's bytes, gzip- or bzip2-compressed or not (told by their first bytes).
+/// [`load`] of a file's bytes, gzip- or bzip2-compressed or not (told by their first bytes); the types
+/// sidecar is `options.types` only (bytes have no file beside them).
 pub fn parse(
     path: &Path,
     format: ParticleFormat,
     bytes: Vec<u8>,
     options: &ParticleOptions,
+) -> Result<(SceneDesc, Vec<String>), SceneError> {
+    let sidecar = options.types.as_deref().map(types::read).transpose()?;
+    build(path, format, bytes, options, sidecar.as_ref())
+}
+
+/// The scene of a particle file's bytes with a sidecar's types.
+fn build(
+    path: &Path,
+    format: ParticleFormat,
+    bytes: Vec<u8>,
+    options: &ParticleOptions,
+    sidecar: Option<&types::Types>,
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
     let source = super::error::text(path, decompress(path, bytes)?)?;
     let wanted = options.frame.unwrap_or(0);
@@ -176,7 +275,7 @@ pub fn parse(
         ParticleFormat::Gro => gro::parse(path, &source, wanted),
         ParticleFormat::Lammps => lammps::parse(path, &source, wanted),
     }?;
-    scene::scene(frame, options).map_err(|m| SceneError::whole_file(path, m))
+    scene::scene(frame, options, sidecar).map_err(|m| SceneError::whole_file(path, m))
 }
 
 /// `bytes` decompressed when they start as gzip (`1f 8b`) or bzip2 (`BZh`) data does; a name ending in

@@ -5,6 +5,8 @@
 //! `HETATM` records a two-letter element written from column 13 (`FE`), else the name's first letter
 //! (` CA ` is carbon, `HG21` hydrogen). PQR records are whitespace-separated,
 //! `ATOM serial name residue [chain] number x y z charge radius`, read from the end; their radius is used.
+//! A `CRYST1` record gives the periodic box (cell lengths in columns 7–33, angles in 34–54; whitespace-
+//! separated in PQR), except the `1 1 1 90 90 90` that stands for none.
 
 use std::collections::HashMap;
 use std::path::Path;
@@ -13,7 +15,7 @@ use glam::DVec3;
 
 use super::elements;
 use super::text::{self, columns, Lines};
-use super::{Frame, Kind, Particle, Unit};
+use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Reads frame `wanted` (from 0) of a PDB text, or of a PQR text when `pqr`.
@@ -51,6 +53,7 @@ pub fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Fram
                 }
                 open = record == "MODEL";
             }
+            "CRYST1" => frame.cell = cryst1(line, pqr).map_err(|m| lines.error(m))?,
             "END" => break,
             _ => {}
         }
@@ -113,6 +116,30 @@ fn pdb_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
     Ok((center, None, key))
 }
 
+/// A `CRYST1` record's box: `None` for the unit cube of 90° that PDB writes when there is no box, and for
+/// zero lengths or angles that close no box, which other writers put there.
+fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
+    const FIELDS: [(usize, usize, &str); 6] =
+        [(6, 15, "a"), (15, 24, "b"), (24, 33, "c"), (33, 40, "alpha"), (40, 47, "beta"), (47, 54, "gamma")];
+    let words: Vec<&str> = line.split_ascii_whitespace().skip(1).collect();
+    let mut v = [0.0; 6];
+    for (k, &(from, to, name)) in FIELDS.iter().enumerate() {
+        v[k] = match pqr {
+            true => text::number(words.get(k).copied().unwrap_or(""), &format!("the CRYST1 cell's {name}")),
+            false => text::number(
+                columns(line, from, to),
+                &format!("the CRYST1 cell's {name} in columns {}-{to}", from + 1),
+            ),
+        }?;
+    }
+    let (lengths, angles) = ([v[0], v[1], v[2]], [v[3], v[4], v[5]]);
+    if lengths == [1.0; 3] && angles == [90.0; 3] {
+        return Ok(None);
+    }
+    // Writers without a box also put zeros here (NAMD, MDAnalysis): a cell that closes no box is none.
+    Ok(Cell::from_lengths_angles(lengths, angles).filter(|_| lengths.iter().all(|&l| l > 0.0)))
+}
+
 /// A PQR record, whitespace-separated and read from the end: centre, radius and key.
 fn pqr_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
     let words: Vec<&str> = line.split_ascii_whitespace().collect();
@@ -164,6 +191,32 @@ mod tests {
         assert_eq!(parse(path, &text, 1, false).unwrap().particles.len(), 1);
         assert!(parse(path, &text, 2, false).unwrap_err().message.contains("2 frames"));
         assert_eq!(parse(path, &a, 0, false).unwrap().particles.len(), 1);
+    }
+
+    #[test]
+    fn cryst1_gives_the_box() {
+        let a = atom("ATOM", " N", "GLY", [1.0, 0.0, 0.0], "N");
+        let path = Path::new("t.pdb");
+        let cryst = "CRYST1   10.000   20.000   30.000  90.00  90.00  90.00 P 1           1";
+        let cell = parse(path, &format!("{cryst}\n{a}\n"), 0, false).unwrap().cell.unwrap();
+        assert_eq!(cell.edges, [DVec3::X * 10.0, DVec3::Y * 20.0, DVec3::Z * 30.0]);
+        // A monoclinic cell: c leans in the xz plane by beta.
+        let tilted = cryst.replace("90.00  90.00  90.00", "90.00 120.00  90.00");
+        let c = parse(path, &format!("{tilted}\n{a}\n"), 0, false).unwrap().cell.unwrap().edges[2];
+        assert!((c - DVec3::new(-15.0, 0.0, 30.0 * 0.75f64.sqrt())).length() < 1e-9, "{c}");
+        let none = "CRYST1    1.000    1.000    1.000  90.00  90.00  90.00 P 1           1";
+        assert_eq!(parse(path, &format!("{none}\n{a}\n"), 0, false).unwrap().cell, None);
+        let e = parse(path, &format!("{a}\n{}\n", cryst.replace("20.000", "20.0x0")), 0, false).unwrap_err();
+        assert!(e.line == 2 && e.message.contains("columns 16-24"), "{e}");
+        // Zeros, as NAMD and MDAnalysis write them for no box, are no box.
+        for zeros in
+            [cryst.replace(" 90.00  90.00  90.00", "  0.00   0.00   0.00"), cryst.replace("10.000", " 0.000")]
+        {
+            assert_eq!(parse(path, &format!("{zeros}\n{a}\n"), 0, false).unwrap().cell, None, "{zeros}");
+        }
+        let pqr = "CRYST1 5 5 5 90 90 90\nATOM 1 N MET 1 0 0 0 0.1 1\n";
+        let cell = parse(Path::new("t.pqr"), pqr, 0, true).unwrap().cell.unwrap();
+        assert_eq!(cell.edges[1], DVec3::Y * 5.0);
     }
 
     #[test]

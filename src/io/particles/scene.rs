@@ -3,18 +3,23 @@
 //! the framing of [`crate::io::xyzr::scene_framing`] from the chosen view, with a white background
 //! ([`particle_scene`], which spheres given as arrays share).
 //!
-//! A radius is, first to last: `--radius` for the kind, the file's radius for the particle, the table's
-//! for the element (÷ 10 in a file in nm), 0.5 for a LAMMPS type, [`elements::FALLBACK_RADIUS`] (÷ 10 in
-//! nm); then times the radius scale. A colour is `--color` for the kind, the file's colour for the
-//! particle, the table's for the element, [`TYPE_COLORS`] for a LAMMPS type, [`elements::FALLBACK_COLOR`].
+//! A radius is, first to last: `--radius` for the kind, the types sidecar's ([`super::types`]), the file's
+//! radius for the particle, the table's for the element (÷ 10 in a file in nm), 0.5 for a LAMMPS type,
+//! [`elements::FALLBACK_RADIUS`] (÷ 10 in nm); then times the radius scale. A colour is `--color` for the
+//! kind, the sidecar's, the file's colour for the particle, the table's for the element, [`TYPE_COLORS`]
+//! for a LAMMPS type, [`elements::FALLBACK_COLOR`].
+//!
+//! With [`ParticleOptions::draw_box`], the frame's periodic box is drawn as twelve open cylinders with a
+//! sphere at each corner to close the joints, all of radius [`box_radius`] and the grey [`BOX_COLOR`].
 
 use glam::DVec3;
 
 use super::elements::{self, FALLBACK_COLOR, FALLBACK_RADIUS};
-use super::{Frame, Kind, ParticleOptions, Unit};
+use super::types::Types;
+use super::{Cell, Frame, Kind, ParticleOptions, Unit};
 use crate::io::xyzr;
 use crate::math::{Rgb, Rgb8};
-use crate::scene::desc::{Material, SceneDesc, SphereDesc};
+use crate::scene::desc::{ConeDesc, Material, SceneDesc, SphereDesc};
 
 /// Colours of LAMMPS types 1, 2, … (repeating): red, blue, yellow, green, orange, violet, cyan, grey.
 pub const TYPE_COLORS: [u32; 8] =
@@ -26,9 +31,29 @@ pub const TYPE_RADIUS: f64 = 0.5;
 /// The view when none is chosen: from +z.
 pub const DEFAULT_VIEW: DVec3 = DVec3::Z;
 
-/// The scene of `frame` with `options`' overrides; the strings are warnings (unknown elements, overrides
-/// that name no kind in the frame). The error is a message about the whole file.
-pub fn scene(frame: Frame, options: &ParticleOptions) -> Result<(SceneDesc, Vec<String>), String> {
+/// The colour of the periodic box's cylinders: a neutral mid grey, seen on white and on most particles.
+pub const BOX_COLOR: Rgb = Rgb::new(0.35, 0.35, 0.35);
+
+/// The radius of the box's cylinders: this share of the box's longest diagonal, thin beside atoms (a
+/// 10 nm box gets 0.03 nm against hydrogen's 0.12) yet a few pixels wide when the box fills the image.
+pub const BOX_RADIUS_SHARE: f64 = 0.0015;
+
+/// The radius of `cell`'s cylinders: [`BOX_RADIUS_SHARE`] of its longest diagonal.
+pub fn box_radius(cell: &Cell) -> f64 {
+    let [a, b, c] = cell.edges;
+    let longest =
+        [a + b + c, a + b - c, a - b + c, -a + b + c].iter().map(|d| d.length()).fold(0.0, f64::max);
+    longest * BOX_RADIUS_SHARE
+}
+
+/// The scene of `frame` with a types sidecar's and `options`' overrides; the strings are warnings (unknown
+/// elements, overrides that name no kind in the frame, a box asked of a frame without one). The error is a
+/// message about the whole file.
+pub fn scene(
+    frame: Frame,
+    options: &ParticleOptions,
+    sidecar: Option<&Types>,
+) -> Result<(SceneDesc, Vec<String>), String> {
     let mut warnings = Vec::new();
     // Particles of each kind without a radius of their own: those the fallback may be for.
     let mut counts = vec![0usize; frame.kinds.len()];
@@ -36,6 +61,13 @@ pub fn scene(frame: Frame, options: &ParticleOptions) -> Result<(SceneDesc, Vec<
     let find = |name: &str| frame.kinds.iter().position(|k| k.name.eq_ignore_ascii_case(name));
     let mut radius_over = vec![None; frame.kinds.len()];
     let mut color_over = vec![None; frame.kinds.len()];
+    // The sidecar first, so that the flags' values replace its.
+    for entry in sidecar.map_or(&[][..], |t| &t.entries[..]) {
+        if let Some(i) = find(&entry.name) {
+            radius_over[i] = entry.radius.or(radius_over[i]);
+            color_over[i] = entry.color.or(color_over[i]);
+        }
+    }
     for (name, r) in &options.radius {
         match find(name) {
             Some(i) => radius_over[i] = Some(*r),
@@ -73,7 +105,40 @@ pub fn scene(frame: Frame, options: &ParticleOptions) -> Result<(SceneDesc, Vec<
     if spheres.is_empty() {
         return Err("no particles".to_owned());
     }
-    Ok((particle_scene(spheres, colors, options.view.unwrap_or(DEFAULT_VIEW)), warnings))
+    let cell = match (options.draw_box, frame.cell) {
+        (false, _) => None,
+        (true, Some(cell)) if cell.is_solid() => Some(cell),
+        (true, Some(_)) => {
+            warnings.push("--box: the file's box is flat or empty, so none is drawn".to_owned());
+            None
+        }
+        (true, None) => {
+            warnings.push("--box: the file gives no periodic box for this frame".to_owned());
+            None
+        }
+    };
+    // The corners join the spheres before the framing, so that the box is framed with the particles.
+    let corners = cell.map(|cell| {
+        let radius = box_radius(&cell);
+        for center in cell.corners() {
+            spheres.push(SphereDesc { center, radius, material: 1 });
+            colors.push(Rgb8::quantize(BOX_COLOR));
+        }
+        (cell, radius)
+    });
+    let mut desc = particle_scene(spheres, colors, options.view.unwrap_or(DEFAULT_VIEW));
+    if let Some((cell, radius)) = corners {
+        desc.materials.push(material_of(BOX_COLOR));
+        let c = cell.corners();
+        desc.cones.extend(Cell::edge_corners().iter().map(|&(i, j)| ConeDesc {
+            base: c[i],
+            base_radius: radius,
+            apex: c[j],
+            apex_radius: radius,
+            material: 1,
+        }));
+    }
+    Ok((desc, warnings))
 }
 
 /// The scene of particles: `spheres` (each with material 0) and their colours (empty, or one per sphere),

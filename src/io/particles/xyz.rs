@@ -3,13 +3,15 @@
 //! (types `S` string, `R` real, `I` integer, `L` logical): `species` (or `element`) gives the kind, `Z` an
 //! atomic number, `pos` the centre, `radius` (or `radii`) a radius and `color` (or `colors`) an RGB colour
 //! with channels in [0, 1]; other columns are skipped. The element may be a symbol or an atomic number.
+//! `Lattice="ax ay az bx by bz cx cy cz"` in the comment line gives the periodic box's edge vectors, from
+//! the origin or from `Origin="x y z"`.
 
 use std::path::Path;
 
 use glam::DVec3;
 
 use super::text::{self, Lines};
-use super::{Frame, KindCache, Particle, Unit};
+use super::{Cell, Frame, KindCache, Particle, Unit};
 use crate::io::SceneError;
 use crate::math::Rgb;
 
@@ -36,7 +38,10 @@ pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneErr
         let comment = lines.expect("the comment line")?;
         if index == wanted {
             let columns = columns(comment).map_err(|m| lines.error(m))?;
-            return frame(&mut lines, count, columns, source.len());
+            let cell = lattice(comment).map_err(|m| lines.error(m))?;
+            let mut frame = frame(&mut lines, count, columns, source.len())?;
+            frame.cell = cell;
+            return Ok(frame);
         }
         for _ in 0..count {
             lines.expect(&format!("{count} particle lines (frame {index})"))?;
@@ -83,6 +88,45 @@ fn columns(comment: &str) -> Result<Columns, String> {
     }
     let pos = pos.ok_or("Properties has no `pos:R:3` column")?;
     Ok(Columns { kind, pos, radius, color, words: at })
+}
+
+/// The box a comment line's `Lattice=` (and `Origin=`) give, if it has one.
+fn lattice(comment: &str) -> Result<Option<Cell>, String> {
+    let Some(value) = key_value(comment, "lattice") else { return Ok(None) };
+    let v = numbers(value).filter(|v| v.len() == 9);
+    let v = v.ok_or_else(|| {
+        format!("Lattice=\"{value}\": expected 9 finite numbers (the box's 3 edge vectors)")
+    })?;
+    let origin = match key_value(comment, "origin") {
+        Some(o) => match numbers(o).filter(|v| v.len() == 3) {
+            Some(o) => DVec3::new(o[0], o[1], o[2]),
+            None => return Err(format!("Origin=\"{o}\": expected 3 finite numbers")),
+        },
+        None => DVec3::ZERO,
+    };
+    let edges = [0, 3, 6].map(|k| DVec3::new(v[k], v[k + 1], v[k + 2]));
+    Ok(Some(Cell { origin, edges }))
+}
+
+/// The words of `text` as finite numbers, or `None` if one is not.
+fn numbers(text: &str) -> Option<Vec<f64>> {
+    text.split_ascii_whitespace().map(|w| text::number(w, "").ok()).collect()
+}
+
+/// The value of `key=` (matched without regard to case, at the start of a word) in a comment line: the text
+/// between the quotes after it, or the word after it.
+fn key_value<'a>(comment: &'a str, key: &str) -> Option<&'a str> {
+    let lower = comment.to_ascii_lowercase();
+    let pattern = format!("{key}=");
+    let at = lower
+        .match_indices(&pattern)
+        .map(|(i, _)| i)
+        .find(|&i| i == 0 || lower.as_bytes()[i - 1].is_ascii_whitespace())?;
+    let rest = &comment[at + pattern.len()..];
+    match rest.strip_prefix('"') {
+        Some(quoted) => Some(quoted.split('"').next().unwrap_or("")),
+        None => rest.split_ascii_whitespace().next(),
+    }
 }
 
 /// Byte offset just after `key` (matched without regard to case) in `text`.
@@ -169,5 +213,25 @@ mod tests {
         assert_eq!(e.line, 4, "{e}");
         let e = parse(path, "3\nc\nC 0 0 0\n", 0).unwrap_err();
         assert_eq!(e.line, 3, "{e}");
+    }
+
+    #[test]
+    fn lattice_and_origin_give_the_box() {
+        let path = Path::new("t.xyz");
+        let text = "1\npbc=\"T T T\" Lattice=\"2 0 0 0 3 0 1 0 4\" Properties=species:S:1:pos:R:3\nC 0 0 0\n";
+        let cell = parse(path, text, 0).unwrap().cell.unwrap();
+        assert_eq!(
+            (cell.origin, cell.edges),
+            (DVec3::ZERO, [DVec3::X * 2.0, DVec3::Y * 3.0, DVec3::new(1.0, 0.0, 4.0)])
+        );
+        let with_origin = text.replace("pbc=", "Origin=\"-1 -1 -1\" pbc=");
+        assert_eq!(parse(path, &with_origin, 0).unwrap().cell.unwrap().origin, DVec3::NEG_ONE);
+        assert_eq!(parse(path, "1\nplain\nC 0 0 0\n", 0).unwrap().cell, None);
+        // Only a key at the start of a word counts.
+        assert_eq!(parse(path, "1\nsuperlattice=1\nC 0 0 0\n", 0).unwrap().cell, None);
+        let e = parse(path, &text.replace("1 0 4", "1 0"), 0).unwrap_err();
+        assert!(e.line == 2 && e.message.contains("expected 9"), "{e}");
+        let e = parse(path, &with_origin.replace("-1 -1 -1", "nan 0 0"), 0).unwrap_err();
+        assert!(e.line == 2 && e.message.contains("Origin"), "{e}");
     }
 }
