@@ -1,7 +1,7 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
-//! Each bounded kind has its own BVH ([`bvh`], one tree type monomorphised over the kind's [`bvh::LeafQuery`]):
+//! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's [`crate::bvh::LeafQuery`]):
 //! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]), bounded transformed shapes
 //! ([`ShapeQuery`]) and open cones and cylinders ([`ConeQuery`]); a kind with few items is tested brute force by the same query, and so are unbounded
 //! shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
@@ -190,7 +190,7 @@ impl Geometry {
     /// [`Geometry::intersect_k`] for each packet of a tile of camera rays (origin at the eye, departing from
     /// no surface) into `hits`, bit for bit: with a sphere BVH that culls by frusta
     /// ([`Bvh::frustum_culling`]) and `pyramid` (enclosing every active ray of the tile), the packets walk
-    /// the sphere tree together as one large packet; at most [`bvh::MAX_PACKETS`] packets then. The large
+    /// the sphere tree together as one large packet; at most [`crate::bvh::MAX_PACKETS`] packets then. The large
     /// walk culls by frusta alone, so with frustum culling off every packet walks on its own.
     pub fn intersect_tile<F: Lanes>(
         &self,

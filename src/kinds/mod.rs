@@ -1,10 +1,10 @@
 //! The primitive kinds of the registry: each kind lives in one folder that holds everything about it (its
 //! description and TOML form, its f32 store, its kernel generic over lanes, bounds, surface, departure rule
-//! and its f64 form for the accuracy twin), behind the [`Kind`] trait. One list, [`registry!`], names the
+//! and its f64 form for the accuracy twin), behind the [`Kind`] trait. One list, `registry!`, names the
 //! kinds; the scene description ([`KindDescs`]), the TOML reader, compile, the queries over the geometry
 //! ([`KindStores`]) and the twin ([`KindTwins`]) are written once over it.
 //!
-//! Adding a kind: a folder here with a type implementing [`Kind`], and its name in [`registry!`]. Its
+//! Adding a kind: a folder here with a type implementing [`Kind`], and its name in `registry!`. Its
 //! primitive ids follow the built-in kinds' (spheres, shapes, polygons, cones) in the list's order.
 //!
 //! ```
