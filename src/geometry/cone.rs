@@ -343,7 +343,7 @@ impl Cones {
 }
 
 /// The largest f32 not above `v`.
-fn round_down(v: f64) -> f32 {
+pub(crate) fn round_down(v: f64) -> f32 {
     let r = v as f32;
     if f64::from(r) > v {
         r.next_down()
@@ -353,7 +353,7 @@ fn round_down(v: f64) -> f32 {
 }
 
 /// The smallest f32 not below `v`.
-fn round_up(v: f64) -> f32 {
+pub(crate) fn round_up(v: f64) -> f32 {
     let r = v as f32;
     if f64::from(r) < v {
         r.next_up()

@@ -12,6 +12,7 @@ mod sphere;
 mod spheres;
 
 pub use cone::{intersect_cone, rehit_cone, Cone, Cones};
+pub(crate) use cone::{round_down, round_up};
 pub use ellipse::{Ellipse, Part};
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;

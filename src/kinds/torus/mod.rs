@@ -14,7 +14,7 @@ pub use kernel::{intersect_torus, rehit_torus, TorusShape};
 
 use super::placement::{transform, TransformOp};
 use super::{Kind, KindError, Stray};
-use crate::geometry::Ray;
+use crate::geometry::{round_down, round_up, Ray};
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
@@ -236,25 +236,5 @@ impl Kind for Torus {
 
     fn distance64(t: &TorusShape<f64>, p: V3<f64>) -> f64 {
         twin::distance(t, p)
-    }
-}
-
-/// The largest f32 not above `v`.
-fn round_down(v: f64) -> f32 {
-    let r = v as f32;
-    if f64::from(r) > v {
-        r.next_down()
-    } else {
-        r
-    }
-}
-
-/// The smallest f32 not below `v`.
-fn round_up(v: f64) -> f32 {
-    let r = v as f32;
-    if f64::from(r) < v {
-        r.next_up()
-    } else {
-        r
     }
 }
