@@ -1,5 +1,6 @@
 //! Where a ray meets the primitive it leaves again, which no kind's query finds (the departure primitive is
-//! skipped there): the exit from a solid it heads into, and the second meeting with an open cone.
+//! skipped there): the exit from a solid it heads into, and the next meeting with an open cone or a registered
+//! kind that a departing ray can meet again (a torus).
 
 use crate::geometry::{far_root, rehit_cone, sphere_roots, DeparturePacket, Ray, RayPacket};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -8,7 +9,8 @@ use super::{Geometry, PrimRef};
 
 impl Geometry {
     /// For lanes whose ray heads into the solid it leaves: its exit from that solid; for lanes whose ray
-    /// leaves an open cone: where it meets that cone again. A candidate hit either way. Computed lane by lane
+    /// leaves an open cone or a kind that [meets again](crate::kinds::Kind::MEETS_AGAIN): where it meets
+    /// that primitive again. A candidate hit either way. Computed lane by lane
     /// with the scalar kernels (each lane's primitive differs), so every width gets the scalar bits.
     pub(super) fn departure_exits_k<F: Lanes>(
         &self,
@@ -16,18 +18,18 @@ impl Geometry {
         from: &DeparturePacket<F>,
     ) -> (F::Mask, F) {
         let inward = F::move_mask(from.inward & rays.active);
-        let on_cone = match self.cones.is_empty() && self.kinds.is_empty() {
+        let again = match self.cones.is_empty() && self.kinds.is_empty() {
             true => 0,
             false => set_bits(F::move_mask(rays.active))
                 .filter(|&i| self.meets_again(from.prim.lane(i)))
                 .fold(0u32, |bits, i| bits | 1 << i),
         };
-        if inward | on_cone == 0 {
+        if inward | again == 0 {
             return (F::mask_from_bits(0), F::splat_f32(f32::INFINITY));
         }
         let mut t = F::splat_f32(f32::INFINITY).to_array();
         let mut found = 0u32;
-        for i in set_bits(inward | on_cone) {
+        for i in set_bits(inward | again) {
             let (ray, t_max, _) = rays.lane(i);
             if let Some(exit) = self.exit_of_departure(&ray, from.prim.lane(i), t_max) {
                 t.as_mut()[i] = exit;
@@ -49,6 +51,7 @@ impl Geometry {
     /// Planar primitives (planes, polygons) have no inside, so nothing. For a ray leaving an open cone:
     /// where it meets the cone again ([`rehit_cone`]), whichever side the shading took it to be on (an open
     /// surface is seen from inside through its ends, so the side a ray heads to is decided by the kernel).
+    /// For a registered kind: its [`crate::kinds::Kind::rehit`].
     fn exit_of_departure(&self, ray: &Ray<f32>, prim: u32, t_max: f32) -> Option<f32> {
         let roots = match self.prim(prim) {
             PrimRef::Sphere(i) => sphere_roots(self.spheres.center(i), self.spheres.r[i], ray),

@@ -39,7 +39,8 @@ use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the spheres of the particle tree (a scene has
-/// one or the other), then the shapes, then the polygons, then the cones.
+/// one or the other), then the shapes, then the polygons, then the cones, then the registered kinds' items
+/// ([`crate::kinds`]) kind by kind.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// Plain spheres, in BVH leaf order when there is a BVH.
