@@ -90,21 +90,23 @@ fn ferrari(c: &[f64; 5]) -> Vec<f64> {
     ys.into_iter().map(|y| y + shift).collect()
 }
 
-/// A few Newton steps on the monic cubic from `m`.
-fn polish_cubic(a: f64, b: f64, c: f64, mut m: f64) -> f64 {
-    for _ in 0..4 {
-        let f = ((m + a) * m + b) * m + c;
-        let df = (3.0 * m + 2.0 * a) * m + b;
-        if df == 0.0 {
+/// `steps` Newton steps from `x` on the function whose value and slope `f` gives, stopping early where the
+/// slope is zero or a step would leave the finite numbers.
+fn newton(f: impl Fn(f64) -> (f64, f64), mut x: f64, steps: usize) -> f64 {
+    for _ in 0..steps {
+        let (value, slope) = f(x);
+        let next = x - value / slope;
+        if slope == 0.0 || !next.is_finite() {
             break;
         }
-        let next = m - f / df;
-        if !next.is_finite() {
-            break;
-        }
-        m = next;
+        x = next;
     }
-    m
+    x
+}
+
+/// A few Newton steps on the monic cubic `x³ + a·x² + b·x + c` from `m`.
+fn polish_cubic(a: f64, b: f64, c: f64, m: f64) -> f64 {
+    newton(|m| (((m + a) * m + b) * m + c, (3.0 * m + 2.0 * a) * m + b), m, 4)
 }
 
 /// Every real root `t` of the ray's line with the torus, ascending, each polished by Newton's method.
@@ -118,23 +120,7 @@ pub fn roots(t: &TorusShape<f64>, ray: &Ray<f64>) -> Vec<f64> {
         return Vec::new();
     }
     let c = quartic(t, o, d);
-    let mut out: Vec<f64> = ferrari(&c)
-        .into_iter()
-        .map(|mut s| {
-            for _ in 0..3 {
-                let (g, dg) = eval(&c, s);
-                if dg == 0.0 {
-                    break;
-                }
-                let next = s - g / dg;
-                if !next.is_finite() {
-                    break;
-                }
-                s = next;
-            }
-            shift + s
-        })
-        .collect();
+    let mut out: Vec<f64> = ferrari(&c).into_iter().map(|s| shift + newton(|s| eval(&c, s), s, 3)).collect();
     out.sort_by(f64::total_cmp);
     out
 }
