@@ -102,17 +102,27 @@ fn summarise<T: Send + Sync + Copy>(
     }
 }
 
-/// The boxes and count of the items whose centres fall in one bin.
+/// Bins along each axis: the box around the items whose centres fall in each, and their number.
 #[derive(Clone, Copy)]
-struct Bin {
-    bounds: Aabb,
-    count: u32,
+struct Bins {
+    bounds: [[Aabb; BINS]; 3],
+    counts: [[u32; BINS]; 3],
 }
 
-/// Bins along each axis.
-type Bins = [[Bin; BINS]; 3];
+const EMPTY_BINS: Bins = Bins { bounds: [[Aabb::INVALID; BINS]; 3], counts: [[0; BINS]; 3] };
 
-const EMPTY_BINS: Bins = [[Bin { bounds: Aabb::INVALID, count: 0 }; BINS]; 3];
+impl Bins {
+    /// Adds `o`'s items (unions and counts, so the order of merging does not matter).
+    fn merge(mut self, o: Bins) -> Bins {
+        for (x, y) in self.bounds.iter_mut().flatten().zip(o.bounds.iter().flatten()) {
+            *x = x.union(y);
+        }
+        for (x, y) in self.counts.iter_mut().flatten().zip(o.counts.iter().flatten()) {
+            *x += y;
+        }
+        self
+    }
+}
 
 /// Which bin a centre falls in, along each axis, over a range's centre box.
 struct Binner {
@@ -137,25 +147,26 @@ impl Binner {
         let at = (r.centre2() - self.min) * self.scale + TWO_23;
         at.to_array().map(|x| (x.to_bits().wrapping_sub(TWO_23.to_bits()) as usize).min(BINS - 1))
     }
+    /// [`Binner::index`] along one axis: the same operations on that coordinate alone.
+    fn index_on(&self, r: &Ref, axis: usize) -> usize {
+        const TWO_23: f32 = 8_388_608.0;
+        let at = (r.centre2()[axis] - self.min[axis]) * self.scale[axis] + TWO_23;
+        (at.to_bits().wrapping_sub(TWO_23.to_bits()) as usize).min(BINS - 1)
+    }
     fn bins(&self, refs: &[Ref]) -> Bins {
         let serial = |refs: &[Ref]| {
             let mut bins = EMPTY_BINS;
             for r in refs {
                 let (at, b) = (self.index(r), r.bounds());
-                for axis in 0..3 {
-                    let bin = &mut bins[axis][at[axis]];
-                    (bin.bounds, bin.count) = (bin.bounds.union(&b), bin.count + 1);
+                for (axis, at) in at.into_iter().enumerate() {
+                    let bound = &mut bins.bounds[axis][at];
+                    *bound = bound.union(&b);
+                    bins.counts[axis][at] += 1;
                 }
             }
             bins
         };
-        let merge = |mut a: Bins, b: Bins| {
-            for (x, y) in a.iter_mut().flatten().zip(b.iter().flatten()) {
-                (x.bounds, x.count) = (x.bounds.union(&y.bounds), x.count + y.count);
-            }
-            a
-        };
-        summarise(refs, serial, EMPTY_BINS, merge)
+        summarise(refs, serial, EMPTY_BINS, Bins::merge)
     }
 }
 
@@ -169,20 +180,29 @@ struct Split {
 
 fn best_split(bins: &Bins) -> Option<Split> {
     let mut best: Option<Split> = None;
-    for (axis, bins) in bins.iter().enumerate() {
-        // left[s]: area × count of the bins below s, None when they are empty.
-        let (mut left, mut acc, mut count) = ([None; BINS], Aabb::INVALID, 0);
-        for s in 1..BINS {
-            (acc, count) = (acc.union(&bins[s - 1].bounds), count + bins[s - 1].count);
-            left[s] = (count > 0).then(|| acc.half_area() * count as f32);
+    for (axis, (bounds, counts)) in bins.bounds.iter().zip(&bins.counts).enumerate() {
+        // The occupied bins in order. A split anywhere in the empty bins between two of them leaves the same
+        // items on each side at the same cost, so only the highest such bin is a candidate: the one a sweep
+        // over every bin from the top, keeping only cheaper splits, would keep. Small ranges occupy few bins.
+        let (mut occupied, mut m) = ([0u8; BINS], 0);
+        for (s, &count) in counts.iter().enumerate() {
+            occupied[m] = s as u8;
+            m += (count > 0) as usize;
+        }
+        // left[j]: area × count of the occupied bins before the j-th.
+        let (mut left, mut acc, mut count) = ([0.0; BINS], Aabb::INVALID, 0);
+        for j in 1..m {
+            let bin = usize::from(occupied[j - 1]);
+            (acc, count) = (acc.union(&bounds[bin]), count + counts[bin]);
+            left[j] = acc.half_area() * count as f32;
         }
         let (mut acc, mut count) = (Aabb::INVALID, 0);
-        for s in (1..BINS).rev() {
-            (acc, count) = (acc.union(&bins[s].bounds), count + bins[s].count);
-            let Some(left) = left[s].filter(|_| count > 0) else { continue };
-            let cost = left + acc.half_area() * count as f32;
+        for j in (1..m).rev() {
+            let bin = usize::from(occupied[j]);
+            (acc, count) = (acc.union(&bounds[bin]), count + counts[bin]);
+            let cost = left[j] + acc.half_area() * count as f32;
             if best.as_ref().is_none_or(|b| cost < b.cost) {
-                best = Some(Split { axis, bin: s, cost });
+                best = Some(Split { axis, bin, cost });
             }
         }
     }
@@ -209,7 +229,7 @@ fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Optio
         return None;
     }
     // The partition bins as `bins` did, so it leaves the split's counts on each side, neither empty.
-    let parts = partition(refs, |r| binner.index(r)[axis] < bin);
+    let parts = partition(refs, |r| binner.index_on(r, axis) < bin);
     debug_assert!(0 < parts.0 && parts.0 < n, "a split left a side empty");
     Some(parts)
 }
@@ -433,6 +453,48 @@ mod tests {
             let bound = MAX_SAH_DEPTH as usize + boxes.len().ilog2() as usize + 2;
             assert!(depth <= bound, "{name}: depth {depth} over {bound}");
             assert!(nodes.len() < 2 * boxes.len(), "{name}: {} nodes", nodes.len());
+        }
+    }
+
+    /// The split a sweep over every bin chooses (the first cheapest from the top, axis by axis).
+    fn best_split_over_every_bin(bins: &Bins) -> Option<(usize, usize, f32)> {
+        let mut best: Option<(usize, usize, f32)> = None;
+        for axis in 0..3 {
+            let (bounds, counts) = (&bins.bounds[axis], &bins.counts[axis]);
+            let (mut left, mut acc, mut count) = ([None; BINS], Aabb::INVALID, 0);
+            for s in 1..BINS {
+                (acc, count) = (acc.union(&bounds[s - 1]), count + counts[s - 1]);
+                left[s] = (count > 0).then(|| acc.half_area() * count as f32);
+            }
+            let (mut acc, mut count) = (Aabb::INVALID, 0);
+            for s in (1..BINS).rev() {
+                (acc, count) = (acc.union(&bounds[s]), count + counts[s]);
+                let Some(left) = left[s].filter(|_| count > 0) else { continue };
+                let cost = left + acc.half_area() * count as f32;
+                if best.is_none_or(|b| cost < b.2) {
+                    best = Some((axis, s, cost));
+                }
+            }
+        }
+        best
+    }
+
+    /// Only the occupied bins are candidates, and the split chosen among them is the one a sweep over every
+    /// bin chooses: same axis, bin (the partition's boundary) and cost bits, over ranges of every size.
+    #[test]
+    fn the_occupied_bins_give_the_full_sweeps_split() {
+        for (name, boxes) in box_sets() {
+            let mut rng = SplitMix64::new(5);
+            for _ in 0..200 {
+                let len = 1 + (rng.unit() * 40.0) as usize % boxes.len().max(1);
+                let start = (rng.unit() * (boxes.len() - len.min(boxes.len())) as f64) as usize;
+                let refs: Vec<Ref> =
+                    boxes[start..][..len].iter().enumerate().map(|(i, b)| Ref::new(*b, i as u32)).collect();
+                let bins = Binner::new(&Extent::of(&refs).centres).bins(&refs);
+                let fast = best_split(&bins).map(|s| (s.axis, s.bin, s.cost.to_bits()));
+                let full = best_split_over_every_bin(&bins).map(|(a, b, c)| (a, b, c.to_bits()));
+                assert_eq!(fast, full, "{name}: {len} items from {start}");
+            }
         }
     }
 
