@@ -1,17 +1,18 @@
-//! The system allocator, with large blocks mapped straight onto transparent huge pages (Linux, where THP is in
-//! `madvise` mode as on Debian's defaults). A 1e7-sphere field first-touches about 3 GB; in 4 KiB pages that is
-//! 1.4 million page faults, at a few µs each under a hypervisor: a third of the build's wall time (docs/perf-log/
-//! 2026-11.md). Huge pages change only how the kernel backs memory, never its contents.
+//! The system allocator, with large blocks mapped straight onto transparent huge pages (Linux, where THP is
+//! in `madvise` mode as on Debian's defaults). A large field first-touches gigabytes; in 4 KiB pages that is
+//! one fault per page, and under a hypervisor those faults were a large share of the build's wall time
+//! (PERF.md, Register: "The binary's allocator"). Huge pages change only how the kernel backs memory, never
+//! its contents.
 
 use std::alloc::{GlobalAlloc, Layout, System};
 
 /// [`System`] for small blocks; blocks of 2 MiB or more get a mapping of their own, aligned to a huge page,
 /// rounded up to whole huge pages and advised onto them (`madvise(MADV_HUGEPAGE)`), so that every page of
 /// the block comes from a huge-page fault. Blocks from `System` kept 4 KiB faults on their unaligned ends,
-/// and those below its mmap threshold came from the heap: a 1024² render's 3 MB sRGB buffer alone took 750
-/// faults (docs/perf-log/2026-11.md). Fresh mappings are zero, so zeroed blocks cost no writes on the allocating
-/// thread. Installed in the `bareray` binary only (`main.rs`): tests and benchmarks use the plain system
-/// allocator.
+/// and those below its mmap threshold came from the heap in 4 KiB pages, a render's sRGB buffer among them
+/// (docs/perf-log/2026-11.md, session 12, "Kept": huge pages without partial ends). Fresh mappings are
+/// zero, so zeroed blocks cost no writes on the allocating thread. Installed in the `bareray` binary only
+/// (`main.rs`): tests and benchmarks use the plain system allocator.
 pub(crate) struct HugePages;
 
 // SAFETY: small blocks are forwarded to `System` with the same arguments; large ones are whole private

@@ -61,8 +61,9 @@ fn lanes_set<F: Lanes>(m: F::Mask) -> u64 {
 
 /// Whether a secondary packet has so few live lanes (at most 3/4 of K) that tracing them one by one beats
 /// tracing the packet: below that, the packet walk visits nodes for lanes that are not there. The share was
-/// measured on sphereflakes at K = 8 and 16 (docs/perf-log/2026-11.md): anything from 1/2 to 7/8 of K gave about
-/// the same; all of K lost on the coherent first reflections; never going one ray at a time was 10–15% slower.
+/// measured on sphereflakes at K = 8 and 16: anything from 1/2 to 7/8 of K gave about the same, all of K lost
+/// on the coherent first reflections, and never going one ray at a time was slower (PERF.md, Register:
+/// "Sparse secondary packets"; docs/perf-log/2026-11.md, session 8).
 fn is_sparse<F: Lanes>(active: F::Mask) -> bool {
     4 * lanes_set::<F>(active) <= 3 * F::K as u64
 }

@@ -34,11 +34,12 @@ pub enum Builder {
 
 impl Builder {
     /// The SAH builder for spheres. Measured on the contract fields and balls4: 1 makes leaves of about one
-    /// sphere and traces the 1e6 field 30% slower, 4 to 8 trace alike, 12 is slower again
-    /// (docs/perf-log/2026-11-own-builder.md).
+    /// sphere and traces the 1e6 field slower, 4 to 8 trace alike, 12 is slower again
+    /// (docs/perf-log/2026-11-own-builder.md, "Node cost and leaves").
     pub const SAH_SPHERES: Builder = Builder::Sah { node_cost: 6.0 };
     /// The SAH builder for items dearer to test than spheres (triangles, ellipsoids, cones): cones.toml and
-    /// SPD's teapot traced 6–8% faster with 1 than with 6 (docs/perf-log/2026-11-own-builder.md).
+    /// SPD's teapot traced faster with 1 than with 6 (docs/perf-log/2026-11-own-builder.md, "Node cost for
+    /// the other kinds").
     pub const SAH_DEARER_ITEMS: Builder = Builder::Sah { node_cost: 1.0 };
 
     /// The builder for items dearer to test than spheres: [`Builder::SAH_DEARER_ITEMS`] in place of the SAH

@@ -5,10 +5,11 @@
 //!
 //! Packets whose live lanes share one origin (camera rays) first test each node's children against the whole
 //! packet at once ([`Frustum`]: four planes, one 4-wide pass) and run the K-lane slab test only on the
-//! children it cannot rule out ([`Bvh::frustum_culling`]). On the contract fields two thirds of the children
-//! a packet visits are missed by all its lanes, and this rules out nearly all of those. In leaves the same
-//! planes rule out single spheres before their K-lane test. The planes come with the packet when its maker
-//! knows them (the camera's blocks, [`crate::camera::Camera::pyramid`]), else they are fitted to the lanes.
+//! children it cannot rule out ([`Bvh::frustum_culling`]). On the contract fields most children a packet
+//! visits are missed by all its lanes, and this rules out nearly all of those (counts: docs/perf-log/
+//! 2026-11.md, session 5, "Where the time went (before)" and "Frustum culling"). In leaves the same planes
+//! rule out single spheres before their K-lane test. The planes come with the packet when its maker knows
+//! them (the camera's blocks, [`crate::camera::Camera::pyramid`]), else they are fitted to the lanes.
 
 use wide::f32x4;
 

@@ -1,7 +1,7 @@
 //! Piles of coincident spheres. obvhs's PLOC merges equal boxes about one pair per pass, so a pile of p
-//! copies of one sphere costs about p passes over the whole scene: 20 000 copies took 3.3 s to build and
-//! 100 000 took 77 s (docs/perf-log/2026-11.md). A scene with a large pile is built over one box per distinct
-//! sphere, and the copies then hang under their box's leaf as a balanced subtree.
+//! copies of one sphere costs about p passes over the whole scene (build times: docs/perf-log/2026-11.md,
+//! session 12, "Kept": piles). A scene with a large pile is built over one box per distinct sphere, and the
+//! copies then hang under their box's leaf as a balanced subtree.
 
 use obvhs::aabb::Aabb;
 use obvhs::bvh2::node::Bvh2Node;
@@ -13,8 +13,9 @@ use super::median::{balanced_into, tree_for, unset};
 /// Spheres sampled to look for piles.
 const SAMPLE: usize = 4096;
 
-/// The PLOC work (estimated pile size × spheres) from which the build goes over piles: about 0.04 s of
-/// obvhs's time (5000 copies of one sphere, 2.5e7 of it, took 0.23 s).
+/// The PLOC work (estimated pile size × spheres) from which the build goes over piles: about a sixth of that
+/// of 5000 copies of one sphere (2.5e7), whose build time is in docs/perf-log/2026-11.md (session 12,
+/// "Kept": piles).
 const PILE_WORK: usize = 1 << 22;
 
 /// The bits of a box: equal for copies of one sphere.

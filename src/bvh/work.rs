@@ -1,11 +1,11 @@
 //! Probes of the walks: how many box and primitive tests they make, with how many live rays each, and
 //! (for `bench`'s per-ray-kind report) which kind of ray each query serves and the time spent in it.
 //!
-//! Both are off unless a [`Probe`] guard asks for them: a plain render pays one relaxed
-//! atomic load per query and per walk. Counting adds thread-local sums per walk (measured 40% slower on
-//! the 1e3 field when it was one add per node, so the walks count locally and report once); timing reads
-//! the time-stamp counter before and after each query, which is why its pass is separate from the passes
-//! that are timed as a whole.
+//! Both are off unless a [`Probe`] guard asks for them: a plain render pays one relaxed atomic load per query
+//! and per walk. Counting adds thread-local sums per walk (one add per node slowed the 1e3 field by a large
+//! share, so the walks count locally and report once: docs/perf-log/2026-11.md, "cost of `--stats` work
+//! counters"); timing reads the time-stamp counter before and after each query, which is why its pass is
+//! separate from the passes that are timed as a whole.
 
 use std::cell::{Cell, RefCell};
 use std::sync::atomic::{AtomicU32, Ordering::Relaxed};

@@ -122,9 +122,9 @@ pub(super) struct RenderArgs {
     #[arg(long)]
     pub(super) stats: bool,
     /// Rays per packet: 1 (single-ray SIMD: one ray against a BVH node's children, and a leaf's spheres, at
-    /// once), 4, 8 or 16 (the default: fastest on every scene in scenes/ but the refraction-heavy whitted.toml,
-    /// docs/perf-log/2026-11.md); or `scalar`: one ray against one box and one primitive at a time, over
-    /// binary BVHs. The image is identical at every width and on the scalar path.
+    /// once), 4, 8 or 16 (the default; which width is fastest on which scene: PERF.md, "Standing speed
+    /// numbers"); or `scalar`: one ray against one box and one primitive at a time, over binary BVHs. The
+    /// image is identical at every width and on the scalar path.
     #[arg(long, default_value = "16", value_parser = parse_lanes)]
     pub(super) lanes: LanesArg,
     /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").

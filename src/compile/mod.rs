@@ -118,7 +118,7 @@ pub enum BvhPreset {
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,
     /// obvhs `very_fast_build`: the quickest build; on uniform random fields it also traces faster than
-    /// `fast`, on sphereflakes 8–10% slower (docs/perf-log/2026-11.md).
+    /// `fast`, on sphereflakes slower (docs/perf-log/2026-11.md, session 2, "Tried, measured, not kept").
     VeryFast,
     /// obvhs `fast_build`.
     Fast,
@@ -143,8 +143,9 @@ impl BvhPreset {
     }
 }
 
-/// Below this many spheres brute force is used: with 2–3 spheres brute force measured 8–13% faster, from 4
-/// spheres on the BVH was already faster (docs/perf-log/2026-11.md, "BVH crossover").
+/// Below this many spheres brute force is used: with 2–3 spheres brute force measured faster, from 4
+/// spheres on the BVH (PERF.md, Register: "No BVH for a kind with fewer than 4 items"; docs/perf-log/
+/// 2026-11.md, "BVH crossover").
 pub const BVH_MIN_SPHERES: usize = 4;
 
 /// The largest coordinate magnitude in rendering space a ray can start from or pass near: spheres' far

@@ -38,13 +38,14 @@
 //!   the heights carry the rounding of the cone's own size, not of its distance from the rendering space's
 //!   origin. `ρ` and the heights are each one fused multiply-add (one rounding).
 //!
-//! What remains is the conditioning of the problem itself: `a` loses relative accuracy for rays within a
-//! few ε of parallel to a generator line, `c` for origins within a few ε of the surface, and a root near
-//! an end plane may fall on either side of it. Away from such grazing rays the f32 result is the exact
-//! result of a ray nudged by a few roundings: `tests/cones.rs` measures `|t32 − t64|·|d|` against the f64
-//! instance at most 74 roundings (2⁻²⁴) of `t·|d| + |origin − B|` (median 0.45), the relative error of
-//! `t` at most 8.4e-6 where the hit is at least as far as the base point, and hit/miss disagreeing only on
-//! grazing rays. The `|origin − B|` term is the rounding of the ray's coordinates in the frame.
+//! What remains is the conditioning of the problem itself: `a` loses relative accuracy for rays within a few
+//! ε of parallel to a generator line, `c` for origins within a few ε of the surface, and a root near an end
+//! plane may fall on either side of it. Away from such grazing rays the f32 result is the exact result of a
+//! ray nudged by a few roundings: `tests/cones.rs` holds `|t32 − t64|·|d|` against the f64 instance to 150
+//! roundings (2⁻²⁴) of `t·|d| + |origin − B|` and the relative error of `t` to 2e-5 where the hit is at least
+//! as far as the base point, with hit/miss disagreeing only on grazing rays (what it measured:
+//! docs/perf-log/2026-11-accuracy.md, "The cone kernel against its f64 instance"). The `|origin − B|` term is
+//! the rounding of the ray's coordinates in the frame.
 //!
 //! Every condition is a mask and every choice a [`Real::select`], so a lane instance evaluates the same
 //! IEEE operations in the same order as the scalar one: packet results are bit-identical to scalar ones.

@@ -35,10 +35,9 @@
 //! NFF colours are display values: SPD's own renderer, POV-Ray (SPD's POV-Ray output, rendered as SPD's
 //! reference images were) and Tachyon write the shaded values out as they come, clamped and times 255, with
 //! no transfer curve. NFF scenes therefore get [`Transfer::Linear`]; encoding them with the sRGB curve, as
-//! TOML scenes are, washes them out: SPD `balls` (size 4) at 512² differs from POV-Ray's render of SPD's
-//! own POV-Ray output by 49 of 255 per channel on average with the curve, 20 without. The rest is the
-//! ambient term: with SPD's values (`--ambient 0.2,0`) the difference is 0.03. `render --transfer srgb`
-//! still chooses the curve.
+//! TOML scenes are, washes them out: against POV-Ray's render of SPD's own POV-Ray output the curve is most
+//! of the difference, and the ambient term the rest, which SPD's values (`--ambient 0.2,0`) take away
+//! (measured: docs/scene-format.md, "NFF (SPD)"). `render --transfer srgb` still chooses the curve.
 
 use std::path::Path;
 
@@ -83,8 +82,9 @@ struct Tok<'a> {
     line: usize,
 }
 
-/// Tokens separated by ASCII whitespace (byte-wise, several times faster than Unicode splitting on large
-/// scenes), with line numbers, `#` comments removed, one token of look-ahead.
+/// Tokens separated by ASCII whitespace (byte-wise: splitting on Unicode whitespace, char by char, showed in
+/// the readers' profile; docs/perf-log/2026-11.md, session 10), with line numbers, `#` comments removed,
+/// one token of look-ahead.
 struct Tokens<'a> {
     lines: std::iter::Enumerate<std::str::Lines<'a>>,
     words: std::str::SplitAsciiWhitespace<'a>,

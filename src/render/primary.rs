@@ -61,7 +61,8 @@ impl PrimaryHits {
 }
 
 /// Copies the first `dst.len()` values of `src` into `dst`: a whole 4-pixel row as one fixed-size copy (a
-/// `memmove` call per short row cost 2–3% of a small field's frame), a partial one as a slice.
+/// `memmove` call per short row showed in a small field's profile: docs/perf-log/2026-11.md, session 6,
+/// "Where the time went (before)"), a partial one as a slice.
 #[inline(always)]
 fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
     match (<&mut [T; 4]>::try_from(&mut *dst), src.first_chunk::<4>()) {

@@ -30,8 +30,8 @@ use resume::Resume;
 pub const BAND_BUDGET: usize = 32 << 20;
 
 /// The fewest bands an image is cut into by default, however small: one band is traced while the one before
-/// is encoded, so memory holds about two bands' pixels, not the whole image (a 1920×1080 image in one band
-/// held 32 MB beside the scene, in four 17 MB).
+/// is encoded, so memory holds about two bands' pixels, not the whole image (measured peaks:
+/// docs/perf-log/2026-11-scale.md, "Peak memory in KiB, and bands").
 pub const MIN_BANDS: u32 = 4;
 
 /// One still to render: where it goes, how it is written, which part of the image.
