@@ -54,7 +54,8 @@ fn random_cone(rng: &mut SplitMix64) -> (DVec3, f64, DVec3, f64) {
 /// inside, or sent through an open end.
 fn random_ray(rng: &mut SplitMix64, c: &Cone<f64>) -> Ray<f64> {
     let mut u = || rng.unit() - 0.5;
-    let (b, e1, e2, ax) = (DVec3::from(c.base), DVec3::from(c.e1), DVec3::from(c.e2), DVec3::from(c.axis));
+    let f = &c.frame;
+    let (b, e1, e2, ax) = (DVec3::from(f.origin), DVec3::from(f.e1), DVec3::from(f.e2), DVec3::from(f.axis));
     let (h, r0, k) = (c.height, c.base_radius, c.slope);
     let local = |x: f64, y: f64, z: f64| b + e1 * x + e2 * y + ax * z;
     let angle = (u() + 0.5) * std::f64::consts::TAU;
@@ -88,10 +89,10 @@ fn random_ray(rng: &mut SplitMix64, c: &Cone<f64>) -> Ray<f64> {
 fn grazes(c: &Cone<f64>, ray: &Ray<f64>, answer: (bool, f64)) -> bool {
     let (o, d) = (DVec3::from(ray.origin), DVec3::from(ray.dir));
     let top = c.base_radius + c.slope * c.height;
-    let reach = (o - DVec3::from(c.base)).length() + c.height + c.base_radius.max(top);
+    let reach = (o - DVec3::from(c.frame.origin)).length() + c.height + c.base_radius.max(top);
     let dist = if answer.0 { answer.1 * d.length() } else { 0.0 };
     let nudge = GRAZE * (reach + dist);
-    let frame = [c.e1, c.e2, c.axis].map(DVec3::from);
+    let frame = [c.frame.e1, c.frame.e2, c.frame.axis].map(DVec3::from);
     let mut nudged = Vec::new();
     for v in frame {
         for s in [-1.0, 1.0] {
@@ -155,7 +156,7 @@ fn f32_kernel_agrees_with_f64_within_the_measured_bound() {
             }
             tally.hits += 1;
             let dist = t64 * DVec3::from(ray64.dir).length();
-            let from_base = (DVec3::from(ray64.origin) - DVec3::from(c64.base)).length();
+            let from_base = (DVec3::from(ray64.origin) - DVec3::from(c64.frame.origin)).length();
             let err = (f64::from(t32) - t64).abs();
             let units = err * DVec3::from(ray64.dir).length() / (eps * (dist + from_base));
             tally.units.push(units);

@@ -300,11 +300,12 @@ fn cone_case() -> impl Strategy<Value = (Cone<f32>, Vec<LaneRay>)> {
             .map(|(recipe, (s, angle, spread), t_max, active)| {
                 let z = s * cone.height;
                 let r = (cone.base_radius + cone.slope * z) * spread;
-                let on = cone.base + cone.axis * z + (cone.e1 * angle.cos() + cone.e2 * angle.sin()) * r;
+                let f = &cone.frame;
+                let on = f.origin + f.axis * z + (f.e1 * angle.cos() + f.e2 * angle.sin()) * r;
                 let ray = match recipe {
                     Recipe::Free(o, d) => Ray::new(o, d),
                     Recipe::Aimed(_, o, jitter) => Ray::new(o, on + jitter * 1e-3 - o),
-                    Recipe::Inside(_, frac, d) => Ray::new(cone.base + cone.axis * z + frac * r, d),
+                    Recipe::Inside(_, frac, d) => Ray::new(f.origin + f.axis * z + frac * r, d),
                 };
                 (ray, t_max, active)
             })
@@ -318,16 +319,16 @@ fn check_cone_kernel<F: Lanes>(cone: &Cone<f32>, rays: &[LaneRay]) -> Result<(),
     for chunk in rays.chunks(F::K) {
         let packet = RayPacket::<F>::from_fn(|i| chunk.get(i).copied().unwrap_or((chunk[0].0, 1.0, false)));
         let (hit, t) = intersect_cone(&lanes, &packet.ray(), packet.t_max);
-        let local = lanes.to_object(packet.ray().at(t));
+        let local = lanes.frame.to_object(packet.ray().at(t));
         let normal = lanes.object_normal(local);
         for (i, (ray, t_max, _)) in chunk.iter().enumerate() {
             let (want_hit, want_t) = intersect_cone(cone, ray, *t_max);
             check_mask("intersect_cone", F::K, i, F::mask_lane(hit, i), want_hit)?;
             check_t("intersect_cone", F::K, i, t.lane(i), want_t)?;
-            let want_local = cone.to_object(ray.at(want_t));
+            let want_local = cone.frame.to_object(ray.at(want_t));
             let want_normal = cone.object_normal(want_local);
             for (what, got, want) in
-                [("Cone::to_object", local, want_local), ("Cone::object_normal", normal, want_normal)]
+                [("Frame::to_object", local, want_local), ("Cone::object_normal", normal, want_normal)]
             {
                 check_t(what, F::K, i, got.x.lane(i), want.x)?;
                 check_t(what, F::K, i, got.y.lane(i), want.y)?;

@@ -43,8 +43,9 @@ fn random_torus(rng: &mut SplitMix64) -> TorusDesc {
 /// A ray aimed at a point near the torus (on its centre circle's neighbourhood, its hole, or its outside),
 /// from 1 to 40 units away, or started inside the tube.
 fn random_ray(rng: &mut SplitMix64, t: &TorusShape<f64>) -> Ray<f32> {
-    let c = DVec3::from(t.centre);
-    let (e1, e2, u) = (DVec3::from(t.e1), DVec3::from(t.e2), DVec3::from(t.axis));
+    let f = &t.frame;
+    let c = DVec3::from(f.origin);
+    let (e1, e2, u) = (DVec3::from(f.e1), DVec3::from(f.e2), DVec3::from(f.axis));
     let angle = std::f64::consts::TAU * rng.unit();
     let ring = c + (e1 * angle.cos() + e2 * angle.sin()) * t.major;
     let target = ring + unit(rng) * t.minor * 1.6 * rng.unit() + u * (rng.unit() - 0.5) * t.minor;
@@ -75,7 +76,7 @@ fn f32_kernel_agrees_with_the_twins_independent_method() {
             let first = twin::roots(&t64, &ray64).into_iter().find(|&s| s >= 0.0);
             let (h64, s64) = (first.is_some(), first.unwrap_or(f64::INFINITY));
             let len = DVec3::from(ray64.dir).length();
-            let scale = (t64.centre - ray64.origin).length() + t64.major + t64.minor;
+            let scale = (t64.frame.origin - ray64.origin).length() + t64.major + t64.minor;
             let case = || format!("torus {i} {t64:?} ray {ray64:?} t32 {s32:e} ({h32}) t64 {s64:e} ({h64})");
             if twin::grazing(&t64, &ray64, GRAZE * scale, Stray::default()) {
                 grazing += 1;

@@ -604,7 +604,7 @@ impl Geometry {
                 SurfacePoint {
                     point,
                     normal: cone.normal(point),
-                    object_point: cone.to_object(point),
+                    object_point: cone.frame.to_object(point),
                     material: self.cones.material[k],
                 }
             }

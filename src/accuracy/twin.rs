@@ -440,7 +440,7 @@ impl Twin {
             o + len(self.shapes[i - ns].center - origin)
         } else if let Some(cone) = self.cone(prim) {
             let apex_radius = cone.base_radius + cone.slope * cone.height;
-            o + len(cone.base - origin) + cone.height + cone.base_radius.max(apex_radius)
+            o + len(cone.frame.origin - origin) + cone.height + cone.base_radius.max(apex_radius)
         } else if let Some(scale) = self.kind(prim).and_then(|k| self.kinds.scale(k, origin)) {
             o + scale
         } else {
@@ -555,7 +555,7 @@ impl Twin {
             return off <= tol * (spread + 1.0) + norm_bound(m) * slack;
         }
         if let Some(cone) = self.cone(prim) {
-            let q = cone.to_object(p);
+            let q = cone.frame.to_object(p);
             let radial = (q.x * q.x + q.y * q.y).sqrt();
             let z = q.z.clamp(0.0, cone.height);
             let rho = cone.slope.mul_add(z, cone.base_radius);
@@ -580,7 +580,7 @@ impl Twin {
 /// `[a, b, c, Δ]` of `a·t² + 2b·t + c = 0` ([`crate::geometry::cone`]; `Δ = b² − a·c` in its perpendicular
 /// form).
 fn cone_line(cone: &Cone<f64>, ray: &Ray<f64>) -> (Ray<f64>, [f64; 4]) {
-    let local = cone.ray_to_object(ray);
+    let local = cone.frame.ray_to_object(ray);
     let (o, d) = (local.origin, local.dir);
     let rho = cone.slope.mul_add(o.z, cone.base_radius);
     let g = cone.slope * d.z;

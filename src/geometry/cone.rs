@@ -54,20 +54,14 @@ use glam::DVec3;
 
 use crate::math::{Real, Vec3f, V3};
 
-use super::Ray;
+use super::{Frame, Ray};
 
 /// One cone's values, ready to intersect: a scalar cone, one splatted over lanes, or a widened one for the
 /// f64 oracle.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Cone<F> {
-    /// The base point `B`, the frame's origin.
-    pub base: V3<F>,
-    /// First unit vector across the axis.
-    pub e1: V3<F>,
-    /// Second unit vector across the axis (`u × e1`).
-    pub e2: V3<F>,
-    /// Unit axis from the base towards the apex.
-    pub axis: V3<F>,
+    /// The frame: origin at the base point `B`, axis from the base towards the apex.
+    pub frame: Frame<F>,
     /// Distance from base to apex, `h > 0`.
     pub height: F,
     /// Radius at the base, `r0 ≥ 0`.
@@ -88,13 +82,8 @@ impl Cone<f64> {
         if !(finite && radii && height > 0.0 && height.is_finite()) {
             return None;
         }
-        let u = axis / height;
-        let (e1, e2) = u.any_orthonormal_pair();
         Some(Cone {
-            base: base.into(),
-            e1: e1.into(),
-            e2: e2.into(),
-            axis: u.into(),
+            frame: Frame::about(base, axis / height),
             height,
             base_radius,
             slope: (apex_radius - base_radius) / height,
@@ -110,8 +99,8 @@ impl Cone<f64> {
     /// (the surface lies in their convex hull), a disc of radius `r` across unit axis `u` reaching
     /// `r·sqrt(1 − u_i²)` along axis `i`.
     pub fn exact_bounds(&self) -> (DVec3, DVec3) {
-        let u = DVec3::from(self.axis);
-        let base = DVec3::from(self.base);
+        let u = DVec3::from(self.frame.axis);
+        let base = DVec3::from(self.frame.origin);
         let apex = base + u * self.height;
         let apex_radius = self.base_radius + self.slope * self.height;
         let across = (DVec3::ONE - u * u).max(DVec3::ZERO).map(f64::sqrt);
@@ -126,10 +115,7 @@ impl<F: Copy> Cone<F> {
     #[inline(always)]
     pub fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> Cone<G> {
         Cone {
-            base: self.base.map(f),
-            e1: self.e1.map(f),
-            e2: self.e2.map(f),
-            axis: self.axis.map(f),
+            frame: self.frame.map(f),
             height: f(self.height),
             base_radius: f(self.base_radius),
             slope: f(self.slope),
@@ -138,32 +124,6 @@ impl<F: Copy> Cone<F> {
 }
 
 impl<F: Real> Cone<F> {
-    /// A world point (rendering space) in the cone's frame: `(x, y)` across the axis, `z` the height above
-    /// the base. What solid textures read, and what [`Cone::object_normal`] takes.
-    #[inline(always)]
-    pub fn to_object(&self, p: V3<F>) -> V3<F> {
-        let w = p - self.base;
-        V3::new(w.dot(self.e1), w.dot(self.e2), w.dot(self.axis))
-    }
-
-    /// A direction in the cone's frame (no translation).
-    #[inline(always)]
-    pub fn vector_to_object(&self, v: V3<F>) -> V3<F> {
-        V3::new(v.dot(self.e1), v.dot(self.e2), v.dot(self.axis))
-    }
-
-    /// The ray in the cone's frame; `t` is unchanged (the frame is a rotation).
-    #[inline(always)]
-    pub fn ray_to_object(&self, ray: &Ray<F>) -> Ray<F> {
-        Ray::new(self.to_object(ray.origin), self.vector_to_object(ray.dir))
-    }
-
-    /// An object-frame vector back in the world.
-    #[inline(always)]
-    pub fn vector_to_world(&self, v: V3<F>) -> V3<F> {
-        self.e1 * v.x + self.e2 * v.y + self.axis * v.z
-    }
-
     /// The outward unit normal (away from the axis) at a point on the surface, in the cone's frame:
     /// `(x/ρ, y/ρ, −k)/sqrt(1 + k²)` with `ρ = sqrt(x² + y²)`, the gradient of `x² + y² − (r0 + k·z)²`
     /// scaled by `1/(2ρ)`. Taking `ρ` from the point rather than from `r0 + k·z` gives a unit normal for a
@@ -182,7 +142,7 @@ impl<F: Real> Cone<F> {
     /// The outward unit normal at a world point on the surface, in world (rendering-space) coordinates.
     #[inline(always)]
     pub fn normal(&self, p: V3<F>) -> V3<F> {
-        self.vector_to_world(self.object_normal(self.to_object(p))).normalize()
+        self.frame.vector_to_world(self.object_normal(self.frame.to_object(p))).normalize()
     }
 }
 
@@ -192,7 +152,7 @@ impl<F: Real> Cone<F> {
 #[inline(always)]
 fn cone_roots<F: Real>(cone: &Cone<F>, ray: &Ray<F>) -> (F, F, F::Mask, F, F) {
     let zero = F::splat(0.0);
-    let local = cone.ray_to_object(ray);
+    let local = cone.frame.ray_to_object(ray);
     let (o, d) = (local.origin, local.dir);
     let rho = cone.slope.mul_add(o.z, cone.base_radius);
     let g = cone.slope * d.z;
@@ -291,10 +251,11 @@ impl Cones {
     ) -> Option<usize> {
         let exact = Cone::new(base, base_radius, apex, apex_radius)?;
         let c = exact.to_f32();
-        self.bx.push(c.base.x);
-        self.by.push(c.base.y);
-        self.bz.push(c.base.z);
-        for (k, v) in [c.e1, c.e2, c.axis].iter().enumerate() {
+        let f = &c.frame;
+        self.bx.push(f.origin.x);
+        self.by.push(f.origin.y);
+        self.bz.push(f.origin.z);
+        for (k, v) in [f.e1, f.e2, f.axis].iter().enumerate() {
             self.frame[3 * k].push(v.x);
             self.frame[3 * k + 1].push(v.y);
             self.frame[3 * k + 2].push(v.z);
@@ -326,10 +287,12 @@ impl Cones {
     pub fn cone(&self, i: usize) -> Cone<f32> {
         let f = &self.frame;
         Cone {
-            base: V3::new(self.bx[i], self.by[i], self.bz[i]),
-            e1: V3::new(f[0][i], f[1][i], f[2][i]),
-            e2: V3::new(f[3][i], f[4][i], f[5][i]),
-            axis: V3::new(f[6][i], f[7][i], f[8][i]),
+            frame: Frame {
+                origin: V3::new(self.bx[i], self.by[i], self.bz[i]),
+                e1: V3::new(f[0][i], f[1][i], f[2][i]),
+                e2: V3::new(f[3][i], f[4][i], f[5][i]),
+                axis: V3::new(f[6][i], f[7][i], f[8][i]),
+            },
             height: self.height[i],
             base_radius: self.base_radius[i],
             slope: self.slope[i],
@@ -515,7 +478,7 @@ mod tests {
             let (lo, hi) = (DVec3::from(lo.to_f64()), DVec3::from(hi.to_f64()));
             let inside = |p: DVec3| p.cmpge(lo).all() && p.cmple(hi).all();
             let exact = Cone::new(base, r0, apex, r1).unwrap();
-            let (e1, e2) = (DVec3::from(exact.e1), DVec3::from(exact.e2));
+            let (e1, e2) = (DVec3::from(exact.frame.e1), DVec3::from(exact.frame.e2));
             for _ in 0..64 {
                 let (s, angle) = (rng.unit(), rng.unit() * std::f64::consts::TAU);
                 let s = if samples % 8 == 0 { s.round() } else { s };

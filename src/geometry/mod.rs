@@ -3,6 +3,7 @@
 
 pub mod cone;
 mod ellipse;
+mod frame;
 mod packet;
 mod plane;
 pub mod polygon;
@@ -14,6 +15,7 @@ mod spheres;
 pub use cone::{intersect_cone, rehit_cone, Cone, Cones};
 pub(crate) use cone::{round_down, round_up};
 pub use ellipse::{Ellipse, Part};
+pub use frame::Frame;
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
 pub use polygon::{intersect_triangle, stays_off_plane};

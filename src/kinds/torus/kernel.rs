@@ -32,20 +32,14 @@
 //! merge: the isolation's critical point carries the same few roundings, and hit or miss can go either way
 //! for a ray within that distance of grazing (the twin's explanation "graze").
 
-use crate::geometry::{sphere_roots, Ray};
+use crate::geometry::{sphere_roots, Frame, Ray};
 use crate::math::{Real, V3};
 
 /// A torus's values, ready to intersect: a scalar torus, one splatted over lanes, or a widened one.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct TorusShape<F> {
-    /// The centre `C`, the frame's origin.
-    pub centre: V3<F>,
-    /// First unit vector in the torus's plane.
-    pub e1: V3<F>,
-    /// Second unit vector in the plane (`u × e1`).
-    pub e2: V3<F>,
-    /// The unit axis `u`.
-    pub axis: V3<F>,
+    /// The frame: origin at the centre `C`, axis the unit axis `u`.
+    pub frame: Frame<F>,
     /// The major radius `R`: the tube's centre circle.
     pub major: F,
     /// The minor radius `r < R`: the tube's.
@@ -56,14 +50,7 @@ impl<F: Copy> TorusShape<F> {
     /// The same torus with every value mapped by `f` (splatted over lanes, or widened).
     #[inline(always)]
     pub fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> TorusShape<G> {
-        TorusShape {
-            centre: self.centre.map(f),
-            e1: self.e1.map(f),
-            e2: self.e2.map(f),
-            axis: self.axis.map(f),
-            major: f(self.major),
-            minor: f(self.minor),
-        }
+        TorusShape { frame: self.frame.map(f), major: f(self.major), minor: f(self.minor) }
     }
 }
 
@@ -74,25 +61,6 @@ pub fn bisections<F: Real>() -> usize {
 }
 
 impl<F: Real> TorusShape<F> {
-    /// A world point in the torus's frame.
-    #[inline(always)]
-    pub fn to_object(&self, p: V3<F>) -> V3<F> {
-        let w = p - self.centre;
-        V3::new(w.dot(self.e1), w.dot(self.e2), w.dot(self.axis))
-    }
-
-    /// A direction in the torus's frame.
-    #[inline(always)]
-    pub fn vector_to_object(&self, v: V3<F>) -> V3<F> {
-        V3::new(v.dot(self.e1), v.dot(self.e2), v.dot(self.axis))
-    }
-
-    /// An object-frame vector in the world.
-    #[inline(always)]
-    pub fn vector_to_world(&self, v: V3<F>) -> V3<F> {
-        self.e1 * v.x + self.e2 * v.y + self.axis * v.z
-    }
-
     /// `h` at a point of the frame: `(ρ − R)² + z² − r²`, negative inside the tube.
     #[inline(always)]
     pub fn tube(&self, p: V3<F>) -> F {
@@ -115,7 +83,7 @@ impl<F: Real> TorusShape<F> {
     /// The outward unit normal at a world point on the surface.
     #[inline(always)]
     pub fn normal(&self, p: V3<F>) -> V3<F> {
-        self.vector_to_world(self.object_normal(self.to_object(p))).normalize()
+        self.frame.vector_to_world(self.object_normal(self.frame.to_object(p))).normalize()
     }
 }
 
@@ -196,8 +164,8 @@ struct Isolated<F: Real> {
 #[inline(always)]
 fn isolate<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F) -> Isolated<F> {
     let zero = F::splat(0.0);
-    let o = torus.to_object(ray.origin);
-    let d = torus.vector_to_object(ray.dir);
+    let o = torus.frame.to_object(ray.origin);
+    let d = torus.frame.vector_to_object(ray.dir);
     let radius = torus.major + torus.minor;
     let bound = sphere_roots(V3::all(zero), radius, &Ray::new(o, d));
     // The torus touches the bounding sphere along its outer equator and hugs it nearby, so a hit can lie

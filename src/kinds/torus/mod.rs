@@ -14,7 +14,7 @@ pub use kernel::{intersect_torus, rehit_torus, TorusShape};
 
 use super::placement::{transform, TransformOp};
 use super::{Kind, KindError, Stray};
-use crate::geometry::{round_down, round_up, Ray};
+use crate::geometry::{round_down, round_up, Frame, Ray};
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
@@ -80,17 +80,16 @@ impl TorusDesc {
             true => (self.axis.normalize(), self.major, self.minor),
             false => (DVec3::Z, f64::MIN_POSITIVE * 4.0, f64::MIN_POSITIVE),
         };
-        let (e1, e2) = axis.any_orthonormal_pair();
         let centre = if self.centre.is_finite() { self.centre - origin } else { DVec3::ZERO };
-        TorusShape { centre: centre.into(), e1: e1.into(), e2: e2.into(), axis: axis.into(), major, minor }
+        TorusShape { frame: Frame::about(centre, axis), major, minor }
     }
 }
 
 /// The exact box of a torus: about each coordinate axis `i`, the centre ± (`R·√(1 − u_i²) + r`).
 fn exact_box(t: &TorusShape<f64>) -> (DVec3, DVec3) {
-    let u = DVec3::from(t.axis);
+    let u = DVec3::from(t.frame.axis);
     let half = (DVec3::ONE - u * u).max(DVec3::ZERO).map(f64::sqrt) * t.major + DVec3::splat(t.minor);
-    let c = DVec3::from(t.centre);
+    let c = DVec3::from(t.frame.origin);
     (c - half, c + half)
 }
 
@@ -176,7 +175,7 @@ impl Kind for Torus {
     fn push(store: &mut Tori, d: &TorusDesc, origin: DVec3) {
         let exact = d.shape(origin);
         let (lo, hi) = exact_box(&exact);
-        let scale = DVec3::from(exact.centre).abs().max_element() + exact.major + exact.minor;
+        let scale = DVec3::from(exact.frame.origin).abs().max_element() + exact.major + exact.minor;
         let pad = BOUNDS_ROUNDINGS * f64::from(f32::EPSILON) * 0.5 * scale;
         store.bounds.push((V3::from(lo - pad).map(round_down), V3::from(hi + pad).map(round_up)));
         store.shapes.push(exact.map(|v| v as f32));
@@ -203,7 +202,7 @@ impl Kind for Torus {
 
     fn surface(store: &Tori, k: usize, point: Vec3f) -> (Vec3f, Vec3f) {
         let torus = &store.shapes[k];
-        (torus.normal(point), torus.to_object(point))
+        (torus.normal(point), torus.frame.to_object(point))
     }
 
     fn item_material(store: &Tori, k: usize) -> u32 {
@@ -227,7 +226,7 @@ impl Kind for Torus {
     }
 
     fn scale64(t: &TorusShape<f64>, origin: V3<f64>) -> f64 {
-        (t.centre - origin).length() + t.major + t.minor
+        (t.frame.origin - origin).length() + t.major + t.minor
     }
 
     fn grazing64(t: &TorusShape<f64>, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool {

@@ -11,8 +11,8 @@ use super::TorusShape;
 /// The ray in the torus's frame, moved along itself to the point nearest the centre (`s = 0` there; `t` of
 /// the original ray is `shift + s`), so that the quartic's coefficients are of the torus's size.
 fn line(t: &TorusShape<f64>, ray: &Ray<f64>) -> (f64, V3<f64>, V3<f64>) {
-    let o = t.to_object(ray.origin);
-    let d = t.vector_to_object(ray.dir);
+    let o = t.frame.to_object(ray.origin);
+    let d = t.frame.vector_to_object(ray.dir);
     let shift = -o.dot(d) / d.dot(d);
     (shift, o + d * shift, d)
 }
@@ -135,7 +135,7 @@ pub fn rehit(t: &TorusShape<f64>, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
 
 /// The distance from `p` (rendering space) to the torus's surface.
 pub fn distance(t: &TorusShape<f64>, p: V3<f64>) -> f64 {
-    let q = t.to_object(p);
+    let q = t.frame.to_object(p);
     let rho = (q.x * q.x + q.y * q.y).sqrt();
     ((rho - t.major).hypot(q.z) - t.minor).abs()
 }
