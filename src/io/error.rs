@@ -32,21 +32,66 @@ impl SceneError {
     }
 }
 
+/// Files from this size up are mapped rather than read ([`read_text`]).
+const MAP_BYTES: u64 = 1 << 20;
+
+/// A scene file's text: read into memory, or for large files the file's pages mapped read-only (a 50 MB NFF
+/// read is 50 MB copied into fresh pages before any parsing starts; the mapping hands over the page
+/// cache's own pages). Derefs to `str`.
+#[derive(Debug)]
+pub(crate) enum Text {
+    /// Read into a string.
+    Read(String),
+    /// Mapped, checked to be UTF-8 once.
+    Mapped(memmap2::Mmap),
+}
+
+impl std::ops::Deref for Text {
+    type Target = str;
+    fn deref(&self) -> &str {
+        match self {
+            Text::Read(s) => s,
+            // SAFETY: checked to be UTF-8 when mapped ([`read_text`]), and the mapping is read-only.
+            Text::Mapped(m) => unsafe { std::str::from_utf8_unchecked(m) },
+        }
+    }
+}
+
 /// The text of a scene file. Bytes that are not UTF-8 are an error at the line and column where they start;
-/// `what` names the file's kind in the error when it cannot be read at all.
-pub(crate) fn read_text(path: &Path, what: &str) -> Result<String, SceneError> {
-    let bytes =
-        std::fs::read(path).map_err(|e| SceneError::whole_file(path, format!("cannot read {what}: {e}")))?;
-    text(path, bytes)
+/// `what` names the file's kind in the error when it cannot be read at all. Regular files of at least
+/// [`MAP_BYTES`] are mapped (and their pages faulted in by one call) instead of read; like any mapped input,
+/// such a file must not be truncated by another process while it is being parsed. Where mapping fails the
+/// file is read.
+pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
+    let cannot = |e: std::io::Error| SceneError::whole_file(path, format!("cannot read {what}: {e}"));
+    let file = std::fs::File::open(path).map_err(cannot)?;
+    let large = file.metadata().is_ok_and(|m| m.is_file() && m.len() >= MAP_BYTES);
+    // SAFETY: a read-only private mapping of a regular file; see the documentation above on truncation.
+    let mapped =
+        large.then(|| unsafe { memmap2::MmapOptions::new().populate().map(&file) }).and_then(Result::ok);
+    match mapped {
+        Some(map) => match std::str::from_utf8(&map) {
+            Ok(_) => Ok(Text::Mapped(map)),
+            Err(e) => Err(not_utf8(path, &map, e)),
+        },
+        None => {
+            let mut bytes = Vec::new();
+            std::io::Read::read_to_end(&mut &file, &mut bytes).map_err(cannot)?;
+            text(path, bytes).map(Text::Read)
+        }
+    }
 }
 
 /// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start.
 pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
-    String::from_utf8(bytes).map_err(|e| {
-        let valid = e.utf8_error().valid_up_to();
-        let before = std::str::from_utf8(&e.as_bytes()[..valid]).expect("valid up to there");
-        SceneError::at_offset(path, before, valid, "not UTF-8 text: invalid byte sequence")
-    })
+    String::from_utf8(bytes).map_err(|e| not_utf8(path, e.as_bytes(), e.utf8_error()))
+}
+
+/// The error for `bytes` that are UTF-8 only up to where `e` says.
+fn not_utf8(path: &Path, bytes: &[u8], e: std::str::Utf8Error) -> SceneError {
+    let valid = e.valid_up_to();
+    let before = std::str::from_utf8(&bytes[..valid]).expect("valid up to there");
+    SceneError::at_offset(path, before, valid, "not UTF-8 text: invalid byte sequence")
 }
 
 /// 1-based line and column (in characters) of byte `offset` in `source`.
@@ -85,6 +130,27 @@ mod tests {
         let e = read_text(&path, "scene").unwrap_err();
         assert_eq!((e.line, e.column), (2, 10), "{e}");
         assert!(e.to_string().starts_with(&format!("{}:2:10: not UTF-8", path.display())), "{e}");
+    }
+
+    /// A file large enough to be mapped reads as the same text, and bad bytes in it give the same error as
+    /// in a file that is read.
+    #[test]
+    fn large_files_are_mapped_with_the_same_text_and_errors() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("big.nff");
+        let line = "s 1 2 3 0.5\n";
+        let body = line.repeat(MAP_BYTES as usize / line.len() + 1);
+        std::fs::write(&path, &body).unwrap();
+        let text = read_text(&path, "scene").unwrap();
+        assert!(matches!(text, Text::Mapped(_)), "a {} byte file was not mapped", body.len());
+        assert!(*text == *body);
+        let mut bad = body.clone().into_bytes();
+        let at = bad.len() - 3;
+        bad[at] = 0xE2;
+        std::fs::write(&path, &bad).unwrap();
+        let e = read_text(&path, "scene").unwrap_err();
+        let lines = body.matches('\n').count();
+        assert_eq!((e.line, e.column), (lines, line.len() - 2), "{e}");
     }
 
     #[test]
