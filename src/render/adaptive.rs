@@ -28,7 +28,7 @@ use crate::shade::{RayCounts, Tracer};
 use crate::simd::{IdLanes, Lanes};
 
 use super::bands::TileCounter;
-use super::{for_each_camera_hit, lane_rgb, tile_rows, tiles, LargePacket, Offsets, Tile};
+use super::{for_each_camera_hit, lane_rgb, tile_rows, tiles, LargePacket, Offsets, Tile, TILE};
 
 /// A traced lattice point: its colour, and the scene-file id of the primitive its camera ray meets first
 /// ([`crate::geometry::NO_PRIM`] on a miss).
@@ -116,34 +116,118 @@ pub(super) fn adaptive_rows<F: Lanes>(
         counts += c;
         work += w;
     }
-    let mut band = vec![Rgb::default(); width as usize * height as usize];
-    let parts = tile_rows(&mut band, width, &local);
-    let rule = Rule { threshold, depth };
-    let refined: Vec<(RayCounts, Work)> = pool.install(|| {
-        local
-            .par_iter()
-            .zip(parts)
+    let mut band_pixels = vec![Rgb::default(); width as usize * height as usize];
+    let parts = tile_rows(&mut band_pixels, width, &local);
+    // Strips of one tile row each: the even ones first, then the odd ones, which take the points the even
+    // ones traced on their shared edges.
+    let per_strip = width.div_ceil(TILE) as usize;
+    let mut strips: [Vec<Strip>; 2] = [Vec::new(), Vec::new()];
+    let mut parts = parts.into_iter();
+    for (i, tiles) in local.chunks(per_strip).enumerate() {
+        strips[i % 2].push(Strip { tiles, parts: parts.by_ref().take(per_strip).collect() });
+    }
+    let [even, odd] = strips;
+    let band = Band {
+        scene,
+        origin: (columns.start, rows.start),
+        width,
+        corners: &corners,
+        rule: Rule { threshold, depth },
+        counter,
+    };
+    let no_seams: Vec<Seam> = Vec::new();
+    let traced_even: Vec<_> = pool.install(|| {
+        even.into_par_iter()
             .with_max_len(1)
-            .map(|(&tile, mut part)| {
-                take_work();
-                let mut tracer = Tracer::<F>::new(scene);
-                let at = Tile { x0: tile.x0 + columns.start, y0: tile.y0 + rows.start, ..tile };
-                let corner =
-                    |x: u32, y: u32| corners[(tile.y0 + y) as usize * corner_width + (tile.x0 + x) as usize];
-                let pixels = refine_tile(scene, &mut tracer, at, corner, rule, depth);
-                for (row, traced) in part.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
-                    row.copy_from_slice(traced);
-                }
-                counter.tile_done();
-                (tracer.counts, take_work())
-            })
+            .map(|strip| band.refine_strip::<F>(strip, &no_seams, 0))
             .collect()
     });
-    for (c, w) in refined {
+    let seams: Vec<Seam> = traced_even.iter().map(|(seam, ..)| seam.clone()).collect();
+    let traced_odd: Vec<_> = pool.install(|| {
+        odd.into_par_iter()
+            .enumerate()
+            .with_max_len(1)
+            .map(|(i, strip)| band.refine_strip::<F>(strip, &seams, i))
+            .collect()
+    });
+    for (_, c, w) in traced_even.into_iter().chain(traced_odd) {
         counts += c;
         work += w;
     }
-    (band, counts, work)
+    (band_pixels, counts, work)
+}
+
+/// One tile row of a band: its tiles (band coordinates) and their pixels' rows in the band's buffer.
+struct Strip<'a, 'b> {
+    tiles: &'a [Tile],
+    parts: Vec<Vec<&'b mut [Rgb]>>,
+}
+
+/// The lattice points a strip traced on its top and bottom edges, by lattice column across the band.
+#[derive(Clone, Default)]
+struct Seam {
+    top: Vec<Option<Point>>,
+    bottom: Vec<Option<Point>>,
+}
+
+/// What every strip of a band shares: the scene, the band's corner in the image, its width, its traced
+/// corners, the split rule and the progress counter.
+struct Band<'a> {
+    scene: &'a Scene,
+    origin: (u32, u32),
+    width: u32,
+    corners: &'a [Point],
+    rule: Rule,
+    counter: &'a TileCounter<'a>,
+}
+
+impl Band<'_> {
+    /// Refines a strip's tiles left to right, each taking the points the one before traced on their shared
+    /// edge, and for an odd strip (`i`-th) the points of the even strips above and below (`seams[i]`,
+    /// `seams[i + 1]`) on its top and bottom edges; returns the points it traced on its own top and bottom
+    /// edges, and the rays and tests it took.
+    fn refine_strip<F: Lanes>(&self, strip: Strip, seams: &[Seam], i: usize) -> (Seam, RayCounts, Work) {
+        take_work();
+        let mut tracer = Tracer::<F>::new(self.scene);
+        let unit = 1u32 << self.rule.depth;
+        let line = (self.width * unit + 1) as usize;
+        let mut own = Seam { top: vec![None; line], bottom: vec![None; line] };
+        let (above, below) = (seams.get(i).map(|s| &s.bottom), seams.get(i + 1).map(|s| &s.top));
+        let mut left: Vec<Option<Point>> = Vec::new();
+        for (&tile, mut part) in strip.tiles.iter().zip(strip.parts) {
+            let corner_width = self.width as usize + 1;
+            let corner =
+                |x: u32, y: u32| self.corners[(tile.y0 + y) as usize * corner_width + (tile.x0 + x) as usize];
+            let at = Tile { x0: tile.x0 + self.origin.0, y0: tile.y0 + self.origin.1, ..tile };
+            let (x0, right) = ((tile.x0 * unit) as usize, (tile.w * unit) as usize);
+            let carried = std::mem::take(&mut left);
+            let preload = |lattice: &mut Lattice| {
+                let (w, h) = (tile.w * unit, tile.h * unit);
+                for (y, p) in carried.iter().enumerate() {
+                    lattice.load((0, y as u32), *p);
+                }
+                for (line, y) in [(above, 0), (below, h)] {
+                    for (x, p) in line.map_or(&[][..], |l| &l[x0..=x0 + w as usize]).iter().enumerate() {
+                        lattice.load((x as u32, y), *p);
+                    }
+                }
+            };
+            let mut export = |lattice: &Lattice| {
+                let h = tile.h * unit;
+                left = (0..=h).map(|y| lattice.known((right as u32, y))).collect();
+                for x in 0..=right {
+                    own.top[x0 + x] = lattice.known((x as u32, 0));
+                    own.bottom[x0 + x] = lattice.known((x as u32, h));
+                }
+            };
+            let pixels = refine_tile(self.scene, &mut tracer, at, corner, self.rule, preload, &mut export);
+            for (row, traced) in part.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
+                row.copy_from_slice(traced);
+            }
+            self.counter.tile_done();
+        }
+        (own, tracer.counts, take_work())
+    }
 }
 
 /// The points of `tile`'s pixel corners `(x0 + i, y0 + j)`, row-major, traced as camera blocks.
@@ -174,8 +258,10 @@ fn refine_tile<F: Lanes>(
     tile: Tile,
     corner: impl Fn(u32, u32) -> Point,
     rule: Rule,
-    depth: u32,
+    preload: impl FnOnce(&mut Lattice),
+    export: impl FnOnce(&Lattice),
 ) -> Vec<Rgb> {
+    let depth = rule.depth;
     LATTICE.with_borrow_mut(|lattice| {
         let unit = 1u32 << depth;
         lattice.reset(tile.w * unit + 1, tile.h * unit + 1);
@@ -184,6 +270,7 @@ fn refine_tile<F: Lanes>(
                 lattice.set((x * unit, y * unit), corner(x, y));
             }
         }
+        preload(lattice);
         // Squares by their top-left lattice point; their size is the level's.
         let mut squares: Vec<(u32, u32)> =
             (0..tile.h).flat_map(|y| (0..tile.w).map(move |x| (x * unit, y * unit))).collect();
@@ -215,6 +302,7 @@ fn refine_tile<F: Lanes>(
             squares =
                 squares.iter().flat_map(|&(x, y)| [(x, y), (x + h, y), (x, y + h), (x + h, y + h)]).collect();
         }
+        export(lattice);
         (0..tile.h)
             .flat_map(|y| (0..tile.w).map(move |x| (x * unit, y * unit)))
             .map(|p| lattice.value(p, unit, 0))
@@ -334,6 +422,17 @@ impl Lattice {
         let i = self.index(p);
         self.points[i] = point;
         self.claimed[i] = true;
+    }
+    /// Sets `p` when a neighbour traced it.
+    fn load(&mut self, p: (u32, u32), point: Option<Point>) {
+        if let Some(point) = point {
+            self.set(p, point);
+        }
+    }
+    /// The point at `p` once traced.
+    fn known(&self, p: (u32, u32)) -> Option<Point> {
+        let i = self.index(p);
+        self.claimed[i].then(|| self.points[i])
     }
     /// Marks `p` to be traced; false when it is traced or marked already.
     fn claim(&mut self, p: (u32, u32)) -> bool {
