@@ -74,7 +74,7 @@ impl Rule {
 
 /// Traces rows `rows` of columns `columns` of the image under adaptive supersampling (`threshold`, `depth`):
 /// the pixels row-major, and the rays and tests it took. The corners in one pass over the band's tiles,
-/// then each tile's refinement as one job, on `pool`.
+/// then the refinement by strips of tiles, on `pool`.
 pub(super) fn adaptive_rows<F: Lanes>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
@@ -84,38 +84,8 @@ pub(super) fn adaptive_rows<F: Lanes>(
 ) -> (Vec<Rgb>, RayCounts, Work) {
     let (width, height) = (columns.end - columns.start, rows.end - rows.start);
     let local = tiles(width, height);
-    // The tile's own corners in band coordinates: its inside, top and left edges, and the band's right and
-    // bottom edges where it lies on them.
-    let own = |t: &Tile| Tile {
-        w: t.w + u32::from(t.x0 + t.w == width),
-        h: t.h + u32::from(t.y0 + t.h == height),
-        ..*t
-    };
-    let traced: Vec<(Vec<Point>, RayCounts, Work)> = pool.install(|| {
-        local
-            .par_iter()
-            .with_max_len(1)
-            .map(|tile| {
-                take_work();
-                let mut tracer = Tracer::<F>::new(scene);
-                let at = Tile { x0: tile.x0 + columns.start, y0: tile.y0 + rows.start, ..own(tile) };
-                let points = trace_corners(scene, &mut tracer, at);
-                (points, tracer.counts, take_work())
-            })
-            .collect()
-    });
-    let corner_width = width as usize + 1;
-    let mut corners = vec![Point::default(); corner_width * (height as usize + 1)];
-    let (mut counts, mut work) = (RayCounts::default(), Work::default());
-    for (tile, (points, c, w)) in local.iter().zip(traced) {
-        let o = own(tile);
-        for (y, row) in points.chunks_exact(o.w as usize).enumerate() {
-            let at = (tile.y0 as usize + y) * corner_width + tile.x0 as usize;
-            corners[at..at + row.len()].copy_from_slice(row);
-        }
-        counts += c;
-        work += w;
-    }
+    let (corners, mut counts, mut work) =
+        band_corners::<F>(scene, pool, &local, (columns.start, rows.start), (width, height));
     let mut band_pixels = vec![Rgb::default(); width as usize * height as usize];
     let parts = tile_rows(&mut band_pixels, width, &local);
     // Strips of one tile row each: the even ones first, then the odd ones, which take the points the even
@@ -155,6 +125,48 @@ pub(super) fn adaptive_rows<F: Lanes>(
         work += w;
     }
     (band_pixels, counts, work)
+}
+
+/// The pixel corners of a band of `size` whose corner is `origin` in the image, `(width + 1) × (height + 1)`
+/// row-major, each traced once: every tile of `local` traces its inside and its top and left edges, and the
+/// band's right and bottom edges where it lies on them, as camera blocks, one job per tile on `pool`.
+fn band_corners<F: Lanes>(
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+    local: &[Tile],
+    origin: (u32, u32),
+    (width, height): (u32, u32),
+) -> (Vec<Point>, RayCounts, Work) {
+    let own = |t: &Tile| Tile {
+        w: t.w + u32::from(t.x0 + t.w == width),
+        h: t.h + u32::from(t.y0 + t.h == height),
+        ..*t
+    };
+    let traced: Vec<(Vec<Point>, RayCounts, Work)> = pool.install(|| {
+        local
+            .par_iter()
+            .with_max_len(1)
+            .map(|tile| {
+                take_work();
+                let mut tracer = Tracer::<F>::new(scene);
+                let at = Tile { x0: tile.x0 + origin.0, y0: tile.y0 + origin.1, ..own(tile) };
+                let points = trace_corners(scene, &mut tracer, at);
+                (points, tracer.counts, take_work())
+            })
+            .collect()
+    });
+    let corner_width = width as usize + 1;
+    let mut corners = vec![Point::default(); corner_width * (height as usize + 1)];
+    let (mut counts, mut work) = (RayCounts::default(), Work::default());
+    for (tile, (points, c, w)) in local.iter().zip(traced) {
+        for (y, row) in points.chunks_exact(own(tile).w as usize).enumerate() {
+            let at = (tile.y0 as usize + y) * corner_width + tile.x0 as usize;
+            corners[at..at + row.len()].copy_from_slice(row);
+        }
+        counts += c;
+        work += w;
+    }
+    (corners, counts, work)
 }
 
 /// One tile row of a band: its tiles (band coordinates) and their pixels' rows in the band's buffer.
