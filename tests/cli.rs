@@ -659,9 +659,9 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
     let mut lines = text.lines();
     assert_eq!(lines.next(), Some("method,spp,seconds,rays,rmse,rmse_edges,psnr"));
     let rows: Vec<Vec<String>> = lines.map(|l| l.split(',').map(String::from).collect()).collect();
-    // grid and stratified at 1, 4, 16; r2 and sobol at 1, 2, 4, 8, 16; adaptive at 5 thresholds; lecture and
+    // grid and stratified at 1, 4, 16; r2 and sobol at 1, 2, 4, 8, 16; adaptive at 6 thresholds; lecture and
     // coverage once.
-    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 5 + 1 + 1, "{text}");
+    assert_eq!(rows.len(), 3 + 3 + 5 + 5 + 6 + 1 + 1, "{text}");
     let rmse = |method: &str, spp: f64| -> f64 {
         let at = |r: &&Vec<String>| r[0] == method && r[1].parse::<f64>().unwrap() == spp;
         rows.iter().find(at).map(|r| r[4].parse().unwrap()).unwrap()
@@ -671,7 +671,7 @@ fn converge_writes_csv_and_plot_and_reuses_its_reference() {
         .filter(|r| r[0] == "adaptive")
         .map(|r| (r[1].parse().unwrap(), r[4].parse().unwrap()))
         .collect();
-    assert!(adaptive[4].0 > adaptive[0].0 && adaptive[4].1 < adaptive[0].1, "adaptive: {adaptive:?}");
+    assert!(adaptive[5].0 > adaptive[0].0 && adaptive[5].1 < adaptive[0].1, "adaptive: {adaptive:?}");
     for method in ["grid", "stratified", "r2", "sobol"] {
         assert!(rmse(method, 16.0) < 0.6 * rmse(method, 1.0), "{method}: {text}");
     }
@@ -728,9 +728,9 @@ fn converge_compares_filters() {
     assert_eq!(lines.next(), Some("method,filter,spp,seconds,rays,rmse,rmse_edges,psnr"));
     let rows: Vec<Vec<&str>> = lines.map(|l| l.split(',').collect()).collect();
     let series = |m: &str, f: &str| rows.iter().filter(|r| r[0] == m && r[1] == f).count();
-    // sobol at 1, 2, 4 under each filter; adaptive's 5 thresholds under `none` only.
+    // sobol at 1, 2, 4 under each filter; adaptive's 6 thresholds under `none` only.
     assert_eq!((series("sobol", "none"), series("sobol", "gaussian:1.5")), (3, 3), "{text}");
-    assert_eq!((series("adaptive", "none"), series("adaptive", "gaussian:1.5")), (5, 0), "{text}");
+    assert_eq!((series("adaptive", "none"), series("adaptive", "gaussian:1.5")), (6, 0), "{text}");
     // Rising counts lower the error under each filter (a filter's spp counts its apron's rays too).
     for filter in ["none", "gaussian:1.5"] {
         let rmse: Vec<f64> = rows

@@ -314,50 +314,82 @@ fn filters_are_deterministic_and_normalised() {
     }
 }
 
-/// Whitted's adaptive supersampling: the same bits at every width and thread count (every split depends only
-/// on colours); on a scene with nothing in view it traces only the shared pixel corners; on whitted.toml it
-/// spends more rays where the image has edges and comes closer to a 64-sample reference than one sample per
-/// pixel does.
+/// Adaptive supersampling gives the same bits and ray counts on the scalar path, at 1, 4, 8 and 16 lanes on
+/// 1 and 2 threads, and with the spheres in the particle tree, on every scene in scenes/ and scenes/stress/:
+/// every split depends only on the colours, primitive ids and depths of lattice points, which each ray
+/// gets with the bits of its one-lane trace whatever packet it travels in.
 #[test]
-fn adaptive_sampling_is_deterministic_and_splits_only_at_edges() {
+fn adaptive_sampling_is_identical_at_every_width_and_thread_count() {
+    use bareray::compile::{Accel, CompileOptions};
+    use bareray::scene::desc::Pattern;
+    let root = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes");
+    let mut scenes = scene_files(&root);
+    scenes.extend(scene_files(&root.join("stress")));
+    let bits =
+        |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
+    for path in &scenes {
+        let mut desc = bareray::io::load(path).unwrap();
+        (desc.camera.width, desc.camera.height) = (56, 40);
+        desc.render.pattern = Pattern::Adaptive { threshold: 0.05, depth: 3 };
+        let mut scene =
+            Scene::compile_with_options(&desc, CompileOptions { scalar: true, ..Default::default() })
+                .unwrap();
+        let reference = render_lanes(&scene, 1, &thread_pool(Some(2)).unwrap(), &());
+        assert!(reference.counts.primary >= 57 * 41, "{path:?}: every pixel corner");
+        assert!(scene.geometry.set_scalar_walk(false));
+        let particles = Scene::compile_with_options(
+            &desc,
+            CompileOptions { accel: Accel::Particles, ..Default::default() },
+        )
+        .unwrap();
+        let runs = [(1, 1), (4, 2), (8, 1), (16, 1), (16, 2)].map(|w| (&scene, w, "BVH"));
+        for (scene, (lanes, threads), accel) in
+            runs.into_iter().chain([(&particles, (16, 2), "particle tree")])
+        {
+            let r = render_lanes(scene, lanes, &thread_pool(Some(threads)).unwrap(), &());
+            assert_eq!(
+                r.counts, reference.counts,
+                "{path:?} counts at lanes {lanes}, threads {threads}, {accel}"
+            );
+            assert!(
+                bits(&r.image) == bits(&reference.image),
+                "{path:?} differs at lanes {lanes}, threads {threads}, {accel}"
+            );
+        }
+    }
+}
+
+/// Adaptive supersampling on whitted.toml: with nothing in view it traces each pixel corner once (tiles share
+/// their edges); it spends more rays where the image has edges, far fewer than splitting every pixel, and
+/// comes closer to a 64-sample reference than one sample per pixel does.
+#[test]
+fn adaptive_sampling_traces_corners_once_and_splits_at_edges() {
     use bareray::scene::desc::Pattern;
     let src = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/scenes/whitted.toml")).unwrap();
     let mut desc = parse_toml(&src);
     desc.camera.width = 72;
     desc.camera.height = 48;
-    let run = |desc: &bareray::scene::SceneDesc, pattern: Pattern, lanes: usize, threads: usize| {
+    let run = |desc: &bareray::scene::SceneDesc, pattern: Pattern| {
         let mut d = desc.clone();
         d.render.pattern = pattern;
         let scene = Scene::compile(&d).unwrap();
-        render_lanes(&scene, lanes, &thread_pool(Some(threads)).unwrap(), &())
+        render_lanes(&scene, 8, &thread_pool(Some(2)).unwrap(), &())
     };
-    let bits =
-        |img: &Image| img.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).map(f32::to_bits).collect::<Vec<_>>();
     let adaptive = Pattern::Adaptive { threshold: 0.1, depth: 2 };
-    let reference = run(&desc, adaptive, 1, 1);
-    for (lanes, threads) in [(4, 2), (8, 1), (16, 2)] {
-        let r = run(&desc, adaptive, lanes, threads);
-        assert!(bits(&r.image) == bits(&reference.image), "at {lanes} lanes, {threads} threads");
-        assert_eq!(r.counts.primary, reference.counts.primary);
-    }
-    // 72×48 in 16×16 tiles: 5 × 3 tiles, each tracing its (w + 1)(h + 1) corners.
     let mut empty = desc.clone();
     empty.spheres.clear();
     empty.shapes.clear();
-    let flat = run(&empty, adaptive, 8, 2);
-    let tiles_w = [16u64, 16, 16, 16, 8];
-    let tiles_h = [16u64, 16, 16];
-    let expected: u64 = tiles_h.iter().map(|h| tiles_w.iter().map(|w| (w + 1) * (h + 1)).sum::<u64>()).sum();
-    assert_eq!(flat.counts.primary, expected, "nothing in view: the corners only");
-    // Splitting every pixel to depth 2 would trace each tile's whole lattice of quarter-pixel points.
-    let full: u64 =
-        tiles_h.iter().map(|h| tiles_w.iter().map(|w| (4 * w + 1) * (4 * h + 1)).sum::<u64>()).sum();
-    let primary = reference.counts.primary;
+    let corners = 73 * 49;
+    assert_eq!(run(&empty, adaptive).counts.primary, corners, "nothing in view: each corner once");
+    // Splitting every pixel to depth 2 would trace the whole lattice of quarter-pixel points.
+    let full = (4 * 72 + 1) * (4 * 48 + 1);
+    let rendered = run(&desc, adaptive);
+    let primary = rendered.counts.primary;
     assert!(
-        primary > expected && primary < full / 2,
-        "{primary} rays: corners {expected}, full lattice {full}"
+        primary > corners && primary < full / 2,
+        "{primary} rays: corners {corners}, full lattice {full}"
     );
-    let fine = run(&desc, Pattern::Stratified(8), 16, 2).image;
+    let fine = run(&desc, Pattern::Stratified(8)).image;
     let err = |img: &Image| {
         img.pixels
             .iter()
@@ -365,12 +397,9 @@ fn adaptive_sampling_is_deterministic_and_splits_only_at_edges() {
             .map(|(a, b)| f64::from((a.x - b.x).abs() + (a.y - b.y).abs()))
             .sum::<f64>()
     };
-    let one = err(&run(&desc, Pattern::Grid(1), 8, 2).image);
-    assert!(
-        err(&reference.image) < 0.7 * one,
-        "adaptive {} against one sample's {one}",
-        err(&reference.image)
-    );
+    let one = err(&run(&desc, Pattern::Grid(1)).image);
+    let ours = err(&rendered.image);
+    assert!(ours < 0.7 * one, "adaptive {ours} against one sample's {one}");
 }
 
 /// The coverage pattern gives the same bits and ray counts at every width and thread count on every scene

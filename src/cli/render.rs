@@ -52,8 +52,9 @@ pub(super) struct RenderArgs {
     /// stratum centres), `stratified:N` (one jittered sample per stratum of a √N×√N grid), `r2:N` (N points
     /// of the R2 low-discrepancy sequence, rotated per pixel), `sobol:N` (N points of the Sobol' sequence,
     /// Owen-scrambled per pixel; a (0, 2)-net at powers of two), `lecture` (the 9-point half-pixel grid shared
-    /// with the neighbours), `adaptive[:THRESHOLD,DEPTH]` (Whitted: pixel corners shared, squares split where
-    /// their corners differ by more than THRESHOLD in a channel, down to DEPTH levels; default 0.1,2),
+    /// with the neighbours), `adaptive[:THRESHOLD,DEPTH]` (after Whitted: pixel corners shared, squares split where
+    /// their corners see different primitives or depths, down to DEPTH levels, or differ by more than
+    /// THRESHOLD in a channel, down to DEPTH − 1; default 0.1,2),
     /// `coverage` (prefiltering: each sphere's exact covered area of the pixel, one ray per covered part and
     /// one for the rest). Jitter and rotation are seeded by the pixel, so every width and thread count
     /// gives the same image.

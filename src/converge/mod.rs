@@ -18,7 +18,7 @@ pub const METHODS: [&str; 7] = ["grid", "stratified", "r2", "sobol", "adaptive",
 
 /// The patterns a method runs at, by increasing sample count up to `max_spp` samples per pixel: squares
 /// (1, 4, 16, 64, …) for the grids, powers of two for R2 and Sobol' (the counts where Sobol' points form
-/// nets), the one half-pixel pattern for `lecture`, for `adaptive` falling thresholds (0.4 to 0.025) at
+/// nets), the one half-pixel pattern for `lecture`, for `adaptive` falling thresholds (0.2 to 0.00625) at
 /// depth 3 (up to 81 points a pixel where every level splits, whatever `max_spp` says), and the one setting
 /// of `coverage` (it has no sample count: one ray per covered part of a pixel).
 pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
@@ -33,7 +33,7 @@ pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
         "sobol" => Ok(powers().map(Pattern::Sobol).collect()),
         "lecture" => Ok(vec![Pattern::HalfPixel]),
         "coverage" => Ok(vec![Pattern::Coverage]),
-        "adaptive" => Ok([0.4, 0.2, 0.1, 0.05, 0.025]
+        "adaptive" => Ok([0.2, 0.1, 0.05, 0.025, 0.0125, 0.00625]
             .map(|threshold| Pattern::Adaptive { threshold, depth: 3 })
             .to_vec()),
         _ => Err(format!("unknown method `{method}`: {}", METHODS.join(", "))),

@@ -16,7 +16,7 @@ use crate::compile::Scene;
 use crate::film::Image;
 use crate::math::Rgb;
 use crate::sample::lecture_3x3_pixel;
-use crate::scene::desc::PostFilter;
+use crate::scene::desc::{Pattern, PostFilter};
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
 
@@ -83,7 +83,7 @@ impl<'a> TileCounter<'a> {
         progress.start(total);
         Self { progress, done: AtomicU64::new(0), total }
     }
-    fn tile_done(&self) {
+    pub(super) fn tile_done(&self) {
         self.progress.tile_done(self.done.fetch_add(1, Ordering::Relaxed) + 1, self.total);
     }
 }
@@ -97,6 +97,15 @@ pub(super) fn trace_rows<F: Lanes>(
     rows: Range<u32>,
     counter: &TileCounter,
 ) -> (Vec<Rgb>, RayCounts, Work) {
+    if let Pattern::Adaptive { threshold, depth } = scene.render.pattern {
+        return super::adaptive::adaptive_rows::<F>(
+            scene,
+            pool,
+            (columns, rows),
+            counter,
+            (threshold, depth),
+        );
+    }
     let (width, height) = (columns.end - columns.start, rows.end - rows.start);
     let local = tiles(width, height);
     let mut band = Image::new(width, height);

@@ -43,6 +43,7 @@ macro_rules! with_lanes {
     };
 }
 
+mod adaptive;
 mod bands;
 mod coverage;
 mod primary;

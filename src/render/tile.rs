@@ -1,11 +1,9 @@
 //! One tile's pixels under each sampling pattern: the shared-offset and per-pixel passes, the reconstruction
-//! filters (with an apron of neighbouring pixels traced again), the lecture's half-pixel grid, Whitted's
-//! adaptive subdivision and the coverage pattern (`coverage.rs`). Every pixel's value depends only on its own samples (and, under a filter, its
+//! filters (with an apron of neighbouring pixels traced again), the lecture's half-pixel grid and the
+//! coverage pattern (`coverage.rs`); adaptive subdivision traces whole bands (`adaptive.rs`). Every pixel's value depends only on its own samples (and, under a filter, its
 //! neighbours'), never on where the tile starts, so any cut of the image into tiles gives the same bits.
 
-use crate::camera::Camera;
 use crate::compile::Scene;
-use crate::geometry::RayPacket;
 use crate::math::Rgb;
 use crate::sample::{grid_offsets, sequence, HALF_PIXEL_WEIGHTS};
 use crate::scene::desc::{Filter, Pattern};
@@ -16,13 +14,10 @@ use super::{for_each_camera_hit, lane_rgb, LargePacket, Offsets, Tile};
 
 /// The pixels of one tile, row by row.
 pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
-    let camera = &scene.camera_f64;
     let pattern = scene.render.pattern;
     match pattern {
         Pattern::HalfPixel => return half_pixel_tile(scene, tracer, tile),
-        Pattern::Adaptive { threshold, depth } => {
-            return adaptive_tile(camera, tracer, tile, threshold, depth)
-        }
+        Pattern::Adaptive { .. } => unreachable!("adaptive sampling traces whole bands (adaptive.rs)"),
         Pattern::Coverage => return super::coverage::coverage_tile(scene, tracer, tile),
         Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => {}
     }
@@ -163,126 +158,4 @@ fn half_pixel_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) 
         }
     }
     out
-}
-
-/// Whitted's adaptive supersampling over one tile ([`Pattern::Adaptive`]). Points live on a lattice of
-/// `2^depth` steps per pixel; the pixel corners are traced first (those on the tile's edges again by the
-/// neighbouring tile: the same bits), then level by level every square whose corners differ by more than
-/// `threshold` in a channel gets its edge midpoints and centre traced (each point once, shared by the
-/// squares that meet there, in lattice order) and is split. Every decision depends only on colours, which are
-/// the same bits at every width, so the image is too.
-fn adaptive_tile<F: Lanes>(
-    camera: &Camera<f64>,
-    tracer: &mut Tracer<F>,
-    tile: Tile,
-    threshold: f32,
-    depth: u32,
-) -> Vec<Rgb> {
-    let unit = 1u32 << depth;
-    let mut colour = Lattice::new(tile.w * unit + 1, tile.h * unit + 1);
-    // Lattice points relative to the tile's corner, in 1/unit pixel steps; traced K at a time.
-    let mut trace = |points: Vec<(u32, u32)>, colour: &mut Lattice| {
-        let step = 1.0 / unit as f32;
-        for chunk in points.chunks(F::K) {
-            let at = |i: usize, pick: fn((u32, u32)) -> u32, origin: u32| {
-                let p = chunk[i.min(chunk.len() - 1)];
-                origin as f32 + pick(p) as f32 * step
-            };
-            let sx = F::from_fn(|i| at(i, |p| p.0, tile.x0));
-            let sy = F::from_fn(|i| at(i, |p| p.1, tile.y0));
-            let ray = camera.rays(sx, sy);
-            let rays =
-                RayPacket::new(ray.origin, ray.dir, F::splat_f32(f32::INFINITY), F::lanes_below(chunk.len()));
-            let c = tracer.primary(&rays);
-            for (i, &p) in chunk.iter().enumerate() {
-                colour.set(p, lane_rgb(&c, i));
-            }
-        }
-    };
-    let corners = (0..=tile.h).flat_map(|y| (0..=tile.w).map(move |x| (x * unit, y * unit))).collect();
-    trace(corners, &mut colour);
-    // Squares as (left, top, size) in lattice steps; `split` holds those divided, for the final averages.
-    let mut squares: Vec<(u32, u32, u32)> =
-        (0..tile.h).flat_map(|y| (0..tile.w).map(move |x| (x * unit, y * unit, unit))).collect();
-    let mut split = std::collections::BTreeSet::new();
-    let differ = |a: Rgb, b: Rgb| (a.x - b.x).abs().max((a.y - b.y).abs()).max((a.z - b.z).abs()) > threshold;
-    for _ in 0..depth {
-        let corners_of = |&(x, y, s): &(u32, u32, u32)| [(x, y), (x + s, y), (x, y + s), (x + s, y + s)];
-        let busy: Vec<(u32, u32, u32)> = squares
-            .iter()
-            .filter(|sq| {
-                let c = corners_of(sq).map(|p| colour.get(p));
-                (0..4).any(|i| (i + 1..4).any(|j| differ(c[i], c[j])))
-            })
-            .copied()
-            .collect();
-        let mut new = std::collections::BTreeSet::new();
-        for &(x, y, s) in &busy {
-            let h = s / 2;
-            for p in [(x + h, y), (x, y + h), (x + h, y + h), (x + s, y + h), (x + h, y + s)] {
-                if !colour.has(p) {
-                    new.insert(p);
-                }
-            }
-        }
-        trace(new.into_iter().collect(), &mut colour);
-        squares = busy
-            .iter()
-            .flat_map(|&(x, y, s)| {
-                split.insert((x, y, s));
-                let h = s / 2;
-                [(x, y, h), (x + h, y, h), (x, y + h, h), (x + h, y + h, h)]
-            })
-            .collect();
-        if squares.is_empty() {
-            break;
-        }
-    }
-    // A square's value: its quarters' mean when split, else its corners' mean.
-    fn value(
-        sq: (u32, u32, u32),
-        colour: &Lattice,
-        split: &std::collections::BTreeSet<(u32, u32, u32)>,
-    ) -> Rgb {
-        let (x, y, s) = sq;
-        let quarter = |sum: Rgb| sum * 0.25;
-        if split.contains(&sq) {
-            let h = s / 2;
-            let q =
-                [(x, y, h), (x + h, y, h), (x, y + h, h), (x + h, y + h, h)].map(|q| value(q, colour, split));
-            quarter(q[0] + q[1] + q[2] + q[3])
-        } else {
-            let c = [(x, y), (x + s, y), (x, y + s), (x + s, y + s)].map(|p| colour.get(p));
-            quarter(c[0] + c[1] + c[2] + c[3])
-        }
-    }
-    (0..tile.h)
-        .flat_map(|y| (0..tile.w).map(move |x| (x, y)))
-        .map(|(x, y)| value((x * unit, y * unit, unit), &colour, &split))
-        .collect()
-}
-
-/// The colours of an adaptive tile's lattice points, traced or not yet.
-struct Lattice {
-    width: u32,
-    colour: Vec<Option<Rgb>>,
-}
-
-impl Lattice {
-    fn new(width: u32, height: u32) -> Self {
-        Lattice { width, colour: vec![None; (width * height) as usize] }
-    }
-    fn index(&self, (x, y): (u32, u32)) -> usize {
-        (y * self.width + x) as usize
-    }
-    fn has(&self, p: (u32, u32)) -> bool {
-        self.colour[self.index(p)].is_some()
-    }
-    fn get(&self, p: (u32, u32)) -> Rgb {
-        self.colour[self.index(p)].expect("a square's corners are traced before it is judged")
-    }
-    fn set(&mut self, p: (u32, u32), c: Rgb) {
-        let i = self.index(p);
-        self.colour[i] = Some(c);
-    }
 }

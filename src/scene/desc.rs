@@ -149,12 +149,13 @@ pub enum Pattern {
     /// per pixel; box filter. Any N from 1; at powers of two each pixel's points form a (0, m, 2)-net in base
     /// 2 (every elementary interval of area 1/N holds one).
     Sobol(u32),
-    /// Whitted's adaptive supersampling: the pixel corners (shared with the neighbours) are traced, and a
-    /// square whose corners differ by more than `threshold` in some channel is split into four, down to
-    /// `depth` levels; a square's value is its corners' mean, or its quarters' mean when split. Flat
+    /// Adaptive supersampling after Whitted's: the pixel corners (shared with the neighbours) are traced, and
+    /// a square is split into four where its corners see different primitives or depths more than 3% apart
+    /// (down to `depth` levels), or differ by more than `threshold` in some channel (down to `depth − 1`
+    /// levels, at least 1); a square's value is its corners' mean, or its quarters' mean when split. Flat
     /// regions cost about one ray per pixel.
     Adaptive {
-        /// The largest channel difference between two corners of a square left whole.
+        /// The largest channel difference between two corners of a square left whole (by colour).
         threshold: f32,
         /// Levels of splitting below the pixel (a square at depth d is 2^−d pixels wide).
         depth: u32,
