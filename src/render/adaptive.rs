@@ -27,8 +27,7 @@ use crate::math::Rgb;
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::{IdLanes, Lanes};
 
-use super::bands::TileCounter;
-use super::{for_each_camera_hit, lane_rgb, tile_rows, tiles, LargePacket, Offsets, Tile, TILE};
+use super::{for_each_camera_hit, lane_rgb, tile_rows, tiles, LargePacket, Offsets, Tile, TileCounter, TILE};
 
 /// A traced lattice point: its colour, and the scene-file id of the primitive its camera ray meets first
 /// ([`crate::geometry::NO_PRIM`] on a miss).

@@ -6,7 +6,7 @@
 //! column of apron wherever the image goes on. Every pixel is the same bits as in the whole-image render.
 
 use std::ops::Range;
-use std::sync::atomic::{AtomicU64, Ordering};
+use std::sync::atomic::AtomicU64;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -20,7 +20,7 @@ use crate::scene::desc::{Pattern, PostFilter};
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
 
-use super::{tile_rows, tiles, trace_tile, Progress, Tile, TILE};
+use super::{tile_rows, tiles, trace_tile, Progress, Tile, TileCounter, TILE};
 
 /// A rectangle of the image in pixels: columns `x0..x1`, rows `y0..y1`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -68,24 +68,6 @@ pub struct Traced {
     pub work: Work,
     /// Wall-clock seconds spent tracing and filtering (not in `emit`).
     pub seconds: f64,
-}
-
-/// A run's tiles as reported to its [`Progress`].
-pub(super) struct TileCounter<'a> {
-    progress: &'a dyn Progress,
-    done: AtomicU64,
-    total: u64,
-}
-
-impl<'a> TileCounter<'a> {
-    /// Starts the report: `total` tiles to come.
-    pub(super) fn new(progress: &'a dyn Progress, total: u64) -> Self {
-        progress.start(total);
-        Self { progress, done: AtomicU64::new(0), total }
-    }
-    pub(super) fn tile_done(&self) {
-        self.progress.tile_done(self.done.fetch_add(1, Ordering::Relaxed) + 1, self.total);
-    }
 }
 
 /// Traces rows `rows` of columns `columns` of the image, before any postfilter: the pixels row-major, and

@@ -50,8 +50,8 @@ mod primary;
 mod tile;
 
 pub(crate) use bands::render_window_lanes;
+use bands::trace_rows;
 pub use bands::{band_rows, render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
-use bands::{trace_rows, TileCounter};
 pub use coverage::{coverage_parts, CoveragePart};
 
 pub(crate) use primary::primary_window_lanes;
@@ -147,6 +147,24 @@ pub trait Progress: Sync {
     fn start(&self, total: u64);
     /// One more tile is finished, `done` of `total` so far (each `done` from 1 to `total` comes once).
     fn tile_done(&self, done: u64, total: u64);
+}
+
+/// A run's tiles as reported to its [`Progress`].
+struct TileCounter<'a> {
+    progress: &'a dyn Progress,
+    done: std::sync::atomic::AtomicU64,
+    total: u64,
+}
+
+impl<'a> TileCounter<'a> {
+    /// Starts the report: `total` tiles to come.
+    fn new(progress: &'a dyn Progress, total: u64) -> Self {
+        progress.start(total);
+        Self { progress, done: std::sync::atomic::AtomicU64::new(0), total }
+    }
+    fn tile_done(&self) {
+        self.progress.tile_done(self.done.fetch_add(1, std::sync::atomic::Ordering::Relaxed) + 1, self.total);
+    }
 }
 
 impl Progress for () {
