@@ -18,7 +18,7 @@ use bareray::accuracy::{run, Options, Twin};
 use bareray::geometry::{Departure, Ray, NO_PRIM};
 use bareray::math::SplitMix64;
 use bareray::math::V3;
-use bareray::scene::desc::{ConeDesc, LightDesc, SceneDesc, SphereDesc};
+use bareray::scene::desc::{ConeDesc, LightDesc, Material, SceneDesc, SphereDesc};
 use common::camera;
 use glam::DVec3;
 
@@ -84,6 +84,32 @@ fn sphere_straight_ahead_matches_the_closed_form() {
     assert_eq!(refl.misses_agree, refl.rays, "mirror rays leave a lone convex sphere: {refl:?}");
     let shadow = report.shadow.expect("secondary");
     assert!(shadow.rays > 0 && shadow.disagree() == 0, "{shadow:?}");
+    assert_eq!(report.refraction.expect("secondary").rays, 0, "the default material does not transmit");
+}
+
+/// The same sphere in glass (ior 1.5): every camera hit refracts into the sphere (from outside there is no
+/// total internal reflection), and every refraction ray meets the sphere's own far side in both precisions,
+/// at the chord's length: no self-hit, no disagreement, t within a few ε32 of the twin's.
+#[test]
+fn glass_sphere_refracts_to_its_far_side() {
+    let (eye, centre) = (DVec3::new(0.1, 0.2, -3.0), DVec3::new(0.3, -0.2, 7.0));
+    let glass = Material { transmit: 0.9, ior: 1.5, ..Material::default() };
+    let desc = SceneDesc {
+        camera: camera(eye, centre, DVec3::Y, 9.0, 64, 48),
+        materials: vec![glass],
+        spheres: vec![SphereDesc { center: centre, radius: 1.0, material: 0 }],
+        ..SceneDesc::default()
+    };
+    let report = run("glass sphere", &desc, &opts(true)).expect("report");
+    eprintln!("{}", report.table());
+    let p = &report.primary;
+    let refr = report.refraction.expect("secondary");
+    assert!(p.hits_agree > 64 * 48 / 4, "{p:?}");
+    assert_eq!(refr.rays, p.hits_agree, "every hit from outside refracts: {refr:?}");
+    assert_eq!(refr.hits_agree, refr.rays, "every refraction ray meets the far side: {refr:?}");
+    assert_eq!((refr.disagree(), refr.unexplained, refr.self_hits), (0, 0, 0), "{refr:?}");
+    assert!(refr.t_rel_err.p99 <= 1e-5, "{:?}", refr.t_rel_err);
+    assert_eq!((report.unexplained(), report.self_hits()), (0, 0));
 }
 
 /// A vertical cylinder of radius 1 at x = 0.25, z = 6 seen from (0.25, 0.5, −4) along +z: the twin counts it
@@ -178,6 +204,12 @@ fn json_output_has_every_key() {
         "reflection_t_rel_err_p50",
         "reflection_t_rel_err_p99",
         "reflection_t_rel_err_max",
+        "refraction_rays",
+        "refraction_hits_agree",
+        "refraction_tir_disagree",
+        "refraction_unexplained",
+        "refraction_self_hits",
+        "refraction_t_rel_err_p99",
         "width",
         "height",
         "lanes",
@@ -234,7 +266,7 @@ fn json_output_has_every_key() {
 }
 
 /// The stress scenes of scenes/stress/ (each must be there); any other scene file there is checked too.
-const STRESS_SCENES: [&str; 13] = [
+const STRESS_SCENES: [&str; 14] = [
     "cones-grazing.toml",
     "distant-100.toml",
     "distant-4100.toml",
@@ -242,6 +274,7 @@ const STRESS_SCENES: [&str; 13] = [
     "distant-1e6.toml",
     "eye-inside.toml",
     "flake-1e5.nff",
+    "glass.toml",
     "grazing.toml",
     "ground-1e6-below.toml",
     "huge-ground.toml",
@@ -250,8 +283,12 @@ const STRESS_SCENES: [&str; 13] = [
     "touching-nested.toml",
 ];
 
+/// The stress scenes with glass: their refraction rays are compared (the bounds below hold them too).
+const GLASS_SCENES: [&str; 2] = ["glass.toml", "touching-nested.toml"];
+
 /// Every stress scene against the accuracy bounds, with secondary rays: 0 unexplained disagreements, 0
-/// self-hits, primary relative t error p99 ≤ 2e-6. All numbers are printed before any bound is checked.
+/// self-hits (primary, shadow, reflection and refraction rays), primary relative t error p99 ≤ 2e-6; the
+/// scenes with glass trace refraction rays. All numbers are printed before any bound is checked.
 /// `ACCURACY_STRESS_DIR=dir` reads the scenes from `dir` instead.
 #[test]
 fn stress_scenes_meet_the_accuracy_bounds() {
@@ -278,6 +315,16 @@ fn stress_scenes_meet_the_accuracy_bounds() {
         checked += 1;
         eprint!("{}", r.table());
         let p99 = r.primary.t_rel_err.p99;
+        let refr = r.refraction.expect("secondary");
+        if GLASS_SCENES.contains(&name.as_str()) && refr.rays < 1000 {
+            failures.push(format!("{name}: only {} refraction rays compared", refr.rays));
+        }
+        if refr.unexplained != 0 || refr.self_hits != 0 {
+            failures.push(format!(
+                "{name}: refraction: {} unexplained, {} self-hits",
+                refr.unexplained, refr.self_hits
+            ));
+        }
         if r.unexplained() != 0 || r.self_hits() != 0 || p99 > 2e-6 {
             failures.push(format!(
                 "{name}: {} unexplained, {} self-hits, primary t rel err p99 {p99:.3e}",

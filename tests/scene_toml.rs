@@ -157,3 +157,29 @@ fn patterns_and_filters_are_read() {
     error_at("[render]\nfilter = \"box\"\nfilter_radius = 9.0\n", 3, "filter_radius");
     error_at("[render]\npattern = \"stratified\"\nsamples = 5\n", 3, "square");
 }
+
+/// `[[polygons]]`: vertices in order, optional per-vertex normals, a material; ids after the shapes, as NFF's.
+/// Too few vertices, vertices that do not span a plane, and a normal list of the wrong length are errors at
+/// their line.
+#[test]
+fn polygons_are_read() {
+    let d = parse(
+        "[materials.red]\ncolor = [1, 0, 0]\n\n[[polygons]]\nvertices = [[0, 0, 1], [1, 0, 1], [1, 1, 1], [0, 1, 1]]\n\
+         material = \"red\"\n\n[[polygons]]\nvertices = [[0, 0, 2], [1, 0, 2], [0, 1, 2]]\n\
+         normals = [[0, 0, 1], [0.1, 0, 1], [0, 0.1, 1]]\n",
+    )
+    .unwrap();
+    assert_eq!(d.polygons.len(), 2);
+    assert_eq!(d.polygons[0].vertices.len(), 4);
+    assert_eq!(d.polygons[0].vertices[2], glam::DVec3::new(1.0, 1.0, 1.0));
+    assert_eq!((d.polygons[0].material, d.polygons[1].material), (1, 0));
+    assert!(d.polygons[0].normals.is_none());
+    assert_eq!(d.polygons[1].normals.as_ref().map(Vec::len), Some(3));
+    error_at("[[polygons]]\nvertices = [[0, 0, 0], [1, 0, 0]]\n", 2, "at least three");
+    error_at("[[polygons]]\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n", 2, "polygon");
+    error_at(
+        "[[polygons]]\nvertices = [[0, 0, 0], [1, 0, 0], [0, 1, 0]]\nnormals = [[0, 0, 1]]\n",
+        3,
+        "one per vertex",
+    );
+}

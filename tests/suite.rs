@@ -35,6 +35,8 @@ mod packet_kernels;
 mod particle_files;
 #[path = "particles.rs"]
 mod particles;
+#[path = "random_scenes.rs"]
+mod random_scenes;
 #[path = "readers.rs"]
 mod readers;
 #[path = "render.rs"]

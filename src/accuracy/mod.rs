@@ -6,8 +6,10 @@
 //! frame-independent quantities are compared: hit or miss, scene-file primitive id, t (rays have unit
 //! directions in both), and occlusion. With secondary rays, each precision builds its own Whitted rays from
 //! its own hit wherever the two primary hits agree on the primitive: one shadow ray per light that faces
-//! the surface, compared as occluded booleans, and the mirror ray (every hit, whatever its material),
-//! compared like a primary ray.
+//! the surface, compared as occluded booleans, the mirror ray (every hit, whatever its material), compared
+//! like a primary ray, and on transmitting materials the refraction ray (where both precisions refract;
+//! total internal reflection in one precision only is a disagreement of its own, `tir_disagree`), compared
+//! like a primary ray.
 //!
 //! A disagreement is *explained* when rounding can account for it; the tolerances are multiples of
 //! ε32 = 2⁻²⁴ ([`EPS32`]) of the magnitudes involved, with the constants below:
@@ -29,13 +31,16 @@
 //!
 //! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in one
 //! precision is its departure primitive itself, or lies within `K_SELF·ε32·|o|` of its origin, while
-//! in the other precision it is not (both hitting the same other primitive is agreement). Relative t errors `|t32 − t64| / t64` are taken over rays whose two
+//! in the other precision it is not (both hitting the same other primitive is agreement); a ray leaving a
+//! solid inward (refraction into glass, any ray from an inside hit) meets the solid's far side, so for it
+//! only a hit within `K_SELF·ε32·|o|` counts. Relative t errors `|t32 − t64| / t64` are taken over rays whose two
 //! hits agree on the primitive; percentiles are nearest-rank: the p-th of n sorted values is the
 //! ⌈p·n⌉-th.
 
 pub mod bvh64;
 mod hit64;
 mod report;
+mod secondary;
 pub mod twin;
 
 use report::Reason;
@@ -73,7 +78,7 @@ pub struct Options {
     /// Compile the f32 scene for the scalar path ([`crate::compile::CompileOptions::scalar`]): with `lanes`
     /// 1, every f32 ray walks binary BVHs one box and one primitive at a time.
     pub scalar: bool,
-    /// Also compare shadow and mirror rays.
+    /// Also compare shadow, mirror and refraction rays.
     pub secondary: bool,
     /// Worker threads (default: all cores).
     pub threads: Option<usize>,
@@ -102,8 +107,8 @@ pub fn run(name: &str, desc: &SceneDesc, opts: &Options) -> Result<Report> {
 }
 
 /// Compares the compiled f32 `scene` with its `twin` (both from one [`SceneDesc`]) on `pool`: every pixel
-/// centre's primary ray, and with `opts.secondary` the shadow and mirror rays of every pixel whose two
-/// primary hits agree on the primitive.
+/// centre's primary ray, and with `opts.secondary` the shadow, mirror and refraction rays of every pixel
+/// whose two primary hits agree on the primitive.
 pub fn compare(name: &str, scene: &Scene, twin: &Twin, opts: &Options, pool: &rayon::ThreadPool) -> Report {
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
@@ -135,6 +140,7 @@ pub fn compare(name: &str, scene: &Scene, twin: &Twin, opts: &Options, pool: &ra
         primary: acc.primary.finish(),
         shadow: opts.secondary.then_some(acc.shadow),
         reflection: opts.secondary.then(|| acc.reflection.finish()),
+        refraction: opts.secondary.then(|| acc.refraction.finish()),
         examples,
         seconds: start.elapsed().as_secs_f64(),
     }
@@ -148,6 +154,7 @@ struct HitAcc {
     misses_agree: u64,
     hit_miss_disagree: u64,
     id_disagree: u64,
+    tir_disagree: u64,
     explained: Explained,
     unexplained: u64,
     self_hits: u64,
@@ -161,6 +168,7 @@ impl HitAcc {
         self.misses_agree += o.misses_agree;
         self.hit_miss_disagree += o.hit_miss_disagree;
         self.id_disagree += o.id_disagree;
+        self.tir_disagree += o.tir_disagree;
         self.explained.add(&o.explained);
         self.unexplained += o.unexplained;
         self.self_hits += o.self_hits;
@@ -173,6 +181,7 @@ impl HitAcc {
             misses_agree: self.misses_agree,
             hit_miss_disagree: self.hit_miss_disagree,
             id_disagree: self.id_disagree,
+            tir_disagree: self.tir_disagree,
             explained: self.explained,
             unexplained: self.unexplained,
             self_hits: self.self_hits,
@@ -187,6 +196,7 @@ struct Acc {
     primary: HitAcc,
     shadow: ShadowStats,
     reflection: HitAcc,
+    refraction: HitAcc,
     examples: Vec<Example>,
 }
 
@@ -195,6 +205,7 @@ impl Acc {
         self.primary.merge(o.primary);
         self.shadow.add(&o.shadow);
         self.reflection.merge(o.reflection);
+        self.refraction.merge(o.refraction);
         self.examples.extend(o.examples);
         // Keep the first examples of each kind in image order.
         self.examples.sort_by(|a, b| (&a.kind, a.y, a.x).cmp(&(&b.kind, b.y, b.x)));
@@ -250,24 +261,6 @@ where
 {
     let inside: bool = eye_inside.unwrap_or_else(|| normal.dot(dir).gt(F::splat(0.0)).into());
     (if inside { -normal } else { normal }, inside)
-}
-
-/// One shadow ray toward `light` from `point` with the facing `normal`: shade.rs's `Tracer::direct`
-/// construction (private there), replicated with the same operations in the same order: `to_light = light −
-/// point`, `dist = sqrt(to_light·to_light)`, unit `l = to_light · (1 / dist)`, `cos = normal·l`; a ray is
-/// traced only where `cos > 0`, over `[0, dist)`.
-fn shadow_ray<F: crate::math::Real>(point: V3<F>, normal: V3<F>, light: V3<F>) -> (Ray<F>, F, F) {
-    let to_light = light - point;
-    let dist2 = to_light.dot(to_light);
-    let dist = dist2.sqrt();
-    let l = to_light * (F::splat(1.0) / dist);
-    (Ray::new(point, l), dist, normal.dot(l))
-}
-
-/// The mirror ray's direction: shade.rs's `Tracer::secondary` construction (private there), replicated:
-/// `normalize(d − n·(2·(d·n)))` with the facing normal.
-fn mirror<F: crate::math::Real>(d: V3<F>, n: V3<F>) -> V3<F> {
-    (d - n * (F::splat(2.0) * d.dot(n))).normalize()
 }
 
 /// Whether a secondary ray leaving primitive `departed` self-hits in one precision only: its hit (`a` in
@@ -328,98 +321,33 @@ impl Comparer<'_> {
         let ray32 = self.scene.camera_f64.ray_f32(x as f32 + 0.5, y as f32 + 0.5);
         let sp = g.surface(&ray32, t32, storage);
         let (n32, inside32) = facing(sp.normal, ray32.dir, g.eye_inside(storage));
-        let from32 = Departure { prim: storage, inward: inside32 };
         let (p64, outward64) = self.twin.surface(&ray64, h64.t, h64.prim);
         let (n64, inside64) = facing(outward64, ray64.dir, self.twin.eye_inside(h64.prim));
-        let from64 = Departure { prim: h64.prim, inward: inside64 };
         // The f32 point in the twin's camera-relative frame: relative to the f32 ray's own origin (the eye in
         // whatever frame the f32 scene lives in), so this holds before and after compile moves to camera space.
-        let eye32 = ray32.origin.to_f64();
-        let o32 = sp.point.to_f64() - eye32;
-        let origin_slack = len(o32 - p64);
-        // A hit this close to the origin is a re-hit of the surface the ray starts on: the f32 origin is off
-        // by a few ε32 of its distance from the eye.
-        let self_tol = K_SELF * EPS32 * len(p64);
-
-        for (k, light32) in self.scene.lights.iter().enumerate() {
-            let (s32, dist32, cos32) = shadow_ray(sp.point, n32, light32.position);
-            let (s64, dist64, cos64) = shadow_ray(p64, n64, self.twin.lights[k]);
-            let (lit32, lit64) = (cos32 > 0.0, cos64 > 0.0);
-            if !lit32 && !lit64 {
-                continue;
-            }
-            let dir_slack = len(s32.dir.to_f64() - s64.dir) + len(n32.to_f64() - n64);
-            if lit32 != lit64 {
-                acc.shadow.lit_disagree += 1;
-                if cos64.abs() <= K_GRAZE * EPS32 {
-                    acc.shadow.explained.count(Reason::Facing);
-                } else if cos64.abs() <= K_GRAZE * EPS32 + dir_slack {
-                    acc.shadow.explained.count(Reason::Diverge);
-                } else {
-                    acc.shadow.unexplained += 1;
-                    let (a, b) =
-                        (Hit64 { t: f64::from(cos32), prim: NO_PRIM }, Hit64 { t: cos64, prim: NO_PRIM });
-                    acc.example("shadow facing", (x, y), Some(k), a, b);
-                }
-                continue;
-            }
-            acc.shadow.rays += 1;
-            let blocked32 = g.occluded(&s32, from32, dist32);
-            let b32 = g.intersect(&s32, from32, dist32);
-            let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
-            let b64 = self.twin.intersect(&s64, from64, dist64);
-            if is_self_hit(b32, b64, h64.prim, self_tol, self.twin.meets_again(h64.prim)) {
-                acc.shadow.self_hits += 1;
-                acc.example("shadow self-hit", (x, y), Some(k), b32, b64);
-            }
-            if blocked32 == b64.is_hit() {
-                continue;
-            }
-            acc.shadow.occluded_disagree += 1;
-            let slack = Slack { origin: origin_slack, dir: len(s32.dir.to_f64() - s64.dir) };
-            let light64 = self.twin.lights[k];
-            let why = |s: Slack| {
-                let prims = [b32.prim, b64.prim];
-                if prims.iter().any(|&p| self.twin.grazing(p, &s64, K_GRAZE, s)) {
-                    Some(Reason::Graze)
-                } else if prims.iter().any(|&p| self.twin.near_surface(p, s64.origin, K_START, s.origin)) {
-                    Some(Reason::Start)
-                } else if prims.iter().any(|&p| self.twin.near_surface(p, light64, K_START, s.at(dist64))) {
-                    Some(Reason::Light)
-                } else {
-                    None
-                }
-            };
-            match why(Slack::default()).or_else(|| why(slack).map(|_| Reason::Diverge)) {
-                Some(r) => acc.shadow.explained.count(r),
-                None => {
-                    acc.shadow.unexplained += 1;
-                    acc.example("shadow", (x, y), Some(k), b32, b64);
-                }
-            }
-        }
-
-        let r32 = Ray::new(sp.point, mirror(ray32.dir, n32));
-        let m32 = g.intersect(&r32, from32, f32::INFINITY);
-        let m32 = Hit64 { t: f64::from(m32.t), prim: self.file_id(m32.prim) };
-        let r64 = Ray::new(p64, mirror(ray64.dir, n64));
-        let m64 = self.twin.intersect(&r64, from64, f64::INFINITY);
-        let slack = Slack { origin: origin_slack, dir: len(r32.dir.to_f64() - r64.dir) };
-        self.compare_hits(
-            &mut acc.reflection,
-            &mut acc.examples,
-            "reflection",
-            (x, y),
-            &r64,
-            from64,
-            m32,
-            m64,
-            slack,
-        );
-        if is_self_hit(m32, m64, h64.prim, self_tol, self.twin.meets_again(h64.prim)) {
-            acc.reflection.self_hits += 1;
-            acc.example("reflection self-hit", (x, y), None, m32, m64);
-        }
+        let o32 = sp.point.to_f64() - ray32.origin.to_f64();
+        let start = secondary::Start {
+            pixel: (x, y),
+            prim: h64.prim,
+            point32: sp.point,
+            dir32: ray32.dir,
+            normal32: n32,
+            inside32,
+            from32: Departure { prim: storage, inward: inside32 },
+            point64: p64,
+            dir64: ray64.dir,
+            normal64: n64,
+            inside64,
+            from64: Departure { prim: h64.prim, inward: inside64 },
+            origin_slack: len(o32 - p64),
+            // A hit this close to the origin is a re-hit of the surface the ray starts on: the f32 origin is
+            // off by a few ε32 of its distance from the eye.
+            self_tol: K_SELF * EPS32 * len(p64),
+            material: self.scene.materials.get(sp.material as usize).copied().unwrap_or_default(),
+        };
+        self.shadows(&start, acc);
+        self.reflection(&start, acc);
+        self.refraction(&start, acc);
     }
 
     /// Compares a closest-hit ray's two answers: `a` from f32, `b` from the twin along `ray` (leaving

@@ -85,7 +85,7 @@ pub(super) enum Reason {
     Diverge,
 }
 
-/// Closest-hit rays of one kind (primary or mirror) compared.
+/// Closest-hit rays of one kind (primary, mirror or refraction) compared.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HitStats {
     /// Rays traced in both precisions.
@@ -98,6 +98,9 @@ pub struct HitStats {
     pub hit_miss_disagree: u64,
     /// Both hit, different primitives.
     pub id_disagree: u64,
+    /// Refraction rays only: total internal reflection in one precision, a refracted ray in the other (the
+    /// ray is traced in neither; not counted in `rays`).
+    pub tir_disagree: u64,
     /// Disagreements explained, by reason.
     pub explained: Explained,
     /// Disagreements not explained.
@@ -111,7 +114,7 @@ pub struct HitStats {
 impl HitStats {
     /// All disagreements.
     pub fn disagree(&self) -> u64 {
-        self.hit_miss_disagree + self.id_disagree
+        self.hit_miss_disagree + self.id_disagree + self.tir_disagree
     }
 }
 
@@ -150,7 +153,8 @@ impl ShadowStats {
 /// One unexplained disagreement or self-hit, for the report.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Example {
-    /// `primary`, `reflection` or `shadow`, with ` self-hit` for self-hits.
+    /// `primary`, `reflection`, `refraction` or `shadow`, with ` self-hit` for self-hits (`shadow facing`,
+    /// `refraction tir`: the side or the total internal reflection disagreed; t holds the cosine or `sin²`).
     pub kind: String,
     /// Pixel column.
     pub x: u32,
@@ -187,6 +191,8 @@ pub struct Report {
     pub shadow: Option<ShadowStats>,
     /// Mirror rays (with secondary rays).
     pub reflection: Option<HitStats>,
+    /// Refraction rays (with secondary rays): from hits on transmitting materials.
+    pub refraction: Option<HitStats>,
     /// Some unexplained disagreements and self-hits.
     pub examples: Vec<Example>,
     /// Wall-clock seconds of the whole comparison (compile and twin build included).
@@ -199,11 +205,14 @@ impl Report {
         self.primary.unexplained
             + self.shadow.map_or(0, |s| s.unexplained)
             + self.reflection.map_or(0, |r| r.unexplained)
+            + self.refraction.map_or(0, |r| r.unexplained)
     }
 
     /// Self-hits of every kind.
     pub fn self_hits(&self) -> u64 {
-        self.shadow.map_or(0, |s| s.self_hits) + self.reflection.map_or(0, |r| r.self_hits)
+        self.shadow.map_or(0, |s| s.self_hits)
+            + self.reflection.map_or(0, |r| r.self_hits)
+            + self.refraction.map_or(0, |r| r.self_hits)
     }
 
     /// One JSON object (one line): the keys are listed in README.md's `accuracy` section.
@@ -258,23 +267,28 @@ impl Report {
             put("shadow_unexplained", s.unexplained.to_string());
             put("shadow_self_hits", s.self_hits.to_string());
         }
-        if let Some(r) = &self.reflection {
-            put("reflection_rays", r.rays.to_string());
-            put("reflection_hits_agree", r.hits_agree.to_string());
-            put("reflection_disagree", r.disagree().to_string());
-            put("reflection_hit_miss_disagree", r.hit_miss_disagree.to_string());
-            put("reflection_id_disagree", r.id_disagree.to_string());
-            put("reflection_explained", r.explained.total().to_string());
-            put("reflection_explained_graze", r.explained.graze.to_string());
-            put("reflection_explained_tie", r.explained.tie.to_string());
-            put("reflection_explained_start", r.explained.start.to_string());
-            put("reflection_explained_diverge", r.explained.diverge.to_string());
-            put("reflection_unexplained", r.unexplained.to_string());
-            put("reflection_self_hits", r.self_hits.to_string());
-            put("reflection_t_rel_err_p50", num(r.t_rel_err.p50));
-            put("reflection_t_rel_err_p99", num(r.t_rel_err.p99));
-            put("reflection_t_rel_err_p999", num(r.t_rel_err.p999));
-            put("reflection_t_rel_err_max", num(r.t_rel_err.max));
+        for (name, stats) in [("reflection", &self.reflection), ("refraction", &self.refraction)] {
+            let Some(r) = stats else { continue };
+            let mut put_row = |k: &str, v: String| put(&format!("{name}_{k}"), v);
+            put_row("rays", r.rays.to_string());
+            put_row("hits_agree", r.hits_agree.to_string());
+            put_row("disagree", r.disagree().to_string());
+            put_row("hit_miss_disagree", r.hit_miss_disagree.to_string());
+            put_row("id_disagree", r.id_disagree.to_string());
+            if name == "refraction" {
+                put_row("tir_disagree", r.tir_disagree.to_string());
+            }
+            put_row("explained", r.explained.total().to_string());
+            put_row("explained_graze", r.explained.graze.to_string());
+            put_row("explained_tie", r.explained.tie.to_string());
+            put_row("explained_start", r.explained.start.to_string());
+            put_row("explained_diverge", r.explained.diverge.to_string());
+            put_row("unexplained", r.unexplained.to_string());
+            put_row("self_hits", r.self_hits.to_string());
+            put_row("t_rel_err_p50", num(r.t_rel_err.p50));
+            put_row("t_rel_err_p99", num(r.t_rel_err.p99));
+            put_row("t_rel_err_p999", num(r.t_rel_err.p999));
+            put_row("t_rel_err_max", num(r.t_rel_err.max));
         }
         let examples: Vec<String> = self
             .examples
@@ -368,6 +382,9 @@ impl Report {
         if let Some(r) = &self.reflection {
             hit_row(&mut o, "reflection", r);
         }
+        if let Some(r) = &self.refraction {
+            hit_row(&mut o, "refraction", r);
+        }
         let why = |e: &Explained| {
             format!(
                 "graze {}, tie {}, start {}, light {}, facing {}, diverge {}",
@@ -380,6 +397,14 @@ impl Report {
         }
         if let Some(r) = &self.reflection {
             let _ = writeln!(o, "explained reflection: {}", why(&r.explained));
+        }
+        if let Some(r) = &self.refraction {
+            let _ = writeln!(
+                o,
+                "explained refraction: {}; total internal reflection in one precision only: {}",
+                why(&r.explained),
+                r.tir_disagree
+            );
         }
         let _ = writeln!(
             o,

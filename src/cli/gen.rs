@@ -1,4 +1,5 @@
-//! `bareray gen`: write generated scenes (the benchmark field, SPD's sphereflake) to files.
+//! `bareray gen`: write generated scenes (the benchmark field, SPD's sphereflake, the random-scene
+//! campaign's scenes) to files.
 
 use std::path::{Path, PathBuf};
 use std::time::Instant;
@@ -26,6 +27,26 @@ enum GenCommand {
     /// SPD's sphereflake (`balls`) at a size factor, as NFF.
     #[command(after_help = "Example:\n  bareray gen flake --level 4 -o balls4.nff   # 7381 spheres")]
     Flake(FlakeArgs),
+    /// One scene of the random-scene campaign (tests/random_scenes.rs) by its seed, as TOML.
+    #[command(after_help = "Example:\n  bareray gen random --seed 42 -o random-42.toml")]
+    Random(RandomArgs),
+}
+
+/// Arguments of `bareray gen random`.
+#[derive(Args, Debug)]
+pub(super) struct RandomArgs {
+    /// The scene's seed.
+    #[arg(long)]
+    pub(super) seed: u64,
+    /// Image width (the campaign renders 48×32).
+    #[arg(long, default_value_t = 48)]
+    pub(super) width: u32,
+    /// Image height.
+    #[arg(long, default_value_t = 32)]
+    pub(super) height: u32,
+    /// Output file; must end in .toml. Written atomically.
+    #[arg(short, long)]
+    pub(super) output: PathBuf,
 }
 
 /// Arguments of `bareray gen field`.
@@ -68,7 +89,20 @@ pub(super) fn run(args: GenArgs) -> Result<()> {
     match args.what {
         GenCommand::Field(a) => field(a),
         GenCommand::Flake(a) => flake(a),
+        GenCommand::Random(a) => random(a),
     }
+}
+
+fn random(a: RandomArgs) -> Result<()> {
+    check_extension(&a.output, &["toml"])?;
+    if a.width == 0 || a.height == 0 {
+        return Err(usage("--width and --height must be at least 1"));
+    }
+    let text = bareray::io::random_scene::random_scene_toml(a.seed, a.width, a.height);
+    write_atomic_with(&a.output, |w| std::io::Write::write_all(w, text.as_bytes()))
+        .with_context(|| format!("{}: cannot write", a.output.display()))?;
+    eprintln!("{}: random scene {}", a.output.display(), a.seed);
+    Ok(())
 }
 
 fn field(a: FieldArgs) -> Result<()> {

@@ -7,7 +7,11 @@
 //! `det = e1·p`, `s = o − v0`, `q = s × e1`, the hit has barycentrics `u = (s·p)/det`, `v = (d·q)/det` and
 //! parameter `t = (e2·q)/det`. It needs no precomputed plane, works for unnormalised directions, and a ray
 //! parallel to the triangle gives `det = 0`, which the mask rejects. Edges are inclusive (`u, v ≥ 0`,
-//! `u + v ≤ 1`) so that a ray through the shared diagonal of a fan hits at least one of the two triangles.
+//! `u + v ≤ 1`), and `v` is computed as `−(s·(d × e1))/det` (equal to `(d·q)/det` in exact arithmetic): the
+//! operations of `u`'s numerator for the edge `e1`. A fan's neighbouring triangles share `v0`, and one's
+//! `e2` is the other's `e1`, so along their shared diagonal the two numerators are exact negatives and a
+//! ray through it hits at least one of the two. With Möller–Trumbore's own `v` the two round differently:
+//! far from `v0` relative to the triangle and at a grazing angle, both could miss (a crack in the polygon).
 
 use glam::{DVec2, DVec3};
 
@@ -27,8 +31,8 @@ pub fn intersect_triangle<F: Real>(v0: V3<F>, e1: V3<F>, e2: V3<F>, ray: &Ray<F>
     let inv = F::splat(1.0) / det;
     let s = ray.origin - v0;
     let u = s.dot(p) * inv;
+    let v = -s.dot(ray.dir.cross(e1)) * inv;
     let q = s.cross(e1);
-    let v = ray.dir.dot(q) * inv;
     let t = e2.dot(q) * inv;
     // det ≠ 0 written as two comparisons: NaN fails both, so NaN rays miss.
     let facing = det.lt(zero) | det.gt(zero);
