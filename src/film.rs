@@ -30,7 +30,7 @@ impl Image {
 
 /// `n` black pixels from the allocator's zeroed memory. `vec![Rgb::default(); n]` would write every pixel
 /// (Rgb is not a type `Vec` knows to be all zero bits): the whole image's page faults and stores on one
-/// thread before the render (docs/perf-log/2026-11.md, session 10, "Where the time around the render went").
+/// thread before the render (docs/perf-log/2026-11.md, "Where the time around the render went").
 /// Zeroed pages come lazily, on the threads that write the tiles.
 fn black_pixels(n: usize) -> Vec<Rgb> {
     if n == 0 {

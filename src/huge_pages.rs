@@ -10,7 +10,7 @@ use std::alloc::{GlobalAlloc, Layout, System};
 /// rounded up to whole huge pages and advised onto them (`madvise(MADV_HUGEPAGE)`), so that every page of
 /// the block comes from a huge-page fault. Blocks from `System` kept 4 KiB faults on their unaligned ends,
 /// and those below its mmap threshold came from the heap in 4 KiB pages, a render's sRGB buffer among them
-/// (docs/perf-log/2026-11.md, session 12, "Kept": huge pages without partial ends). Fresh mappings are
+/// (docs/perf-log/2026-11.md, "Kept": huge pages without partial ends). Fresh mappings are
 /// zero, so zeroed blocks cost no writes on the allocating thread. Installed in the `bareray` binary only
 /// (`main.rs`): tests and benchmarks use the plain system allocator.
 pub(crate) struct HugePages;

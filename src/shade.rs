@@ -63,7 +63,7 @@ fn lanes_set<F: Lanes>(m: F::Mask) -> u64 {
 /// tracing the packet: below that, the packet walk visits nodes for lanes that are not there. The share was
 /// measured on sphereflakes at K = 8 and 16: anything from 1/2 to 7/8 of K gave about the same, all of K lost
 /// on the coherent first reflections, and never going one ray at a time was slower (PERF.md, Register:
-/// "Sparse secondary packets"; docs/perf-log/2026-11.md, session 8).
+/// "Sparse secondary packets"; docs/perf-log/2026-11.md).
 fn is_sparse<F: Lanes>(active: F::Mask) -> bool {
     4 * lanes_set::<F>(active) <= 3 * F::K as u64
 }

@@ -4,7 +4,7 @@
 //! obvhs sizes the tree's node array (2n − 1 nodes of 48 bytes: 96 MB for a million spheres) with a serial
 //! `resize` on the calling thread. Its first touch is page faults, and under a hypervisor a fresh page costs
 //! far more than the write: that `resize` showed in a 1e6-sphere bench's profile as the kernel's
-//! `clear_page`, all of it on one core while the other waited (docs/perf-log/2026-11.md, session 13, "The 1e6
+//! `clear_page`, all of it on one core while the other waited (docs/perf-log/2026-11.md, "The 1e6
 //! build: page faults on one core"). Handing obvhs an array already of that length, first touched by all
 //! threads, leaves its `resize` nothing to do.
 

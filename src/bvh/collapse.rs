@@ -36,7 +36,7 @@ pub(super) fn stack_need(slots: usize, below: usize) -> usize {
 
 /// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on
 /// one thread, the collapse was a serial part of a 1e6 build on 2 threads (docs/perf-log/2026-11.md,
-/// session 9, "Kept": the collapse runs in parallel).
+/// "Kept": the collapse runs in parallel).
 pub(super) const PARALLEL_LEVELS: u32 = 3;
 
 /// [`flatten`] of obvhs inner node `i` into a vector of its own (the subtree's root first, indices local to

@@ -68,7 +68,7 @@ pub(super) fn shift_inner(child: &mut [u32], count: &[u8], slots: u8, base: u32)
 
 /// Bit c set where `count[c]` is not 0: the leaf slots (empty slots have count 0 and are never entered).
 /// Kept in each node: the single-ray occlusion walk asks for it at every visit, and computing it there
-/// showed in balls4's instruction counts (docs/perf-log/2026-11.md, session 13, "Leaf bits kept in the
+/// showed in balls4's instruction counts (docs/perf-log/2026-11.md, "Leaf bits kept in the
 /// nodes").
 pub(super) fn leaf_bits(count: &[u8]) -> u8 {
     count.iter().enumerate().fold(0, |bits, (c, &n)| bits | u8::from(n != 0) << c)

@@ -7,7 +7,7 @@
 //! packet at once ([`Frustum`]: four planes, one 4-wide pass) and run the K-lane slab test only on the
 //! children it cannot rule out ([`Bvh::frustum_culling`]). On the contract fields most children a packet
 //! visits are missed by all its lanes, and this rules out nearly all of those (counts: docs/perf-log/
-//! 2026-11.md, session 5, "Where the time went (before)" and "Frustum culling"). In leaves the same planes
+//! 2026-11.md, "Where the time went (before)" and "Frustum culling"). In leaves the same planes
 //! rule out single spheres before their K-lane test. The planes come with the packet when its maker knows
 //! them (the camera's blocks, [`crate::camera::Camera::pyramid`]), else they are fitted to the lanes.
 

@@ -1,6 +1,6 @@
 //! Piles of coincident spheres. obvhs's PLOC merges equal boxes about one pair per pass, so a pile of p
 //! copies of one sphere costs about p passes over the whole scene (build times: docs/perf-log/2026-11.md,
-//! session 12, "Kept": piles). A scene with a large pile is built over one box per distinct sphere, and the
+//! "Kept": piles). A scene with a large pile is built over one box per distinct sphere, and the
 //! copies then hang under their box's leaf as a balanced subtree.
 
 use obvhs::aabb::Aabb;
@@ -14,8 +14,8 @@ use super::median::{balanced_into, tree_for, unset};
 const SAMPLE: usize = 4096;
 
 /// The PLOC work (estimated pile size × spheres) from which the build goes over piles: about a sixth of that
-/// of 5000 copies of one sphere (2.5e7), whose build time is in docs/perf-log/2026-11.md (session 12,
-/// "Kept": piles).
+/// of 5000 copies of one sphere (2.5e7), whose build time is in docs/perf-log/2026-11.md
+/// ("Kept": piles).
 const PILE_WORK: usize = 1 << 22;
 
 /// The bits of a box: equal for copies of one sphere.

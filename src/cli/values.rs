@@ -174,7 +174,7 @@ pub(super) enum BvhPresetArg {
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,
     /// obvhs `very_fast_build`: the quickest build; on uniform random fields it also traces faster than
-    /// `fast`, on sphereflakes slower (docs/perf-log/2026-11.md, session 2, "Tried, measured, not kept").
+    /// `fast`, on sphereflakes slower (docs/perf-log/2026-11.md, "Tried, measured, not kept").
     VeryFast,
     /// obvhs `fast_build`.
     Fast,

@@ -83,7 +83,7 @@ struct Tok<'a> {
 }
 
 /// Tokens separated by ASCII whitespace (byte-wise: splitting on Unicode whitespace, char by char, showed in
-/// the readers' profile; docs/perf-log/2026-11.md, session 10), with line numbers, `#` comments removed,
+/// the readers' profile; docs/perf-log/2026-11.md), with line numbers, `#` comments removed,
 /// one token of look-ahead.
 struct Tokens<'a> {
     lines: std::iter::Enumerate<std::str::Lines<'a>>,

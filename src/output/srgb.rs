@@ -16,7 +16,7 @@ pub fn srgb8_formula(linear: f32) -> u8 {
 
 /// Linear to sRGB-encoded 8-bit, clamped: [`srgb8_formula`] by table, bit for bit (checked over every f32
 /// in [0, 1] by a test). The table took a large share off an image's write time (docs/perf-log/2026-11.md,
-/// session 7, "Exact table-driven sRGB encoding").
+/// "Exact table-driven sRGB encoding").
 pub fn srgb8(linear: f32) -> u8 {
     SrgbTable::get().encode(linear)
 }
@@ -70,7 +70,7 @@ impl SrgbTable {
 
     /// [`SrgbTable::encode`] of 8 values into `out`: the clamp and the bucket in SIMD (the scalar rounding:
     /// NaN to 0, then max and min, then an exact product and truncation), the look-ups per value. Measured
-    /// against the scalar encode: docs/perf-log/2026-11.md, session 10, "Kept" (sRGB conversion 8 values at
+    /// against the scalar encode: docs/perf-log/2026-11.md, "Kept" (sRGB conversion 8 values at
     /// a time).
     #[inline(always)]
     fn encode8(&self, values: [f32; 8], out: &mut [u8]) {

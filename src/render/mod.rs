@@ -422,7 +422,7 @@ pub fn for_each_packet_at<F: Lanes>(
 /// The image's pixels as one list of row slices per tile, in the order of `tiles`, which must be
 /// [`tiles`]`(width, height)` (row-major bands of TILE rows), so each tile's job writes its own pixels in
 /// place: returning each tile's pixels and merging them after the trace measured slower on a sphereflake
-/// (the merge, and the first touch of a buffer per tile; docs/perf-log/2026-11.md, session 9, "Page faults:
+/// (the merge, and the first touch of a buffer per tile; docs/perf-log/2026-11.md, "Page faults:
 /// huge pages, and tiles written in place").
 fn tile_rows<'a>(pixels: &'a mut [Rgb], width: u32, tiles: &[Tile]) -> Vec<Vec<&'a mut [Rgb]>> {
     let mut out: Vec<Vec<&mut [Rgb]>> = tiles.iter().map(|t| Vec::with_capacity(t.h as usize)).collect();

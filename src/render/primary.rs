@@ -61,7 +61,7 @@ impl PrimaryHits {
 }
 
 /// Copies the first `dst.len()` values of `src` into `dst`: a whole 4-pixel row as one fixed-size copy (a
-/// `memmove` call per short row showed in a small field's profile: docs/perf-log/2026-11.md, session 6,
+/// `memmove` call per short row showed in a small field's profile: docs/perf-log/2026-11.md,
 /// "Where the time went (before)"), a partial one as a slice.
 #[inline(always)]
 fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
