@@ -11,7 +11,8 @@
 //!   discriminant chosen by bound (as in a scene with a sphere near the eye), and [`first_root`].
 //!
 //! The reference is the generic kernel at f64 ([`intersect_sphere::<f64>`]) over the scene file's spheres
-//! moved by `−eye` in f64, along the f64 camera rays that the f32 rays are rounded from. Every pass is a brute
+//! moved into the scene's rendering space in f64, along the f64 camera rays that the f32 rays are rounded
+//! from (a far scene's start short of it, where the eye-term row does not apply: no ray starts at the eye). Every pass is a brute
 //! force over the spheres only (shapes and polygons are ignored by all formulas and the reference), closest
 //! hit with ties to the lower id (scene-file order: compiled with [`Accel::Brute`]). Reported per scene and
 //! formula: pixels whose hit/miss differs from the reference, pixels that hit a different sphere, the relative
@@ -187,9 +188,10 @@ fn main() -> anyhow::Result<()> {
         let (w, h) = (cam.width, cam.height);
         let full = f64::from(w) * f64::from(h) * s.len() as f64;
         let stride = (full / MAX_TESTS).sqrt().ceil().max(1.0) as usize;
-        let eye = desc.camera.eye;
+        // In the scene's rendering space (the eye, or a far scene's centre, at the origin), as its rays.
+        let origin = scene.origin;
         let spheres64: Vec<(V3<f64>, f64)> =
-            desc.spheres.iter().map(|sp| (V3::from(sp.center - eye), sp.radius)).collect();
+            desc.spheres.iter().map(|sp| (V3::from(sp.center - origin), sp.radius)).collect();
         let closest64 = |ray: &Ray<f64>| {
             let (mut id, mut best) = (NO_PRIM, f64::INFINITY);
             for (k, &(c, r)) in spheres64.iter().enumerate() {

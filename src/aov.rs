@@ -72,6 +72,7 @@ pub fn samples(
     let hits = primary_window_lanes(scene, lanes, pool, window);
     let w = hits.width as usize;
     let float_id = scene.geometry.len() <= 1 << 24;
+    let start = scene.camera_f64.start;
     let per_pixel = channels(which, scene.geometry.len()).len() * 4;
     let mut out = vec![0u8; hits.t.len() * per_pixel];
     pool.install(|| {
@@ -91,7 +92,9 @@ pub fn samples(
             let mut values = Vec::with_capacity(5);
             for aov in which {
                 match aov {
-                    Aov::Depth => values.push(t.to_bits()),
+                    // From the eye: a far scene's camera rays start `start` along (compile's frame).
+                    Aov::Depth if start == 0.0 => values.push(t.to_bits()),
+                    Aov::Depth => values.push(((start + f64::from(t)) as f32).to_bits()),
                     Aov::Normal => values.extend(normal().map(f32::to_bits)),
                     Aov::Id if float_id => {
                         values.push(if id == NO_PRIM { -1.0f32 } else { id as f32 }.to_bits())

@@ -65,6 +65,10 @@ pub struct Camera<F> {
     pub width: u32,
     /// v_res.
     pub height: u32,
+    /// How far from the eye camera rays start: 0 (at the eye) unless the scene lies far from the eye, where
+    /// compile makes rays start just short of the geometry so that their f32 origins are as fine as the
+    /// geometry's own coordinates ([`crate::compile::RenderingFrame`]). No geometry is nearer the eye.
+    pub start: F,
 }
 
 impl Camera<f64> {
@@ -142,6 +146,7 @@ impl Camera<f64> {
             distance: desc.distance,
             width: w,
             height: h,
+            start: 0.0,
         })
     }
 
@@ -155,7 +160,8 @@ impl Camera<f64> {
     }
 
     /// [`Camera::ray_f32`] for each lane of (sx, sy), four lanes at a time in `f64x4` by the same
-    /// operations in the same order (IEEE, no fusing), so each lane's ray is bit for bit the scalar one.
+    /// operations in the same order (IEEE, no fusing), so each lane's ray is bit for bit the scalar one. The
+    /// origin is the eye, or in a far scene each lane's start point ([`Camera::start`]).
     #[inline]
     pub fn rays<F: Lanes>(&self, sx: F, sy: F) -> Ray<F> {
         // Padded to the widest lane type (K ≤ 16) so that every group of four is whole: fixed-size copies
@@ -176,7 +182,28 @@ impl Camera<f64> {
             }
         }
         let lanes = |v: &[f32; 16]| F::load(v, 0);
-        Ray::new(F::splat_v3(self.eye.to_f32()), V3::new(lanes(&dir[0]), lanes(&dir[1]), lanes(&dir[2])))
+        let origin = match self.start == 0.0 {
+            true => F::splat_v3(self.eye.to_f32()),
+            false => self.start_points::<F>(&x, &y),
+        };
+        Ray::new(origin, V3::new(lanes(&dir[0]), lanes(&dir[1]), lanes(&dir[2])))
+    }
+
+    /// Where a far scene's camera rays start ([`Camera::start`] along each lane's f64 unit direction from
+    /// the eye), computed in f64 by [`Camera::rays`]' operations and rounded once.
+    #[inline(never)]
+    fn start_points<F: Lanes>(&self, x: &[f32; 16], y: &[f32; 16]) -> V3<F> {
+        let mut origin = [[0.0f32; 16]; 3];
+        let eye = [self.eye.x, self.eye.y, self.eye.z];
+        for first in (0..F::K.max(4)).step_by(4) {
+            let four = |v: &[f32; 16]| f64x4::new(std::array::from_fn(|i| f64::from(v[first + i])));
+            let d = self.directions4(four(x), four(y));
+            for ((out, d), e) in origin.iter_mut().zip(d).zip(eye) {
+                out[first..first + 4].copy_from_slice(&d.map(|c| (e + c * self.start) as f32));
+            }
+        }
+        let lanes = |v: &[f32; 16]| F::load(v, 0);
+        V3::new(lanes(&origin[0]), lanes(&origin[1]), lanes(&origin[2]))
     }
 
     /// Unit directions toward four pixel-space points: [`Camera::ray`]'s `toward`, then scaled by
@@ -204,7 +231,12 @@ impl Camera<f64> {
     /// less), and the stored normal is rounded too. Widening each normal by m·Z, m = 16·2⁻²⁴·|n|·L with
     /// L ≥ |t|, keeps n·d ≥ 0 with at least five times the room those two roundings need (about 3·2⁻²⁴·|n|),
     /// as Z·d ≥ 1/L − 2⁻²⁴.
+    /// Rays that start away from the eye ([`Camera::start`]) get none: their f32 origins are rounded one by
+    /// one, so they share no apex.
     pub fn pyramid(&self, sx: [f32; 2], sy: [f32; 2]) -> Option<Pyramid> {
+        if self.start != 0.0 {
+            return None;
+        }
         // `directions4`'s operations: the edge lanes get these very U and V, and since rounding is
         // monotone every lane between them lies between.
         let window = |s: f32, scale: f64, offset: f64, half: f64| (f64::from(s) * scale + offset) * half;
@@ -248,6 +280,7 @@ impl Camera<f64> {
             distance: f(self.distance),
             width: self.width,
             height: self.height,
+            start: f(self.start),
         }
     }
 }
@@ -262,10 +295,11 @@ impl<F: Real> Camera<F> {
     }
 
     /// The primary ray through pixel-space point (sx, sy): column j's centre is sx = j + ½, row k's
-    /// sy = k + ½. The direction is unit length.
+    /// sy = k + ½. The direction is unit length; the origin is [`Camera::start`] along it from the eye.
     #[inline(always)]
     pub fn ray(&self, sx: F, sy: F) -> Ray<F> {
-        Ray::new(self.eye, self.toward(sx, sy).normalize())
+        let dir = self.toward(sx, sy).normalize();
+        Ray::new(self.eye + dir * self.start, dir)
     }
 
     /// The point on the image plane (distance d) that pixel-space point (sx, sy) looks through: P_j,k.

@@ -21,6 +21,8 @@ mod cli;
 mod cones;
 #[path = "coverage.rs"]
 mod coverage;
+#[path = "far_scenes.rs"]
+mod far_scenes;
 #[path = "fuzz_merge.rs"]
 mod fuzz_merge;
 #[path = "fuzz_particles.rs"]

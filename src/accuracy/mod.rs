@@ -52,7 +52,7 @@ use anyhow::Result;
 use rayon::prelude::*;
 
 use crate::compile::{CompileOptions, Scene};
-use crate::geometry::{Departure, Ray, NO_PRIM};
+use crate::geometry::{at_eye, Departure, Ray, NO_PRIM};
 use crate::math::V3;
 use crate::render::{thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::SceneDesc;
@@ -320,12 +320,15 @@ impl Comparer<'_> {
         let g = &self.scene.geometry;
         let ray32 = self.scene.camera_f64.ray_f32(x as f32 + 0.5, y as f32 + 0.5);
         let sp = g.surface(&ray32, t32, storage);
-        let (n32, inside32) = facing(sp.normal, ray32.dir, g.eye_inside(storage));
+        // The side from the exact eye term only for rays that start at the eye, as shade.rs rules.
+        let from_eye32 = at_eye(ray32.origin);
+        let (n32, inside32) = facing(sp.normal, ray32.dir, g.eye_inside(storage).filter(|_| from_eye32));
         let (p64, outward64) = self.twin.surface(&ray64, h64.t, h64.prim);
-        let (n64, inside64) = facing(outward64, ray64.dir, self.twin.eye_inside(h64.prim));
-        // The f32 point in the twin's camera-relative frame: relative to the f32 ray's own origin (the eye in
-        // whatever frame the f32 scene lives in), so this holds before and after compile moves to camera space.
-        let o32 = sp.point.to_f64() - ray32.origin.to_f64();
+        let from_eye64 = at_eye(ray64.origin);
+        let (n64, inside64) =
+            facing(outward64, ray64.dir, self.twin.eye_inside(h64.prim).filter(|_| from_eye64));
+        // The twin works in the f32 scene's rendering space, so the two points compare as they are.
+        let o32 = sp.point.to_f64();
         let start = secondary::Start {
             pixel: (x, y),
             prim: h64.prim,

@@ -2,9 +2,10 @@
 //! renderer is measured against.
 //!
 //! It reads the [`SceneDesc`] (already f64) and never the compiled f32 scene, and works in the renderer's
-//! camera-relative space: every position `p` is stored as `p − eye`, computed in f64 (sphere centres, shape
-//! translations, polygon vertices, cone bases and apexes, lights), and camera rays start at exactly 0 with
-//! f64 unit directions from [`Camera<f64>::ray`], not rounded to f32. Intersections run the generic kernels
+//! rendering space ([`RenderingFrame`]: origin at the eye, or at a far scene's centre): every position `p`
+//! is stored as `p − origin`, computed in f64 (sphere centres, shape translations, polygon vertices, cone
+//! bases and apexes, lights), and camera rays start where the renderer's do (at exactly 0, or a far scene's
+//! start distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to f32. Intersections run the generic kernels
 //! of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`], [`Shape::intersect`],
 //! [`intersect_triangle`], [`intersect_cone`] on [`Cone<f64>`]), with the renderer's rules: closest hit by the
 //! total order (smaller t, then lower id), and a ray that leaves a primitive ([`Departure`]) never hits it
@@ -20,6 +21,7 @@ use std::ops::Range;
 use glam::{DAffine3, DVec3};
 
 use crate::camera::{Camera, CameraError};
+use crate::compile::RenderingFrame;
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::{
     far_root, first_root, intersect_cone, intersect_sphere, intersect_triangle, rehit_cone, sphere_roots,
@@ -69,11 +71,11 @@ struct Polygon64 {
 /// The f64 reference scene: see the module documentation.
 #[derive(Clone, Debug)]
 pub struct Twin {
-    /// The camera in f64 (world space; [`Twin::camera_ray`] makes its rays camera-relative).
+    /// The camera in f64, in the twin's space.
     pub camera: Camera<f64>,
-    /// The eye in world space: the origin of the twin's space.
-    pub eye: DVec3,
-    /// Light positions, camera-relative.
+    /// The origin of the twin's space in world space: the f32 scene's ([`RenderingFrame`]).
+    pub origin: DVec3,
+    /// Light positions in the twin's space.
     pub lights: Vec<V3<f64>>,
     spheres: Vec<(V3<f64>, f64)>,
     shapes: Vec<Shape<f64>>,
@@ -108,18 +110,22 @@ impl Twin {
     /// The twin of `desc`, searching spheres through its BVH when `bvh` is true (and every sphere is finite),
     /// else brute force: the two give the same hits bit for bit (tests/accuracy.rs).
     pub fn with_bvh(desc: &SceneDesc, bvh: bool) -> Result<Self, CameraError> {
-        let camera = Camera::new(&desc.camera)?;
-        let eye = desc.camera.eye;
+        // The f32 scene's rendering space (compile's frame): tolerances then scale with the magnitudes f32
+        // rounds at, and camera rays start where the f32 ones do.
+        let frame = RenderingFrame::of(desc, None);
+        let origin = frame.origin;
+        let mut camera = Camera::new(&desc.camera)?;
+        (camera.eye, camera.start) = (v(desc.camera.eye - origin), frame.start);
         let spheres: Vec<(V3<f64>, f64)> =
-            desc.spheres.iter().map(|s| (v(s.center - eye), s.radius)).collect();
+            desc.spheres.iter().map(|s| (v(s.center - origin), s.radius)).collect();
         let shapes = desc
             .shapes
             .iter()
             .map(|s| {
-                // The placement moved by −eye: the translation is the only part that changes.
+                // The placement moved by −origin: the translation is the only part that changes.
                 let m = DAffine3 {
                     matrix3: s.world_from_object.matrix3,
-                    translation: s.world_from_object.translation - eye,
+                    translation: s.world_from_object.translation - origin,
                 };
                 Shape::placed(s.kind, &m, s.material)
             })
@@ -127,7 +133,7 @@ impl Twin {
         let base = (spheres.len() + shapes.len()) as u32;
         let (mut tris, mut polygons) = (Vec::new(), Vec::new());
         for (k, p) in desc.polygons.iter().enumerate() {
-            let vertices: Vec<DVec3> = p.vertices.iter().map(|&x| x - eye).collect();
+            let vertices: Vec<DVec3> = p.vertices.iter().map(|&x| x - origin).collect();
             let n = vertices.len() as u32;
             // compile's rule: a polygon the readers would have rejected still gets its id, as a plain fan.
             let triangles =
@@ -159,7 +165,7 @@ impl Twin {
             .cones
             .iter()
             .map(|c| {
-                let (base, apex) = (c.base - eye, c.apex - eye);
+                let (base, apex) = (c.base - origin, c.apex - origin);
                 // compile's rule: a cone the readers would have rejected still gets its id, as a needle.
                 Cone::new(base, c.base_radius, apex, c.apex_radius).unwrap_or_else(|| {
                     let needle = base + DVec3::X * base.abs().max_element().max(1.0) * 1e-6;
@@ -173,14 +179,14 @@ impl Twin {
         let bvh = (bvh && finite && !spheres.is_empty()).then(|| Bvh64::build(&spheres));
         Ok(Self {
             camera,
-            eye,
-            lights: desc.lights.iter().map(|l| v(l.position - eye)).collect(),
+            origin,
+            lights: desc.lights.iter().map(|l| v(l.position - origin)).collect(),
             spheres,
             shapes,
             tris,
             polygons,
             cones,
-            kinds: desc.kinds.twins(eye),
+            kinds: desc.kinds.twins(origin),
             bvh,
         })
     }
@@ -224,10 +230,10 @@ impl Twin {
         self.bvh.is_some()
     }
 
-    /// The camera ray through pixel-space point (sx, sy) (column j's centre is j + ½): origin 0 (the eye),
-    /// the f64 unit direction of [`Camera<f64>::ray`], not rounded.
+    /// The camera ray through pixel-space point (sx, sy) (column j's centre is j + ½): [`Camera<f64>::ray`],
+    /// not rounded (from the eye, or from where a far scene's camera rays start).
     pub fn camera_ray(&self, sx: f64, sy: f64) -> Ray<f64> {
-        Ray::new(V3::all(0.0), self.camera.ray(sx, sy).dir)
+        self.camera.ray(sx, sy)
     }
 
     /// Closest hit of `ray` in `[0, t_max)`, never on the near side of its departure surface.

@@ -133,6 +133,14 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
         job.band_rows()
     );
     let _ = writeln!(out, "features: {features}");
+    if scene.camera_f64.start != 0.0 {
+        let o = scene.origin;
+        let _ = writeln!(
+            out,
+            "far scene: rendering space centred on the geometry at ({}, {}, {}), camera rays start {} from the eye",
+            o.x, o.y, o.z, scene.camera_f64.start
+        );
+    }
     let search = |bvh: &Option<bareray::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
     let spheres = match (&scene.accel_note, g.particles.is_empty()) {
         (_, true) => {

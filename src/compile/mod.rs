@@ -6,10 +6,12 @@
 //! file's values and rounded once to f32. Near the eye, where the image is made, f32 then resolves the
 //! scene as finely as it can anywhere, however far from the world origin the scene sits, and camera rays
 //! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::geometry::eye_term`]).
-//! Directions, distances along rays and normals do not depend on the origin, so images, depths and ids
-//! mean what they meant in world space; [`Scene::origin`] maps points back.
+//! A scene far from the eye instead gets its origin at its own centre, and camera rays start just short of
+//! it ([`RenderingFrame`]). Directions, distances along rays and normals do not depend on the origin, so
+//! images and ids mean what they meant in world space; [`Scene::origin`] maps points back.
 
 pub mod features;
+mod frame;
 pub mod load;
 pub mod memory;
 
@@ -25,6 +27,7 @@ use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 
 use crate::scene::desc::{Ao, Falloff, Material, PolygonDesc, RenderDesc, SceneDesc, Shade};
+pub use frame::{RenderingFrame, FAR_RATIO};
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -42,11 +45,11 @@ pub struct Light {
 pub struct Scene {
     /// The camera's frame rounded to f32 (resolution, and f32 points on the image plane).
     pub camera: Camera<f32>,
-    /// The camera in f64 (in rendering space: its eye is the origin): camera rays are computed from it and
-    /// rounded once ([`Camera::rays`]); the f64 accuracy twin uses it as it is.
+    /// The camera in f64, in rendering space (its eye is the origin but in a far scene, [`RenderingFrame`]):
+    /// camera rays are computed from it and rounded once ([`Camera::rays`]).
     pub camera_f64: Camera<f64>,
-    /// Where the rendering space's origin (the eye) is in the scene file's world space: a world point is
-    /// `origin + p` for a rendering-space point `p`.
+    /// Where the rendering space's origin (the eye, or a far scene's centre) is in the scene file's world
+    /// space: a world point is `origin + p` for a rendering-space point `p`.
     pub origin: glam::DVec3,
     /// Sampling, depth, background, ambient.
     pub render: RenderDesc,
@@ -148,17 +151,17 @@ impl BvhPreset {
 /// 2026-11.md, "BVH crossover").
 pub const BVH_MIN_SPHERES: usize = 4;
 
-/// The largest coordinate magnitude in rendering space a ray can start from or pass near: spheres' far
-/// sides, lights (the eye is the origin).
-fn reach(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> f32 {
-    let eye = desc.camera.eye;
-    let extra = extra.into_iter().flatten().map(|p| (p - eye).abs().max_element());
-    let spheres = desc.spheres.iter().map(|s| (s.center - eye).abs().max_element() + s.radius).chain(extra);
-    let lights = desc.lights.iter().map(|l| (l.position - eye).abs().max_element());
-    let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| (*v - eye).abs().max_element());
+/// The largest coordinate magnitude in rendering space (origin `origin`) a ray can start from or pass near:
+/// spheres' far sides, lights, the eye.
+fn reach(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>, origin: glam::DVec3) -> f32 {
+    let mag = |p: glam::DVec3| (p - origin).abs().max_element();
+    let extra = extra.into_iter().flatten().map(mag);
+    let spheres = desc.spheres.iter().map(|s| mag(s.center) + s.radius).chain(extra);
+    let lights = desc.lights.iter().map(|l| mag(l.position)).chain([mag(desc.camera.eye)]);
+    let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| mag(*v));
     let shapes =
-        shape_boxes(desc).into_iter().map(|(_, b)| b.min.abs().max(b.max.abs()).max_element() as f64);
-    let kinds = desc.kinds.world_boxes().into_iter().flatten().map(|p| (p - eye).abs().max_element());
+        shape_boxes(desc, origin).into_iter().map(|(_, b)| b.min.abs().max(b.max.abs()).max_element() as f64);
+    let kinds = desc.kinds.world_boxes().into_iter().flatten().map(mag);
     spheres.chain(lights).chain(vertices).chain(shapes).chain(kinds).fold(0.0, f64::max) as f32
 }
 
@@ -259,11 +262,13 @@ impl Scene {
         extra: Option<[glam::DVec3; 2]>,
     ) -> Result<(Scene, BvhJob), CameraError> {
         let CompileOptions { accel, preset, frustum_culling, single_ray_lanes, scalar } = options;
-        let origin = desc.camera.eye;
+        let frame = RenderingFrame::of(desc, extra);
+        let origin = frame.origin;
         let mut camera_f64 = Camera::new(&desc.camera)?;
-        camera_f64.eye = V3::all(0.0);
+        camera_f64.eye = V3::from(desc.camera.eye - origin);
+        camera_f64.start = frame.start;
         let mut geometry = Geometry { origin: V3::from(origin).to_f32(), ..Geometry::default() };
-        let pad = bvh::padding(reach(desc, extra));
+        let pad = bvh::padding(reach(desc, extra, origin));
         let mut build = BuildStats::default();
         // Per-sphere colours go with the spheres, whichever structure holds them; a list of another length
         // (a description built by hand) is ignored, as `SceneDesc::sphere_colors` says.
@@ -319,7 +324,7 @@ impl Scene {
         if materials.is_empty() {
             materials.push(Material::default());
         }
-        let bounded = shape_boxes(desc);
+        let bounded = shape_boxes(desc, origin);
         let cones_finite = geometry.cones.height.iter().all(|h| h.is_finite());
         let job = BvhJob {
             accel,
@@ -437,30 +442,7 @@ fn resolved_shade(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> Shade {
 
 /// The diagonal of the box around every bounded primitive and the box `extra` (0 without any), in f64.
 fn bounded_diagonal(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>) -> f64 {
-    use glam::DVec3;
-    let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
-    let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
-    let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
-    let cones = desc
-        .cones
-        .iter()
-        .flat_map(|c| ball(c.base, c.base_radius).into_iter().chain(ball(c.apex, c.apex_radius)));
-    // Shape boxes are in rendering space: moved back by the eye.
-    let eye = desc.camera.eye;
-    let shapes = shape_boxes(desc).into_iter().flat_map(|(_, b)| [b.min, b.max].map(|p| p.as_dvec3() + eye));
-    let kinds = desc.kinds.world_boxes().into_iter().flatten();
-    let (lo, hi) = spheres
-        .chain(kinds)
-        .chain(extra.into_iter().flatten())
-        .chain(vertices)
-        .chain(cones)
-        .chain(shapes)
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
-    if lo.cmple(hi).all() {
-        (hi - lo).length()
-    } else {
-        0.0
-    }
+    frame::bounded_box(desc, extra).map_or(0.0, |(lo, hi)| (hi - lo).length())
 }
 
 /// The box `(lo, hi)` widened by `pad` on every side, for the BVH build.
@@ -472,18 +454,12 @@ fn padded((lo, hi): (Vec3f, Vec3f), pad: f32) -> Aabb {
 /// The bounded shapes (ellipsoids) and their boxes in rendering space: the unit sphere's box under the shape's
 /// map, `centre ± Σ|column entries|` per axis, in f64 and rounded to f32 (the BVH's padding covers the
 /// rounding). Planes are unbounded and have none.
-fn shape_boxes(desc: &SceneDesc) -> Vec<(u32, Aabb)> {
-    let eye = desc.camera.eye;
+fn shape_boxes(desc: &SceneDesc, origin: glam::DVec3) -> Vec<(u32, Aabb)> {
     let bounded = desc.shapes.iter().enumerate().filter(|(_, s)| s.kind.is_solid());
     bounded
         .map(|(k, s)| {
-            let m = s.world_from_object.matrix3;
-            let half = glam::DVec3::new(
-                m.x_axis.x.abs() + m.y_axis.x.abs() + m.z_axis.x.abs(),
-                m.x_axis.y.abs() + m.y_axis.y.abs() + m.z_axis.y.abs(),
-                m.x_axis.z.abs() + m.y_axis.z.abs() + m.z_axis.z.abs(),
-            );
-            let c = s.world_from_object.translation - eye;
+            let (c, half) = frame::shape_extent(&s.world_from_object);
+            let c = c - origin;
             (k as u32, Aabb { min: (c - half).as_vec3a(), max: (c + half).as_vec3a() })
         })
         .collect()

@@ -88,6 +88,8 @@ fn dot(a: V, b: V) -> f64 {
 
 /// The camera as coverage needs it: the frame, and pixel space ↔ window.
 struct View {
+    /// The eye in rendering space (the origin but in a far scene, `crate::compile::RenderingFrame`).
+    eye: V,
     right: V,
     up: V,
     forward: V,
@@ -102,6 +104,7 @@ impl View {
     fn new(camera: &Camera<f64>) -> View {
         let v = |p: crate::math::V3<f64>| [p.x, p.y, p.z];
         View {
+            eye: v(camera.eye),
             right: v(camera.right),
             up: v(camera.up),
             forward: v(camera.forward),
@@ -118,6 +121,11 @@ impl View {
     }
 
     /// A rendering-space vector in the frame.
+    /// A rendering-space point as a vector from the eye, in f64.
+    fn eye_to(&self, p: [f32; 3]) -> V {
+        [0, 1, 2].map(|a| f64::from(p[a]) - self.eye[a])
+    }
+
     fn to_frame(&self, c: V) -> V {
         [dot(c, self.right), dot(c, self.up), dot(c, self.forward)]
     }
@@ -129,7 +137,7 @@ impl View {
     }
 }
 
-/// A sphere in the camera's frame (the eye at the origin), in f64 from its stored f32 values.
+/// A sphere in the camera's frame (from the eye), in f64 from its stored f32 values.
 #[derive(Clone, Copy, Debug)]
 struct Ball {
     c: V,
@@ -353,20 +361,21 @@ impl<'a> Coverage<'a> {
         let sides: [V; 4] = [[1.0, 0.0, -u0], [-1.0, 0.0, u1], [0.0, 1.0, -v0], [0.0, -1.0, v1]];
         let world = sides.map(|n| view.to_rendering(n));
         let box_key = |lo: [f32; 3], hi: [f32; 3]| {
+            let (lo, hi) = (view.eye_to(lo), view.eye_to(hi));
             for n in &world {
-                let far: f64 = (0..3).map(|a| (n[a] * f64::from(lo[a])).max(n[a] * f64::from(hi[a]))).sum();
-                let size: f64 = (0..3).map(|a| n[a].abs() * f64::from(lo[a].abs().max(hi[a].abs()))).sum();
+                let far: f64 = (0..3).map(|a| (n[a] * lo[a]).max(n[a] * hi[a])).sum();
+                let size: f64 = (0..3).map(|a| n[a].abs() * lo[a].abs().max(hi[a].abs())).sum();
                 if far < -1e-9 * size {
                     return None;
                 }
             }
-            let gap = |a: usize| f64::from(lo[a].max(0.0).max(-hi[a]));
+            let gap = |a: usize| lo[a].max(0.0).max(-hi[a]);
             Some((gap(0).powi(2) + gap(1).powi(2) + gap(2).powi(2)).sqrt())
         };
         let spheres = &scene.geometry.spheres;
         let view = &*view;
         let ball = |i: usize| {
-            let c = [spheres.cx[i], spheres.cy[i], spheres.cz[i]].map(f64::from);
+            let c = view.eye_to([spheres.cx[i], spheres.cy[i], spheres.cz[i]]);
             Ball::new(view.to_frame(c), f64::from(spheres.r[i]))
         };
         let item_key = |i: usize| {

@@ -1,0 +1,163 @@
+//! Where the rendering space's origin is, and where camera rays start.
+//!
+//! f32 resolves a coordinate to about ε32 = 2⁻²⁴ of its magnitude, so the geometry is as fine as its distance
+//! from the rendering space's origin allows. With the origin at the eye (the usual frame) that is the
+//! distance from the eye: right for what the camera sees near it, too coarse for a scene far away — a
+//! cluster of spheres 10⁶ from the eye is stored in steps of 0.06, wider than gaps of a few hundredths
+//! between them, and every reflection off it starts from a point that coarse.
+//!
+//! When every primitive is bounded and the eye lies more than [`FAR_RATIO`] times the geometry's bounding
+//! radius R from its centre C, the frame moves: the origin goes to C, so every stored coordinate is at most R
+//! in magnitude, and camera rays start at the distance [`RenderingFrame::start`] = |eye − C| − R·(1 + 2⁻¹⁰)
+//! along their exact f64 direction, just short of the bounding sphere, rounded once to f32 there. A ray
+//! that can reach the geometry then starts within about 1.5R of C and crosses it within about 2R, so its
+//! error there (the origin's rounding and the direction's over that length) is of order ε32·R instead of
+//! ε32·|eye − C|: a scene far from the eye is resolved about as finely as it would be near it. Such rays
+//! share no apex, so camera packets are not culled by a frustum there.
+//!
+//! Otherwise (something unbounded such as a plane, or the eye within [`FAR_RATIO`]·R) the origin stays at
+//! the eye and camera rays start at exactly zero, which lets spheres carry exact eye terms.
+
+use glam::DVec3;
+
+use crate::scene::desc::SceneDesc;
+
+/// The eye must be this many bounding radii from the geometry's centre for the frame to move there: the
+/// gain in resolution is about this over 3 (the origin's and the direction's roundings above), so the frame
+/// moves only where it gains more than an order of magnitude.
+pub const FAR_RATIO: f64 = 64.0;
+
+/// Camera rays start this fraction of R short of the bounding sphere: more than the start point's f64
+/// rounding (about 2⁻⁵³·|eye − C|) wherever |eye − C| < 2⁴³·R.
+const START_MARGIN: f64 = 1.0 / 1024.0;
+
+/// The rendering space of a compiled scene (module documentation).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct RenderingFrame {
+    /// The rendering space's origin in world space: the eye, or the centre of a far scene's bounds.
+    pub origin: DVec3,
+    /// How far from the eye camera rays start: 0, or |eye − C| − R·(1 + 2⁻¹⁰) for a far scene.
+    pub start: f64,
+}
+
+impl RenderingFrame {
+    /// The frame for `desc`, with `extra` the world box of spheres compiled apart (a mapped field's).
+    pub fn of(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Self {
+        let eye = desc.camera.eye;
+        let at_eye = Self { origin: eye, start: 0.0 };
+        let unbounded = desc.shapes.iter().any(|s| !s.kind.is_solid())
+            || desc.cones.iter().any(|c| !(c.base - c.apex).is_finite());
+        let Some((lo, hi)) = bounded_box(desc, extra).filter(|_| !unbounded) else {
+            return at_eye;
+        };
+        let centre = (lo + hi) * 0.5;
+        let radius = (hi - lo).length() * 0.5;
+        let distance = (eye - centre).length();
+        if distance <= FAR_RATIO * radius || !distance.is_finite() || radius.is_nan() {
+            return at_eye;
+        }
+        Self { origin: centre, start: distance - radius * (1.0 + START_MARGIN) }
+    }
+
+    /// Whether camera rays start away from the eye.
+    pub fn is_far(&self) -> bool {
+        self.start != 0.0
+    }
+}
+
+/// The box around every bounded primitive and the box `extra`, in f64 world space (`None` without any):
+/// spheres, ellipsoids (the unit sphere's box under their map), polygons, cones and the registered kinds.
+pub fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
+    let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
+    let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
+    let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
+    let cones = desc
+        .cones
+        .iter()
+        .flat_map(|c| ball(c.base, c.base_radius).into_iter().chain(ball(c.apex, c.apex_radius)));
+    let shapes = desc.shapes.iter().filter(|s| s.kind.is_solid()).flat_map(|s| {
+        let (c, half) = shape_extent(&s.world_from_object);
+        [c - half, c + half]
+    });
+    let kinds = desc.kinds.world_boxes().into_iter().flatten();
+    let (lo, hi) = spheres
+        .chain(kinds)
+        .chain(extra.into_iter().flatten())
+        .chain(vertices)
+        .chain(cones)
+        .chain(shapes)
+        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    lo.cmple(hi).all().then_some((lo, hi))
+}
+
+/// A bounded shape's box as centre and half extent per axis in world space: the unit sphere's box under
+/// `world_from_object`, `centre ± Σ|column entries|` per axis.
+pub fn shape_extent(world_from_object: &glam::DAffine3) -> (DVec3, DVec3) {
+    let m = world_from_object.matrix3;
+    let half = DVec3::new(
+        m.x_axis.x.abs() + m.y_axis.x.abs() + m.z_axis.x.abs(),
+        m.x_axis.y.abs() + m.y_axis.y.abs() + m.z_axis.y.abs(),
+        m.x_axis.z.abs() + m.y_axis.z.abs() + m.z_axis.z.abs(),
+    );
+    (world_from_object.translation, half)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::geometry::ShapeKind;
+    use crate::scene::desc::{ShapeDesc, SphereDesc};
+
+    /// Two touching unit spheres at `centre ± (1, 0, 0)` seen from `eye`.
+    fn pair(eye: DVec3, centre: DVec3) -> SceneDesc {
+        let mut desc = SceneDesc::default();
+        desc.camera.eye = eye;
+        for dx in [-1.0, 1.0] {
+            desc.spheres.push(SphereDesc { center: centre + DVec3::X * dx, radius: 1.0, material: 0 });
+        }
+        desc
+    }
+
+    #[test]
+    fn a_scene_near_the_eye_keeps_the_eye_as_origin() {
+        let eye = DVec3::new(1e6, -2e6, 3e6);
+        // The bounding radius is √(4 + 4 + 4)/2 ≈ 1.73; 64 of them is about 111.
+        let frame = RenderingFrame::of(&pair(eye, eye + DVec3::new(0.0, 0.0, 100.0)), None);
+        assert_eq!(frame, RenderingFrame { origin: eye, start: 0.0 });
+        assert!(!frame.is_far());
+    }
+
+    #[test]
+    fn a_far_scene_is_centred_and_rays_start_short_of_it() {
+        let eye = DVec3::new(3.25, 1.75, -2.5);
+        let centre = eye + DVec3::new(0.48, 0.6, 0.64) * 1e6;
+        let desc = pair(eye, centre);
+        let frame = RenderingFrame::of(&desc, None);
+        assert_eq!(frame.origin, centre);
+        assert!(frame.is_far());
+        // No sphere is nearer the eye than where rays start, and they start within 2R of the nearest.
+        let nearest =
+            desc.spheres.iter().map(|s| (s.center - eye).length() - s.radius).fold(f64::MAX, f64::min);
+        let radius = 3f64.sqrt();
+        assert!(frame.start < nearest && frame.start > nearest - 2.0 * radius, "{frame:?} {nearest}");
+    }
+
+    #[test]
+    fn an_unbounded_primitive_keeps_the_eye_as_origin() {
+        let eye = DVec3::ZERO;
+        let mut desc = pair(eye, DVec3::new(0.0, 0.0, 1e6));
+        assert!(RenderingFrame::of(&desc, None).is_far());
+        let plane = glam::DAffine3::from_translation(DVec3::new(0.0, 0.0, 1e6));
+        desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: plane, material: 0 });
+        assert_eq!(RenderingFrame::of(&desc, None), RenderingFrame { origin: eye, start: 0.0 });
+    }
+
+    #[test]
+    fn a_mapped_fields_box_counts() {
+        let eye = DVec3::ZERO;
+        let desc = pair(eye, DVec3::new(0.0, 0.0, 1e6));
+        // A field around the eye: the scene is no longer far.
+        let field = [DVec3::splat(-10.0), DVec3::splat(10.0)];
+        assert!(!RenderingFrame::of(&desc, Some(field)).is_far());
+    }
+}
