@@ -182,8 +182,9 @@ impl std::ops::AddAssign for BuildStats {
 
 /// The padding that keeps culling conservative: the sphere kernel may accept a ray passing up to a few ulps
 /// of the ray's distance outside the sphere, and that distance is at most about the scene's extent `reach`
-/// (the largest coordinate magnitude of any sphere, eye or light); the fused slab test may move a box plane
-/// by up to one more ulp of it (`slab::WIDEN`). 64 ulps is ample and far below any sphere the scene can resolve.
+/// (the largest coordinate magnitude of any sphere, light or camera ray start); the fused slab test may move
+/// a box plane by up to one more ulp of it (`slab::WIDEN`). 64 ulps is ample and far below any sphere the
+/// scene can resolve.
 pub fn padding(reach: f32) -> f32 {
     reach * (64.0 * f32::EPSILON)
 }

@@ -152,12 +152,24 @@ impl BvhPreset {
 pub const BVH_MIN_SPHERES: usize = 4;
 
 /// The largest coordinate magnitude in rendering space (origin `origin`) a ray can start from or pass near:
-/// spheres' far sides, lights, the eye.
-fn reach(desc: &SceneDesc, extra: Option<[glam::DVec3; 2]>, origin: glam::DVec3) -> f32 {
+/// spheres' far sides, lights, where camera rays start (the eye, or a far scene's start points: those
+/// through the image's corners bound them).
+fn reach(
+    desc: &SceneDesc,
+    extra: Option<[glam::DVec3; 2]>,
+    origin: glam::DVec3,
+    camera: &Camera<f64>,
+) -> f32 {
     let mag = |p: glam::DVec3| (p - origin).abs().max_element();
     let extra = extra.into_iter().flatten().map(mag);
     let spheres = desc.spheres.iter().map(|s| mag(s.center) + s.radius).chain(extra);
-    let lights = desc.lights.iter().map(|l| mag(l.position)).chain([mag(desc.camera.eye)]);
+    let (w, h) = (f64::from(camera.width), f64::from(camera.height));
+    let corner = |(x, y): (f64, f64)| {
+        let o = camera.ray(x, y).origin;
+        o.x.abs().max(o.y.abs()).max(o.z.abs())
+    };
+    let starts = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)].map(corner);
+    let lights = desc.lights.iter().map(|l| mag(l.position)).chain(starts);
     let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| mag(*v));
     let shapes =
         shape_boxes(desc, origin).into_iter().map(|(_, b)| b.min.abs().max(b.max.abs()).max_element() as f64);
@@ -268,7 +280,7 @@ impl Scene {
         camera_f64.eye = V3::from(desc.camera.eye - origin);
         camera_f64.start = frame.start;
         let mut geometry = Geometry { origin: V3::from(origin).to_f32(), ..Geometry::default() };
-        let pad = bvh::padding(reach(desc, extra, origin));
+        let pad = bvh::padding(reach(desc, extra, origin, &camera_f64));
         let mut build = BuildStats::default();
         // Per-sphere colours go with the spheres, whichever structure holds them; a list of another length
         // (a description built by hand) is ignored, as `SceneDesc::sphere_colors` says.

@@ -32,7 +32,9 @@ pub fn random_scene_toml(seed: u64, width: u32, height: u32) -> String {
 enum View {
     /// Outside the cluster, 1.5 to 50 cluster radii from its centre.
     Outside,
-    /// 50 to 2000 cluster radii away.
+    /// 50 to 2000 cluster radii away, or 50 to 10⁶ for a scene without planes (from 64 bounding radii on,
+    /// such a scene gets the far-scene frame, `crate::compile::RenderingFrame`; with a plane it keeps the
+    /// eye's, whose f32 steps far away the campaign does not hold to its bounds).
     Far,
     /// Among the primitives.
     Among,
@@ -154,9 +156,10 @@ impl Gen {
         ]);
         self.line(format!("# Random scene {seed}: scale {scale:.3e}, {view:?}, centre {}", vec3(centre)));
         let mut body = Gen { rng: self.rng.clone(), out: String::new(), holds_eye: false };
-        let inside = body.primitives(centre, scale, radius, view == View::InsideAll, view == View::InsideOne);
+        let (inside, planes) =
+            body.primitives(centre, scale, radius, view == View::InsideAll, view == View::InsideOne);
         self.rng = body.rng.clone();
-        let (eye, look) = self.eye(view, centre, radius, inside);
+        let (eye, look) = self.eye(view, centre, radius, inside, planes);
         self.camera(eye, look, view, radius, width, height);
         self.render(scale);
         self.lights(eye, centre, radius);
@@ -188,11 +191,21 @@ impl Gen {
     }
 
     /// Where the eye is and a point it looks at.
-    fn eye(&mut self, view: View, centre: DVec3, radius: f64, inside: Inside) -> (DVec3, DVec3) {
+    fn eye(
+        &mut self,
+        view: View,
+        centre: DVec3,
+        radius: f64,
+        inside: Inside,
+        planes: bool,
+    ) -> (DVec3, DVec3) {
         let aim = |g: &mut Gen| g.around(centre, 0.3 * radius);
         match (view, inside) {
             (View::Outside, _) => (centre + self.dir() * radius * self.log(1.5, 50.0), aim(self)),
-            (View::Far, _) => (centre + self.dir() * radius * self.log(50.0, 2000.0), aim(self)),
+            (View::Far, _) => {
+                let most = if planes { 2000.0 } else { 1e6 };
+                (centre + self.dir() * radius * self.log(50.0, most), aim(self))
+            }
             (View::InsideOne, Some(p)) => (p, if self.chance(0.5) { aim(self) } else { p + self.dir() }),
             (View::InsideAll, _) | (View::Among, _) | (View::InsideOne, None) => {
                 let eye = self.around(centre, radius);
@@ -253,7 +266,7 @@ impl Gen {
 
     /// The primitives, written to `self.out`, around `centre` within `radius`; with `enclose`, first a sphere
     /// around them all. With `eye_inside`, a primitive chosen at random (or the next one with an inside)
-    /// holds the eye: the point inside it is returned.
+    /// holds the eye: the point inside it is returned, and whether there is a plane.
     fn primitives(
         &mut self,
         centre: DVec3,
@@ -261,7 +274,7 @@ impl Gen {
         radius: f64,
         enclose: bool,
         eye_inside: bool,
-    ) -> Inside {
+    ) -> (Inside, bool) {
         let mut cluster = Cluster { centre, radius, inside: None, spheres: Vec::new(), planes: 0 };
         if enclose {
             let r = radius * self.log(5.0, 50.0);
@@ -291,7 +304,7 @@ impl Gen {
                 }
             }
         }
-        cluster.inside
+        (cluster.inside, cluster.planes > 0)
     }
 
     /// Records `p` as the eye's place if this primitive holds the eye.
