@@ -17,7 +17,8 @@
 //! - **graze** ([`K_GRAZE`]): the ray passes within tolerance of tangency with either primitive
 //!   ([`Twin::grazing`]: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
 //!   outlines, cones near tangency or with a hit near an end rim);
-//! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other;
+//! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other, times
+//!   how fast a moved ray's hits move apart (1 head on, the inverse cosines at a slant: [`Twin::tie`]);
 //! - **start** ([`K_START`], secondary rays): the ray starts within tolerance of either primitive's surface
 //!   ([`Twin::near_surface`]: contact points of touching spheres, a ray leaving one cone where another's
 //!   wall or rim is);
@@ -29,9 +30,10 @@
 //!   because each starts from its own hit point along its own normal, [`Slack`]): the primary hit's error
 //!   carried forward, not a fault of the secondary query.
 //!
-//! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in one
-//! precision is its departure primitive itself, or lies within `K_SELF·ε32·|o|` of its origin, while
-//! in the other precision it is not (both hitting the same other primitive is agreement); a ray leaving a
+//! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in f32 is
+//! its departure primitive itself, or lies within `K_SELF·ε32·|o|` of its origin, while in f64 it is not
+//! (both hitting the same other primitive is agreement; the twin's own near hit is a surface the exact ray
+//! meets there, and the f32 contact rule's entry into a sphere is no re-hit: [`is_self_hit`]); a ray leaving a
 //! solid inward (refraction into glass, any ray from an inside hit) meets the solid's far side, so for it
 //! only a hit within `K_SELF·ε32·|o|` counts. Relative t errors `|t32 − t64| / t64` are taken over rays whose two
 //! hits agree on the primitive; percentiles are nearest-rank: the p-th of n sorted values is the
@@ -263,18 +265,22 @@ where
     (if inside { -normal } else { normal }, inside)
 }
 
-/// Whether a secondary ray leaving primitive `departed` self-hits in one precision only: its hit (`a` in
-/// f32, `b` in f64) is the departure primitive itself, or lies within `tol` of the origin, in one and not in
-/// the other. Both hitting the same other primitive is agreement, however close to the origin (a neighbour
-/// closer than the f32 rounding of the origin's position). When the departure primitive can be met again
-/// away from the origin (`meets_again`: an open cone's far wall), only hits within `tol` count: a far-wall
-/// hit in one precision and not the other is a disagreement like any other, to be explained or not.
-fn is_self_hit(a: Hit64, b: Hit64, departed: u32, tol: f64, meets_again: bool) -> bool {
-    if a.is_hit() && a.prim == b.prim && a.prim != departed {
+/// Whether a secondary ray leaving primitive `departed` self-hits in f32: its hit (`a` in f32, `b` in f64)
+/// is the departure primitive itself, or lies within `tol` of the origin, in f32 and not in f64. Both hitting
+/// the same other primitive is agreement, however close to the origin (a neighbour closer than the f32
+/// rounding of the origin's position). When the departure primitive can be met again away from the origin
+/// (`meets_again`: an open cone's far wall), only hits within `tol` count: a far-wall hit in one precision
+/// and not the other is a disagreement like any other, to be explained or not. A near hit of the twin's
+/// alone is no self-hit: the twin skips the start by its departure rules, so its hit is a surface the exact
+/// ray meets there (a torus left at a grazing slant that curves back into its path), and the f32 ray
+/// meeting it farther or not at all is compared as any hit is. `contact`: `a` is the f32 contact rule's
+/// entry into another sphere ([`Twin::contact_entry`]), the origin taken as on that sphere, no re-hit.
+fn is_self_hit(a: Hit64, b: Hit64, departed: u32, tol: f64, meets_again: bool, contact: bool) -> bool {
+    if a.is_hit() && a.prim != departed && (a.prim == b.prim || contact) {
         return false;
     }
     let selfish = |h: Hit64| h.is_hit() && ((h.prim == departed && !meets_again) || h.t <= tol);
-    selfish(a) != selfish(b)
+    selfish(a) && !selfish(b)
 }
 
 /// The per-pixel comparison.
@@ -384,18 +390,14 @@ impl Comparer<'_> {
             st.hit_miss_disagree += 1;
         }
         let twin = self.twin;
-        let o = len(ray.origin);
         let secondary = from.prim != NO_PRIM;
         let why = |s: Slack| {
             let prims = [a.prim, b.prim];
             if prims.iter().any(|&p| twin.grazing(p, ray, K_GRAZE, s)) {
                 return Some(Reason::Graze);
             }
-            if let (Some(ta), Some(tb)) = (twin.hit_of(a.prim, ray, from), twin.hit_of(b.prim, ray, from)) {
-                let t = ta.max(tb);
-                if (ta - tb).abs() <= K_TIE * EPS32 * (o + t) + s.at(t) {
-                    return Some(Reason::Tie);
-                }
+            if twin.tie(a.prim, b.prim, ray, from, K_TIE, s) {
+                return Some(Reason::Tie);
             }
             if secondary && prims.iter().any(|&p| twin.near_surface(p, ray.origin, K_START, s.origin)) {
                 return Some(Reason::Start);

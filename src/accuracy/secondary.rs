@@ -104,7 +104,8 @@ impl Comparer<'_> {
             let b32 = g.intersect(&s32, s.from32, dist32);
             let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
             let b64 = self.twin.intersect(&s64, s.from64, dist64);
-            if is_self_hit(b32, b64, s.prim, s.self_tol, meets_again) {
+            let contact = self.twin.contact_entry(b32, &s32);
+            if is_self_hit(b32, b64, s.prim, s.self_tol, meets_again, contact) {
                 acc.shadow.self_hits += 1;
                 acc.example("shadow self-hit", pixel, Some(k), b32, b64);
             }
@@ -202,7 +203,8 @@ impl Comparer<'_> {
         self.compare_hits(st, &mut acc.examples, kind, s.pixel, &r64, from64, m32, m64, slack);
         // A ray leaving a solid inward meets its far side: only a hit at the origin is a re-hit.
         let meets_again = self.twin.meets_again(s.prim) || from64.inward;
-        if is_self_hit(m32, m64, s.prim, s.self_tol, meets_again) {
+        let contact = self.twin.contact_entry(m32, &r32);
+        if is_self_hit(m32, m64, s.prim, s.self_tol, meets_again, contact) {
             st.self_hits += 1;
             push_self_hit(&mut acc.examples, kind, s.pixel, m32, m64);
         }

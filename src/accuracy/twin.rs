@@ -25,7 +25,7 @@ use crate::compile::RenderingFrame;
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::{
     far_root, first_root, intersect_cone, intersect_sphere, intersect_triangle, rehit_cone, sphere_roots,
-    Cone, Departure, Ray, Shape, ShapeKind, NO_PRIM,
+    Cone, Departure, Ray, Shape, ShapeKind, CONTACT_ROUNDINGS, NO_PRIM,
 };
 use crate::kinds::KindTwins;
 use crate::math::{Affine, V3};
@@ -33,6 +33,10 @@ use crate::scene::desc::SceneDesc;
 
 use super::bvh64::Bvh64;
 pub use super::hit64::Hit64;
+
+/// The roundings, beyond the contact band's own [`CONTACT_ROUNDINGS`], by which the f32 renderer's `c = |oc|²
+/// − r²` can differ from the exact `c` of the same origin and the scene's sphere ([`Twin::contact_entry`]).
+const CONTACT_C_ROUNDINGS: f64 = 8.0;
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
 pub const EPS32: f64 = f32::EPSILON as f64 / 2.0;
@@ -527,6 +531,69 @@ impl Twin {
             .map(|j| segment_distance(p, poly.outline[j], poly.outline[(j + 1) % m]))
             .fold(f64::INFINITY, f64::min);
         edge * cos <= tol * (len(ray.origin) + len(p)) + slack.at(t)
+    }
+
+    /// The unit geometric normal of `prim` at `ray`'s point `t`: [`Twin::surface`]'s, but a polygon's plane
+    /// normal rather than its interpolated vertex normals (the surface the hit's `t` is measured on).
+    fn geometric_normal(&self, ray: &Ray<f64>, t: f64, prim: u32) -> V3<f64> {
+        let first = self.spheres.len() + self.shapes.len();
+        match (prim as usize).checked_sub(first).and_then(|k| self.polygons.get(k)) {
+            Some(poly) => poly.normal,
+            None => self.surface(ray, t, prim).1,
+        }
+    }
+
+    /// True when `ray` (leaving `from`) meets both `a` and `b` in f64 so close together that a ray moved by
+    /// rounding, `k·ε32·(|o| + t)`, plus `slack` (how far the f32 ray strays) can meet them in the other
+    /// order (explanation "tie").
+    ///
+    /// To first order, moving a ray by `δ` (its point at `t` by `δ(t)`) moves its hit on a surface with unit
+    /// normal `n` by `−(n·δ)/(n·d)` along it: by up to `|δ|/|cos|`, `cos` the cosine of incidence. A common
+    /// displacement (the stray of the f32 ray from the f64 one) moves `ta − tb` by `δ·g`, `g = n_a/(n_a·d) −
+    /// n_b/(n_b·d)`; each kernel's own rounding, a displacement of its own, moves its `t` by it over its
+    /// `|cos|`. So the order can change when `|ta − tb| ≤ (k·ε32·(|o| + t) + slack)·w`, with the weight
+    /// `w = max(|g|, mean of 1/|cos_a| and 1/|cos_b|)`: 1 where both are met head on; at a slant on planes
+    /// crossing near the hits `t` moves by many times the displacement (graze takes over where a cosine is
+    /// within rounding of 0).
+    pub fn tie(&self, a: u32, b: u32, ray: &Ray<f64>, from: Departure, k: f64, slack: Slack) -> bool {
+        let (Some(ta), Some(tb)) = (self.hit_of(a, ray, from), self.hit_of(b, ray, from)) else {
+            return false;
+        };
+        let t = ta.max(tb);
+        // n/(n·d): the hit's move along the ray per unit displacement, as a vector.
+        let rate = |prim: u32, tp: f64| {
+            let n = self.geometric_normal(ray, tp, prim);
+            n * (1.0 / n.dot(ray.dir))
+        };
+        let (ga, gb) = (rate(a, ta), rate(b, tb));
+        let w = len(ga - gb).max(0.5 * (len(ga) + len(gb)));
+        (ta - tb).abs() <= (k * EPS32 * (len(ray.origin) + t) + slack.at(t)) * w
+    }
+
+    /// True when the f32 renderer's `hit` along its own f32 `ray` is the sphere contact rule's entry
+    /// (ARCHITECTURE.md, "Self-intersection"; [`crate::geometry::sphere`]): a sphere met at exactly `t = 0`
+    /// by a ray heading toward its centre from within the rule's band of its surface. Such a hit is the
+    /// renderer treating the origin as on that sphere, not a re-hit of the surface the ray leaves.
+    ///
+    /// The band is `|c| ≤ CONTACT_ROUNDINGS·ε32·(bound + 2r·|o|∞)`, `c = |oc|² − r²` in f32, `bound =
+    /// |oc|² + r²` (the eye-term form, taken only where its bound is smaller, has a narrower band). This
+    /// checks the exact `c` of the f32 origin and the scene's sphere against [`CONTACT_C_ROUNDINGS`] more:
+    /// the f32 `c` is off from it by the centre's rounding to f32 (`2|oc|·ε32·|C|`, `|C| ≤ |oc| + √3·|o|∞`),
+    /// `oc`'s subtraction (`2ε32·|oc|²`), its square (`3ε32·|oc|²`) and `r²` (`3ε32·r²`): at most
+    /// `7ε32·(bound + 2r·|o|∞)` near the surface. The heading, `oc·d ≥ 0` in f32, is allowed what the
+    /// centre's rounding (`ε32·|C|`), `oc`'s and the dot product's (`4ε32·|oc|`) can move it by.
+    pub fn contact_entry(&self, hit: Hit64, ray: &Ray<f32>) -> bool {
+        let Some(&(centre, r)) = self.spheres.get(hit.prim as usize) else { return false };
+        if hit.t != 0.0 {
+            return false;
+        }
+        let (o, d) = (ray.origin.to_f64(), ray.dir.to_f64());
+        let oc = centre - o;
+        let c = (len(oc) - r) * (len(oc) + r);
+        let reach = o.x.abs().max(o.y.abs()).max(o.z.abs());
+        let band = (CONTACT_ROUNDINGS + CONTACT_C_ROUNDINGS) * EPS32 * (oc.dot(oc) + r * r + 2.0 * r * reach);
+        let heading_in = oc.dot(d) >= -EPS32 * (4.0 * len(oc) + len(centre)) * len(d);
+        heading_in && c.abs() <= band
     }
 
     /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
