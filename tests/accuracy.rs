@@ -488,12 +488,16 @@ fn contact_entries_of_the_f32_kernel_are_recognised() {
     for case in 0..40_000 {
         let r = rng.log(-3.0, 3.0);
         let centre = eye + rng.dir() * rng.log(-1.0, 4.0).max(2.0 * r);
+        // A speck just behind the eye keeps the eye's rendering frame (a lone sphere far from the eye would be
+        // compiled around its centre): the large coordinates near the eye are what this checks.
+        let speck = SphereDesc { center: eye + (eye - centre).normalize() * 0.01, radius: 1e-4, material: 0 };
         let desc = SceneDesc {
             camera: camera(eye, centre, DVec3::Y, 40.0, 4, 4),
-            spheres: vec![SphereDesc { center: centre, radius: r, material: 0 }],
+            spheres: vec![SphereDesc { center: centre, radius: r, material: 0 }, speck],
             ..SceneDesc::default()
         };
         let twin = Twin::new(&desc).expect("twin");
+        assert_eq!(twin.origin, eye, "case {case}: the eye's frame");
         let c = centre - eye;
         // The renderer's band in distance from the surface, about: 8 roundings of (|oc|² + r² + 2r·|o|∞)/(2r).
         let n = rng.dir();
