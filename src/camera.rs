@@ -71,6 +71,22 @@ pub struct Camera<F> {
     pub start: F,
 }
 
+/// Lanes padded to the widest lane type (K ≤ 16) so that every group of four is whole: fixed-size copies and
+/// conversions the compiler keeps in vector registers (`f32 → f64 → f32` rounding is the same in a vector
+/// instruction as in a scalar one).
+#[inline(always)]
+fn padded<F: Lanes>(v: F) -> [f32; 16] {
+    let mut out = [0.0f32; 16];
+    out[..F::K].copy_from_slice(v.to_array().as_ref());
+    out
+}
+
+/// Lanes `first..first + 4` of `v` in f64.
+#[inline(always)]
+fn four(v: &[f32; 16], first: usize) -> f64x4 {
+    f64x4::new(std::array::from_fn(|i| f64::from(v[first + i])))
+}
+
 impl Camera<f64> {
     /// Builds the frame from a description, in f64.
     pub fn new(desc: &CameraDesc) -> Result<Self, CameraError> {
@@ -164,46 +180,39 @@ impl Camera<f64> {
     /// origin is the eye, or in a far scene each lane's start point ([`Camera::start`]).
     #[inline]
     pub fn rays<F: Lanes>(&self, sx: F, sy: F) -> Ray<F> {
-        // Padded to the widest lane type (K ≤ 16) so that every group of four is whole: fixed-size copies
-        // and conversions the compiler keeps in vector registers (`f32 → f64 → f32` rounding is the same
-        // in a vector instruction as in a scalar one).
-        let padded = |v: F| {
-            let mut out = [0.0f32; 16];
-            out[..F::K].copy_from_slice(v.to_array().as_ref());
-            out
-        };
+        if self.start != 0.0 {
+            return self.rays_from_start(sx, sy);
+        }
         let (x, y) = (padded(sx), padded(sy));
         let mut dir = [[0.0f32; 16]; 3];
         for first in (0..F::K.max(4)).step_by(4) {
-            let four = |v: &[f32; 16]| f64x4::new(std::array::from_fn(|i| f64::from(v[first + i])));
-            let d = self.directions4(four(&x), four(&y));
+            let d = self.directions4(four(&x, first), four(&y, first));
             for (out, d) in dir.iter_mut().zip(d) {
                 out[first..first + 4].copy_from_slice(&d.map(|c| c as f32));
             }
         }
         let lanes = |v: &[f32; 16]| F::load(v, 0);
-        let origin = match self.start == 0.0 {
-            true => F::splat_v3(self.eye.to_f32()),
-            false => self.start_points::<F>(&x, &y),
-        };
-        Ray::new(origin, V3::new(lanes(&dir[0]), lanes(&dir[1]), lanes(&dir[2])))
+        Ray::new(F::splat_v3(self.eye.to_f32()), V3::new(lanes(&dir[0]), lanes(&dir[1]), lanes(&dir[2])))
     }
 
-    /// Where a far scene's camera rays start ([`Camera::start`] along each lane's f64 unit direction from
-    /// the eye), computed in f64 by [`Camera::rays`]' operations and rounded once.
+    /// [`Camera::rays`] for a far scene's camera: each lane starts [`Camera::start`] along its f64 unit
+    /// direction from the eye, the point computed in f64 (each lane's own operations) and rounded once.
+    #[cold]
     #[inline(never)]
-    fn start_points<F: Lanes>(&self, x: &[f32; 16], y: &[f32; 16]) -> V3<F> {
-        let mut origin = [[0.0f32; 16]; 3];
+    fn rays_from_start<F: Lanes>(&self, sx: F, sy: F) -> Ray<F> {
+        let (x, y) = (padded(sx), padded(sy));
+        let (mut dir, mut origin) = ([[0.0f32; 16]; 3], [[0.0f32; 16]; 3]);
         let eye = [self.eye.x, self.eye.y, self.eye.z];
         for first in (0..F::K.max(4)).step_by(4) {
-            let four = |v: &[f32; 16]| f64x4::new(std::array::from_fn(|i| f64::from(v[first + i])));
-            let d = self.directions4(four(x), four(y));
-            for ((out, d), e) in origin.iter_mut().zip(d).zip(eye) {
-                out[first..first + 4].copy_from_slice(&d.map(|c| (e + c * self.start) as f32));
+            let d = self.directions4(four(&x, first), four(&y, first));
+            for (((dir, origin), d), e) in dir.iter_mut().zip(origin.iter_mut()).zip(d).zip(eye) {
+                dir[first..first + 4].copy_from_slice(&d.map(|c| c as f32));
+                origin[first..first + 4].copy_from_slice(&d.map(|c| (e + c * self.start) as f32));
             }
         }
         let lanes = |v: &[f32; 16]| F::load(v, 0);
-        V3::new(lanes(&origin[0]), lanes(&origin[1]), lanes(&origin[2]))
+        let v3 = |v: &[[f32; 16]; 3]| V3::new(lanes(&v[0]), lanes(&v[1]), lanes(&v[2]));
+        Ray::new(v3(&origin), v3(&dir))
     }
 
     /// Unit directions toward four pixel-space points: [`Camera::ray`]'s `toward`, then scaled by
