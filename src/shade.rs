@@ -571,7 +571,12 @@ mod tests {
                 );
                 desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
             }
+            // A plane behind the eye keeps the eye's frame (alone, the far shape would be compiled around its
+            // own centre, `crate::compile::RenderingFrame`): camera rays from the eye are what this checks.
+            let behind = glam::DAffine3::from_translation(glam::DVec3::new(0.0, 0.0, -10.0));
+            desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: behind, material: 0 });
             let scene = Scene::compile(&desc).expect("scene");
+            assert_eq!(scene.camera_f64.start, 0.0, "the eye's frame");
             let tracer = Tracer::<f32x8>::new(&scene);
             let mut rng = SplitMix64::new(5);
             let (mut found_lanes, mut normal_wrong_side) = (0, 0);
