@@ -33,7 +33,7 @@
 //! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in f32 is
 //! its departure primitive itself, or lies within `K_SELF·ε32·|o|` of its origin, while in f64 it is not
 //! (both hitting the same other primitive is agreement; the twin's own near hit is a surface the exact ray
-//! meets there, and the f32 contact rule's entry into a sphere is no re-hit: [`is_self_hit`]); a ray leaving a
+//! meets there, and the f32 contact rule's entry into a sphere is no re-hit: `is_self_hit`); a ray leaving a
 //! solid inward (refraction into glass, any ray from an inside hit) meets the solid's far side, so for it
 //! only a hit within `K_SELF·ε32·|o|` counts. Relative t errors `|t32 − t64| / t64` are taken over rays whose two
 //! hits agree on the primitive; percentiles are nearest-rank: the p-th of n sorted values is the

@@ -571,13 +571,13 @@ impl Twin {
     }
 
     /// True when the f32 renderer's `hit` along its own f32 `ray` is the sphere contact rule's entry
-    /// (ARCHITECTURE.md, "Self-intersection"; [`crate::geometry::sphere`]): a sphere met at exactly `t = 0`
+    /// (ARCHITECTURE.md, "Self-intersection"; `geometry/sphere.rs`): a sphere met at exactly `t = 0`
     /// by a ray heading toward its centre from within the rule's band of its surface. Such a hit is the
     /// renderer treating the origin as on that sphere, not a re-hit of the surface the ray leaves.
     ///
     /// The band is `|c| ≤ CONTACT_ROUNDINGS·ε32·(bound + 2r·|o|∞)`, `c = |oc|² − r²` in f32, `bound =
     /// |oc|² + r²` (the eye-term form, taken only where its bound is smaller, has a narrower band). This
-    /// checks the exact `c` of the f32 origin and the scene's sphere against [`CONTACT_C_ROUNDINGS`] more:
+    /// checks the exact `c` of the f32 origin and the scene's sphere against `CONTACT_C_ROUNDINGS` more:
     /// the f32 `c` is off from it by the centre's rounding to f32 (`2|oc|·ε32·|C|`, `|C| ≤ |oc| + √3·|o|∞`),
     /// `oc`'s subtraction (`2ε32·|oc|²`), its square (`3ε32·|oc|²`) and `r²` (`3ε32·r²`): at most
     /// `7ε32·(bound + 2r·|o|∞)` near the surface. The heading, `oc·d ≥ 0` in f32, is allowed what the
