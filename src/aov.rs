@@ -47,7 +47,7 @@ pub fn parse_list(list: &str) -> Result<AovList, String> {
 
 /// The EXR channels of `which`, in that order: `Z`; `N.X`, `N.Y`, `N.Z`; `id` (float while every index of
 /// a scene of `prim_count` primitives is exact in an f32, else unsigned).
-pub fn channels(which: &[Aov], prim_count: usize) -> Vec<Channel> {
+pub(crate) fn channels(which: &[Aov], prim_count: usize) -> Vec<Channel> {
     let mut out = Vec::new();
     for aov in which {
         match aov {
@@ -60,8 +60,8 @@ pub fn channels(which: &[Aov], prim_count: usize) -> Vec<Channel> {
 }
 
 /// The AOVs of `window`'s pixels (one camera ray per pixel centre, in packets of `lanes`), row-major, each
-/// pixel the little-endian 4-byte samples of [`channels`]`(which, …)` in order: the rows an EXR of them
-/// takes ([`output::write_channels`]).
+/// pixel the little-endian 4-byte samples of `channels``(which, …)` in order: the rows an EXR of them
+/// takes (`output::write_channels`).
 pub fn samples(
     scene: &Scene,
     lanes: usize,

@@ -73,7 +73,7 @@ impl Default for RenderOptions {
 
 impl RenderOptions {
     /// Checks the settings and applies the overrides to `desc`.
-    pub fn apply(&self, desc: &mut SceneDesc) -> Result<(), Error> {
+    pub(crate) fn apply(&self, desc: &mut SceneDesc) -> Result<(), Error> {
         if !LANE_CHOICES.contains(&self.lanes) || (self.scalar && self.lanes != 1) {
             let scalar = if self.scalar { " (the scalar path takes 1)" } else { "" };
             return Err(Error::Options(format!("lanes must be 1, 4, 8 or 16, got {}{scalar}", self.lanes)));
@@ -169,7 +169,7 @@ pub struct FileScene {
     /// The description; a mapped field's holds no spheres (they stay in the file).
     pub desc: SceneDesc,
     /// Whether the spheres are an `.f32r` field mapped for the particle tree.
-    pub mapped: bool,
+    pub(crate) mapped: bool,
     /// How many spheres the scene has (a mapped field's included).
     spheres: usize,
     /// The reader's warnings (unknown elements, say).

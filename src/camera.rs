@@ -60,7 +60,7 @@ pub struct Camera<F> {
     /// See `v_scale`.
     pub v_offset: F,
     /// Image-plane distance d (for points on the image plane; directions do not depend on it).
-    pub distance: F,
+    pub(crate) distance: F,
     /// h_res.
     pub width: u32,
     /// v_res.

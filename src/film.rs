@@ -23,7 +23,7 @@ impl Image {
         self.pixels[y as usize * self.width as usize + x as usize]
     }
     /// Sets pixel (x, y).
-    pub fn set(&mut self, x: u32, y: u32, c: Rgb) {
+    pub(crate) fn set(&mut self, x: u32, y: u32, c: Rgb) {
         self.pixels[y as usize * self.width as usize + x as usize] = c;
     }
 }

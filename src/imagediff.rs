@@ -52,7 +52,7 @@ pub struct Diff {
     /// Pixels with at least one channel whose values are not equal.
     pub differing_pixels: u64,
     /// Per pixel, row-major from the top: the largest absolute difference of its channels.
-    pub per_pixel: Vec<f32>,
+    pub(crate) per_pixel: Vec<f32>,
 }
 
 /// The absolute difference of two channel values: 0 when they are equal (two NaNs are equal here: the same
@@ -74,7 +74,7 @@ impl Diff {
     /// Compares two decoded images (see the module documentation for how values are compared).
     ///
     /// Returns `None` when their sizes differ.
-    pub fn new(a: &DynamicImage, b: &DynamicImage) -> Option<Diff> {
+    pub(crate) fn new(a: &DynamicImage, b: &DynamicImage) -> Option<Diff> {
         if (a.width(), a.height()) != (b.width(), b.height()) {
             return None;
         }
@@ -121,7 +121,7 @@ impl Diff {
         }
     }
 
-    /// A grey image of [`Diff::per_pixel`], scaled so that the largest difference is white (255): grey
+    /// A grey image of `Diff::per_pixel`, scaled so that the largest difference is white (255): grey
     /// level `ceil(255 d / max_abs)`, so that any differing pixel is at least 1; black where the pixels are
     /// equal, and everywhere when the images are identical. Infinite differences are white and, when
     /// the largest difference is infinite, so is every other difference.

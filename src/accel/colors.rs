@@ -8,7 +8,7 @@ impl Geometry {
     /// The colour of primitive `prim` when it is a sphere with a colour of its own (it replaces the
     /// material's); `None` for other primitives and in scenes without per-sphere colours.
     #[inline]
-    pub fn sphere_color(&self, prim: u32) -> Option<Rgb8> {
+    pub(crate) fn sphere_color(&self, prim: u32) -> Option<Rgb8> {
         match self.prim(prim) {
             PrimRef::Sphere(i) => self.spheres.color_of(i),
             PrimRef::Particle(i) => self.particles.color(i),

@@ -11,11 +11,11 @@ use crate::bvh::item_query::{ItemQuery, ItemTest};
 #[derive(Clone, Copy)]
 pub struct ConeItems<'a> {
     /// Every cone of the scene.
-    pub cones: &'a Cones,
+    pub(crate) cones: &'a Cones,
     /// The cones the items are, in the tree's leaf order; `None`: all of them, in order.
-    pub order: Option<&'a [u32]>,
+    pub(crate) order: Option<&'a [u32]>,
     /// The id of cone 0.
-    pub base: u32,
+    pub(crate) base: u32,
 }
 
 impl ItemTest for ConeItems<'_> {

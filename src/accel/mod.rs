@@ -1,7 +1,7 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
-//! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's [`crate::bvh::LeafQuery`]):
+//! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's `crate::bvh::LeafQuery`):
 //! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]), bounded transformed shapes
 //! ([`ShapeQuery`]) and open cones and cylinders ([`ConeQuery`]); a kind with few items is tested brute force by the same query, and so are unbounded
 //! shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
@@ -118,7 +118,7 @@ fn occluded_items<F: Lanes, Q: LeafQuery<F>>(
 
 /// What a primitive id refers to.
 #[derive(Clone, Copy, Debug)]
-pub enum PrimRef<'a> {
+pub(crate) enum PrimRef<'a> {
     /// Index into [`Geometry::spheres`].
     Sphere(usize),
     /// Position in [`Geometry::particles`].
@@ -142,9 +142,9 @@ pub struct SurfacePoint {
     pub normal: Vec3f,
     /// The hit point in the primitive's own frame (centre-relative for spheres, z = 0 for planes), for
     /// solid textures.
-    pub object_point: Vec3f,
+    pub(crate) object_point: Vec3f,
     /// Material index.
-    pub material: u32,
+    pub(crate) material: u32,
 }
 
 impl Geometry {
@@ -419,7 +419,7 @@ impl Geometry {
     }
 
     /// The BVHs the scene has, to change their walk settings.
-    pub fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
+    pub(crate) fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
         [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh, &mut self.cone_bvh]
             .into_iter()
             .flatten()
@@ -518,7 +518,7 @@ impl Geometry {
     }
 
     /// The id of the first shape (shape k has id `shape_base() + k`).
-    pub fn shape_base(&self) -> usize {
+    pub(crate) fn shape_base(&self) -> usize {
         self.spheres.len() + self.particles.len()
     }
 
@@ -534,12 +534,12 @@ impl Geometry {
 
     /// The id of the registered kinds' first item (their items are numbered on from it in the registry's
     /// order).
-    pub fn kinds_base(&self) -> usize {
+    pub(crate) fn kinds_base(&self) -> usize {
         self.cone_base() + self.cones.len()
     }
 
     /// What primitive id `prim` (< `len()`) refers to.
-    pub fn prim(&self, prim: u32) -> PrimRef<'_> {
+    pub(crate) fn prim(&self, prim: u32) -> PrimRef<'_> {
         let i = prim as usize;
         if i < self.spheres.len() {
             PrimRef::Sphere(i)
@@ -564,7 +564,7 @@ impl Geometry {
     /// at a grazing hit the rounded hit point can put the normal's side wrong (a unit sphere 1e6 away, `t`
     /// one ulp long, turns `n·d` from −0.013 to +0.013), and the hit would be shaded and left as if from
     /// inside.
-    pub fn eye_inside(&self, prim: u32) -> Option<bool> {
+    pub(crate) fn eye_inside(&self, prim: u32) -> Option<bool> {
         let c_eye = match self.prim(prim) {
             PrimRef::Sphere(i) => self.spheres.c_eye[i],
             PrimRef::Particle(i) => self.particles.c_eye(i),

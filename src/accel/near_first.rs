@@ -63,7 +63,7 @@ pub struct NearFirst {
 
 impl NearFirst {
     /// An empty queue.
-    pub fn new() -> Self {
+    pub(crate) fn new() -> Self {
         Self::default()
     }
 
@@ -72,7 +72,7 @@ impl NearFirst {
     /// upper corners) gives `None`. A box's key must not exceed the key of any item below it, so that items
     /// come out in order. `visit(item, key)` returns the cut-off: the walk ends before the first entry whose
     /// key reaches it (`f64::INFINITY` to go on).
-    pub fn walk(
+    pub(crate) fn walk(
         &mut self,
         bvh: Option<&Bvh>,
         items: usize,

@@ -15,20 +15,20 @@ pub struct Polygons {
     /// Per triangle: the polygon it belongs to (`0..len()`).
     pub polygon: Vec<u32>,
     /// Per triangle: unit vertex normals to interpolate (NFF `pp`), or `None` for flat polygons.
-    pub vertex_normals: Vec<Option<[Vec3f; 3]>>,
+    pub(crate) vertex_normals: Vec<Option<[Vec3f; 3]>>,
     /// The triangles of every polygon, grouped by polygon: polygon k's are `members[first[k]..first[k + 1]]`.
-    pub members: Vec<u32>,
+    pub(crate) members: Vec<u32>,
     /// Per polygon: where its triangles start in `members` (one more entry than polygons).
-    pub first: Vec<u32>,
+    pub(crate) first: Vec<u32>,
     /// Per polygon: unit geometric normal (right-hand rule over the vertex order).
-    pub normal: Vec<Vec3f>,
+    pub(crate) normal: Vec<Vec3f>,
     /// Per polygon: a vertex, on the plane through which `normal` is taken.
-    pub anchor: Vec<Vec3f>,
+    pub(crate) anchor: Vec<Vec3f>,
     /// Per polygon: how far (at most) its vertices lie off that plane, rounded up: polygons need only be
     /// planar to a tolerance.
-    pub thickness: Vec<f32>,
+    pub(crate) thickness: Vec<f32>,
     /// Per polygon: material index.
-    pub material: Vec<u32>,
+    pub(crate) material: Vec<u32>,
 }
 
 impl Polygons {
@@ -53,7 +53,7 @@ impl Polygons {
     }
 
     /// Appends a polygon given as triangles `[a, b, c]` over `vertices`, with optional per-vertex normals.
-    pub fn push(
+    pub(crate) fn push(
         &mut self,
         vertices: &[Vec3f],
         normals: Option<&[Vec3f]>,
@@ -96,7 +96,7 @@ impl Polygons {
 
     /// The triangles in a new order (`order[j]` is the old index of new triangle `j`), each polygon's list of
     /// triangles following them; polygon ids do not change.
-    pub fn permuted(&self, order: &[u32]) -> Polygons {
+    pub(crate) fn permuted(&self, order: &[u32]) -> Polygons {
         fn pick<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
             order.iter().map(|&i| v[i as usize]).collect()
         }
@@ -121,7 +121,7 @@ impl Polygons {
 
     /// The box of triangle `j` over its vertices `v0`, `v0 + e1`, `v0 + e2` (the sums rounded: the BVH's
     /// padding covers that ulp).
-    pub fn triangle_box(&self, j: usize) -> (Vec3f, Vec3f) {
+    pub(crate) fn triangle_box(&self, j: usize) -> (Vec3f, Vec3f) {
         let (a, b, c) = (self.v0[j], self.v0[j] + self.e1[j], self.v0[j] + self.e2[j]);
         let pick =
             |f: fn(f32, f32) -> f32| V3::new(f(f(a.x, b.x), c.x), f(f(a.y, b.y), c.y), f(f(a.z, b.z), c.z));

@@ -11,11 +11,11 @@ use crate::bvh::item_query::{ItemQuery, ItemTest};
 #[derive(Clone, Copy)]
 pub struct Shapes<'a> {
     /// Every transformed shape of the scene.
-    pub shapes: &'a [Shape<f32>],
+    pub(crate) shapes: &'a [Shape<f32>],
     /// The shapes the items are, in the tree's leaf order; `None`: all of them, in order.
-    pub order: Option<&'a [u32]>,
+    pub(crate) order: Option<&'a [u32]>,
     /// The id of shape 0.
-    pub base: u32,
+    pub(crate) base: u32,
 }
 
 impl ItemTest for Shapes<'_> {

@@ -14,15 +14,15 @@ use crate::bvh::{LeafQuery, SingleLeafQuery};
 #[derive(Clone, Copy)]
 pub struct SphereQuery<'a, F: Lanes> {
     /// The spheres.
-    pub spheres: &'a Spheres,
+    pub(crate) spheres: &'a Spheres,
     /// The rays.
-    pub ray: Ray<F>,
+    pub(crate) ray: Ray<F>,
     /// Exclusive end of each ray's range.
-    pub t_max: F,
+    pub(crate) t_max: F,
     /// The departure sphere of each ray.
-    pub skip: F::Ids,
+    pub(crate) skip: F::Ids,
     /// Planes enclosing the live rays, from the packet's maker ([`crate::geometry::RayPacket::pyramid`]).
-    pub pyramid: Option<Pyramid>,
+    pub(crate) pyramid: Option<Pyramid>,
     /// The rays' per-ray terms, shared by every sphere test.
     terms: SphereRay<F>,
     /// The lanes that start at the eye.
@@ -32,7 +32,7 @@ pub struct SphereQuery<'a, F: Lanes> {
 impl<'a, F: Lanes> SphereQuery<'a, F> {
     /// A query of `ray` (the lanes of `live`) over `spheres` in `[0, t_max)`, never reporting `skip`.
     #[inline(always)]
-    pub fn new(
+    pub(crate) fn new(
         spheres: &'a Spheres,
         ray: Ray<F>,
         t_max: F,

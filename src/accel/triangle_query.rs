@@ -11,14 +11,14 @@ use crate::bvh::item_query::{ItemQuery, ItemTest};
 #[derive(Clone, Copy)]
 pub struct Triangles<'a> {
     /// The polygons and their triangles.
-    pub polygons: &'a Polygons,
+    pub(crate) polygons: &'a Polygons,
     /// The id of polygon 0.
-    pub base: u32,
+    pub(crate) base: u32,
     /// Skip a triangle for the rays that stay off its polygon's plane up to their reach ([`stays_off_plane`]):
     /// worth it without a BVH, where every triangle meets every packet (a floor under a sphere field is
     /// passed over by the rays that hit a sphere first and by those heading up); in a BVH's leaves the boxes
     /// have culled already.
-    pub plane_cull: bool,
+    pub(crate) plane_cull: bool,
 }
 
 impl ItemTest for Triangles<'_> {

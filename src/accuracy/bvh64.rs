@@ -32,7 +32,7 @@ struct Node {
 
 /// A binary BVH over spheres, with the spheres stored in leaf order.
 #[derive(Clone, Debug)]
-pub struct Bvh64 {
+pub(crate) struct Bvh64 {
     nodes: Vec<Node>,
     /// Sphere centres in leaf order.
     centre: Vec<V3<f64>>,
@@ -65,7 +65,7 @@ impl Bvh64 {
 
     /// Merges into `best` the closest hit in `[0, t_max)` of `ray` with every sphere but `skip`, by the total
     /// order (smaller t, then lower id).
-    pub fn closest(&self, ray: &Ray<f64>, skip: u32, t_max: f64, best: &mut Hit64) {
+    pub(crate) fn closest(&self, ray: &Ray<f64>, skip: u32, t_max: f64, best: &mut Hit64) {
         if self.nodes.is_empty() {
             return;
         }

@@ -13,16 +13,16 @@ pub struct Hit64 {
 
 impl Hit64 {
     /// No hit.
-    pub const MISS: Hit64 = Hit64 { t: f64::INFINITY, prim: NO_PRIM };
+    pub(crate) const MISS: Hit64 = Hit64 { t: f64::INFINITY, prim: NO_PRIM };
 
     /// True when something was hit.
-    pub fn is_hit(&self) -> bool {
+    pub(crate) fn is_hit(&self) -> bool {
         self.prim != NO_PRIM
     }
 
     /// Takes `(prim, t)` when it is closer by the renderer's total order: smaller t, or equal t and a lower id.
     #[inline]
-    pub fn update(&mut self, prim: u32, t: f64) {
+    pub(crate) fn update(&mut self, prim: u32, t: f64) {
         if t < self.t || (t == self.t && prim < self.prim) {
             *self = Hit64 { t, prim };
         }

@@ -14,16 +14,16 @@
 //! A disagreement is *explained* when rounding can account for it; the tolerances are multiples of
 //! ε32 = 2⁻²⁴ ([`EPS32`]) of the magnitudes involved, with the constants below:
 //!
-//! - **graze** ([`K_GRAZE`]): the ray passes within tolerance of tangency with either primitive
-//!   ([`Twin::grazing`]: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
+//! - **graze** (`K_GRAZE`): the ray passes within tolerance of tangency with either primitive
+//!   (`Twin::grazing`: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
 //!   outlines, cones near tangency or with a hit near an end rim);
 //! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other, times
 //!   how fast a moved ray's hits move apart (1 head on, the inverse cosines at a slant: [`Twin::tie`]);
-//! - **start** ([`K_START`], secondary rays): the ray starts within tolerance of either primitive's surface
-//!   ([`Twin::near_surface`]: contact points of touching spheres, a ray leaving one cone where another's
+//! - **start** (`K_START`, secondary rays): the ray starts within tolerance of either primitive's surface
+//!   (`Twin::near_surface`: contact points of touching spheres, a ray leaving one cone where another's
 //!   wall or rim is);
-//! - **light** ([`K_START`], shadow rays): the light lies within tolerance of the blocker's surface;
-//! - **facing** ([`K_GRAZE`], shadow rays): the light is in front of the surface in one precision only and
+//! - **light** (`K_START`, shadow rays): the light lies within tolerance of the blocker's surface;
+//! - **facing** (`K_GRAZE`, shadow rays): the light is in front of the surface in one precision only and
 //!   within `K_GRAZE·ε32` of its tangent plane (|cos| in f64);
 //! - **diverge** (secondary rays): none of the above at their own tolerances, but each holds once the
 //!   tolerances grow by how far the f32 ray actually strays from the f64 one (origins and directions differ
@@ -62,11 +62,11 @@ use crate::scene::SceneDesc;
 pub use twin::{Hit64, Slack, Twin, EPS32, TWIN_BVH_MIN_SPHERES};
 
 /// Tolerance of the "graze" and "facing" explanations, in ε32 of the magnitudes involved (tests/stress_f64_oracle.rs's).
-pub const K_GRAZE: f64 = 16.0;
+pub(crate) const K_GRAZE: f64 = 16.0;
 /// Tolerance of the "tie" explanation, in ε32 of `|o| + t` (tests/stress_f64_oracle.rs's).
 pub const K_TIE: f64 = 64.0;
 /// Tolerance of the "start" and "light" explanations, in ε32 of the magnitudes involved.
-pub const K_START: f64 = 16.0;
+pub(crate) const K_START: f64 = 16.0;
 /// Distance from the origin within which a secondary ray's hit counts as a self-hit, in ε32 of `|o|` (the
 /// origin's distance from the eye): the f32 origin's own rounding (at most half an ulp per coordinate,
 /// about `1.7·ε32·|o|`) with room. A hit farther away is a hit on something else, compared as such.

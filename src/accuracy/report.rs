@@ -36,22 +36,22 @@ impl Percentiles {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Explained {
     /// Tangency with either primitive.
-    pub graze: u64,
+    pub(crate) graze: u64,
     /// Both primitives hit at nearly the same t.
-    pub tie: u64,
+    pub(crate) tie: u64,
     /// The ray starts on either primitive's surface.
-    pub start: u64,
+    pub(crate) start: u64,
     /// The light lies on the blocker's surface (shadow rays).
-    pub light: u64,
+    pub(crate) light: u64,
     /// The light is within rounding of the surface's tangent plane (shadow rays).
-    pub facing: u64,
+    pub(crate) facing: u64,
     /// Explained only with the tolerances widened by the f32 ray's measured divergence.
-    pub diverge: u64,
+    pub(crate) diverge: u64,
 }
 
 impl Explained {
     /// All explained disagreements.
-    pub fn total(&self) -> u64 {
+    pub(crate) fn total(&self) -> u64 {
         self.graze + self.tie + self.start + self.light + self.facing + self.diverge
     }
     pub(super) fn add(&mut self, o: &Explained) {
@@ -95,14 +95,14 @@ pub struct HitStats {
     /// Both missed.
     pub misses_agree: u64,
     /// One hit, the other missed.
-    pub hit_miss_disagree: u64,
+    pub(crate) hit_miss_disagree: u64,
     /// Both hit, different primitives.
-    pub id_disagree: u64,
+    pub(crate) id_disagree: u64,
     /// Refraction rays only: total internal reflection in one precision, a refracted ray in the other (the
     /// ray is traced in neither; not counted in `rays`).
-    pub tir_disagree: u64,
+    pub(crate) tir_disagree: u64,
     /// Disagreements explained, by reason.
-    pub explained: Explained,
+    pub(crate) explained: Explained,
     /// Disagreements not explained.
     pub unexplained: u64,
     /// Self-hits (secondary rays only).
@@ -124,15 +124,15 @@ pub struct ShadowStats {
     /// Shadow rays traced in both precisions (lights in front of the surface in both).
     pub rays: u64,
     /// Lights in front of the surface in one precision only (a shadow ray in one only).
-    pub lit_disagree: u64,
+    pub(crate) lit_disagree: u64,
     /// Occluded in one precision only.
-    pub occluded_disagree: u64,
+    pub(crate) occluded_disagree: u64,
     /// Disagreements explained, by reason.
-    pub explained: Explained,
+    pub(crate) explained: Explained,
     /// Disagreements not explained.
-    pub unexplained: u64,
+    pub(crate) unexplained: u64,
     /// Shadow rays blocked by their own departure primitive, or at their origin, in one precision only.
-    pub self_hits: u64,
+    pub(crate) self_hits: u64,
 }
 
 impl ShadowStats {
@@ -155,24 +155,24 @@ impl ShadowStats {
 pub struct Example {
     /// `primary`, `reflection`, `refraction` or `shadow`, with ` self-hit` for self-hits (`shadow facing`,
     /// `refraction tir`: the side or the total internal reflection disagreed; t holds the cosine or `sin²`).
-    pub kind: String,
+    pub(crate) kind: String,
     /// Pixel column.
-    pub x: u32,
+    pub(crate) x: u32,
     /// Pixel row.
-    pub y: u32,
+    pub(crate) y: u32,
     /// The light's index for shadow rays.
-    pub light: Option<usize>,
+    pub(crate) light: Option<usize>,
     /// The f32 hit (or shadow blocker): scene-file id, −1 for none, and t.
-    pub f32_hit: (i64, f64),
+    pub(crate) f32_hit: (i64, f64),
     /// The f64 twin's.
-    pub f64_hit: (i64, f64),
+    pub(crate) f64_hit: (i64, f64),
 }
 
 /// The comparison of one scene.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Report {
     /// The scene's name (as given to [`super::run`]).
-    pub scene: String,
+    pub(crate) scene: String,
     /// Image columns.
     pub width: u32,
     /// Image rows.
@@ -180,11 +180,11 @@ pub struct Report {
     /// Packet width of the f32 primary pass.
     pub lanes: usize,
     /// Whether the f32 pass ran on the scalar path (`lanes` is then 1; JSON writes `"lanes":"scalar"`).
-    pub scalar: bool,
+    pub(crate) scalar: bool,
     /// Primitives in the scene.
     pub primitives: usize,
     /// Whether the twin searched spheres through its BVH.
-    pub twin_bvh: bool,
+    pub(crate) twin_bvh: bool,
     /// Camera rays.
     pub primary: HitStats,
     /// Shadow rays (with secondary rays).
@@ -194,9 +194,9 @@ pub struct Report {
     /// Refraction rays (with secondary rays): from hits on transmitting materials.
     pub refraction: Option<HitStats>,
     /// Some unexplained disagreements and self-hits.
-    pub examples: Vec<Example>,
+    pub(crate) examples: Vec<Example>,
     /// Wall-clock seconds of the whole comparison (compile and twin build included).
-    pub seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 impl Report {

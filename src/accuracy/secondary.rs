@@ -11,29 +11,29 @@ use crate::scene::desc::Material;
 
 /// Where one pixel's secondary rays start, in each precision.
 pub(super) struct Start {
-    pub pixel: (u32, u32),
+    pub(crate) pixel: (u32, u32),
     /// The primitive hit (scene-file id, the same in both).
-    pub prim: u32,
-    pub point32: V3<f32>,
+    pub(crate) prim: u32,
+    pub(crate) point32: V3<f32>,
     /// The f32 camera ray's direction.
-    pub dir32: V3<f32>,
+    pub(crate) dir32: V3<f32>,
     /// The f32 normal, turned toward the camera ray.
-    pub normal32: V3<f32>,
+    pub(crate) normal32: V3<f32>,
     /// The f32 hit was from inside.
-    pub inside32: bool,
+    pub(crate) inside32: bool,
     /// Departure of the f32 rays that leave on the camera ray's side.
-    pub from32: Departure,
-    pub point64: V3<f64>,
-    pub dir64: V3<f64>,
-    pub normal64: V3<f64>,
-    pub inside64: bool,
-    pub from64: Departure,
+    pub(crate) from32: Departure,
+    pub(crate) point64: V3<f64>,
+    pub(crate) dir64: V3<f64>,
+    pub(crate) normal64: V3<f64>,
+    pub(crate) inside64: bool,
+    pub(crate) from64: Departure,
     /// Distance between the two hit points.
-    pub origin_slack: f64,
+    pub(crate) origin_slack: f64,
     /// Hits this close to the origin are re-hits of the surface left.
-    pub self_tol: f64,
+    pub(crate) self_tol: f64,
     /// The primitive's material.
-    pub material: Material,
+    pub(crate) material: Material,
 }
 
 /// One shadow ray toward `light` from `point` with the facing `normal`: shade.rs's `Tracer::direct`

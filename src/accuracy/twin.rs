@@ -76,7 +76,7 @@ struct Polygon64 {
 #[derive(Clone, Debug)]
 pub struct Twin {
     /// The camera in f64, in the twin's space.
-    pub camera: Camera<f64>,
+    pub(crate) camera: Camera<f64>,
     /// The origin of the twin's space in world space: the f32 scene's ([`RenderingFrame`]).
     pub origin: DVec3,
     /// Light positions in the twin's space.
@@ -203,7 +203,7 @@ impl Twin {
     /// Whether a ray leaving primitive `prim` can meet it again away from its origin whichever way it heads:
     /// an open cone's far wall, or a registered kind's that says so (a solid's exit needs the ray to head
     /// inward).
-    pub fn meets_again(&self, prim: u32) -> bool {
+    pub(crate) fn meets_again(&self, prim: u32) -> bool {
         let i = prim as usize;
         (self.cone_base()..self.kinds_base()).contains(&i)
             || self.kind(prim).is_some_and(|k| self.kinds.meets_again(k))
@@ -369,7 +369,7 @@ impl Twin {
 
     /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere or an
     /// ellipsoid: the sign of its eye term in f64, when not zero); `None` otherwise. The f32 scene's
-    /// [`crate::accel::Geometry::eye_inside`].
+    /// `crate::accel::Geometry::eye_inside`.
     pub fn eye_inside(&self, prim: u32) -> Option<bool> {
         let i = prim as usize;
         let c_eye = match self.spheres.get(i) {
@@ -473,7 +473,7 @@ impl Twin {
     ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets the
     ///   quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
     ///   crosses the rim, as a polygon's hit crosses an edge).
-    pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64, slack: Slack) -> bool {
+    pub(crate) fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64, slack: Slack) -> bool {
         if prim == NO_PRIM || prim as usize >= self.len() {
             return false;
         }
@@ -602,7 +602,7 @@ impl Twin {
     /// the end planes, to the nearer rim circle beyond them) within `k·ε32` of `Twin::magnitude`'s scale. This is where a ray that starts at `p` (a secondary ray's origin on another
     /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
     /// find or miss `prim` by rounding.
-    pub fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
+    pub(crate) fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
         if prim == NO_PRIM || prim as usize >= self.len() {
             return false;
         }

@@ -63,7 +63,7 @@ pub struct Profile {
     /// Every kind the render traced, in [`RayKind::ALL`]'s order.
     pub kinds: Vec<KindProfile>,
     /// Threads of the pool.
-    pub threads: usize,
+    pub(crate) threads: usize,
     /// Work done outside any tagged query (none in the renderer).
     pub untagged: Work,
     /// All the counting run's work, as the render itself summed it tile by tile.

@@ -36,15 +36,15 @@ impl Builder {
     /// The SAH builder for spheres. Measured on the contract fields and balls4: 1 makes leaves of about one
     /// sphere and traces the 1e6 field slower, 4 to 8 trace alike, 12 is slower again
     /// (docs/perf-log/2026-11-own-builder.md, "Node cost and leaves").
-    pub const SAH_SPHERES: Builder = Builder::Sah { node_cost: 6.0 };
+    pub(crate) const SAH_SPHERES: Builder = Builder::Sah { node_cost: 6.0 };
     /// The SAH builder for items dearer to test than spheres (triangles, ellipsoids, cones): cones.toml and
     /// SPD's teapot traced faster with 1 than with 6 (docs/perf-log/2026-11-own-builder.md, "Node cost for
     /// the other kinds").
-    pub const SAH_DEARER_ITEMS: Builder = Builder::Sah { node_cost: 1.0 };
+    pub(crate) const SAH_DEARER_ITEMS: Builder = Builder::Sah { node_cost: 1.0 };
 
     /// The builder for items dearer to test than spheres: [`Builder::SAH_DEARER_ITEMS`] in place of the SAH
     /// builder, obvhs's presets as they are.
-    pub fn for_dearer_items(self) -> Builder {
+    pub(crate) fn for_dearer_items(self) -> Builder {
         match self {
             Builder::Sah { .. } => Builder::SAH_DEARER_ITEMS,
             obvhs => obvhs,
@@ -56,18 +56,18 @@ impl Builder {
 #[derive(Clone, Copy, Debug)]
 pub struct BuildOptions {
     /// The padding the item boxes carry ([`super::padding`]), kept for the packet walk's frustum test of single items.
-    pub pad: f32,
+    pub(crate) pad: f32,
     /// The binary tree's builder.
-    pub builder: Builder,
+    pub(crate) builder: Builder,
     /// Whether to build the 8-wide single-ray tree too (scenes that trace secondary rays).
-    pub single_ray_tree: bool,
+    pub(crate) single_ray_tree: bool,
     /// Whether to keep the binary tree for the scalar walk ([`Bvh::scalar`]) and have single rays walk it
     /// ([`Bvh::scalar_walk`]).
-    pub scalar_tree: bool,
+    pub(crate) scalar_tree: bool,
     /// [`Bvh::frustum_culling`].
-    pub frustum_culling: bool,
+    pub(crate) frustum_culling: bool,
     /// [`Bvh::single_ray_lanes`].
-    pub single_ray_lanes: u32,
+    pub(crate) single_ray_lanes: u32,
 }
 
 /// Builds the tree over `n` items whose padded boxes `item_box` gives, and returns it with `permute(order)`

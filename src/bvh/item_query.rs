@@ -27,15 +27,15 @@ pub trait ItemTest: Copy {
 #[derive(Clone, Copy)]
 pub struct ItemQuery<F: Lanes, T: ItemTest> {
     /// The kind's items.
-    pub items: T,
+    pub(crate) items: T,
     /// The rays.
-    pub ray: Ray<F>,
+    pub(crate) ray: Ray<F>,
     /// Exclusive end of each ray's range.
-    pub t_max: F,
+    pub(crate) t_max: F,
     /// The departure primitive of each ray.
-    pub skip: F::Ids,
+    pub(crate) skip: F::Ids,
     /// Planes enclosing the live rays, from the packet's maker.
-    pub pyramid: Option<Pyramid>,
+    pub(crate) pyramid: Option<Pyramid>,
 }
 
 impl<F: Lanes, T: ItemTest> ItemQuery<F, T> {

@@ -149,7 +149,7 @@ impl Bvh {
     /// by their distance from the origin against the rays' t. `query(p)` makes packet p's leaf query,
     /// called only for packets that reach a leaf. Each lane gets the bits [`Bvh::intersect_k`] gives it
     /// with that query.
-    pub fn intersect_large<F: Lanes, Q: LeafQuery<F>>(
+    pub(crate) fn intersect_large<F: Lanes, Q: LeafQuery<F>>(
         &self,
         packets: &[RayPacket<F>],
         query: impl Fn(usize) -> Q,

@@ -5,12 +5,12 @@
 //!
 //! The tree knows nothing of primitives. It is built over one box per item ([`build()`]), returns the leaf
 //! order of the items (their owner stores them in that order, so leaves index the arrays directly), and its
-//! walks ask a [`LeafQuery`] to test the items of a leaf: spheres, triangles and cones each implement it, and
+//! walks ask a `LeafQuery` to test the items of a leaf: spheres, triangles and cones each implement it, and
 //! each kind's walk is monomorphised over its own query.
 //!
-//! Culling is conservative: boxes are padded by a bound on the kernels' rounding error ([`padding`]), and every
+//! Culling is conservative: boxes are padded by a bound on the kernels' rounding error (`padding`), and every
 //! slab test widens its exit distance by 6ε, which covers the fused slab distances' rounding
-//! (`slab::WIDEN`). With the (t, id) order of [`crate::geometry::HitPacket::update`] this makes every lane's
+//! (`slab::WIDEN`). With the (t, id) order of `crate::geometry::HitPacket::update` this makes every lane's
 //! result equal, bit for bit, to brute force over the same items, whatever order the nodes are visited in and
 //! whichever walk runs.
 //!
@@ -55,7 +55,7 @@ pub(crate) use slab::{SlabRay as SlabRays, Stack, WIDEN};
 /// item ranges, and every kind of primitive answers for its own items. Implementations must give each lane the
 /// result its K = 1 (`f32`) instance gives, and combine hits by [`HitPacket::update`]'s (t, id) order, so the
 /// walk's order of visits cannot change a result.
-pub trait LeafQuery<F: Lanes> {
+pub(crate) trait LeafQuery<F: Lanes> {
     /// The query of one lane's ray alone, for the single-ray walk.
     type One: SingleLeafQuery;
     /// The rays.
@@ -80,7 +80,7 @@ pub trait LeafQuery<F: Lanes> {
 /// its items across the lanes (spheres do). They must give the bits of [`LeafQuery::intersect`] and
 /// [`LeafQuery::occluded`] on the same items; `blocker` is the lowest blocking item, as the scalar loop
 /// finds it.
-pub trait SingleLeafQuery: LeafQuery<f32> {
+pub(crate) trait SingleLeafQuery: LeafQuery<f32> {
     /// The closest hit among items `first..first + count`, merged into `best`.
     fn intersect_leaf(&self, first: usize, count: usize, best: &mut HitPacket<f32>);
     /// Whether an item among `first..first + count` blocks the ray.
@@ -89,28 +89,28 @@ pub trait SingleLeafQuery: LeafQuery<f32> {
 
 /// Subtrees that a packet enters with at most this many live lanes are walked one ray at a time (measured:
 /// docs/perf-log/2026-11.md, "Single-ray switch").
-pub const SINGLE_RAY_MAX_LANES: u32 = 2;
+pub(crate) const SINGLE_RAY_MAX_LANES: u32 = 2;
 
 /// The BVH: `nodes[0]` is the root.
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
     /// Flattened nodes, depth-first.
-    pub nodes: Vec<Node>,
+    pub(crate) nodes: Vec<Node>,
     /// Subtrees entered by at most this many live lanes of a packet are walked one ray at a time
-    /// ([`SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
+    /// (`SINGLE_RAY_MAX_LANES` by default; 0 never switches).
     pub single_ray_lanes: u32,
     /// Test each node's children and each leaf's spheres against a shared-origin packet as a whole (its
     /// frustum) before their lanes. On by default (docs/perf-log/2026-11.md, "Frustum culling").
     pub frustum_culling: bool,
     /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
-    pub extent: f32,
+    pub(crate) extent: f32,
     /// The padding the spheres' boxes were built with ([`padding`]): the frustum's sphere test pads by it too.
-    pub pad: f32,
+    pub(crate) pad: f32,
     /// The same tree in 8-wide nodes for rays walked alone from the root ([`WideNode`]), when the scene traces
     /// secondary rays.
     pub wide: Option<Vec<WideNode>>,
     /// The binary tree before the collapse, in nodes of the scalar walk ([`PairNode`]), when the build was
-    /// asked for it ([`BuildOptions::scalar_tree`]).
+    /// asked for it (`BuildOptions::scalar_tree`).
     pub scalar: Option<Vec<PairNode>>,
     /// Single rays (K = 1) walk [`Bvh::scalar`], one box and one item at a time, instead of the wide nodes
     /// (`--lanes scalar`). Has no effect without that tree.
@@ -119,7 +119,7 @@ pub struct Bvh {
 
 impl Bvh {
     /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built).
-    pub fn bytes(&self) -> usize {
+    pub(crate) fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
         let scalar = self.scalar.as_ref().map_or(0, |s| s.len() * size_of::<PairNode>());
         self.nodes.len() * size_of::<Node>() + wide + scalar
@@ -133,7 +133,12 @@ impl Bvh {
     /// Closest hits of the spheres for the live lanes, merged into `best`: one ray at a time for K = 1 (the
     /// scalar walk when set, [`Bvh::scalar_walk`]), else the packet traversal, which switches to single rays
     /// in sparse subtrees.
-    pub fn intersect_k<F: Lanes, Q: LeafQuery<F>>(&self, q: &Q, live: F::Mask, best: &mut HitPacket<F>) {
+    pub(crate) fn intersect_k<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        q: &Q,
+        live: F::Mask,
+        best: &mut HitPacket<F>,
+    ) {
         if F::K == 1 {
             if let Some(nodes) = self.scalar_nodes() {
                 return self.intersect_scalar(nodes, q, live, best);
@@ -149,7 +154,12 @@ impl Bvh {
 
     /// Lanes of `live` blocked by a sphere within their `t_max`, like [`Bvh::intersect_k`]. `blocker` is set
     /// to a sphere that blocked a lane.
-    pub fn occluded_k<F: Lanes, Q: LeafQuery<F>>(&self, q: &Q, live: F::Mask, blocker: &mut u32) -> F::Mask {
+    pub(crate) fn occluded_k<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        q: &Q,
+        live: F::Mask,
+        blocker: &mut u32,
+    ) -> F::Mask {
         if F::K == 1 {
             if let Some(nodes) = self.scalar_nodes() {
                 return self.occluded_scalar(nodes, q, live, blocker);
@@ -170,7 +180,7 @@ pub struct BuildStats {
     /// Seconds building the binary tree, collapsing it and reordering the items.
     pub seconds: f64,
     /// Bytes of the node array.
-    pub node_bytes: usize,
+    pub(crate) node_bytes: usize,
 }
 
 impl std::ops::AddAssign for BuildStats {
@@ -185,6 +195,6 @@ impl std::ops::AddAssign for BuildStats {
 /// (the largest coordinate magnitude of any sphere, light or camera ray start); the fused slab test may move
 /// a box plane by up to one more ulp of it (`slab::WIDEN`). 64 ulps is ample and far below any sphere the
 /// scene can resolve.
-pub fn padding(reach: f32) -> f32 {
+pub(crate) fn padding(reach: f32) -> f32 {
     reach * (64.0 * f32::EPSILON)
 }

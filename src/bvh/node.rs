@@ -12,18 +12,18 @@ pub const N: usize = 4;
 pub struct Node {
     /// `bounds[0]` the lower corner, `bounds[1]` the upper, per axis (x, y, z), per child: indexed by side
     /// so a ray picks its near and far planes by the signs of its direction.
-    pub bounds: [[[f32; N]; 3]; 2],
+    pub(crate) bounds: [[[f32; N]; 3]; 2],
     /// Inner child: index of its node; leaf child: index of its first sphere.
-    pub child: [u32; N],
+    pub(crate) child: [u32; N],
     /// Number of spheres of a leaf child (M ≤ obvhs's leaf size, at most 255); 0 for an inner child.
-    pub count: [u8; N],
+    pub(crate) count: [u8; N],
     /// Front-to-back order of the occupied slots for rays in each octant (index: bit a set when the
     /// direction's axis-a component is negative), 2 bits per slot, nearest in the low bits.
-    pub order: [u8; 8],
+    pub(crate) order: [u8; 8],
     /// Occupied slots (2 to N, 1 only for a root that is a leaf).
-    pub slots: u8,
+    pub(crate) slots: u8,
     /// Bit c set where slot c is a leaf (`count[c]` not 0).
-    pub leaves: u8,
+    pub(crate) leaves: u8,
 }
 
 const _: () = assert!(size_of::<Node>() == 128, "a node is two cache lines");
@@ -83,19 +83,19 @@ impl Node {
 
     /// Lower corners per axis, per child.
     #[inline(always)]
-    pub fn lo(&self) -> &[[f32; N]; 3] {
+    pub(crate) fn lo(&self) -> &[[f32; N]; 3] {
         &self.bounds[0]
     }
     /// Upper corners per axis, per child.
     #[inline(always)]
-    pub fn hi(&self) -> &[[f32; N]; 3] {
+    pub(crate) fn hi(&self) -> &[[f32; N]; 3] {
         &self.bounds[1]
     }
 
     /// The occupied slots farthest first for rays in `octant` (the order to push them in), from
     /// [`Node::order`].
     #[inline(always)]
-    pub fn slots_far_to_near(&self, octant: usize) -> impl Iterator<Item = usize> {
+    pub(crate) fn slots_far_to_near(&self, octant: usize) -> impl Iterator<Item = usize> {
         let order = self.order[octant];
         (0..usize::from(self.slots)).rev().map(move |k| usize::from(order >> (2 * k) & 3))
     }

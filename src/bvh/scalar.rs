@@ -27,13 +27,13 @@ use crate::simd::{set_bits, IdLanes, Lanes};
 #[repr(C)]
 pub struct PairChild {
     /// The box's lower corner (x, y, z).
-    pub lo: [f32; 3],
+    pub(crate) lo: [f32; 3],
     /// The box's upper corner.
-    pub hi: [f32; 3],
+    pub(crate) hi: [f32; 3],
     /// An inner child: the index of its node; a leaf: its first item in leaf order.
-    pub first: u32,
+    pub(crate) first: u32,
     /// A leaf's item count; 0 for an inner child.
-    pub count: u32,
+    pub(crate) count: u32,
 }
 
 /// A child slot no ray enters: a box at +inf, whose slab distances are never a finite entry (the wide nodes'
@@ -45,7 +45,7 @@ const EMPTY: PairChild = PairChild { lo: [f32::INFINITY; 3], hi: [f32::INFINITY;
 #[repr(C, align(64))]
 pub struct PairNode {
     /// The two children.
-    pub children: [PairChild; 2],
+    pub(crate) children: [PairChild; 2],
 }
 
 const _: () = assert!(size_of::<PairNode>() == 64, "a pair node is one cache line");

@@ -16,15 +16,15 @@ pub const WIDE_N: usize = 8;
 #[repr(C, align(64))]
 pub struct WideNode {
     /// `bounds[0]` the lower corner, `bounds[1]` the upper, per axis, per child.
-    pub bounds: [[[f32; WIDE_N]; 3]; 2],
+    pub(crate) bounds: [[[f32; WIDE_N]; 3]; 2],
     /// Inner child: index of its node; leaf child: index of its first sphere.
-    pub child: [u32; WIDE_N],
+    pub(crate) child: [u32; WIDE_N],
     /// Number of spheres of a leaf child; 0 for an inner child.
-    pub count: [u8; WIDE_N],
+    pub(crate) count: [u8; WIDE_N],
     /// Occupied slots.
-    pub slots: u8,
+    pub(crate) slots: u8,
     /// Bit c set where slot c is a leaf.
-    pub leaves: u8,
+    pub(crate) leaves: u8,
 }
 
 const _: () = assert!(size_of::<WideNode>() == 256, "a wide node is four cache lines");

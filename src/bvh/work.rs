@@ -96,11 +96,11 @@ impl std::ops::AddAssign for Work {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct KindWork {
     /// Tests made for this kind (counting on).
-    pub work: Work,
+    pub(crate) work: Work,
     /// `traced` queries made for this kind (counting or timing on).
-    pub queries: u64,
+    pub(crate) queries: u64,
     /// Time-stamp counter ticks inside them (timing on), [`ticks`]' unit.
-    pub ticks: u64,
+    pub(crate) ticks: u64,
 }
 
 impl std::ops::AddAssign for KindWork {
@@ -128,7 +128,7 @@ thread_local! {
 }
 
 /// A probe switched on for the whole process while this guard lives: the work counters
-/// ([`Probe::counting`]) or the per-kind query timing ([`Probe::timing`]). Guards nest and overlap (a probe
+/// ([`Probe::counting`]) or the per-kind query timing (`Probe::timing`). Guards nest and overlap (a probe
 /// is on while any of its guards lives), so tests on parallel threads cannot switch each other's off.
 #[must_use = "the probe is off again when the guard drops"]
 #[derive(Debug)]
@@ -142,7 +142,7 @@ impl Probe {
     }
 
     /// Times each `traced` query by [`ticks`] ([`take_kind_work`]).
-    pub fn timing() -> Probe {
+    pub(crate) fn timing() -> Probe {
         PROBES.fetch_add(TIMING, Relaxed);
         Probe(TIMING)
     }

@@ -20,7 +20,7 @@ pub struct Counts {
     /// Open cones and cylinders.
     pub cones: usize,
     /// The registered kinds' items ([`crate::kinds`]), in the registry's order.
-    pub kinds: [usize; crate::kinds::COUNT],
+    pub(crate) kinds: [usize; crate::kinds::COUNT],
 }
 
 /// The parts of the tracer a scene needs.
@@ -29,17 +29,17 @@ pub struct Features {
     /// Primitives by kind: a kind with none is skipped.
     pub counts: Counts,
     /// Some kind is searched through a BVH (else all brute force).
-    pub bvh: bool,
+    pub(crate) bvh: bool,
     /// Lights that shade something: Lambert or Phong terms and shadow rays.
-    pub direct: bool,
+    pub(crate) direct: bool,
     /// Mirror materials and a depth limit above 0.
-    pub reflection: bool,
+    pub(crate) reflection: bool,
     /// Transmissive materials and a depth limit above 0.
-    pub refraction: bool,
+    pub(crate) refraction: bool,
     /// More than one sample per pixel or a postfilter.
-    pub antialiasing: bool,
+    pub(crate) antialiasing: bool,
     /// Ambient occlusion shading (which replaces the lights and the bounces).
-    pub ao: bool,
+    pub(crate) ao: bool,
 }
 
 impl Features {

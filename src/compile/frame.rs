@@ -35,14 +35,14 @@ const START_MARGIN: f64 = 1.0 / 1024.0;
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct RenderingFrame {
     /// The rendering space's origin in world space: the eye, or the centre of a far scene's bounds.
-    pub origin: DVec3,
+    pub(crate) origin: DVec3,
     /// How far from the eye camera rays start: 0, or |eye − C| − R·(1 + 2⁻¹⁰) for a far scene.
-    pub start: f64,
+    pub(crate) start: f64,
 }
 
 impl RenderingFrame {
     /// The frame for `desc`, with `extra` the world box of spheres compiled apart (a mapped field's).
-    pub fn of(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Self {
+    pub(crate) fn of(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Self {
         let eye = desc.camera.eye;
         let at_eye = Self { origin: eye, start: 0.0 };
         let unbounded = desc.shapes.iter().any(|s| !s.kind.is_solid())
@@ -67,7 +67,7 @@ impl RenderingFrame {
 
 /// The box around every bounded primitive and the box `extra`, in f64 world space (`None` without any):
 /// spheres, ellipsoids (the unit sphere's box under their map), polygons, cones and the registered kinds.
-pub fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
+pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
     let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
     let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
     let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
@@ -92,7 +92,7 @@ pub fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3
 
 /// A bounded shape's box as centre and half extent per axis in world space: the unit sphere's box under
 /// `world_from_object`, `centre ± Σ|column entries|` per axis.
-pub fn shape_extent(world_from_object: &glam::DAffine3) -> (DVec3, DVec3) {
+pub(crate) fn shape_extent(world_from_object: &glam::DAffine3) -> (DVec3, DVec3) {
     let m = world_from_object.matrix3;
     let half = DVec3::new(
         m.x_axis.x.abs() + m.y_axis.x.abs() + m.z_axis.x.abs(),

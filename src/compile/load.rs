@@ -1,5 +1,5 @@
 //! Reading a scene for compiling, with the search structure its spheres get decided first: an `.f32r` field
-//! bound for the particle tree is mapped rather than read ([`crate::io::f32r::map`]), and one too large for
+//! bound for the particle tree is mapped rather than read (`crate::io::f32r::map`), and one too large for
 //! the memory is refused before anything is loaded ([`super::memory`]).
 
 use std::path::{Path, PathBuf};
@@ -20,7 +20,7 @@ pub struct Loaded {
     /// How the spheres are searched.
     pub accel: Accel,
     /// Why the particle tree, when `auto` chose it.
-    pub note: Option<String>,
+    pub(crate) note: Option<String>,
     /// The reader's warnings (unknown elements in a particle file, say).
     pub warnings: Vec<String>,
 }

@@ -6,19 +6,19 @@ use std::fmt;
 
 /// Peak bytes per sphere of reading a sphere list and building its BVH: the description's f64 spheres, the
 /// SoA arrays, their reordered copy and the nodes, with a margin over the measured peaks (PERF.md, "Scale").
-pub const BVH_BYTES_PER_SPHERE: u64 = 110;
+pub(crate) const BVH_BYTES_PER_SPHERE: u64 = 110;
 
 /// Bytes per sphere of a mapped `.f32r` field in the particle tree: the 16-byte record (its page becomes
 /// this process's own when the build reorders it) and the 4-byte key.
-pub const PARTICLE_BYTES_PER_SPHERE: u64 = 20;
+pub(crate) const PARTICLE_BYTES_PER_SPHERE: u64 = 20;
 
 /// Bytes every render needs beside the spheres (image, threads' stacks, the program), so a field is not
 /// planned to the last byte.
-pub const RESERVE_BYTES: u64 = 256 << 20;
+pub(crate) const RESERVE_BYTES: u64 = 256 << 20;
 
 /// What `--accel auto` picks for a sphere field, and why.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum FieldChoice {
+pub(crate) enum FieldChoice {
     /// The BVH fits.
     Bvh,
     /// The particle tree: asked for, or the BVH would not fit.
@@ -32,11 +32,11 @@ pub enum FieldChoice {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct TooLarge {
     /// The field's spheres.
-    pub spheres: u64,
+    pub(crate) spheres: u64,
     /// The memory available, in bytes.
-    pub available: u64,
+    pub(crate) available: u64,
     /// The largest field that fits.
-    pub largest: u64,
+    pub(crate) largest: u64,
 }
 
 impl fmt::Display for TooLarge {
@@ -57,7 +57,7 @@ impl std::error::Error for TooLarge {}
 
 /// The structure for `spheres` spheres with `available` bytes of memory: the BVH when `particles` is not
 /// asked for and the BVH fits, else the particle tree when it fits, else [`TooLarge`].
-pub fn choose(spheres: u64, particles: bool, available: u64) -> Result<FieldChoice, TooLarge> {
+pub(crate) fn choose(spheres: u64, particles: bool, available: u64) -> Result<FieldChoice, TooLarge> {
     let fits =
         |per_sphere: u64| spheres.saturating_mul(per_sphere).saturating_add(RESERVE_BYTES) <= available;
     if !particles && fits(BVH_BYTES_PER_SPHERE) {

@@ -33,11 +33,11 @@ pub use frame::{RenderingFrame, FAR_RATIO};
 #[derive(Clone, Copy, Debug)]
 pub struct Light {
     /// Position.
-    pub position: Vec3f,
+    pub(crate) position: Vec3f,
     /// Colour times intensity.
-    pub color: Rgb,
+    pub(crate) color: Rgb,
     /// Distance falloff.
-    pub falloff: Falloff,
+    pub(crate) falloff: Falloff,
 }
 
 /// What a render reads: immutable, shared by all threads.
@@ -76,7 +76,7 @@ pub struct CompileOptions {
     /// ([`crate::bvh::Bvh::frustum_culling`]).
     pub frustum_culling: bool,
     /// Subtrees entered by at most this many live lanes are walked one ray at a time
-    /// ([`crate::bvh::SINGLE_RAY_MAX_LANES`] by default; 0 never switches).
+    /// (`crate::bvh::SINGLE_RAY_MAX_LANES` by default; 0 never switches).
     pub single_ray_lanes: u32,
     /// Keep each BVH's binary tree and have single rays (K = 1) walk it one box and one primitive at a time:
     /// the scalar path (`--lanes scalar`, [`crate::accel::Geometry::set_scalar_walk`]). Off by default, so
@@ -99,7 +99,7 @@ impl Default for CompileOptions {
 /// How primitives are searched.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Default)]
 pub enum Accel {
-    /// A BVH for each kind with [`BVH_MIN_SPHERES`] items or more, brute force below.
+    /// A BVH for each kind with `BVH_MIN_SPHERES` items or more, brute force below.
     #[default]
     Auto,
     /// A BVH for every kind with items.
@@ -133,7 +133,7 @@ pub enum BvhPreset {
 
 impl BvhPreset {
     /// The builder.
-    pub fn builder(self) -> Builder {
+    pub(crate) fn builder(self) -> Builder {
         let params = match self {
             BvhPreset::Sah => return Builder::SAH_SPHERES,
             BvhPreset::Fastest => BvhBuildParams::fastest_build(),
@@ -149,7 +149,7 @@ impl BvhPreset {
 /// Below this many spheres brute force is used: with 2–3 spheres brute force measured faster, from 4
 /// spheres on the BVH (PERF.md, Register: "No BVH for a kind with fewer than 4 items"; docs/perf-log/
 /// 2026-11.md, "BVH crossover").
-pub const BVH_MIN_SPHERES: usize = 4;
+pub(crate) const BVH_MIN_SPHERES: usize = 4;
 
 /// The largest coordinate magnitude in rendering space (origin `origin`) a ray can start from or pass near:
 /// spheres' far sides, lights, where camera rays start (the eye, or a far scene's start points: those
@@ -239,7 +239,7 @@ impl Scene {
     /// `.f32r` file in the particle tree, built in the mapping's private pages: no copy of the records is
     /// made. Their bounds (the mapping's, [`MappedRecords::bounds`]) count for the culling padding and the
     /// default ambient occlusion distance.
-    pub fn compile_mapped(
+    pub(crate) fn compile_mapped(
         desc: SceneDesc,
         records: MappedRecords,
         options: CompileOptions,
@@ -259,7 +259,7 @@ impl Scene {
     /// [`Scene::compile_with_options`] taking the description, which is freed before the BVH build: the
     /// build is the peak of a large scene's memory, and the description's spheres (40 bytes each, in f64)
     /// are no longer needed then.
-    pub fn compile_owned(desc: SceneDesc, options: CompileOptions) -> Result<Scene, CameraError> {
+    pub(crate) fn compile_owned(desc: SceneDesc, options: CompileOptions) -> Result<Scene, CameraError> {
         let (mut scene, job) = Self::assemble(&desc, options, None)?;
         drop(desc);
         scene.build_bvh(job);

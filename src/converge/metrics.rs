@@ -17,7 +17,7 @@ pub struct Errors {
 
 /// The edge pixels of an image whose primary hits (pixel centres) are `prims` (row-major, `width` columns):
 /// a pixel is an edge pixel when one of its 4 neighbours sees another primitive (or background).
-pub fn edge_mask(prims: &[u32], width: u32) -> Vec<bool> {
+pub(crate) fn edge_mask(prims: &[u32], width: u32) -> Vec<bool> {
     let w = width as usize;
     let h = prims.len() / w.max(1);
     (0..prims.len())
@@ -33,7 +33,7 @@ pub fn edge_mask(prims: &[u32], width: u32) -> Vec<bool> {
 }
 
 /// The errors of `image` against `reference` (same size); `edges` marks the edge pixels ([`edge_mask`]).
-pub fn errors(image: &Image, reference: &Image, edges: &[bool]) -> Errors {
+pub(crate) fn errors(image: &Image, reference: &Image, edges: &[bool]) -> Errors {
     assert_eq!((image.width, image.height), (reference.width, reference.height), "images of one size");
     let (mut all, mut edge, mut edge_pixels) = (0.0f64, 0.0f64, 0usize);
     for ((a, b), &is_edge) in image.pixels.iter().zip(&reference.pixels).zip(edges) {

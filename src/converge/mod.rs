@@ -44,7 +44,7 @@ pub fn ladder(method: &str, max_spp: u32) -> Result<Vec<Pattern>, String> {
 #[derive(Clone, Debug, PartialEq)]
 pub struct Run {
     /// The method's name.
-    pub method: String,
+    pub(crate) method: String,
     /// The reconstruction filter's name when the study compares filters (`none`, `gaussian:1.5`, …); `None`
     /// when every run keeps the scene's own filter.
     pub filter: Option<String>,
@@ -64,7 +64,7 @@ pub struct Reference {
     /// The reference image.
     pub image: Image,
     /// Edge pixels, row-major.
-    pub edges: Vec<bool>,
+    pub(crate) edges: Vec<bool>,
 }
 
 impl Reference {

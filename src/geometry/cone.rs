@@ -98,7 +98,7 @@ impl Cone<f64> {
     /// An axis-aligned box around the whole lateral surface: the union of the two end discs' exact boxes
     /// (the surface lies in their convex hull), a disc of radius `r` across unit axis `u` reaching
     /// `r·sqrt(1 − u_i²)` along axis `i`.
-    pub fn exact_bounds(&self) -> (DVec3, DVec3) {
+    pub(crate) fn exact_bounds(&self) -> (DVec3, DVec3) {
         let u = DVec3::from(self.frame.axis);
         let base = DVec3::from(self.frame.origin);
         let apex = base + u * self.height;
@@ -141,7 +141,7 @@ impl<F: Real> Cone<F> {
 
     /// The outward unit normal at a world point on the surface, in world (rendering-space) coordinates.
     #[inline(always)]
-    pub fn normal(&self, p: V3<F>) -> V3<F> {
+    pub(crate) fn normal(&self, p: V3<F>) -> V3<F> {
         self.frame.vector_to_world(self.object_normal(self.frame.to_object(p))).normalize()
     }
 }
@@ -210,21 +210,21 @@ pub fn rehit_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, 
 #[derive(Clone, Debug, Default)]
 pub struct Cones {
     /// Base points.
-    pub bx: Vec<f32>,
+    pub(crate) bx: Vec<f32>,
     /// Base points, y.
-    pub by: Vec<f32>,
+    pub(crate) by: Vec<f32>,
     /// Base points, z.
-    pub bz: Vec<f32>,
+    pub(crate) bz: Vec<f32>,
     /// Frame vectors `e1`, `e2` and the axis, one triple of arrays each: `frame[0..3]` is `e1`'s x, y, z.
-    pub frame: [Vec<f32>; 9],
+    pub(crate) frame: [Vec<f32>; 9],
     /// Heights.
-    pub height: Vec<f32>,
+    pub(crate) height: Vec<f32>,
     /// Base radii.
-    pub base_radius: Vec<f32>,
+    pub(crate) base_radius: Vec<f32>,
     /// Radius slopes.
-    pub slope: Vec<f32>,
+    pub(crate) slope: Vec<f32>,
     /// Material indices.
-    pub material: Vec<u32>,
+    pub(crate) material: Vec<u32>,
     /// Boxes around the surfaces, low corners.
     lo: Vec<Vec3f>,
     /// Boxes around the surfaces, high corners.
@@ -236,7 +236,7 @@ pub struct Cones {
 /// base, frame, height and radii: within about 4 units of that scale. 64 covers it with room to spare. A
 /// hit the f32 kernel reports is the exact hit of a slightly nudged ray (see the module documentation), so
 /// its ray passes the box within that kernel error, which the BVH's own ray-box padding must cover.
-pub const BOUNDS_ROUNDINGS: f64 = 64.0;
+pub(crate) const BOUNDS_ROUNDINGS: f64 = 64.0;
 
 impl Cones {
     /// Adds a cone given in f64 rendering-space values (rounded to f32 once) and returns its index, or
@@ -273,12 +273,12 @@ impl Cones {
     }
 
     /// The number of cones.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.height.len()
     }
 
     /// True when there are none.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.height.is_empty()
     }
 
@@ -301,7 +301,7 @@ impl Cones {
 
     /// An axis-aligned box `(lo, hi)` containing cone `i`'s surface, as described in f64 and as stored in
     /// f32: the exact f64 box padded by [`BOUNDS_ROUNDINGS`] and rounded outwards to f32.
-    pub fn bounds(&self, i: usize) -> (Vec3f, Vec3f) {
+    pub(crate) fn bounds(&self, i: usize) -> (Vec3f, Vec3f) {
         (self.lo[i], self.hi[i])
     }
 }

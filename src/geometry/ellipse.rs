@@ -13,9 +13,9 @@
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ellipse {
     /// The centre.
-    pub centre: [f64; 2],
+    pub(crate) centre: [f64; 2],
     /// The rows of `N`, which takes the ellipse (centred at the origin) onto the unit disc; invertible.
-    pub to_unit: [[f64; 2]; 2],
+    pub(crate) to_unit: [[f64; 2]; 2],
 }
 
 /// The part of a region inside a rectangle: its area and its centroid (the rectangle's centre when the area
@@ -23,9 +23,9 @@ pub struct Ellipse {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Part {
     /// Area, in the rectangle's units (0 ≤ area ≤ the rectangle's area).
-    pub area: f64,
+    pub(crate) area: f64,
     /// Centroid of the part.
-    pub centroid: [f64; 2],
+    pub(crate) centroid: [f64; 2],
 }
 
 fn cross(a: [f64; 2], b: [f64; 2]) -> f64 {
@@ -45,24 +45,24 @@ impl Ellipse {
     }
 
     /// `det N`: the ellipse's area is `π/|det N|`.
-    pub fn det(&self) -> f64 {
+    pub(crate) fn det(&self) -> f64 {
         let n = &self.to_unit;
         n[0][0] * n[1][1] - n[0][1] * n[1][0]
     }
 
     /// The ellipse's area.
-    pub fn area(&self) -> f64 {
+    pub(crate) fn area(&self) -> f64 {
         std::f64::consts::PI / self.det().abs()
     }
 
     /// `|N·(p − centre)|²`: below 1 inside, 1 on the boundary, above 1 outside.
-    pub fn level(&self, p: [f64; 2]) -> f64 {
+    pub(crate) fn level(&self, p: [f64; 2]) -> f64 {
         let q = self.map(p);
         dot(q, q)
     }
 
     /// Whether `p` lies inside or on the boundary.
-    pub fn contains(&self, p: [f64; 2]) -> bool {
+    pub(crate) fn contains(&self, p: [f64; 2]) -> bool {
         self.level(p) <= 1.0
     }
 
@@ -82,7 +82,7 @@ impl Ellipse {
     }
 
     /// Half the width and half the height of the ellipse's bounding box: the lengths of the rows of `N⁻¹`.
-    pub fn half_extent(&self) -> [f64; 2] {
+    pub(crate) fn half_extent(&self) -> [f64; 2] {
         let n = &self.to_unit;
         let det = self.det().abs();
         [n[1][1].hypot(n[0][1]) / det, n[1][0].hypot(n[0][0]) / det]
@@ -91,7 +91,7 @@ impl Ellipse {
     /// The part of the ellipse inside the rectangle `[lo[0], hi[0]] × [lo[1], hi[1]]`, exactly up to f64
     /// rounding (relative error about 1e-15 of the terms summed: areas of 1e-12 of the rectangle and more
     /// come out right to several digits even for ellipses 1e6 times the rectangle's size).
-    pub fn clip(&self, lo: [f64; 2], hi: [f64; 2]) -> Part {
+    pub(crate) fn clip(&self, lo: [f64; 2], hi: [f64; 2]) -> Part {
         let rect_area = (hi[0] - lo[0]) * (hi[1] - lo[1]);
         let rect_centre = [0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1])];
         let nothing = Part { area: 0.0, centroid: rect_centre };

@@ -23,7 +23,7 @@ pub struct Frame<F> {
 impl Frame<f64> {
     /// The frame at `origin` about the unit vector `axis`, the cross vectors chosen from it alone (glam's
     /// `any_orthonormal_pair`), so equal axes give equal frames.
-    pub fn about(origin: DVec3, axis: DVec3) -> Self {
+    pub(crate) fn about(origin: DVec3, axis: DVec3) -> Self {
         let (e1, e2) = axis.any_orthonormal_pair();
         Frame { origin: origin.into(), e1: e1.into(), e2: e2.into(), axis: axis.into() }
     }
@@ -32,7 +32,7 @@ impl Frame<f64> {
 impl<F: Copy> Frame<F> {
     /// The same frame with every value mapped by `f` (splatted over lanes, or widened): no arithmetic.
     #[inline(always)]
-    pub fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> Frame<G> {
+    pub(crate) fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> Frame<G> {
         Frame { origin: self.origin.map(f), e1: self.e1.map(f), e2: self.e2.map(f), axis: self.axis.map(f) }
     }
 }
@@ -47,19 +47,19 @@ impl<F: Real> Frame<F> {
 
     /// A direction in the frame (no translation).
     #[inline(always)]
-    pub fn vector_to_object(&self, v: V3<F>) -> V3<F> {
+    pub(crate) fn vector_to_object(&self, v: V3<F>) -> V3<F> {
         V3::new(v.dot(self.e1), v.dot(self.e2), v.dot(self.axis))
     }
 
     /// The ray in the frame; `t` is unchanged (the frame is a rotation and a translation).
     #[inline(always)]
-    pub fn ray_to_object(&self, ray: &Ray<F>) -> Ray<F> {
+    pub(crate) fn ray_to_object(&self, ray: &Ray<F>) -> Ray<F> {
         Ray::new(self.to_object(ray.origin), self.vector_to_object(ray.dir))
     }
 
     /// A frame vector back in rendering space.
     #[inline(always)]
-    pub fn vector_to_world(&self, v: V3<F>) -> V3<F> {
+    pub(crate) fn vector_to_world(&self, v: V3<F>) -> V3<F> {
         self.e1 * v.x + self.e2 * v.y + self.axis * v.z
     }
 }

@@ -24,16 +24,16 @@ use super::{first_root, sphere_approach, sphere_roots_of, EyeLanes, Hit, Ray, Sp
 #[derive(Clone, Copy, Debug)]
 pub struct RayPacket<F: Lanes> {
     /// Ray origins.
-    pub origin: V3<F>,
+    pub(crate) origin: V3<F>,
     /// Ray directions (not necessarily unit length).
-    pub dir: V3<F>,
+    pub(crate) dir: V3<F>,
     /// Exclusive upper end of each ray's range `[0, t_max)`.
     pub t_max: F,
     /// Lanes that carry a ray; the others are ignored by every kernel and report misses.
     pub active: F::Mask,
     /// Planes enclosing every active ray, when the packet's maker knows them (camera blocks): the BVH culls
     /// a node's children for the whole packet by them. `None` leaves it to the BVH to find its own.
-    pub pyramid: Option<Pyramid>,
+    pub(crate) pyramid: Option<Pyramid>,
 }
 
 /// Four planes through a point that enclose a packet's rays, and an axis the rays run along: every active
@@ -96,12 +96,12 @@ impl<F: Lanes> RayPacket<F> {
 #[derive(Clone, Copy, Debug)]
 pub struct HitPacket<F: Lanes> {
     /// Ray parameter of each hit.
-    pub t: F,
+    pub(crate) t: F,
     /// Primitive id of each hit.
     pub prim: F::Ids,
     /// The hit primitive's scene-file id, which breaks ties in t: the same order whatever order the
     /// primitives are stored and visited in (a BVH stores spheres in leaf order).
-    pub key: F::Ids,
+    pub(crate) key: F::Ids,
 }
 
 impl<F: Lanes> HitPacket<F> {
@@ -127,7 +127,7 @@ impl<F: Lanes> HitPacket<F> {
     /// a packet traversal, which visits nodes in its own order, agree bit for bit with a single ray's, and a
     /// BVH with brute force, ids included.
     #[inline(always)]
-    pub fn update(&mut self, valid: F::Mask, t: F, id: F::Ids, key: F::Ids) {
+    pub(crate) fn update(&mut self, valid: F::Mask, t: F, id: F::Ids, key: F::Ids) {
         let closer = valid & (t.lt(self.t) | (t.le(self.t) & F::ids_lt(key, self.key)));
         self.t = F::select(closer, t, self.t);
         self.prim = F::select_ids(closer, id, self.prim);
@@ -150,7 +150,7 @@ impl<F: Lanes> DeparturePacket<F> {
         Self { prim: F::Ids::splat(NO_PRIM), inward: F::mask_from_bits(0) }
     }
     /// Lane `i` as a scalar departure.
-    pub fn lane(&self, i: usize) -> super::Departure {
+    pub(crate) fn lane(&self, i: usize) -> super::Departure {
         super::Departure { prim: self.prim.lane(i), inward: F::mask_lane(self.inward, i) }
     }
 }

@@ -102,7 +102,7 @@ impl std::fmt::Display for PolygonError {
 
 /// The area-weighted normal of a polygon (Newell's method): robust for any planar polygon, convex or not,
 /// and its length is twice the area. Follows the right-hand rule: counter-clockwise seen from its tip.
-pub fn newell_normal(vertices: &[DVec3]) -> DVec3 {
+pub(crate) fn newell_normal(vertices: &[DVec3]) -> DVec3 {
     let n = vertices.len();
     (0..n).fold(DVec3::ZERO, |acc, i| {
         let (a, b) = (vertices[i], vertices[(i + 1) % n]);

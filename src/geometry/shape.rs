@@ -18,7 +18,7 @@ pub enum ShapeKind {
 
 impl ShapeKind {
     /// Planar shapes cannot be hit twice by one ray; convex solids can (entry and exit).
-    pub fn is_solid(self) -> bool {
+    pub(crate) fn is_solid(self) -> bool {
         self == ShapeKind::Sphere
     }
 }
@@ -85,7 +85,7 @@ impl<F: Real> Shape<F> {
     /// Closest hit in `[0, t_max)`. The unit sphere's `c = |o'|² − 1` cancels for a large ellipsoid seen
     /// from close by, so it comes from the exact eye term as for spheres: lanes whose ray starts at the eye
     /// take it as it is, the others as `c_eye + 2·o_eye·v + |v|²` (`v = L⁻¹·o`, the origin seen from the eye
-    /// in object space) where that has the smaller rounding bound ([`Approach::roots_with_eye_term`] with
+    /// in object space) where that has the smaller rounding bound (`Approach::roots_with_eye_term` with
     /// the centre seen from the eye, `L⁻¹·centre`). Shapes are few; every lane computes both forms.
     #[inline(always)]
     pub fn intersect(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
@@ -127,7 +127,7 @@ impl<F: Real> Shape<F> {
 
 impl Shape<f32> {
     /// The unit world-space normal at an object-space point on the shape.
-    pub fn world_normal(&self, object_point: Vec3f) -> Vec3f {
+    pub(crate) fn world_normal(&self, object_point: Vec3f) -> Vec3f {
         let n = match self.kind {
             ShapeKind::Sphere => object_point,
             ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),

@@ -50,7 +50,7 @@ pub const CONTACT_ROUNDINGS: f64 = 8.0;
 #[derive(Clone, Copy, Debug)]
 pub struct SphereRay<F: Real> {
     /// The ray.
-    pub ray: Ray<F>,
+    pub(crate) ray: Ray<F>,
     dd: F,
     inv_dd: F,
     /// `|origin|²` and the origin's absolute coordinates, for `c` from the eye term.
@@ -85,7 +85,7 @@ impl<F: Real> SphereRay<F> {
     /// The same terms with every value mapped by `f` (a lane of a packet's, or a single ray's splatted):
     /// no arithmetic, so the mapped terms are the bits the mapped ray's own would be.
     #[inline(always)]
-    pub fn map<G: Real>(&self, f: impl Fn(F) -> G + Copy) -> SphereRay<G> {
+    pub(crate) fn map<G: Real>(&self, f: impl Fn(F) -> G + Copy) -> SphereRay<G> {
         SphereRay {
             ray: Ray::new(self.ray.origin.map(f), self.ray.dir.map(f)),
             dd: f(self.dd),
@@ -105,7 +105,7 @@ impl<F: Real> SphereRay<F> {
 
     /// The same direction terms for a ray from `origin` (only the origin's terms are recomputed).
     #[inline(always)]
-    pub fn with_origin(&self, origin: V3<F>) -> Self {
+    pub(crate) fn with_origin(&self, origin: V3<F>) -> Self {
         let abs_origin = V3::new(origin.x.abs(), origin.y.abs(), origin.z.abs());
         let reach = abs_origin.x.max_of(abs_origin.y).max_of(abs_origin.z);
         Self {
@@ -141,7 +141,7 @@ pub enum EyeLanes<M> {
 impl<M: crate::math::Mask> EyeLanes<M> {
     /// Classifies the lanes `eye` of the `live` ones.
     #[inline(always)]
-    pub fn of(eye: M, live: M) -> Self {
+    pub(crate) fn of(eye: M, live: M) -> Self {
         if (eye | !live).all() {
             EyeLanes::All
         } else if (eye & live).any() {
@@ -181,7 +181,7 @@ pub struct Approach<F: Real> {
 impl<F: Real> Approach<F> {
     /// The line meets the sphere (`l² ≤ r²`); NaN inputs give false.
     #[inline(always)]
-    pub fn meets(&self) -> F::Mask {
+    pub(crate) fn meets(&self) -> F::Mask {
         self.l2.le(self.r2)
     }
 
@@ -190,7 +190,7 @@ impl<F: Real> Approach<F> {
     /// discriminant: with this `c` its bound is always the smaller one, so this is
     /// [`Approach::roots_with_eye_term`]'s result whenever that one takes the direct `c`.
     #[inline(always)]
-    pub fn roots(&self) -> Roots<F> {
+    pub(crate) fn roots(&self) -> Roots<F> {
         let oo = self.oc.dot(self.oc);
         let (c, bound) = (oo - self.r2, oo + self.r2);
         let (on_surface, ahead) = self.contact(c, bound, self.reach2);
@@ -201,7 +201,7 @@ impl<F: Real> Approach<F> {
     /// |centre|² − r²`: `c` from the eye term or computed directly, whichever has the smaller rounding
     /// bound.
     #[inline(always)]
-    pub fn roots_with_eye_term(&self, centre: V3<F>, c_eye: F, ray: &SphereRay<F>) -> Roots<F> {
+    pub(crate) fn roots_with_eye_term(&self, centre: V3<F>, c_eye: F, ray: &SphereRay<F>) -> Roots<F> {
         let co = centre.dot(ray.ray.origin);
         let abs_co = V3::new(centre.x.abs(), centre.y.abs(), centre.z.abs()).dot(ray.abs_origin);
         let c = c_eye - ((co + co) - ray.oo);
@@ -216,7 +216,7 @@ impl<F: Real> Approach<F> {
     }
 
     /// The two roots for a ray that starts exactly at the eye: `c = c_eye`. `choose` (the scene's
-    /// [`super::Spheres::eye_terms_help`]) lets each lane take `proj² − c/(d·d)` where its bound is
+    /// `super::Spheres::eye_terms_help`) lets each lane take `proj² − c/(d·d)` where its bound is
     /// the smaller; without a sphere that near the eye the perpendicular form always is (the textbook bound
     /// `ε·|c_eye|` alone exceeds `ε·|C|·r` once the eye is 1.6 radii from the centre). No contact rule: the
     /// eye is a point the scene places, not a rounded hit point.
@@ -239,7 +239,7 @@ impl<F: Real> Approach<F> {
     /// [`Approach::roots_from_eye`] in the lanes of `eye`, `other` (the roots of the other lanes' rays) in
     /// the rest.
     #[inline(always)]
-    pub fn select_eye_lanes(eye: F::Mask, from_eye: Roots<F>, other: Roots<F>) -> Roots<F> {
+    pub(crate) fn select_eye_lanes(eye: F::Mask, from_eye: Roots<F>, other: Roots<F>) -> Roots<F> {
         Roots {
             hit: (eye & from_eye.hit) | (!eye & other.hit),
             near: F::select(eye, from_eye.near, other.near),
@@ -311,8 +311,8 @@ pub fn sphere_approach<F: Real>(centre: V3<F>, radius: F, ray: &SphereRay<F>) ->
 
 /// A stored sphere's roots for the rays of a query, the one rule every sphere query follows: lanes from the
 /// eye take [`Approach::roots_from_eye`] (choosing the discriminant when `help`, the scene's
-/// `Spheres::eye_terms_help`, says a sphere is near the eye), the others [`Approach::roots_with_eye_term`]
-/// in such scenes and [`Approach::roots`] elsewhere. `centre` is only evaluated where it is needed.
+/// `Spheres::eye_terms_help`, says a sphere is near the eye), the others `Approach::roots_with_eye_term`
+/// in such scenes and `Approach::roots` elsewhere. `centre` is only evaluated where it is needed.
 #[inline(always)]
 pub fn sphere_roots_of<F: Real>(
     help: bool,
@@ -331,7 +331,7 @@ pub fn sphere_roots_of<F: Real>(
 }
 
 /// The roots of `|origin + t·dir − centre|² = radius²` for a ray from anywhere, with no eye term
-/// ([`Approach::roots`]).
+/// (`Approach::roots`).
 #[inline(always)]
 pub fn sphere_roots<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Roots<F> {
     sphere_approach(centre, radius, &SphereRay::new(*ray)).roots()

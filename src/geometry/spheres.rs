@@ -19,19 +19,19 @@ pub struct Spheres {
     /// ([`crate::geometry::Approach::roots_from_eye`]).
     pub c_eye: Vec<f32>,
     /// Material index.
-    pub material: Vec<u32>,
+    pub(crate) material: Vec<u32>,
     /// Per-sphere colours, replacing the material's colour: empty (no sphere has its own), or one per
     /// sphere, in the same order as the other arrays (permuted with them). Three bytes a sphere
     /// ([`Rgb8`]), allocated only for scenes that give colours.
     pub color: Vec<Rgb8>,
-    /// Scene-file index (the identity until [`Spheres::permuted`]): breaks ties in t and names the sphere
+    /// Scene-file index (the identity until `Spheres::permuted`): breaks ties in t and names the sphere
     /// in reports.
     pub key: Vec<u32>,
     /// Some sphere has the eye within about its radius of its surface (`|c_eye| < 4·r²`): only then can `c`
     /// from the eye term be the more accurate one for rays that do not start at the eye (a large ground
     /// sphere near the eye), so only then do those rays pay for computing both
     /// ([`crate::geometry::Approach::roots_with_eye_term`]); elsewhere they take `|oc|² − r²` directly.
-    pub eye_terms_help: bool,
+    pub(crate) eye_terms_help: bool,
 }
 
 impl Spheres {
@@ -44,7 +44,7 @@ impl Spheres {
         self.r.is_empty()
     }
     /// Bytes of the arrays' contents.
-    pub fn bytes(&self) -> usize {
+    pub(crate) fn bytes(&self) -> usize {
         let floats = [&self.cx, &self.cy, &self.cz, &self.r, &self.c_eye].map(Vec::len).iter().sum::<usize>();
         floats * size_of::<f32>()
             + (self.material.len() + self.key.len()) * size_of::<u32>()
@@ -52,7 +52,7 @@ impl Spheres {
     }
     /// The colour of sphere `i` when the spheres have colours of their own.
     #[inline]
-    pub fn color_of(&self, i: usize) -> Option<Rgb8> {
+    pub(crate) fn color_of(&self, i: usize) -> Option<Rgb8> {
         self.color.get(i).copied()
     }
     /// Centre of sphere `i`.
@@ -61,7 +61,7 @@ impl Spheres {
         V3::new(self.cx[i], self.cy[i], self.cz[i])
     }
     /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.
-    pub fn permuted(&self, order: &[u32]) -> Spheres {
+    pub(crate) fn permuted(&self, order: &[u32]) -> Spheres {
         use rayon::prelude::*;
         fn pick<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
             order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
@@ -81,7 +81,7 @@ impl Spheres {
 
     /// Room for `more` spheres in every array: compile knows the count, so each array is allocated once, at
     /// its final size.
-    pub fn reserve_exact(&mut self, more: usize) {
+    pub(crate) fn reserve_exact(&mut self, more: usize) {
         for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.r, &mut self.c_eye] {
             v.reserve_exact(more);
         }
@@ -98,7 +98,7 @@ impl Spheres {
 
     /// Appends a sphere given in f64 (rendering space), rounding its centre and radius to f32 once and
     /// computing its eye term from the f64 values.
-    pub fn push_exact(&mut self, center: V3<f64>, radius: f64, material: u32) {
+    pub(crate) fn push_exact(&mut self, center: V3<f64>, radius: f64, material: u32) {
         let c = center.to_f32();
         self.cx.push(c.x);
         self.cy.push(c.y);

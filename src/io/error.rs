@@ -11,7 +11,7 @@ pub struct SceneError {
     /// 1-based line, 0 when the error is about the whole file.
     pub line: usize,
     /// 1-based column, 0 when unknown.
-    pub column: usize,
+    pub(crate) column: usize,
     /// What was wrong and what was expected.
     pub message: String,
 }
@@ -83,7 +83,7 @@ pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
 }
 
 /// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start.
-pub fn text(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
+pub(crate) fn text(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
     String::from_utf8(bytes).map_err(|e| not_utf8(path, e.as_bytes(), e.utf8_error()))
 }
 

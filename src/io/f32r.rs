@@ -1,13 +1,13 @@
 //! `.f32r` sphere lists: the spheres of an `.xyzr` list in binary, for fields too large to read quickly as
 //! text (1e6 spheres are 16 MB instead of 46 MB, and need no number parsing). The scene around them is the
-//! one an `.xyzr` list gets ([`super::xyzr::scene_around`]).
+//! one an `.xyzr` list gets (`super::xyzr::scene_around`).
 //!
 //! The file, all little-endian:
 //!
 //! | bytes        | what                                                                   |
 //! |--------------|------------------------------------------------------------------------|
 //! | 0..8         | magic [`MAGIC`]: `89 'F' '3' '2' 'R' 0D 0A 1A`                          |
-//! | 8..12        | version, u32: [`VERSION`] (1)                                          |
+//! | 8..12        | version, u32: `VERSION` (1)                                          |
 //! | 12..16       | count, u32: the number of records (≥ 1)                                |
 //! | 16 + 16·i .. | record `i` (from 0): x, y, z, r as IEEE 754 binary32                    |
 //!
@@ -30,14 +30,14 @@ use crate::scene::desc::{SceneDesc, SphereDesc};
 /// The file's first 8 bytes.
 pub const MAGIC: [u8; 8] = *b"\x89F32R\r\n\x1a";
 /// The layout version this reader reads and the writer writes.
-pub const VERSION: u32 = 1;
+pub(crate) const VERSION: u32 = 1;
 /// Bytes before the first record: magic, version, count.
-pub const HEADER_BYTES: usize = 16;
+pub(crate) const HEADER_BYTES: usize = 16;
 /// Bytes per record: x, y, z, r.
-pub const RECORD_BYTES: usize = 16;
+pub(crate) const RECORD_BYTES: usize = 16;
 
 /// Reads an `.f32r` file.
-pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+pub(crate) fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     let bytes = std::fs::read(path)
         .map_err(|e| SceneError::whole_file(path, format!("cannot read sphere list: {e}")))?;
     parse(path, &bytes)
@@ -50,7 +50,7 @@ pub fn parse(path: &Path, bytes: &[u8]) -> Result<SceneDesc, SceneError> {
 
 /// The spheres of `.f32r` bytes, in file order, checked as the module documentation says. Records are
 /// converted in parallel (on the current rayon pool).
-pub fn spheres(path: &Path, bytes: &[u8]) -> Result<Vec<SphereDesc>, SceneError> {
+pub(crate) fn spheres(path: &Path, bytes: &[u8]) -> Result<Vec<SphereDesc>, SceneError> {
     let records = records(bytes).map_err(|m| SceneError::whole_file(path, m))?;
     let chunks = records.par_chunks_exact(RECORD_BYTES);
     if let Some(i) = chunks.clone().position_first(|r| problem(values(r)).is_some()) {
@@ -70,7 +70,7 @@ pub fn spheres(path: &Path, bytes: &[u8]) -> Result<Vec<SphereDesc>, SceneError>
 
 /// An `.f32r` file mapped privately (copy-on-write): its records are read where they lie, with no copy, and
 /// writes to them (the particle tree reorders them in place, [`crate::accel::Particles`]) go to private
-/// pages of this process, never to the file. Records are checked as [`spheres`] checks them.
+/// pages of this process, never to the file. Records are checked as `spheres` checks them.
 ///
 /// The mapping assumes the file is not changed by another process while it is mapped.
 pub struct MappedRecords {
@@ -82,7 +82,7 @@ pub struct MappedRecords {
 
 impl MappedRecords {
     /// The records `x, y, z, r`, in file order until something reorders them.
-    pub fn records(&self) -> &[[f32; 4]] {
+    pub(crate) fn records(&self) -> &[[f32; 4]] {
         // SAFETY: the map holds `HEADER_BYTES + count·RECORD_BYTES` bytes (checked by `map`); the map starts
         // on a page boundary, so the records, 16 bytes after it, are 4-byte aligned; any bits are valid f32s,
         // and the host is little-endian (checked by `map`), the file's order.
@@ -96,12 +96,12 @@ impl MappedRecords {
     }
 
     /// Number of records.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.count
     }
 
     /// The world box of the spheres, `[lo, hi]`: every centre widened by its radius.
-    pub fn bounds(&self) -> [DVec3; 2] {
+    pub(crate) fn bounds(&self) -> [DVec3; 2] {
         self.bounds
     }
 
@@ -129,7 +129,7 @@ impl std::fmt::Debug for MappedRecords {
 /// Maps an `.f32r` file privately and checks it as [`load`] does (header, length, every record's values in
 /// parallel on the current rayon pool), without reading it into memory first: the records stay in the
 /// page cache, and only pages written later become this process's own.
-pub fn map(path: &Path) -> Result<MappedRecords, SceneError> {
+pub(crate) fn map(path: &Path) -> Result<MappedRecords, SceneError> {
     let fail = |m: String| SceneError::whole_file(path, m);
     if cfg!(target_endian = "big") {
         return Err(fail("mapping .f32r records needs a little-endian machine".into()));

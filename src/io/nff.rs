@@ -25,7 +25,7 @@
 //!
 //! `f r g b Kd Ks shine T ior` becomes a [`Material`] with `diffuse = Kd`, `specular = Ks` (Phong exponent
 //! `shine`), `reflect = Ks` (NFF's Ks is also the mirror weight in Whitted use), `transmit = T`, `ior`. NFF has
-//! no ambient term; NFF materials get [`NFF_AMBIENT`], the value SPD's own NFF reader gives them, which keeps
+//! no ambient term; NFF materials get `NFF_AMBIENT`, the value SPD's own NFF reader gives them, which keeps
 //! fully shadowed floor from going black. SPD's generators pass their own per-material values to their other
 //! outputs only (balls: floor 0.2, spheres 0); `render --ambient` sets them. Lights without colour
 //! each get intensity `1/sqrt(number of lights)`, as SPD's converters do for every renderer but NFF's own.
@@ -53,10 +53,10 @@ use crate::scene::desc::*;
 mod chunks;
 
 /// Ambient coefficient of NFF materials (see the module documentation).
-pub const NFF_AMBIENT: f32 = 0.1;
+pub(crate) const NFF_AMBIENT: f32 = 0.1;
 
 /// Reads an NFF scene from a file.
-pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+pub(crate) fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     let source = super::error::read_text(path, "scene")?;
     parse(path, &source)
 }

@@ -4,7 +4,7 @@
 //! The file holds geometry only, so the rest of the scene is chosen here: bareray's default material, and
 //! the benchmark contract's camera orientation (from −z looking +z, up +y, horizontal angle 45°, 1920×1080,
 //! pixel centres), centred on the field's bounding box and backed off until the box's front face fills the
-//! image in its tighter direction ([`frame_box`]); for the contract's [−1, 1]³ field that puts the eye near
+//! image in its tighter direction (`frame_box`); for the contract's [−1, 1]³ field that puts the eye near
 //! z = −5.6 (the contract's fixed z = −4 crops the field, on purpose). One white light sits above and to the
 //! left of the eye so that shading shows the spheres' shape. The CLI overrides the camera. Values go to 8-bit
 //! images with [`Transfer::Linear`], as NFF's do (the benchmark's peers read sphere lists as NFF spheres).
@@ -21,7 +21,7 @@ use super::error::SceneError;
 use crate::scene::desc::*;
 
 /// Reads an `.xyzr` file.
-pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
+pub(crate) fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     let source = super::error::read_text(path, "sphere list")?;
     parse(path, &source)
 }
@@ -141,13 +141,13 @@ impl std::fmt::Display for Shortest {
 }
 
 /// A scene showing `spheres`: default material, a camera framing their bounds, one light.
-pub fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
+pub(crate) fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
     let (lo, hi) = bounds(&spheres);
     SceneDesc { spheres, ..scene_framing(lo, hi, None) }
 }
 
 /// The box around `spheres`.
-pub fn bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
+pub(crate) fn bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
     spheres.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), s| {
         (lo.min(s.center - s.radius), hi.max(s.center + s.radius))
     })
@@ -157,7 +157,7 @@ pub fn bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
 /// are compiled apart, [`crate::compile::Scene::compile_mapped`]). Without a `view`, the contract camera
 /// ([`frame_box`]) and a light above and left of it; with one, the box's bounding sphere seen from the
 /// side `view` points to ([`frame_sphere`]) and a headlight, a light at the eye.
-pub fn scene_framing(lo: DVec3, hi: DVec3, view: Option<DVec3>) -> SceneDesc {
+pub(crate) fn scene_framing(lo: DVec3, hi: DVec3, view: Option<DVec3>) -> SceneDesc {
     let (camera, light) = match view {
         None => {
             let camera = frame_box(lo, hi);
@@ -180,13 +180,13 @@ pub fn scene_framing(lo: DVec3, hi: DVec3, view: Option<DVec3>) -> SceneDesc {
 }
 
 /// The share of the view's half-angle that the bounding sphere fills in [`frame_sphere`].
-pub const SPHERE_FILL: f64 = 0.95;
+pub(crate) const SPHERE_FILL: f64 = 0.95;
 
 /// A camera on the `view` side of the box `[lo, hi]`, looking at its centre along −`view`, backed off
 /// until the box's bounding sphere fits the image (1920×1080, horizontal angle 45°) in its tighter
 /// direction, with a margin ([`SPHERE_FILL`]). Up is +y, or −z looking down from +y and +z looking up
 /// from −y (a view within about 8° of the y axis).
-pub fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
+pub(crate) fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
     let (width, height) = (1920u32, 1080u32);
     let hfov = 45.0f64;
     let tan_w = (hfov.to_radians() / 2.0).tan();
@@ -204,7 +204,7 @@ pub fn frame_sphere(lo: DVec3, hi: DVec3, view: DVec3) -> CameraDesc {
 }
 
 /// The contract-oriented camera (see the module documentation) for the box `[lo, hi]`.
-pub fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
+pub(crate) fn frame_box(lo: DVec3, hi: DVec3) -> CameraDesc {
     let (width, height) = (1920u32, 1080u32);
     let hfov = 45.0f64;
     let tan_w = (hfov.to_radians() / 2.0).tan();

@@ -2,7 +2,7 @@
 //! description and TOML form, its f32 store, its kernel generic over lanes, bounds, surface, departure rule
 //! and its f64 form for the accuracy twin), behind the [`Kind`] trait. One list, `registry!`, names the
 //! kinds; the scene description ([`KindDescs`]), the TOML reader, compile, the queries over the geometry
-//! ([`KindStores`]) and the twin ([`KindTwins`]) are written once over it.
+//! ([`KindStores`]) and the twin (`KindTwins`) are written once over it.
 //!
 //! Adding a kind: a folder here with a type implementing [`Kind`], and its name in `registry!`. Its
 //! primitive ids follow the built-in kinds' (spheres, shapes, polygons, cones) in the list's order.
@@ -45,9 +45,9 @@ pub(crate) use registry;
 #[derive(Clone, Debug, PartialEq)]
 pub struct KindError {
     /// Byte range of the value in the file.
-    pub span: Range<usize>,
+    pub(crate) span: Range<usize>,
     /// What is wrong and what was expected.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 /// Where a primitive is measured from in the accuracy twin: the scale its f32 rounding is proportional to,
@@ -137,26 +137,22 @@ pub trait Kind: Clone + Debug + Default + Send + Sync + 'static {
 
 /// One kind's compiled items, the tree over them (`None`: brute force) and, with a tree, its leaf order.
 #[derive(Clone, Debug, Default)]
-pub struct KindItems<K: Kind> {
+pub(crate) struct KindItems<K: Kind> {
     /// The items in description order (their ids).
-    pub store: K::Store,
+    pub(crate) store: K::Store,
     /// The BVH over the items, if any.
-    pub bvh: Option<Bvh>,
+    pub(crate) bvh: Option<Bvh>,
     /// With a BVH: the items' indices in its leaf order.
-    pub order: Vec<u32>,
+    pub(crate) order: Vec<u32>,
 }
 
 impl<K: Kind> KindItems<K> {
     /// The number of items.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         K::len(&self.store)
     }
-    /// True when the kind has none.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
     /// The leaf test over these items for a query: the tree's items in leaf order, or all in order.
-    pub fn items(&self, base: u32) -> Items<'_, K> {
+    pub(crate) fn items(&self, base: u32) -> Items<'_, K> {
         let order = self.bvh.as_ref().map(|_| self.order.as_slice());
         Items { store: &self.store, order, base }
     }
@@ -164,13 +160,13 @@ impl<K: Kind> KindItems<K> {
 
 /// The items of one kind as a leaf query's items ([`ItemTest`]): item `j` is `order[j]` (without a list,
 /// `j`), primitive `base + order[j]`.
-pub struct Items<'a, K: Kind> {
+pub(crate) struct Items<'a, K: Kind> {
     /// The kind's store.
-    pub store: &'a K::Store,
+    pub(crate) store: &'a K::Store,
     /// The tree's leaf order, or `None` for every item in order.
-    pub order: Option<&'a [u32]>,
+    pub(crate) order: Option<&'a [u32]>,
     /// The id of item 0.
-    pub base: u32,
+    pub(crate) base: u32,
 }
 
 impl<K: Kind> Clone for Items<'_, K> {
@@ -190,7 +186,7 @@ impl<K: Kind> ItemTest for Items<'_, K> {
 }
 
 /// Something done to each kind's compiled items, in the registry's order (the order of their ids).
-pub trait VisitItems {
+pub(crate) trait VisitItems {
     /// Kind `K`'s items.
     fn visit<K: Kind>(&mut self, items: &KindItems<K>);
 }
@@ -237,16 +233,16 @@ macro_rules! per_kind {
         pub struct KindStores {
             $(
                 #[doc = concat!("The compiled `", stringify!($field), "`.")]
-                pub $field: KindItems<$kind>,
+                pub(crate) $field: KindItems<$kind>,
             )*
         }
 
         /// Every registered kind's items in f64, for the accuracy twin.
         #[derive(Clone, Debug, Default)]
-        pub struct KindTwins {
+        pub(crate) struct KindTwins {
             $(
                 #[doc = concat!("The `", stringify!($field), "` in f64.")]
-                pub $field: Vec<<$kind as Kind>::Twin>,
+                pub(crate) $field: Vec<<$kind as Kind>::Twin>,
             )*
         }
 
@@ -262,7 +258,7 @@ macro_rules! per_kind {
                 self.len() == 0
             }
             /// The items compiled: each description moved by `−origin` and rounded ([`Kind::push`]).
-            pub fn compile(&self, origin: DVec3) -> KindStores {
+            pub(crate) fn compile(&self, origin: DVec3) -> KindStores {
                 #[allow(unused_mut)]
                 let mut stores = KindStores::default();
                 $(
@@ -274,14 +270,14 @@ macro_rules! per_kind {
                 stores
             }
             /// The items in f64, moved by `−origin`.
-            pub fn twins(&self, origin: DVec3) -> KindTwins {
+            pub(crate) fn twins(&self, origin: DVec3) -> KindTwins {
                 let _ = origin;
                 KindTwins {
                     $($field: self.$field.iter().map(|d| <$kind as Kind>::twin(d, origin)).collect(),)*
                 }
             }
             /// Every item's world box.
-            pub fn world_boxes(&self) -> Vec<[DVec3; 2]> {
+            pub(crate) fn world_boxes(&self) -> Vec<[DVec3; 2]> {
                 #[allow(unused_mut)]
                 let mut boxes = Vec::new();
                 $(boxes.extend(self.$field.iter().map(<$kind as Kind>::world_box));)*
@@ -300,16 +296,16 @@ macro_rules! per_kind {
         #[allow(unused_variables, unused_mut)]
         impl KindStores {
             /// Calls `v` with each kind's items in id order.
-            pub fn visit(&self, v: &mut impl VisitItems) {
+            pub(crate) fn visit(&self, v: &mut impl VisitItems) {
                 $(v.visit::<$kind>(&self.$field);)*
                 let _ = v;
             }
             /// The number of items of every kind.
-            pub fn len(&self) -> usize {
+            pub(crate) fn len(&self) -> usize {
                 0 $(+ self.$field.len())*
             }
             /// True when there are none.
-            pub fn is_empty(&self) -> bool {
+            pub(crate) fn is_empty(&self) -> bool {
                 self.len() == 0
             }
             /// Each kind's number of items, in id order.
@@ -328,18 +324,18 @@ macro_rules! per_kind {
                 [$(self.$field.bvh.is_some()),*]
             }
             /// The kinds' trees.
-            pub fn bvhs(&self) -> Vec<&Bvh> {
+            pub(crate) fn bvhs(&self) -> Vec<&Bvh> {
                 let trees: Vec<Option<&Bvh>> = vec![$(self.$field.bvh.as_ref()),*];
                 trees.into_iter().flatten().collect()
             }
             /// The kinds' trees, to change their walk settings.
-            pub fn bvhs_mut(&mut self) -> Vec<&mut Bvh> {
+            pub(crate) fn bvhs_mut(&mut self) -> Vec<&mut Bvh> {
                 let trees: Vec<Option<&mut Bvh>> = vec![$(self.$field.bvh.as_mut()),*];
                 trees.into_iter().flatten().collect()
             }
             /// Builds a tree for each kind that `wants` one (given its number of items), where every
             /// item's box is finite: `build(n, box of item k)` returns the tree and its leaf order.
-            pub fn build_trees(
+            pub(crate) fn build_trees(
                 &mut self,
                 wants: impl Fn(usize) -> bool,
                 mut build: impl FnMut(usize, &(dyn Fn(usize) -> (Vec3f, Vec3f) + Sync)) -> (Bvh, Vec<u32>),
@@ -362,18 +358,18 @@ macro_rules! per_kind {
             }
             /// Whether a ray leaving item `id` (numbered over every kind's items in id order) can meet it
             /// again ([`Kind::MEETS_AGAIN`]).
-            pub fn meets_again(&self, id: usize) -> bool {
+            pub(crate) fn meets_again(&self, id: usize) -> bool {
                 dispatch!(self, id, false, |_items, K, _k| K::MEETS_AGAIN; $($field: $kind),*)
             }
             /// [`Kind::rehit`] of item `id`, for a kind whose items a ray can meet again.
-            pub fn rehit(&self, id: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32> {
+            pub(crate) fn rehit(&self, id: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32> {
                 dispatch!(self, id, None, |items, K, k| match K::MEETS_AGAIN {
                     true => K::rehit(&items.store, k, ray, t_max),
                     false => None,
                 }; $($field: $kind),*)
             }
             /// Item `id`'s outward unit normal at `point`, the point in its frame, and its material.
-            pub fn surface(&self, id: usize, point: Vec3f) -> Option<(Vec3f, Vec3f, u32)> {
+            pub(crate) fn surface(&self, id: usize, point: Vec3f) -> Option<(Vec3f, Vec3f, u32)> {
                 dispatch!(self, id, None, |items, K, k| {
                     let (normal, object) = K::surface(&items.store, k, point);
                     Some((normal, object, K::item_material(&items.store, k)))
@@ -385,16 +381,12 @@ macro_rules! per_kind {
         #[allow(unused_variables, unused_mut)]
         impl KindTwins {
             /// The number of items of every kind.
-            pub fn len(&self) -> usize {
+            pub(crate) fn len(&self) -> usize {
                 0 $(+ self.$field.len())*
-            }
-            /// True when there are none.
-            pub fn is_empty(&self) -> bool {
-                self.len() == 0
             }
             /// The closest hit in `[0, t_max)` over every item but `skip` (ids from `base`), as `(id, t)`
             /// merged into `best` where nearer (ties to the lower id).
-            pub fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
+            pub(crate) fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
                 #[allow(unused_mut)]
                 let mut id = base;
                 $(
@@ -412,34 +404,34 @@ macro_rules! per_kind {
                 let _ = (skip, ray, t_max, best, id);
             }
             /// Whether a ray leaving item `id` can meet it again.
-            pub fn meets_again(&self, id: usize) -> bool {
+            pub(crate) fn meets_again(&self, id: usize) -> bool {
                 dispatch!(self, id, false, |_items, K, _k| K::MEETS_AGAIN; $($field: $kind),*)
             }
             /// [`Kind::rehit64`] of item `id`.
-            pub fn rehit(&self, id: usize, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+            pub(crate) fn rehit(&self, id: usize, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| match K::MEETS_AGAIN {
                     true => K::rehit64(&items[k], ray, t_max),
                     false => None,
                 }; $($field: $kind),*)
             }
             /// Item `id`'s hit along `ray` in `[0, inf)`.
-            pub fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
+            pub(crate) fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| K::intersect64(&items[k], ray, f64::INFINITY); $($field: $kind),*)
             }
             /// Item `id`'s outward unit normal at `point`.
-            pub fn normal(&self, id: usize, point: V3<f64>) -> Option<V3<f64>> {
+            pub(crate) fn normal(&self, id: usize, point: V3<f64>) -> Option<V3<f64>> {
                 dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], point)); $($field: $kind),*)
             }
             /// [`Kind::scale64`] of item `id`.
-            pub fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
+            pub(crate) fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::scale64(&items[k], origin)); $($field: $kind),*)
             }
             /// [`Kind::grazing64`] of item `id`.
-            pub fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
+            pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
                 dispatch!(self, id, None, |items, K, k| Some(K::grazing64(&items[k], ray, nudge, stray)); $($field: $kind),*)
             }
             /// [`Kind::distance64`] of item `id` from `p`.
-            pub fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
+            pub(crate) fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::distance64(&items[k], p)); $($field: $kind),*)
             }
         }

@@ -10,7 +10,7 @@ use super::KindError;
 /// One step of a TOML `transform` list.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields, rename_all = "lowercase")]
-pub enum TransformOp {
+pub(crate) enum TransformOp {
     /// Move by a vector.
     Translate([f64; 3]),
     /// Scale about the origin.
@@ -22,7 +22,7 @@ pub enum TransformOp {
 /// A scale step: one factor, or one per axis.
 #[derive(Deserialize)]
 #[serde(untagged, expecting = "a number or an array of three numbers")]
-pub enum Scale {
+pub(crate) enum Scale {
     /// The same factor on every axis.
     Uniform(f64),
     /// A factor per axis.
@@ -32,16 +32,16 @@ pub enum Scale {
 /// A rotation step: right-handed, by `degrees` about `axis`.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct Rotation {
+pub(crate) struct Rotation {
     /// The axis (any non-zero length).
-    pub axis: [f64; 3],
+    pub(crate) axis: [f64; 3],
     /// The angle in degrees.
-    pub degrees: f64,
+    pub(crate) degrees: f64,
 }
 
 /// The steps composed in order (the first applied first); an error names the step that is singular or not
 /// finite, or a rotation about a zero axis.
-pub fn transform(ops: &[Spanned<TransformOp>]) -> Result<DAffine3, KindError> {
+pub(crate) fn transform(ops: &[Spanned<TransformOp>]) -> Result<DAffine3, KindError> {
     let mut m = DAffine3::IDENTITY;
     for op in ops {
         let err = |message: &str| KindError { span: op.span(), message: message.into() };

@@ -17,7 +17,7 @@ pub struct Affine<F> {
 impl<F: Real> Affine<F> {
     /// Maps a direction (linear part only); lengths change, so ray parameters t are preserved.
     #[inline(always)]
-    pub fn vector(&self, v: V3<F>) -> V3<F> {
+    pub(crate) fn vector(&self, v: V3<F>) -> V3<F> {
         self.cols[0] * v.x + self.cols[1] * v.y + self.cols[2] * v.z
     }
 }
@@ -38,7 +38,7 @@ impl Affine<f64> {
 
 /// The linear map that carries object-space normals to world space: the inverse transpose of
 /// `world_from_object`'s linear part (no translation), as an [`Affine`] with zero translation.
-pub fn normal_to_world(world_from_object: &glam::DAffine3) -> Affine<f64> {
+pub(crate) fn normal_to_world(world_from_object: &glam::DAffine3) -> Affine<f64> {
     let m = world_from_object.matrix3.inverse().transpose();
     Affine::from_glam(&glam::DAffine3 { matrix3: m, translation: glam::DVec3::ZERO })
 }

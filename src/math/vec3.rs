@@ -36,7 +36,7 @@ impl<F: Copy> V3<F> {
     }
     /// Applies `f` to each component.
     #[inline(always)]
-    pub fn map<G>(self, f: impl Fn(F) -> G) -> V3<G> {
+    pub(crate) fn map<G>(self, f: impl Fn(F) -> G) -> V3<G> {
         V3 { x: f(self.x), y: f(self.y), z: f(self.z) }
     }
 }

@@ -21,11 +21,11 @@ const BLOCK_ROWS: usize = 16;
 
 /// One channel of an EXR file and the type of its samples.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub struct Channel {
+pub(crate) struct Channel {
     /// The channel's name (`R`, `N.X`, `id`, ...).
-    pub name: &'static str,
+    pub(crate) name: &'static str,
     /// 32-bit float (`true`) or 32-bit unsigned integer.
-    pub float: bool,
+    pub(crate) float: bool,
 }
 
 /// R, G, B as 32-bit floats: the channels of a rendered image.
@@ -36,7 +36,7 @@ pub(crate) fn rgb_channels() -> Vec<Channel> {
 /// Writes an EXR of `frame` whose rows hold, per pixel, one little-endian 4-byte sample per channel in the
 /// order of `channels`. The `text` entry `Software` becomes the `software` attribute; the others, as
 /// `key: value` (or the value alone for an empty key) joined by `; `, the `comments` attribute.
-pub fn write<W: Write + Seek>(
+pub(crate) fn write<W: Write + Seek>(
     out: &mut W,
     frame: Frame,
     channels: &[Channel],

@@ -11,13 +11,13 @@ use image::{ExtendedColorType, ImageEncoder};
 use super::{BitDepth, BoxError, Format, Frame, Rows};
 
 /// JPEG's quality (1–100).
-pub const JPEG_QUALITY: u8 = 92;
+pub(crate) const JPEG_QUALITY: u8 = 92;
 
 /// JPEG's largest side (its header stores 16-bit sizes).
-pub const JPEG_MAX_SIDE: u32 = 65_535;
+pub(crate) const JPEG_MAX_SIDE: u32 = 65_535;
 
 /// Classic TIFF's largest file: 32-bit offsets.
-pub const TIFF_MAX_BYTES: u64 = u32::MAX as u64;
+pub(crate) const TIFF_MAX_BYTES: u64 = u32::MAX as u64;
 
 /// Writes a TIFF or JPEG of `frame` from `rows` (as [`super::pixel_bytes`] gives for the format and depth).
 pub(super) fn write<W: Write + Seek>(

@@ -191,7 +191,7 @@ fn parent_dir(path: &Path) -> PathBuf {
 }
 
 /// A boxed error from an encoder or the file system.
-pub type BoxError = Box<dyn std::error::Error + Send + Sync>;
+pub(crate) type BoxError = Box<dyn std::error::Error + Send + Sync>;
 
 /// Writes `img` to `path` in the format its extension names, atomically; 8-bit formats under `transfer`.
 ///
@@ -255,7 +255,7 @@ impl Drop for Pending {
 
 /// Removes the temporary files of writes still under way: for a panic hook that ends the process without
 /// unwinding (an MPI abort), so that no temporary file is left beside an output.
-pub fn remove_temporaries() {
+pub(crate) fn remove_temporaries() {
     if let Ok(list) = PENDING.try_lock() {
         for path in list.iter() {
             let _ = fs::remove_file(path);
@@ -272,9 +272,9 @@ pub struct Frame {
     /// Rows in the file.
     pub height: u32,
     /// The file's first column in the full image.
-    pub x0: u32,
+    pub(crate) x0: u32,
     /// The file's first row in the full image.
-    pub y0: u32,
+    pub(crate) y0: u32,
     /// Columns of the full image.
     pub(crate) full_width: u32,
     /// Rows of the full image.
@@ -399,7 +399,7 @@ pub fn write_rows(
 /// Writes an EXR of `channels` to `path` atomically from rows of their samples (per pixel one little-endian
 /// 4-byte sample per channel, in the order of `channels`), streamed as [`write_rows`] streams; `text` as
 /// [`WriteOptions::text`].
-pub fn write_channels(
+pub(crate) fn write_channels(
     path: &Path,
     frame: Frame,
     channels: &[exr::Channel],
@@ -417,7 +417,7 @@ pub fn write_channels(
 
 /// The rows of a [`write_rows`] source one at a time, checked: every item whole rows, `frame.height` rows
 /// in all.
-pub struct Rows<'a> {
+pub(crate) struct Rows<'a> {
     source: &'a mut dyn Iterator<Item = Vec<u8>>,
     row_bytes: usize,
     height: u32,
@@ -428,7 +428,11 @@ pub struct Rows<'a> {
 
 impl<'a> Rows<'a> {
     /// The rows of `source` for a file of `frame`, `pixel_bytes` per pixel.
-    pub fn new(source: &'a mut dyn Iterator<Item = Vec<u8>>, frame: Frame, pixel_bytes: usize) -> Self {
+    pub(crate) fn new(
+        source: &'a mut dyn Iterator<Item = Vec<u8>>,
+        frame: Frame,
+        pixel_bytes: usize,
+    ) -> Self {
         let row_bytes = frame.width as usize * pixel_bytes;
         Self { source, row_bytes, height: frame.height, taken: 0, chunk: Vec::new(), at: 0 }
     }
@@ -454,7 +458,7 @@ impl<'a> Rows<'a> {
     }
 
     /// Fails if the source holds more rows than the image.
-    pub fn finish(self) -> Result<(), BoxError> {
+    pub(crate) fn finish(self) -> Result<(), BoxError> {
         if self.at < self.chunk.len() || self.source.next().is_some() {
             return Err(format!("the source gave more than the image's {} rows", self.height).into());
         }

@@ -136,18 +136,18 @@ pub fn band_rows(width: u32, budget: usize) -> u32 {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Bands {
     /// The pixels wanted.
-    pub window: Window,
+    pub(crate) window: Window,
     /// The pixels traced: `window` and its apron.
-    pub traced: Window,
+    pub(crate) traced: Window,
     /// Rows per band (the last may have fewer).
-    pub rows: u32,
+    pub(crate) rows: u32,
     postfilter: bool,
 }
 
 impl Bands {
     /// `window` of the scene's image in bands of about `rows` rows (rounded up to whole tile rows). Panics
     /// on an empty window or one reaching outside the image.
-    pub fn new(scene: &Scene, window: Window, rows: u32) -> Self {
+    pub(crate) fn new(scene: &Scene, window: Window, rows: u32) -> Self {
         let (width, height) = (scene.camera.width, scene.camera.height);
         assert!(window.x1 <= width && window.y1 <= height && window.x0 < window.x1 && window.y0 < window.y1);
         let postfilter = scene.render.postfilter == PostFilter::Lecture3x3;
@@ -155,7 +155,7 @@ impl Bands {
         Self { window, traced, rows: rows.div_ceil(TILE).max(1) * TILE, postfilter }
     }
     /// How many bands.
-    pub fn count(&self) -> u32 {
+    pub(crate) fn count(&self) -> u32 {
         self.traced.height().div_ceil(self.rows)
     }
     /// The image rows band `i` traces.
@@ -164,16 +164,16 @@ impl Bands {
         y..(y + self.rows).min(self.traced.y1)
     }
     /// Tiles traced in all.
-    pub fn tiles(&self) -> u64 {
+    pub(crate) fn tiles(&self) -> u64 {
         u64::from(self.traced.width().div_ceil(TILE)) * u64::from(self.traced.height().div_ceil(TILE))
     }
     /// Tiles band `i` traces.
-    pub fn tiles_of(&self, i: u32) -> u64 {
+    pub(crate) fn tiles_of(&self, i: u32) -> u64 {
         let rows = self.rows_of(i);
         u64::from(self.traced.width().div_ceil(TILE)) * u64::from((rows.end - rows.start).div_ceil(TILE))
     }
     /// The stage that turns the bands, given in order, into the window's finished rows.
-    pub fn stage(&self) -> RowStage {
+    pub(crate) fn stage(&self) -> RowStage {
         RowStage::new(self.window, self.traced, self.postfilter)
     }
 }
@@ -270,7 +270,7 @@ impl RowStage {
 
     /// Takes the next traced rows (in order, the traced window's width each); gives the window rows now
     /// finished, if any.
-    pub fn push(&mut self, rows: Vec<Rgb>) -> Option<Vec<Rgb>> {
+    pub(crate) fn push(&mut self, rows: Vec<Rgb>) -> Option<Vec<Rgb>> {
         if !self.postfilter {
             return Some(rows);
         }

@@ -76,7 +76,7 @@ pub struct CoveragePart {
     /// The part's share of the pixel: 0 to 1, the shares of a pixel summing to 1.
     pub weight: f64,
     /// Where the ray goes through, in pixel-space coordinates (column j's centre at j + ½).
-    pub at: (f32, f32),
+    pub(crate) at: (f32, f32),
 }
 
 /// A vector of the camera's frame coordinates: x along the image's columns, y up, z forward.

@@ -74,7 +74,7 @@ pub struct Rendered {
     /// Rays traced by kind.
     pub counts: RayCounts,
     /// Intersection tests done.
-    pub work: Work,
+    pub(crate) work: Work,
     /// Rays per packet.
     pub lanes: usize,
     /// Wall-clock seconds spent tracing and filtering.
@@ -230,7 +230,7 @@ pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &dyn 
 }
 
 /// Pixel-block shape of a packet: (columns, rows).
-pub fn block<F: Lanes>() -> (u32, u32) {
+pub(crate) fn block<F: Lanes>() -> (u32, u32) {
     match F::K {
         1 => (1, 1),
         4 => (2, 2),
@@ -241,24 +241,24 @@ pub fn block<F: Lanes>() -> (u32, u32) {
 }
 
 /// The pixels of one packet: a block of `w × h` pixels at column `x`, row `y` of its tile; lane `i` is the
-/// pixel `(i mod bw, i div bw)` of the block, `bw × bh` = [`block`] (`w`, `h` are smaller at a tile's edge).
+/// pixel `(i mod bw, i div bw)` of the block, `bw × bh` = `block` (`w`, `h` are smaller at a tile's edge).
 #[derive(Clone, Copy, Debug)]
 pub struct Block {
     /// Left column in the tile.
-    pub x: u32,
+    pub(crate) x: u32,
     /// Top row in the tile.
-    pub y: u32,
+    pub(crate) y: u32,
     /// Columns covered.
-    pub w: u32,
+    pub(crate) w: u32,
     /// Rows covered.
-    pub h: u32,
+    pub(crate) h: u32,
     /// Columns of a whole block (lanes per row).
     pub(crate) bw: u32,
 }
 
 impl Block {
     /// `(lane, column, row)` in the tile for each pixel of the block.
-    pub fn pixels(self) -> impl Iterator<Item = (usize, u32, u32)> {
+    pub(crate) fn pixels(self) -> impl Iterator<Item = (usize, u32, u32)> {
         (0..self.h)
             .flat_map(move |r| (0..self.w).map(move |c| ((r * self.bw + c) as usize, self.x + c, self.y + r)))
     }
@@ -279,7 +279,7 @@ pub fn for_each_packet<F: Lanes>(
 }
 
 /// `tile` cut into the pieces one large packet covers ([`crate::bvh::MAX_PACKETS`] packets of
-/// [`block`]`::<F>()` pixels: 16×16 pixels at K = 16, 16×8 at K = 8, 8×8 at K = 4), row by row, in image
+/// `block``::<F>()` pixels: 16×16 pixels at K = 16, 16×8 at K = 8, 8×8 at K = 4), row by row, in image
 /// coordinates.
 pub fn large_packets<F: Lanes>(tile: Tile) -> impl Iterator<Item = Tile> {
     let (bw, bh) = block::<F>();
@@ -302,7 +302,7 @@ pub fn tile_pyramid(camera: &Camera<f64>, tile: Tile, (dx, dy): (f32, f32)) -> O
 }
 
 /// Reusable buffers for [`for_each_camera_hit`]: one large packet's rays, blocks and hits.
-pub struct LargePacket<F: Lanes> {
+pub(crate) struct LargePacket<F: Lanes> {
     packets: Vec<RayPacket<F>>,
     blocks: Vec<Block>,
     hits: Vec<HitPacket<F>>,
@@ -319,7 +319,7 @@ impl<F: Lanes> Default for LargePacket<F> {
 /// [`large_packets`] cuts are traced together ([`crate::accel::Geometry::intersect_tile`], with the piece's
 /// pyramid), then `visit` gets each packet, its hits and its block (in `tile`'s coordinates). Offsets must
 /// lie in the pixel (`[0, 1]`), as every sampling pattern's do.
-pub fn for_each_camera_hit<F: Lanes>(
+pub(crate) fn for_each_camera_hit<F: Lanes>(
     scene: &Scene,
     tile: Tile,
     offsets: &Offsets,
@@ -353,7 +353,7 @@ pub fn for_each_camera_hit<F: Lanes>(
 }
 
 /// Where a pass of samples lies in each pixel, from the pixel's corner.
-pub enum Offsets<'a> {
+pub(crate) enum Offsets<'a> {
     /// The same offset in every pixel.
     Shared(f32, f32),
     /// Each pixel's own offset, given its image column and row.
@@ -362,7 +362,7 @@ pub enum Offsets<'a> {
 
 /// [`for_each_packet`] with an offset per pixel: lane i's position is `(column + lane column) + dx_i`, the sums
 /// a one-lane packet of that pixel computes, so every width gives the same rays.
-pub fn for_each_packet_at<F: Lanes>(
+pub(crate) fn for_each_packet_at<F: Lanes>(
     camera: &Camera<f64>,
     tile: Tile,
     offsets: &Offsets,

@@ -14,22 +14,22 @@ use super::{for_each_camera_hit, tiles, LargePacket, Offsets, Tile, Window, TILE
 #[derive(Clone, Debug)]
 pub struct PrimaryHits {
     /// Columns.
-    pub width: u32,
+    pub(crate) width: u32,
     /// Rows.
-    pub height: u32,
+    pub(crate) height: u32,
     /// Hit distance per pixel, row-major, `inf` on a miss.
     pub t: Vec<f32>,
     /// Primitive id per pixel in storage order ([`crate::accel::Geometry::file_id`] maps it to the scene
     /// file's numbering), [`crate::geometry::NO_PRIM`] on a miss.
     pub prim: Vec<u32>,
     /// Wall-clock seconds of the tracing.
-    pub seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 impl PrimaryHits {
     /// FNV-1a 64 over the per-pixel scene-file ids as little-endian i32 (−1 on a miss), row-major: the
     /// checksum bench-peers/ computes for Embree, so equal results give equal checksums across tracers.
-    pub fn checksum(&self, scene: &Scene) -> u64 {
+    pub(crate) fn checksum(&self, scene: &Scene) -> u64 {
         let ids = self.prim.iter().map(|&p| {
             if p == crate::geometry::NO_PRIM {
                 -1i32
@@ -48,7 +48,7 @@ pub fn fnv1a(bytes: impl IntoIterator<Item = u8>) -> u64 {
 
 impl PrimaryHits {
     /// A frame of misses, to be filled by [`trace_primary`].
-    pub fn new(width: u32, height: u32) -> Self {
+    pub(crate) fn new(width: u32, height: u32) -> Self {
         let n = width as usize * height as usize;
         Self {
             width,

@@ -6,7 +6,7 @@ use crate::scene::desc::{Filter, FilterKind};
 impl Filter {
     /// The separable weight at offset `(dx, dy)` (in pixels) from a pixel centre: `f(dx)·f(dy)`, zero from
     /// the radius on.
-    pub fn weight(&self, dx: f32, dy: f32) -> f32 {
+    pub(crate) fn weight(&self, dx: f32, dy: f32) -> f32 {
         self.weight_1d(dx) * self.weight_1d(dy)
     }
 
@@ -46,7 +46,7 @@ impl Filter {
 
     /// Pixels beyond a tile's edge whose samples can reach its pixels: the radius less the half pixel from a
     /// sample's pixel to its edge, rounded up.
-    pub fn apron(&self) -> u32 {
+    pub(crate) fn apron(&self) -> u32 {
         (self.radius - 0.5).max(0.0).ceil() as u32
     }
 }

@@ -15,7 +15,7 @@ pub(crate) fn grid_offsets(n: u32) -> Vec<(f32, f32)> {
 
 /// Weights of the lecture's 9-sample half-pixel grid (corner, edge midpoint, centre), the trapezoid rule
 /// for the box filter over the pixel: 1/16 at corners, 1/8 at edge midpoints, 1/4 at the centre.
-pub const HALF_PIXEL_WEIGHTS: [[f32; 3]; 3] = [
+pub(crate) const HALF_PIXEL_WEIGHTS: [[f32; 3]; 3] = [
     [1.0 / 16.0, 1.0 / 8.0, 1.0 / 16.0],
     [1.0 / 8.0, 1.0 / 4.0, 1.0 / 8.0],
     [1.0 / 16.0, 1.0 / 8.0, 1.0 / 16.0],

@@ -7,7 +7,7 @@ use crate::math::SplitMix64;
 /// The random bits of pixel `(x, y)`'s sample `k`, stream `s` (0 and 1 for the two coordinates, more for
 /// other uses): one splitmix64 step over the packed arguments, so neighbouring pixels and indices get
 /// unrelated values.
-pub fn pixel_hash(x: u32, y: u32, k: u32, s: u32) -> u64 {
+pub(crate) fn pixel_hash(x: u32, y: u32, k: u32, s: u32) -> u64 {
     let packed = (u64::from(x) << 32 | u64::from(y)) ^ (u64::from(k) << 20 | u64::from(s)).rotate_left(45);
     SplitMix64::new(packed).next_u64()
 }
@@ -19,7 +19,7 @@ pub(crate) fn pixel_unit(x: u32, y: u32, k: u32, s: u32) -> f32 {
 
 /// Sample `k` of pixel `(x, y)` on an n×n jittered grid: a uniform position inside the k-th stratum (row by
 /// row), in [0, 1)².
-pub fn stratified(n: u32, x: u32, y: u32, k: u32) -> (f32, f32) {
+pub(crate) fn stratified(n: u32, x: u32, y: u32, k: u32) -> (f32, f32) {
     let (a, b) = (k % n, k / n);
     let step = 1.0 / n as f32;
     let jitter = |s: u32, cell: u32| ((cell as f32 + pixel_unit(x, y, k, s)) * step).min(ONE_BELOW);
@@ -35,7 +35,7 @@ const R2_STEP: (f64, f64) = (0.754_877_666_246_692_8, 0.569_840_290_998_053_3);
 
 /// Sample `k` of pixel `(x, y)` from the R2 sequence, shifted by a per-pixel random rotation
 /// (Cranley–Patterson) so that pixels do not repeat one pattern: `frac(u + k·α)`, in [0, 1)².
-pub fn r2(x: u32, y: u32, k: u32) -> (f32, f32) {
+pub(crate) fn r2(x: u32, y: u32, k: u32) -> (f32, f32) {
     let shift = |s: u32| f64::from(pixel_unit(x, y, 0, s));
     let step = |u: f64, a: f64| ((u + f64::from(k) * a).fract() as f32).min(ONE_BELOW);
     (step(shift(0), R2_STEP.0), step(shift(1), R2_STEP.1))
@@ -51,7 +51,7 @@ const SOBOL_BITS: u32 = 24;
 /// `i`, counted from the top, is `C(i, r)` mod 2; by Lucas's theorem it is odd exactly when the bits of `r`
 /// are a subset of those of `i`). Together they are a (0, 2)-sequence in base 2: each aligned block of 2^m
 /// points, the first one included, is a (0, m, 2)-net.
-pub fn sobol_point(k: u32) -> (u32, u32) {
+pub(crate) fn sobol_point(k: u32) -> (u32, u32) {
     let (mut second, mut bits) = (0u32, k);
     while bits != 0 {
         second ^= SOBOL_PASCAL[bits.trailing_zeros() as usize];
@@ -89,7 +89,7 @@ const SOBOL_PASCAL: [u32; 32] = {
 /// subtree take their flips from the bits of one splitmix64 step over the seed XOR the subtree root's heap
 /// index (`2^top + prefix`, distinct for every root), node `2^r + q` (relative depth `r`, the next `r` bits
 /// `q`) from bit `2^r + q`. So every node's flip is its own random bit, at four hashes a coordinate.
-pub fn owen_scramble(v: u32, seed: u64) -> u32 {
+pub(crate) fn owen_scramble(v: u32, seed: u64) -> u32 {
     const _: () = assert!(SOBOL_BITS == 4 * 6, "four subtrees of six levels");
     let mut flips = 0u32;
     for top in [0, 6, 12, 18] {
@@ -113,7 +113,7 @@ pub fn owen_scramble(v: u32, seed: u64) -> u32 {
 /// every pixel form a (0, m, 2)-net in base 2: each of the 2^m elementary intervals of area 2^−m (for every
 /// split `2^−i × 2^−(m−i)`) holds exactly one. Other counts are a prefix of the next power of two's net and
 /// keep low discrepancy without that guarantee.
-pub fn sobol(x: u32, y: u32, k: u32) -> (f32, f32) {
+pub(crate) fn sobol(x: u32, y: u32, k: u32) -> (f32, f32) {
     let (a, b) = sobol_point(k);
     let unit = |v: u32| (v >> (32 - SOBOL_BITS)) as f32 * (1.0 / (1u32 << SOBOL_BITS) as f32);
     let (seed_u, seed_v) = (pixel_hash(x, y, 0, SOBOL_STREAM), pixel_hash(x, y, 0, SOBOL_STREAM + 1));

@@ -179,7 +179,7 @@ impl Pattern {
     }
 
     /// Camera rays per pixel (the half-pixel pattern shares its 9 with the neighbours: about 4).
-    pub fn rays_per_pixel(self) -> f64 {
+    pub(crate) fn rays_per_pixel(self) -> f64 {
         match self {
             Pattern::Grid(n) | Pattern::Stratified(n) => f64::from(n * n),
             Pattern::R2(count) | Pattern::Sobol(count) => f64::from(count),
@@ -244,29 +244,29 @@ pub enum Shade {
 /// The settings of [`Shade::Ao`].
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Ao {
-    /// Occlusion rays per camera ray's hit, from 1 to [`Ao::MAX_SAMPLES`].
+    /// Occlusion rays per camera ray's hit, from 1 to `Ao::MAX_SAMPLES`.
     pub samples: u32,
-    /// The occlusion rays' length in scene units (positive); `None`: [`Ao::DEFAULT_REACH`] times the diagonal
+    /// The occlusion rays' length in scene units (positive); `None`: `Ao::DEFAULT_REACH` times the diagonal
     /// of the bounded primitives' box, which compiling fills in.
     pub distance: Option<f64>,
 }
 
 impl Ao {
     /// The most occlusion rays per hit.
-    pub const MAX_SAMPLES: u32 = 4096;
+    pub(crate) const MAX_SAMPLES: u32 = 4096;
     /// Occlusion rays per hit when none are given.
-    pub const DEFAULT_SAMPLES: u32 = 16;
+    pub(crate) const DEFAULT_SAMPLES: u32 = 16;
     /// The default distance as a share of the diagonal of the box around every bounded primitive: a quarter,
     /// so that occlusion is local (contacts, creases, cavities) rather than the whole scene's shadow.
-    pub const DEFAULT_REACH: f64 = 0.25;
+    pub(crate) const DEFAULT_REACH: f64 = 0.25;
 }
 
 impl Shade {
     /// The forms `--shade` and the TOML key `shade` accept.
-    pub const FORMS: &'static str = "whitted, ao, ao:SAMPLES or ao:SAMPLES,DISTANCE";
+    pub(crate) const FORMS: &'static str = "whitted, ao, ao:SAMPLES or ao:SAMPLES,DISTANCE";
 
-    /// Parses `whitted` or `ao[:SAMPLES[,DISTANCE]]` (SAMPLES from 1 to [`Ao::MAX_SAMPLES`], default
-    /// [`Ao::DEFAULT_SAMPLES`]; DISTANCE a length above 0 in scene units, default from the scene's size).
+    /// Parses `whitted` or `ao[:SAMPLES[,DISTANCE]]` (SAMPLES from 1 to `Ao::MAX_SAMPLES`, default
+    /// `Ao::DEFAULT_SAMPLES`; DISTANCE a length above 0 in scene units, default from the scene's size).
     pub fn parse(s: &str) -> Result<Shade, String> {
         let forms = Self::FORMS;
         let (mode, args) = match s.trim().split_once(':') {
@@ -378,7 +378,7 @@ impl Default for RenderDesc {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Checker {
     /// The colour of the odd cells (the material's colour fills the even ones).
-    pub color: Rgb,
+    pub(crate) color: Rgb,
     /// Edge length of a cell.
     pub size: f32,
 }

@@ -18,14 +18,14 @@ pub const MAX_SIDE: u32 = 1 << 23;
 pub struct Estimate {
     /// Bands alive at once (traced, held by the postfilter, finished, encoded and queued, being written),
     /// and for TIFF and JPEG, which encode the image whole, its stored bytes.
-    pub bands: u64,
+    pub(crate) bands: u64,
     /// Working memory of the tiles in flight, one per thread (supersampling, filter aprons, adaptive
     /// lattices).
-    pub tiles: u64,
+    pub(crate) tiles: u64,
     /// All of it.
-    pub total: u64,
+    pub(crate) total: u64,
     /// The machine's available memory (`MemAvailable`), where the system tells.
-    pub available: Option<u64>,
+    pub(crate) available: Option<u64>,
 }
 
 /// Something a still runs into.
@@ -106,7 +106,7 @@ fn check_with(
 }
 
 /// The memory [`check`] compares with the available memory.
-pub fn estimate(scene: &Scene, job: &Job, threads: usize) -> Estimate {
+pub(crate) fn estimate(scene: &Scene, job: &Job, threads: usize) -> Estimate {
     let postfilter = u64::from(scene.render.postfilter == crate::scene::desc::PostFilter::Lecture3x3);
     let columns = u64::from(job.window.width()) + 2 * postfilter;
     let rows = job.band_rows().min(job.window.height() + 2 * postfilter as u32);
@@ -182,7 +182,7 @@ fn refuse(why: String) -> StillError {
 }
 
 /// `n` bytes in the largest unit that keeps a number ≥ 1 (GiB, MiB, KiB).
-pub fn bytes(n: u64) -> String {
+pub(crate) fn bytes(n: u64) -> String {
     match n {
         n if n >= 1 << 30 => format!("{:.1} GiB", n as f64 / f64::from(1u32 << 30)),
         n if n >= 1 << 20 => format!("{:.1} MiB", n as f64 / f64::from(1u32 << 20)),

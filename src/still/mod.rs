@@ -27,12 +27,12 @@ pub use check::{check, Estimate, Limit, MAX_SIDE};
 use resume::Resume;
 
 /// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.
-pub const BAND_BUDGET: usize = 32 << 20;
+pub(crate) const BAND_BUDGET: usize = 32 << 20;
 
 /// The fewest bands an image is cut into by default, however small: one band is traced while the one before
 /// is encoded, so memory holds about two bands' pixels, not the whole image (measured peaks:
 /// docs/perf-log/2026-11-scale.md, "Peak memory in KiB, and bands").
-pub const MIN_BANDS: u32 = 4;
+pub(crate) const MIN_BANDS: u32 = 4;
 
 /// One still to render: where it goes, how it is written, which part of the image.
 #[derive(Clone, Debug)]
@@ -49,9 +49,9 @@ pub struct Job {
     pub lanes: usize,
     /// AOVs to write beside the image, and their file.
     pub aov: Option<(Vec<Aov>, PathBuf)>,
-    /// Bytes of linear RGB per band ([`BAND_BUDGET`] unless set).
+    /// Bytes of linear RGB per band (`BAND_BUDGET` unless set).
     pub band_budget: usize,
-    /// The fewest bands the window is cut into where the budget would allow bigger ones ([`MIN_BANDS`]
+    /// The fewest bands the window is cut into where the budget would allow bigger ones (`MIN_BANDS`
     /// unless set; 1 lets the budget alone decide).
     pub min_bands: u32,
     /// Resumable ([`resume`]): the hash of everything that decides the files' bytes (scene, settings,
@@ -76,7 +76,7 @@ impl Job {
     }
 
     /// Where the file's pixels sit in the full image.
-    pub fn frame(&self, scene: &Scene) -> Frame {
+    pub(crate) fn frame(&self, scene: &Scene) -> Frame {
         let w = self.window;
         Frame {
             width: w.width(),
@@ -154,7 +154,7 @@ pub fn catch_interrupts() {
 
 /// Signals stay as they are where there is no Unix signal API.
 #[cfg(not(unix))]
-pub fn catch_interrupts() {}
+pub(crate) fn catch_interrupts() {}
 
 /// Renders `job` on `pool`, reporting tiles to `progress`: bands of rows go through the postfilter, are
 /// turned into the format's bytes, and are handed to a writer thread (one more for the AOVs) through a
@@ -181,7 +181,7 @@ pub fn render(
 
 /// A writer has failed: the producer of rows should stop (the writer's error is what gets reported).
 #[derive(Clone, Copy, Debug)]
-pub struct Stop;
+pub(crate) struct Stop;
 
 /// Writes `job`'s files from the rows `produce` makes: it is called with `emit`, which takes the window's
 /// finished rows in order (one or more whole rows a call), turns them into the format's bytes (and makes
@@ -190,7 +190,7 @@ pub struct Stop;
 /// `Err(Some(e))` when it failed itself — then the files are abandoned (their temporary files removed,
 /// existing files kept) and `e` is returned. [`render`] produces the rows by tracing bands here; a
 /// distributed render receives them from elsewhere. `job.resume` is not used here (see [`render`]).
-pub fn write_bands<T>(
+pub(crate) fn write_bands<T>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     job: &Job,

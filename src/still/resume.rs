@@ -16,11 +16,11 @@ use crate::output::BoxError;
 const MAGIC: &[u8; 16] = b"bareray resume1\n";
 
 /// The side file of a resumable still.
-pub struct Resume {
+pub(crate) struct Resume {
     path: PathBuf,
     file: File,
     /// Window rows already finished.
-    pub rows: u32,
+    pub(crate) rows: u32,
 }
 
 /// The side file of `output`: `.NAME.resume` in the same directory.
@@ -41,7 +41,7 @@ impl Resume {
     /// Opens the side file of `output` for settings `hash`: an existing one with the same hash is kept up
     /// to its last whole record, and its records are handed to `replay` in order (image bytes, AOV bytes);
     /// any other is replaced by an empty one.
-    pub fn open(
+    pub(crate) fn open(
         output: &Path,
         hash: u64,
         mut replay: impl FnMut(Vec<u8>, Vec<u8>) -> Result<(), BoxError>,
@@ -76,7 +76,7 @@ impl Resume {
 
     /// Appends finished rows: `rows` window rows as the image writer's bytes and the AOV writer's (empty
     /// without AOVs). Flushed to the system at once, so a killed process keeps them.
-    pub fn record(&mut self, rows: u32, image: &[u8], aov: &[u8]) -> Result<(), BoxError> {
+    pub(crate) fn record(&mut self, rows: u32, image: &[u8], aov: &[u8]) -> Result<(), BoxError> {
         let (image, aov) = (deflate(image)?, deflate(aov)?);
         let mut out = Vec::with_capacity(20 + image.len() + aov.len());
         out.extend_from_slice(&rows.to_le_bytes());
@@ -90,13 +90,13 @@ impl Resume {
     }
 
     /// The render is complete and its files are in place: the side file goes.
-    pub fn finish(self) -> std::io::Result<()> {
+    pub(crate) fn finish(self) -> std::io::Result<()> {
         drop(self.file);
         fs::remove_file(&self.path)
     }
 
     /// Where the side file is.
-    pub fn path(&self) -> &Path {
+    pub(crate) fn path(&self) -> &Path {
         &self.path
     }
 }

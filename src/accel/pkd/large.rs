@@ -174,7 +174,7 @@ impl Particles {
     /// each with its pyramid (`packets[p]`, merged into `best[p]`), walking the tree once for all of them;
     /// `pyramid` encloses every active ray of the tile. The directions must be unit length (camera rays are).
     /// Each lane gets the bits [`Particles::intersect_k`] gives it.
-    pub fn intersect_large<F: Lanes>(
+    pub(crate) fn intersect_large<F: Lanes>(
         &self,
         packets: &[RayPacket<F>],
         pyramid: &Pyramid,

@@ -1,7 +1,7 @@
 //! The particle tree: a balanced k-d tree whose nodes are the spheres themselves (the P-k-d tree of Wald,
 //! Knoll, Johnson, Usher, Pascucci and Papka, "CPU Ray Tracing Large Particle Data with Balanced P-k-d
 //! Trees", 2015), for sphere fields too large for a BVH. It costs 4 bytes per sphere beside the spheres'
-//! own records: a `u32` holding the scene-file index (30 bits, so at most [`MAX_PARTICLES`] spheres) and,
+//! own records: a `u32` holding the scene-file index (30 bits, so at most `MAX_PARTICLES` spheres) and,
 //! for a node, its split axis (the top 2 bits).
 //!
 //! **Layout.** Implicit and in order: the spheres of a range `lo..hi` longer than [`LEAF`] are split at
@@ -12,10 +12,10 @@
 //! whole field, as the paper's, so a field of very mixed radii culls less well but never wrongly).
 //!
 //! **Records.** The spheres' world-space values, `x, y, z, r`, as the file holds them (in a private mapping
-//! of an `.f32r` file, [`crate::io::f32r::map`]) or in memory, in f32 or in f64 (a scene description's
+//! of an `.f32r` file, `crate::io::f32r::map`) or in memory, in f32 or in f64 (a scene description's
 //! spheres). The walk moves each visited centre into rendering space (`centre − eye` in f64, rounded once)
 //! and computes its exact eye term as compile does for the BVH's spheres ([`crate::geometry::eye_term`]),
-//! so the sphere kernel sees the same bits, and with [`crate::geometry::HitPacket::update`]'s (t, file
+//! so the sphere kernel sees the same bits, and with `crate::geometry::HitPacket::update`'s (t, file
 //! index) order the closest hits are the BVH's and brute force's, bit for bit, at every packet width.
 
 mod build;
@@ -35,7 +35,7 @@ pub(crate) const INDEX_BITS: u32 = 30;
 /// The index part of a key.
 pub(crate) const INDEX_MASK: u32 = (1 << INDEX_BITS) - 1;
 /// The most spheres a particle tree holds (2³⁰, 1.07e9).
-pub const MAX_PARTICLES: usize = 1 << INDEX_BITS;
+pub(crate) const MAX_PARTICLES: usize = 1 << INDEX_BITS;
 
 /// A sphere's world-space record `x, y, z, r`, in f32 (files) or f64 (scene descriptions).
 pub(crate) trait Record: Copy + Send + Sync {
@@ -59,7 +59,7 @@ impl Record for [f64; 4] {
 
 /// f32 records that live elsewhere than in a `Vec`: a private mapping of an `.f32r` file
 /// (`crate::io::f32r::MappedRecords`), which the tree reorders in place.
-pub trait RecordStore: Send + Sync {
+pub(crate) trait RecordStore: Send + Sync {
     /// The records `x, y, z, r`.
     fn records(&self) -> &[[f32; 4]];
     /// The records, to reorder them.
@@ -67,7 +67,7 @@ pub trait RecordStore: Send + Sync {
 }
 
 /// The spheres' records, wherever they are.
-pub enum Records {
+pub(crate) enum Records {
     /// f32 records in a store of their own (a mapped file).
     Mapped(Box<dyn RecordStore>),
     /// f32 records in memory.
@@ -78,17 +78,12 @@ pub enum Records {
 
 impl Records {
     /// Number of records.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         match self {
             Records::Mapped(m) => m.records().len(),
             Records::F32(v) => v.len(),
             Records::F64(v) => v.len(),
         }
-    }
-
-    /// True when there are none.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
     }
 }
 
@@ -169,14 +164,14 @@ pub struct Particles {
     eye_terms_help: bool,
     /// Camera packets cull by their pyramids and tiles walk as large packets
     /// ([`crate::bvh::Bvh::frustum_culling`]'s setting for the tree).
-    pub frustum_culling: bool,
+    pub(crate) frustum_culling: bool,
 }
 
 impl Particles {
     /// Spheres given in f64 (world space: `x, y, z, r`), their materials and their colours (empty, or one
     /// per sphere) in a particle tree, in rendering space about `origin` (the eye), culling with padding
     /// `pad`.
-    pub fn from_f64(
+    pub(crate) fn from_f64(
         records: Vec<[f64; 4]>,
         material: Vec<u32>,
         color: Vec<Rgb8>,
@@ -191,7 +186,7 @@ impl Particles {
 
     /// The records of a store (a mapped `.f32r` file) in a particle tree, built in the store's own memory,
     /// every sphere with material 0.
-    pub fn from_store(records: Box<dyn RecordStore>, origin: DVec3, pad: f32) -> Particles {
+    pub(crate) fn from_store(records: Box<dyn RecordStore>, origin: DVec3, pad: f32) -> Particles {
         Self::build(Records::Mapped(records), Vec::new(), Vec::new(), 0, origin, pad)
     }
 
@@ -277,12 +272,12 @@ impl Particles {
     }
 
     /// Bytes beside the records: keys, materials and colours (the tree's whole cost, and the colours').
-    pub fn overhead_bytes(&self) -> usize {
+    pub(crate) fn overhead_bytes(&self) -> usize {
         (self.key.len() + self.material.len()) * size_of::<u32>() + self.color.len() * size_of::<Rgb8>()
     }
 
     /// Bytes of the records.
-    pub fn record_bytes(&self) -> usize {
+    pub(crate) fn record_bytes(&self) -> usize {
         match &self.records {
             Records::F64(v) => v.len() * size_of::<[f64; 4]>(),
             r => r.len() * size_of::<[f32; 4]>(),
@@ -290,34 +285,34 @@ impl Particles {
     }
 
     /// Centre (rendering space) and radius of the sphere at position `i`, as the kernel sees them.
-    pub fn sphere(&self, i: usize) -> (Vec3f, f32) {
+    pub(crate) fn sphere(&self, i: usize) -> (Vec3f, f32) {
         with_records!(&self.records, |recs| place(&recs[i], self.origin))
     }
 
     /// The exact eye term of the sphere at position `i`, rounded to f32 ([`crate::geometry::eye_term`]).
-    pub fn c_eye(&self, i: usize) -> f32 {
+    pub(crate) fn c_eye(&self, i: usize) -> f32 {
         with_records!(&self.records, |recs| eye_term_of(&recs[i], self.origin)) as f32
     }
 
     /// Material of the sphere at position `i`.
-    pub fn material(&self, i: usize) -> u32 {
+    pub(crate) fn material(&self, i: usize) -> u32 {
         self.material.get(i).copied().unwrap_or(self.material0)
     }
 
     /// The colour of the sphere at position `i`, when the spheres have colours of their own.
     #[inline]
-    pub fn color(&self, i: usize) -> Option<Rgb8> {
+    pub(crate) fn color(&self, i: usize) -> Option<Rgb8> {
         self.color.get(i).copied()
     }
 
     /// How many spheres have a colour of their own (0 or all).
-    pub fn colors(&self) -> usize {
+    pub(crate) fn colors(&self) -> usize {
         self.color.len()
     }
 
     /// Scene-file index of the sphere at position `i`.
     #[inline(always)]
-    pub fn key(&self, i: usize) -> u32 {
+    pub(crate) fn key(&self, i: usize) -> u32 {
         self.key[i] & INDEX_MASK
     }
 

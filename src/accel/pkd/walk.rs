@@ -272,7 +272,7 @@ impl<E: Copy> Stack<E> {
 impl Particles {
     /// Closest hits of the packet's active lanes with the tree's spheres (ids from `base`), merged into
     /// `best`; the departure sphere of each lane (`from.prim`) is never reported.
-    pub fn intersect_k<F: Lanes>(
+    pub(crate) fn intersect_k<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
@@ -287,7 +287,7 @@ impl Particles {
     }
 
     /// Lanes of `live` blocked by one of the tree's spheres (ids from `base`) in `[0, t_max)`.
-    pub fn occluded_k<F: Lanes>(
+    pub(crate) fn occluded_k<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,

@@ -1,5 +1,5 @@
 //! Spheres given as arrays in memory (centres, radii, colours), checked and made the scene a particle file
-//! of the same spheres makes ([`super::scene::particle_scene`]): what the Python module renders.
+//! of the same spheres makes (`super::scene::particle_scene`): what the Python module renders.
 //!
 //! The arrays are read where they are, as f32 or f64 ([`Floats`]); the description holds each sphere in
 //! f64 (40 bytes) and its colour in 3 bytes.
@@ -21,7 +21,7 @@ pub enum Floats<'a> {
 
 impl Floats<'_> {
     /// Number of values.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         match self {
             Floats::F32(v) => v.len(),
             Floats::F64(v) => v.len(),
@@ -35,7 +35,7 @@ impl Floats<'_> {
 
     /// Value `i` in f64 (exactly).
     #[inline]
-    pub fn get(&self, i: usize) -> f64 {
+    pub(crate) fn get(&self, i: usize) -> f64 {
         match self {
             Floats::F32(v) => f64::from(v[i]),
             Floats::F64(v) => v[i],
@@ -60,11 +60,11 @@ pub struct SphereArrays<'a> {
 #[error("{}: {message}", match .index { Some(i) => format!("{array}[{i}]"), None => array.to_string() })]
 pub struct ArrayError {
     /// `centers`, `radii` or `colors`.
-    pub array: &'static str,
+    pub(crate) array: &'static str,
     /// The first bad sphere, or `None` for a fault of the whole array (its length).
     pub index: Option<usize>,
     /// What is wrong.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 impl ArrayError {
@@ -75,7 +75,7 @@ impl ArrayError {
 
 impl SphereArrays<'_> {
     /// Number of spheres.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.radii.len()
     }
 
@@ -122,7 +122,7 @@ impl SphereArrays<'_> {
         Ok(())
     }
 
-    /// The scene of these spheres, as a particle file of them gives it ([`particle_scene`]): seen from `view`
+    /// The scene of these spheres, as a particle file of them gives it (`particle_scene`): seen from `view`
     /// (+z when `None`), framed at 1920×1080, a headlight, a white background; each sphere's colour in the
     /// per-sphere colour store. Checks the arrays first ([`SphereArrays::check`]).
     ///

@@ -5,18 +5,18 @@
 use crate::math::Rgb;
 
 /// Radius (Å) of an element the table has no radius for, and of an unknown element.
-pub const FALLBACK_RADIUS: f64 = 1.5;
+pub(crate) const FALLBACK_RADIUS: f64 = 1.5;
 
 /// Colour of an unknown element: pink, #FF1493.
-pub const FALLBACK_COLOR: u32 = 0xFF1493;
+pub(crate) const FALLBACK_COLOR: u32 = 0xFF1493;
 
 /// One element: symbol, van der Waals radius in Å (0 where Alvarez gives none), Jmol colour `0xRRGGBB`.
 /// Atomic number Z is the index in [`ELEMENTS`] plus one.
-pub type Element = (&'static str, f64, u32);
+pub(crate) type Element = (&'static str, f64, u32);
 
 /// Elements H (Z = 1) to Cm (Z = 96), in order of atomic number.
 #[rustfmt::skip]
-pub const ELEMENTS: &[Element] = &[
+pub(crate) const ELEMENTS: &[Element] = &[
     ("H", 1.20, 0xFFFFFF), ("He", 1.43, 0xD9FFFF), ("Li", 2.12, 0xCC80FF), ("Be", 1.98, 0xC2FF00),
     ("B", 1.91, 0xFFB5B5), ("C", 1.77, 0x909090), ("N", 1.66, 0x3050F8), ("O", 1.50, 0xFF0D0D),
     ("F", 1.46, 0x90E050), ("Ne", 1.58, 0xB3E3F5), ("Na", 2.50, 0xAB5CF2), ("Mg", 2.51, 0x8AFF00),
@@ -45,7 +45,7 @@ pub const ELEMENTS: &[Element] = &[
 
 /// The element a symbol names, matched without regard to case (`CL`, `cl` and `Cl` are chlorine), or an
 /// atomic number (`6` is carbon).
-pub fn lookup(name: &str) -> Option<&'static Element> {
+pub(crate) fn lookup(name: &str) -> Option<&'static Element> {
     if let Ok(z) = name.parse::<usize>() {
         return z.checked_sub(1).and_then(|i| ELEMENTS.get(i));
     }
@@ -53,12 +53,12 @@ pub fn lookup(name: &str) -> Option<&'static Element> {
 }
 
 /// The element's radius in Å, if the table has one.
-pub fn radius(element: &Element) -> Option<f64> {
+pub(crate) fn radius(element: &Element) -> Option<f64> {
     (element.1 > 0.0).then_some(element.1)
 }
 
 /// `0xRRGGBB` as a colour with channels in [0, 1].
-pub fn rgb(hex: u32) -> Rgb {
+pub(crate) fn rgb(hex: u32) -> Rgb {
     let channel = |shift: u32| ((hex >> shift) & 0xFF) as f32 / 255.0;
     Rgb::new(channel(16), channel(8), channel(0))
 }
@@ -66,7 +66,7 @@ pub fn rgb(hex: u32) -> Rgb {
 /// The element of a PDB/GRO atom name (`CA`, `OW`, `HG21`, `1HB`, `NA`): the ion named as its residue
 /// (`NA` in residue `NA`) or, when `two_letters` allows it, a known two-letter element written from the
 /// name's first character; otherwise the name's first letter.
-pub fn from_atom_name(name: &str, residue: &str, two_letters: bool) -> Option<&'static Element> {
+pub(crate) fn from_atom_name(name: &str, residue: &str, two_letters: bool) -> Option<&'static Element> {
     let letters: String = name.trim().chars().filter(char::is_ascii_alphabetic).collect();
     if letters.is_empty() {
         return None;

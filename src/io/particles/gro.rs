@@ -15,7 +15,7 @@ use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Reads frame `wanted` (from 0) of a `.gro` text.
-pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let mut index = 0;
     while lines.more() {

@@ -4,7 +4,7 @@
 //! scaled `xs ys zs` or `xsu ysu zsu` mapped through the box (triclinic too); an `element` column gives
 //! the kind, else `type` (a LAMMPS type number); `radius` or `diameter` give the radius. Other sections
 //! (`UNITS`, `TIME`) are skipped. Frames are counted in file order, whatever their timesteps. The box of
-//! the chosen frame is kept ([`Frame::cell`]).
+//! the chosen frame is kept (`Frame::cell`).
 
 use std::path::Path;
 
@@ -27,7 +27,7 @@ struct Columns {
 }
 
 /// Reads frame `wanted` (from 0) of a LAMMPS dump.
-pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let (mut index, mut count, mut cell) = (0usize, None, None);
     while lines.more() {

@@ -1,7 +1,7 @@
 //! Particle files as simulation codes write them: XYZ and extended XYZ ([`xyz`]), PDB and PQR ([`pdb`]),
 //! GROMACS `.gro` ([`gro`]) and LAMMPS dumps ([`lammps`]), each also gzip- or bzip2-compressed. A reader
 //! turns one frame of a file into a [`Frame`]: centres, a kind per particle (an element or a LAMMPS type)
-//! the radii or colours the file gives, and its periodic box ([`Cell`]) if it has one. [`scene`] then
+//! the radii or colours the file gives, and its periodic box (`Cell`) if it has one. [`scene`] then
 //! chooses radii and colours by kind (the tables in [`elements`], a types sidecar ([`types`]) and the
 //! overrides of [`ParticleOptions`]), gives every particle one material and its own colour
 //! ([`crate::scene::SceneDesc::sphere_colors`]), draws the box if asked and frames the particles; [`arrays`]
@@ -44,7 +44,7 @@ pub enum ParticleFormat {
 
 impl ParticleFormat {
     /// The format an extension (lower case, without the dot) names.
-    pub fn from_name(ext: &str) -> Option<Self> {
+    pub(crate) fn from_name(ext: &str) -> Option<Self> {
         match ext {
             "xyz" | "extxyz" => Some(Self::Xyz),
             "pdb" | "ent" => Some(Self::Pdb),
@@ -72,15 +72,15 @@ pub struct ParticleOptions {
     /// Every radius is multiplied by this (1 when `None`).
     pub radius_scale: Option<f64>,
     /// A types sidecar ([`types`]) to read radii and colours by kind from, beaten by `radius` and `color`;
-    /// when `None`, [`load`] reads the particle file's own sidecar if there is one ([`types::sidecar_of`]).
+    /// when `None`, `load` reads the particle file's own sidecar if there is one (`types::sidecar_of`).
     pub types: Option<PathBuf>,
-    /// Draw the file's periodic box as thin cylinders ([`scene::box_radius`]).
+    /// Draw the file's periodic box as thin cylinders (`scene::box_radius`).
     pub draw_box: bool,
 }
 
 impl ParticleOptions {
     /// Whether any choice besides the view is made (those apply to particle files only).
-    pub fn chooses_particles(&self) -> bool {
+    pub(crate) fn chooses_particles(&self) -> bool {
         self.frame.is_some()
             || !self.radius.is_empty()
             || !self.color.is_empty()
@@ -92,7 +92,7 @@ impl ParticleOptions {
 
 /// The unit of a file's lengths, which decides how the Å radii of the table are scaled.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum Unit {
+pub(crate) enum Unit {
     /// Ångström (XYZ, PDB, PQR, LAMMPS `real` and `metal` units).
     Angstrom,
     /// Nanometre (GROMACS).
@@ -101,63 +101,63 @@ pub enum Unit {
 
 /// What particles are: an element of the table, a name that is none, or a LAMMPS type number.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Kind {
+pub(crate) struct Kind {
     /// The element's symbol as the table writes it, the name as the file writes it, or the type number.
-    pub name: String,
+    pub(crate) name: String,
     /// The element, when the name is one.
-    pub element: Option<&'static elements::Element>,
+    pub(crate) element: Option<&'static elements::Element>,
     /// A LAMMPS type without an element: radius 0.5 and a colour of [`scene::TYPE_COLORS`] by default.
-    pub lammps_type: bool,
+    pub(crate) lammps_type: bool,
 }
 
 /// One particle as read.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Particle {
+pub(crate) struct Particle {
     /// Centre, in the file's unit.
-    pub center: DVec3,
+    pub(crate) center: DVec3,
     /// Index into [`Frame::kinds`].
-    pub kind: u32,
+    pub(crate) kind: u32,
     /// The file's radius for it, if the file has one.
-    pub radius: Option<f64>,
+    pub(crate) radius: Option<f64>,
     /// The file's colour for it, if the file has one.
-    pub color: Option<Rgb>,
+    pub(crate) color: Option<Rgb>,
 }
 
 /// One frame of a particle file.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Frame {
     /// The particles in file order.
-    pub particles: Vec<Particle>,
+    pub(crate) particles: Vec<Particle>,
     /// The distinct kinds, in order of first appearance.
-    pub kinds: Vec<Kind>,
+    pub(crate) kinds: Vec<Kind>,
     /// The unit of the file's lengths.
-    pub unit: Unit,
+    pub(crate) unit: Unit,
     /// The periodic box the file gives for this frame, if any.
-    pub cell: Option<Cell>,
+    pub(crate) cell: Option<Cell>,
 }
 
 /// A periodic box: a parallelepiped with a corner and three edge vectors, in the file's unit.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cell {
+pub(crate) struct Cell {
     /// The corner the edges start from.
-    pub origin: DVec3,
+    pub(crate) origin: DVec3,
     /// The edge vectors a, b, c.
-    pub edges: [DVec3; 3],
+    pub(crate) edges: [DVec3; 3],
 }
 
 impl Cell {
     /// The point of scaled (fractional) coordinates `s`: origin + s.x·a + s.y·b + s.z·c.
-    pub fn point(&self, s: DVec3) -> DVec3 {
+    pub(crate) fn point(&self, s: DVec3) -> DVec3 {
         self.origin + s.x * self.edges[0] + s.y * self.edges[1] + s.z * self.edges[2]
     }
 
     /// The eight corners, corner `i` at the scaled coordinates of `i`'s bits (bit 0 for a, 1 for b, 2 for c).
-    pub fn corners(&self) -> [DVec3; 8] {
+    pub(crate) fn corners(&self) -> [DVec3; 8] {
         std::array::from_fn(|i| self.point(DVec3::new((i & 1) as f64, (i >> 1 & 1) as f64, (i >> 2) as f64)))
     }
 
     /// The twelve edges as pairs of [`Cell::corners`] indices.
-    pub fn edge_corners() -> [(usize, usize); 12] {
+    pub(crate) fn edge_corners() -> [(usize, usize); 12] {
         let mut out = [(0, 0); 12];
         let mut n = 0;
         for i in 0..8 {
@@ -173,7 +173,7 @@ impl Cell {
 
     /// Whether the box can be drawn: finite, with a volume that is not vanishingly small next to its edges
     /// (a GRO box line of zeros, say, gives none).
-    pub fn is_solid(&self) -> bool {
+    pub(crate) fn is_solid(&self) -> bool {
         let [a, b, c] = self.edges;
         let volume = a.dot(b.cross(c)).abs();
         let scale = a.length() * b.length() * c.length();
@@ -183,7 +183,7 @@ impl Cell {
     /// The box of the crystallographic cell lengths `a, b, c` and angles `alpha, beta, gamma` (degrees), with
     /// a along x and b in the xy plane, as PDB's CRYST1 record gives them; `None` for angles that close no
     /// box.
-    pub fn from_lengths_angles(lengths: [f64; 3], angles: [f64; 3]) -> Option<Cell> {
+    pub(crate) fn from_lengths_angles(lengths: [f64; 3], angles: [f64; 3]) -> Option<Cell> {
         let [a, b, c] = lengths;
         // Right angles exactly, so that an orthogonal cell's edges lie on the axes.
         let [cos_a, cos_b, cos_g] = angles.map(|d| if d == 90.0 { 0.0 } else { d.to_radians().cos() });
@@ -207,12 +207,12 @@ impl Cell {
 
 impl Frame {
     /// An empty frame in `unit`, without a box.
-    pub fn new(unit: Unit) -> Self {
+    pub(crate) fn new(unit: Unit) -> Self {
         Self { particles: Vec::new(), kinds: Vec::new(), unit, cell: None }
     }
 
     /// The index of `kind`, added on first sight (kinds are few, so a search is enough).
-    pub fn kind(&mut self, kind: Kind) -> u32 {
+    pub(crate) fn kind(&mut self, kind: Kind) -> u32 {
         match self.kinds.iter().position(|k| k.name == kind.name && k.lammps_type == kind.lammps_type) {
             Some(i) => i as u32,
             None => {
@@ -223,7 +223,7 @@ impl Frame {
     }
 
     /// The index of the element named `name` (or of `name` itself when no element has it).
-    pub fn element_kind(&mut self, name: &str) -> u32 {
+    pub(crate) fn element_kind(&mut self, name: &str) -> u32 {
         let element = elements::lookup(name);
         let name = element.map_or(name, |e| e.0).to_owned();
         self.kind(Kind { name, element, lammps_type: false })
@@ -232,7 +232,7 @@ impl Frame {
 
 /// Reads frame `options.frame` of a particle file and makes its scene; the strings are warnings. The types
 /// sidecar is `options.types`, else the file's own ([`types::sidecar_of`]) when it exists.
-pub fn load(
+pub(crate) fn load(
     path: &Path,
     format: ParticleFormat,
     options: &ParticleOptions,
@@ -248,7 +248,7 @@ pub fn load(
 
 /// [`load`] of a file's bytes, gzip- or bzip2-compressed or not (told by their first bytes); the types
 /// sidecar is `options.types` only (bytes have no file beside them).
-pub fn parse(
+pub(crate) fn parse(
     path: &Path,
     format: ParticleFormat,
     bytes: Vec<u8>,
@@ -280,7 +280,7 @@ fn build(
 
 /// `bytes` decompressed when they start as gzip (`1f 8b`) or bzip2 (`BZh`) data does; a name ending in
 /// `.gz` or `.bz2` must hold such data.
-pub fn decompress(path: &Path, bytes: Vec<u8>) -> Result<Vec<u8>, SceneError> {
+pub(crate) fn decompress(path: &Path, bytes: Vec<u8>) -> Result<Vec<u8>, SceneError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let mut out = Vec::new();
     let result = if bytes.starts_with(&[0x1f, 0x8b]) {
@@ -300,7 +300,7 @@ pub fn decompress(path: &Path, bytes: Vec<u8>) -> Result<Vec<u8>, SceneError> {
 }
 
 /// The error for a frame past the end: how many frames the file has.
-pub fn missing_frame(path: &Path, wanted: usize, count: usize) -> SceneError {
+pub(crate) fn missing_frame(path: &Path, wanted: usize, count: usize) -> SceneError {
     let has = match count {
         0 => "no frames".to_owned(),
         1 => "1 frame (frame 0)".to_owned(),
@@ -311,11 +311,11 @@ pub fn missing_frame(path: &Path, wanted: usize, count: usize) -> SceneError {
 
 /// Kinds by the word a file names them with, so that each word is looked up in the table once.
 #[derive(Default)]
-pub struct KindCache<'a>(std::collections::HashMap<&'a str, u32>);
+pub(crate) struct KindCache<'a>(std::collections::HashMap<&'a str, u32>);
 
 impl<'a> KindCache<'a> {
     /// The kind of the element (or unknown name) `word`.
-    pub fn element(&mut self, frame: &mut Frame, word: &'a str) -> u32 {
+    pub(crate) fn element(&mut self, frame: &mut Frame, word: &'a str) -> u32 {
         *self.0.entry(word).or_insert_with(|| frame.element_kind(word))
     }
 }

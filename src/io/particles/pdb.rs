@@ -19,7 +19,7 @@ use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Reads frame `wanted` (from 0) of a PDB text, or of a PQR text when `pqr`.
-pub fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame, SceneError> {
+pub(crate) fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let mut frame = Frame::new(Unit::Angstrom);
     let mut kinds: HashMap<(Key, bool), u32> = HashMap::new();

@@ -1,16 +1,16 @@
 //! A frame of particles made a scene: radii and colours by kind, one material for every particle and each
 //! particle's colour in the per-sphere colour store ([`SceneDesc::sphere_colors`], 8 bits a channel), and
-//! the framing of [`crate::io::xyzr::scene_framing`] from the chosen view, with a white background
-//! ([`particle_scene`], which spheres given as arrays share).
+//! the framing of `crate::io::xyzr::scene_framing` from the chosen view, with a white background
+//! (`particle_scene`, which spheres given as arrays share).
 //!
 //! A radius is, first to last: `--radius` for the kind, the types sidecar's ([`super::types`]), the file's
 //! radius for the particle, the table's for the element (÷ 10 in a file in nm), 0.5 for a LAMMPS type,
-//! [`elements::FALLBACK_RADIUS`] (÷ 10 in nm); then times the radius scale. A colour is `--color` for the
-//! kind, the sidecar's, the file's colour for the particle, the table's for the element, [`TYPE_COLORS`]
-//! for a LAMMPS type, [`elements::FALLBACK_COLOR`].
+//! `elements::FALLBACK_RADIUS` (÷ 10 in nm); then times the radius scale. A colour is `--color` for the
+//! kind, the sidecar's, the file's colour for the particle, the table's for the element, `TYPE_COLORS`
+//! for a LAMMPS type, `elements::FALLBACK_COLOR`.
 //!
 //! With [`ParticleOptions::draw_box`], the frame's periodic box is drawn as twelve open cylinders with a
-//! sphere at each corner to close the joints, all of radius [`box_radius`] and the grey [`BOX_COLOR`].
+//! sphere at each corner to close the joints, all of radius `box_radius` and the grey `BOX_COLOR`.
 
 use glam::DVec3;
 
@@ -22,24 +22,24 @@ use crate::math::{Rgb, Rgb8};
 use crate::scene::desc::{ConeDesc, Material, SceneDesc, SphereDesc};
 
 /// Colours of LAMMPS types 1, 2, … (repeating): red, blue, yellow, green, orange, violet, cyan, grey.
-pub const TYPE_COLORS: [u32; 8] =
+pub(crate) const TYPE_COLORS: [u32; 8] =
     [0xE63232, 0x3264E6, 0xF0D732, 0x32B450, 0xF08C28, 0x9646C8, 0x32C8D2, 0xA0A0A0];
 
 /// The radius of a LAMMPS type without a radius column or an override (half the unit length).
-pub const TYPE_RADIUS: f64 = 0.5;
+pub(crate) const TYPE_RADIUS: f64 = 0.5;
 
 /// The view when none is chosen: from +z.
-pub const DEFAULT_VIEW: DVec3 = DVec3::Z;
+pub(crate) const DEFAULT_VIEW: DVec3 = DVec3::Z;
 
 /// The colour of the periodic box's cylinders: a neutral mid grey, seen on white and on most particles.
-pub const BOX_COLOR: Rgb = Rgb::new(0.35, 0.35, 0.35);
+pub(crate) const BOX_COLOR: Rgb = Rgb::new(0.35, 0.35, 0.35);
 
 /// The radius of the box's cylinders: this share of the box's longest diagonal, thin beside atoms (a
 /// 10 nm box gets 0.03 nm against hydrogen's 0.12) yet a few pixels wide when the box fills the image.
-pub const BOX_RADIUS_SHARE: f64 = 0.0015;
+pub(crate) const BOX_RADIUS_SHARE: f64 = 0.0015;
 
 /// The radius of `cell`'s cylinders: [`BOX_RADIUS_SHARE`] of its longest diagonal.
-pub fn box_radius(cell: &Cell) -> f64 {
+pub(crate) fn box_radius(cell: &Cell) -> f64 {
     let [a, b, c] = cell.edges;
     let longest =
         [a + b + c, a + b - c, a - b + c, -a + b + c].iter().map(|d| d.length()).fold(0.0, f64::max);
@@ -49,7 +49,7 @@ pub fn box_radius(cell: &Cell) -> f64 {
 /// The scene of `frame` with a types sidecar's and `options`' overrides; the strings are warnings (unknown
 /// elements, overrides that name no kind in the frame, a box asked of a frame without one). The error is a
 /// message about the whole file.
-pub fn scene(
+pub(crate) fn scene(
     frame: Frame,
     options: &ParticleOptions,
     sidecar: Option<&Types>,
@@ -145,7 +145,7 @@ pub fn scene(
 /// seen from the side `view` points to ([`xyzr::scene_framing`]: the bounding sphere framed at 1920×1080,
 /// a headlight), on a white background, with one material ([`material_of`] bareray's default grey, which
 /// shows only without colours).
-pub fn particle_scene(spheres: Vec<SphereDesc>, colors: Vec<Rgb8>, view: DVec3) -> SceneDesc {
+pub(crate) fn particle_scene(spheres: Vec<SphereDesc>, colors: Vec<Rgb8>, view: DVec3) -> SceneDesc {
     let (lo, hi) = xyzr::bounds(&spheres);
     let mut desc = xyzr::scene_framing(lo, hi, Some(view));
     desc.render.background = Rgb::all(1.0);
@@ -183,6 +183,6 @@ fn unknown(kind: &Kind, count: usize, radius: f64) -> String {
 }
 
 /// The material of particles of `color`: diffuse with a little highlight.
-pub fn material_of(color: Rgb) -> Material {
+pub(crate) fn material_of(color: Rgb) -> Material {
     Material { color, ambient: 0.2, diffuse: 0.8, specular: 0.3, shininess: 40.0, ..Material::default() }
 }

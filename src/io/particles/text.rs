@@ -7,41 +7,41 @@ use std::str::Lines as StrLines;
 use crate::io::SceneError;
 
 /// The lines of a text, numbered from 1 as they are taken.
-pub struct Lines<'a> {
+pub(crate) struct Lines<'a> {
     path: &'a Path,
     lines: Peekable<StrLines<'a>>,
     /// The number of the last line taken (0 before the first).
-    pub number: usize,
+    pub(crate) number: usize,
 }
 
 impl<'a> Lines<'a> {
     /// The lines of `text`, which errors call `path`.
-    pub fn new(path: &'a Path, text: &'a str) -> Self {
+    pub(crate) fn new(path: &'a Path, text: &'a str) -> Self {
         Self { path, lines: text.lines().peekable(), number: 0 }
     }
 
     /// The next line, if any.
     #[allow(clippy::should_implement_trait)]
-    pub fn next(&mut self) -> Option<&'a str> {
+    pub(crate) fn next(&mut self) -> Option<&'a str> {
         let line = self.lines.next()?;
         self.number += 1;
         Some(line)
     }
 
     /// The next line, or an error saying the file ends where `what` was expected.
-    pub fn expect(&mut self, what: &str) -> Result<&'a str, SceneError> {
+    pub(crate) fn expect(&mut self, what: &str) -> Result<&'a str, SceneError> {
         self.next().ok_or_else(|| {
             SceneError::at_line(self.path, self.number.max(1), format!("the file ends here; expected {what}"))
         })
     }
 
     /// The next line without taking it.
-    pub fn peek(&mut self) -> Option<&'a str> {
+    pub(crate) fn peek(&mut self) -> Option<&'a str> {
         self.lines.peek().copied()
     }
 
     /// Skips blank lines; whether any line is left.
-    pub fn more(&mut self) -> bool {
+    pub(crate) fn more(&mut self) -> bool {
         while self.peek().is_some_and(|l| l.trim().is_empty()) {
             self.next();
         }
@@ -49,18 +49,13 @@ impl<'a> Lines<'a> {
     }
 
     /// An error at the last line taken.
-    pub fn error(&self, message: impl Into<String>) -> SceneError {
+    pub(crate) fn error(&self, message: impl Into<String>) -> SceneError {
         SceneError::at_line(self.path, self.number.max(1), message)
-    }
-
-    /// The file these lines are of.
-    pub fn path(&self) -> &'a Path {
-        self.path
     }
 }
 
 /// `word` as a finite number within f32 range; `what` names it in the error.
-pub fn number(word: &str, what: &str) -> Result<f64, String> {
+pub(crate) fn number(word: &str, what: &str) -> Result<f64, String> {
     match word.trim().parse::<f64>() {
         Ok(x) if x.is_finite() && (x as f32).is_finite() => Ok(x),
         _ => Err(format!("expected {what} (a finite number), got `{}`", word.trim())),
@@ -68,7 +63,7 @@ pub fn number(word: &str, what: &str) -> Result<f64, String> {
 }
 
 /// `word` as a positive radius.
-pub fn radius(word: &str, what: &str) -> Result<f64, String> {
+pub(crate) fn radius(word: &str, what: &str) -> Result<f64, String> {
     let r = number(word, what)?;
     if r > 0.0 {
         Ok(r)
@@ -78,7 +73,7 @@ pub fn radius(word: &str, what: &str) -> Result<f64, String> {
 }
 
 /// `word` as a count of particles.
-pub fn count(word: &str, what: &str) -> Result<usize, String> {
+pub(crate) fn count(word: &str, what: &str) -> Result<usize, String> {
     word.trim()
         .parse::<usize>()
         .map_err(|_| format!("expected {what} (a whole number), got `{}`", word.trim()))
@@ -86,13 +81,13 @@ pub fn count(word: &str, what: &str) -> Result<usize, String> {
 
 /// Room to reserve for `count` particles in a text of `bytes` bytes: a count that lies reserves no more
 /// than the text could hold.
-pub fn capacity(count: usize, bytes: usize) -> usize {
+pub(crate) fn capacity(count: usize, bytes: usize) -> usize {
     count.min(bytes / 8 + 1)
 }
 
 /// The characters `from..to` of a fixed-column line (columns from 0, clipped to the line; empty where the
 /// line is shorter or the cut falls inside a character).
-pub fn columns(line: &str, from: usize, to: usize) -> &str {
+pub(crate) fn columns(line: &str, from: usize, to: usize) -> &str {
     let to = to.min(line.len());
     line.get(from.min(to)..to).unwrap_or("")
 }

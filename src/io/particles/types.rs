@@ -13,7 +13,7 @@
 //! ```
 //!
 //! A sidecar's values beat the file's and the tables' and are beaten by `--radius` and `--color`. It is the
-//! file `render --types` names, or else the particle file's own when it exists ([`sidecar_of`]). Kinds it
+//! file `render --types` names, or else the particle file's own when it exists (`sidecar_of`). Kinds it
 //! names that a frame lacks are not warned about (one sidecar may serve several files). Unknown keys, values
 //! of the wrong type or out of range are errors naming the sidecar's line.
 
@@ -28,20 +28,20 @@ use crate::math::Rgb;
 
 /// One kind's entry.
 #[derive(Clone, Debug, PartialEq)]
-pub struct TypeEntry {
+pub(crate) struct TypeEntry {
     /// The kind, as `--radius` names it.
-    pub name: String,
+    pub(crate) name: String,
     /// Its radius, in the particle file's unit.
-    pub radius: Option<f64>,
+    pub(crate) radius: Option<f64>,
     /// Its colour, channels in [0, 1].
-    pub color: Option<Rgb>,
+    pub(crate) color: Option<Rgb>,
 }
 
 /// A sidecar read: its kinds, in the order of their names.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Types {
     /// The kinds.
-    pub entries: Vec<TypeEntry>,
+    pub(crate) entries: Vec<TypeEntry>,
 }
 
 #[derive(Deserialize)]
@@ -54,7 +54,7 @@ struct EntryToml {
 /// The sidecar beside a particle file, if it exists: `<file>.types.toml` (`conf.gro.types.toml` for
 /// `conf.gro`), or for a compressed file also the name without `.gz` or `.bz2` (`run.dump.types.toml` for
 /// `run.dump.gz`).
-pub fn sidecar_of(path: &Path) -> Option<PathBuf> {
+pub(crate) fn sidecar_of(path: &Path) -> Option<PathBuf> {
     let with = |p: &Path| {
         let mut name = p.as_os_str().to_owned();
         name.push(".types.toml");
@@ -75,7 +75,7 @@ pub fn sidecar_of(path: &Path) -> Option<PathBuf> {
 }
 
 /// Reads a sidecar.
-pub fn read(path: &Path) -> Result<Types, SceneError> {
+pub(crate) fn read(path: &Path) -> Result<Types, SceneError> {
     let bytes = std::fs::read(path)
         .map_err(|e| SceneError::whole_file(path, format!("cannot read types file: {e}")))?;
     parse(path, &crate::io::error::text(path, bytes)?)

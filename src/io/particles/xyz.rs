@@ -29,7 +29,7 @@ struct Columns {
 const PLAIN: Columns = Columns { kind: Some(0), pos: 1, radius: None, color: None, words: 4 };
 
 /// Reads frame `wanted` (from 0) of an XYZ text.
-pub fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let mut index = 0;
     while lines.more() {

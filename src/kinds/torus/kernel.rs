@@ -24,7 +24,7 @@
 //! evaluates the same IEEE operations in the same order as the one-lane call: every width gives the same
 //! bits.
 //!
-//! **Error.** Bisection ends within `L·2⁻ᴺ` (`N` = [`bisections`]: 26 in f32) of a sign change of the
+//! **Error.** Bisection ends within `L·2⁻ᴺ` (`N` = `bisections`: 26 in f32) of a sign change of the
 //! computed `h`, with `L ≤ 2(R + r)/|d|` the clipped range; the computed `h` is the exact `h` of a point
 //! moved by a few roundings of the torus's size. So away from tangency the f32 `t` is the exact hit of a
 //! ray nudged by a few ε of `|t·d| + |C − o| + R + r`, the same form of bound as the sphere's and the
@@ -56,14 +56,14 @@ impl<F: Copy> TorusShape<F> {
 
 /// The number of bisection steps for lanes of type `F`: enough to bring a range to about one unit roundoff
 /// of its length (26 for f32, 55 for f64).
-pub fn bisections<F: Real>() -> usize {
+pub(crate) fn bisections<F: Real>() -> usize {
     (-F::UNIT_ROUNDOFF.log2()).ceil() as usize + 2
 }
 
 impl<F: Real> TorusShape<F> {
     /// `h` at a point of the frame: `(ρ − R)² + z² − r²`, negative inside the tube.
     #[inline(always)]
-    pub fn tube(&self, p: V3<F>) -> F {
+    pub(crate) fn tube(&self, p: V3<F>) -> F {
         let rho = (p.x * p.x + p.y * p.y).sqrt();
         let off = rho - self.major;
         (-self.minor).mul_add(self.minor, off.mul_add(off, p.z * p.z))
@@ -72,7 +72,7 @@ impl<F: Real> TorusShape<F> {
     /// The outward unit normal at a point of the frame: away from the nearest point of the centre circle.
     /// On the axis (no nearest point; never on the surface of a ring torus) it is the axis.
     #[inline(always)]
-    pub fn object_normal(&self, p: V3<F>) -> V3<F> {
+    pub(crate) fn object_normal(&self, p: V3<F>) -> V3<F> {
         let rho = (p.x * p.x + p.y * p.y).sqrt();
         let zero = F::splat(0.0);
         let shrink = F::select(rho.gt(zero), self.major / rho, zero);

@@ -54,9 +54,9 @@ pub struct TorusToml {
 #[derive(Clone, Debug, Default)]
 pub struct Tori {
     /// The tori.
-    pub shapes: Vec<TorusShape<f32>>,
+    pub(crate) shapes: Vec<TorusShape<f32>>,
     /// Material indices.
-    pub material: Vec<u32>,
+    pub(crate) material: Vec<u32>,
     /// Boxes around the surfaces: low and high corners.
     bounds: Vec<(Vec3f, Vec3f)>,
 }
@@ -64,7 +64,7 @@ pub struct Tori {
 /// The boxes' margin beyond the exact f64 box, in units of 2⁻²⁴ of the torus's scale `|C|∞ + R + r`: the
 /// stored f32 values differ from the f64 torus by a few such units, and the kernel's hits are exact hits
 /// of rays nudged by a few more (the [`kernel`] documentation).
-pub const BOUNDS_ROUNDINGS: f64 = 64.0;
+pub(crate) const BOUNDS_ROUNDINGS: f64 = 64.0;
 
 impl TorusDesc {
     /// The torus in f64 with its frame, moved by `−origin`. A torus the readers would reject (a description

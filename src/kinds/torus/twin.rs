@@ -127,14 +127,14 @@ pub fn roots(t: &TorusShape<f64>, ray: &Ray<f64>) -> Vec<f64> {
 
 /// Where a ray that starts on the torus meets it again in `[0, t_max)`: the first root after the one
 /// nearest 0 (the start).
-pub fn rehit(t: &TorusShape<f64>, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+pub(crate) fn rehit(t: &TorusShape<f64>, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
     let all = roots(t, ray);
     let start = (0..all.len()).min_by(|&i, &j| all[i].abs().total_cmp(&all[j].abs()))?;
     all[start + 1..].iter().copied().find(|&s| s >= 0.0 && s < t_max)
 }
 
 /// The distance from `p` (rendering space) to the torus's surface.
-pub fn distance(t: &TorusShape<f64>, p: V3<f64>) -> f64 {
+pub(crate) fn distance(t: &TorusShape<f64>, p: V3<f64>) -> f64 {
     let q = t.frame.to_object(p);
     let rho = (q.x * q.x + q.y * q.y).sqrt();
     ((rho - t.major).hypot(q.z) - t.minor).abs()
