@@ -11,7 +11,7 @@ use rayon::prelude::*;
 use crate::compile::Scene;
 use crate::geometry::NO_PRIM;
 use crate::output::{self, exr::Channel, Frame, OutputError};
-use crate::render::{primary_window_lanes, Window};
+use crate::render::{trace_primary_window_lanes, Window};
 
 /// One kind of AOV.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -69,7 +69,7 @@ pub fn samples(
     window: Window,
     which: &[Aov],
 ) -> Vec<u8> {
-    let hits = primary_window_lanes(scene, lanes, pool, window);
+    let hits = trace_primary_window_lanes(scene, lanes, pool, window);
     let w = hits.width as usize;
     let float_id = scene.geometry.len() <= 1 << 24;
     let start = scene.camera_f64.start;

@@ -145,8 +145,8 @@ impl Bvh {
             }
             let slab = SlabRay::new(q.ray());
             return match &self.wide {
-                Some(wide) => self.intersect_lanes(wide, 0, q, &slab, live, best),
-                None => self.intersect_lanes(&self.nodes, 0, q, &slab, live, best),
+                Some(wide) => self.intersect_each(wide, 0, q, &slab, live, best),
+                None => self.intersect_each(&self.nodes, 0, q, &slab, live, best),
             };
         }
         self.intersect_packet(q, live, best)
@@ -166,8 +166,8 @@ impl Bvh {
             }
             let slab = SlabRay::new(q.ray());
             return match &self.wide {
-                Some(wide) => self.occluded_lanes(wide, 0, q, &slab, live, blocker),
-                None => self.occluded_lanes(&self.nodes, 0, q, &slab, live, blocker),
+                Some(wide) => self.occluded_each(wide, 0, q, &slab, live, blocker),
+                None => self.occluded_each(&self.nodes, 0, q, &slab, live, blocker),
             };
         }
         self.occluded_packet(q, live, blocker)

@@ -161,7 +161,7 @@ impl Bvh {
 
     /// The lanes of `lanes` walk the subtree of `nodes[root]` one ray at a time; their hits are merged into
     /// `best`. `slab` is the packet prepared for slab tests.
-    pub(super) fn intersect_lanes<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
+    pub(super) fn intersect_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
         root: u32,
@@ -182,7 +182,7 @@ impl Bvh {
     }
 
     /// The lanes of `lanes` blocked within their `t_max` in the subtree of `nodes[root]`, one ray at a time.
-    pub(super) fn occluded_lanes<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
+    pub(super) fn occluded_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
         root: u32,

@@ -72,7 +72,7 @@ pub struct Traced {
 
 /// Traces rows `rows` of columns `columns` of the image, before any postfilter: the pixels row-major, and
 /// the rays and tests it took. Tiles of TILE × TILE from the band's corner, one job each, on `pool`.
-pub(super) fn trace_rows<F: Lanes>(
+pub(super) fn trace_band<F: Lanes>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     columns: Range<u32>,
@@ -191,7 +191,7 @@ pub fn trace_band_lanes(
     let each = EachTile(tile_done);
     let counter = TileCounter { progress: &each, done: AtomicU64::new(0), total: bands.tiles() };
     let (columns, rows) = (bands.traced.x0..bands.traced.x1, bands.rows_of(i));
-    with_lanes!(lanes, F => trace_rows::<F>(scene, pool, columns, rows, &counter))
+    with_lanes!(lanes, F => trace_band::<F>(scene, pool, columns, rows, &counter))
 }
 
 /// A [`Progress`] that only counts: a call per finished tile.
@@ -237,7 +237,7 @@ pub fn render_window<F: Lanes, E>(
     let mut total = Traced::default();
     for i in 0..bands.count() {
         let columns = bands.traced.x0..bands.traced.x1;
-        let (pixels, counts, work) = trace_rows::<F>(scene, pool, columns, bands.rows_of(i), &counter);
+        let (pixels, counts, work) = trace_band::<F>(scene, pool, columns, bands.rows_of(i), &counter);
         total.counts += counts;
         total.work += work;
         if let Some(out) = stage.push(pixels) {

@@ -50,11 +50,11 @@ mod primary;
 mod tile;
 
 pub(crate) use bands::render_window_lanes;
-use bands::trace_rows;
+use bands::trace_band;
 pub use bands::{band_rows, render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
 pub use coverage::{coverage_parts, CoveragePart};
 
-pub(crate) use primary::primary_window_lanes;
+pub(crate) use primary::trace_primary_window_lanes;
 pub use primary::{
     fnv1a, primary_hits_lanes, trace_primary, trace_primary_lanes, trace_primary_window, PrimaryHits,
 };
@@ -221,7 +221,7 @@ pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &dyn 
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let counter = TileCounter::new(progress, tiles(width, height).len() as u64);
-    let (pixels, counts, work) = trace_rows::<F>(scene, pool, 0..width, 0..height, &counter);
+    let (pixels, counts, work) = trace_band::<F>(scene, pool, 0..width, 0..height, &counter);
     let mut image = Image { width, height, pixels };
     if scene.render.postfilter == PostFilter::Lecture3x3 {
         image = lecture_3x3(&image);

@@ -134,7 +134,7 @@ pub fn trace_primary_window<F: Lanes>(
 }
 
 /// [`trace_primary_window`] into a new frame, at a packet width chosen at run time (1, 4, 8 or 16).
-pub(crate) fn primary_window_lanes(
+pub(crate) fn trace_primary_window_lanes(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,
