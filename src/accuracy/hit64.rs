@@ -1,4 +1,4 @@
-//! The f64 twin's closest hit, shared by its brute-force loops (`twin.rs`) and its BVH (`bvh64.rs`).
+//! The f64 twin's closest hit, shared by its brute-force loops (`twin/`) and its BVH (`bvh64.rs`).
 
 use crate::geometry::NO_PRIM;
 

@@ -255,6 +255,7 @@ impl Drop for Pending {
 
 /// Removes the temporary files of writes still under way: for a panic hook that ends the process without
 /// unwinding (an MPI abort), so that no temporary file is left beside an output.
+#[cfg(feature = "mpi")]
 pub(crate) fn remove_temporaries() {
     if let Ok(list) = PENDING.try_lock() {
         for path in list.iter() {

@@ -168,6 +168,7 @@ impl Bands {
         u64::from(self.traced.width().div_ceil(TILE)) * u64::from(self.traced.height().div_ceil(TILE))
     }
     /// Tiles band `i` traces.
+    #[cfg(feature = "mpi")]
     pub(crate) fn tiles_of(&self, i: u32) -> u64 {
         let rows = self.rows_of(i);
         u64::from(self.traced.width().div_ceil(TILE)) * u64::from((rows.end - rows.start).div_ceil(TILE))

@@ -190,6 +190,7 @@ pub(crate) struct Stop;
 /// `Err(Some(e))` when it failed itself — then the files are abandoned (their temporary files removed,
 /// existing files kept) and `e` is returned. [`render`] produces the rows by tracing bands here; a
 /// distributed render receives them from elsewhere. `job.resume` is not used here (see [`render`]).
+#[cfg(feature = "mpi")]
 pub(crate) fn write_bands<T>(
     scene: &Scene,
     pool: &rayon::ThreadPool,

@@ -1,0 +1,287 @@
+//! The twin's tolerances: how far f32 rounding can move a ray near a primitive, and the rules that
+//! explain an f32/f64 disagreement by it (grazing, ties in t, contact entries, starts near a surface).
+
+use super::{len, norm_bound, Hit64, Slack, Twin, CONTACT_C_ROUNDINGS, EPS32};
+use crate::geometry::{Cone, Departure, Ray, ShapeKind, CONTACT_ROUNDINGS, NO_PRIM};
+use crate::math::V3;
+
+impl Twin {
+    /// How big the f32 rounding of a ray near `prim` can be, per ε32, for a ray from `origin`: |origin|
+    /// plus the primitive's centre distance and radius (the magnitudes the kernel's f32 operations round);
+    /// for a cone, the base point's distance, the height and the larger end radius (the scale its stored f32
+    /// values and its frame coordinates `origin − B` are rounded at).
+    fn magnitude(&self, prim: u32, origin: V3<f64>) -> f64 {
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let o = len(origin);
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            o + len(c - origin) + r
+        } else if i < ns + self.shapes.len() {
+            o + len(self.shapes[i - ns].center - origin)
+        } else if let Some(cone) = self.cone(prim) {
+            let apex_radius = cone.base_radius + cone.slope * cone.height;
+            o + len(cone.frame.origin - origin) + cone.height + cone.base_radius.max(apex_radius)
+        } else if let Some(scale) = self.kind(prim).and_then(|k| self.kinds.scale(k, origin)) {
+            o + scale
+        } else {
+            o
+        }
+    }
+
+    /// True when `ray` passes within tolerance of tangency with `prim` — where an f32 and an f64 kernel may
+    /// legitimately disagree on hit or miss (explanation "graze"):
+    ///
+    /// - spheres: the line's closest approach l to the centre satisfies `|l − r| ≤ k·ε32·(|c − o| + r)` plus
+    ///   `slack` at that distance;
+    /// - ellipsoids: the same test in object space, with the scale `Σ|L_i|·(|o_i| + |c_i|) + 1` (L the
+    ///   object-from-world map, whose f32 rounding the object-space ray carries), as tests/stress.rs does;
+    /// - planes: the object-space direction is within `k·ε32` (plus the direction slack) of parallel;
+    /// - polygons: the direction is within that of parallel to the plane, or the line meets the plane within
+    ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline;
+    /// - cones: a nudge of the line by `δ = k·ε32·(|o| + |B − o| + h + max(r0, r1))` plus slack can change
+    ///   hit or miss, in one of two ways (`cone_grazing`): the line is within `δ` of tangency with the
+    ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets the
+    ///   quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
+    ///   crosses the rim, as a polygon's hit crosses an edge).
+    pub(crate) fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64, slack: Slack) -> bool {
+        if prim == NO_PRIM || prim as usize >= self.len() {
+            return false;
+        }
+        let tol = k * EPS32;
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        let near_tangent = |c: V3<f64>, r: f64, ray: &Ray<f64>, scale: f64, slack: f64| {
+            let cc = c - ray.origin;
+            let d = ray.dir;
+            let proj = cc.dot(d) / d.dot(d);
+            let l = len(cc - d * proj);
+            (l - r).abs() <= tol * scale + slack
+        };
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            let dist = len(c - ray.origin);
+            return near_tangent(c, r, ray, dist + r, slack.at(dist));
+        }
+        if i < ns + self.shapes.len() {
+            let s = &self.shapes[i - ns];
+            let local = s.to_object(ray);
+            let m = &s.object_from_world;
+            let stretch = norm_bound(m);
+            let (o, c) = (ray.origin, s.center);
+            let spread = len(m.cols[0]) * (o.x.abs() + c.x.abs())
+                + len(m.cols[1]) * (o.y.abs() + c.y.abs())
+                + len(m.cols[2]) * (o.z.abs() + c.z.abs());
+            let d = local.dir;
+            return match s.kind {
+                ShapeKind::Sphere => {
+                    let dist = len(c - o);
+                    near_tangent(V3::all(0.0), 1.0, &local, spread + 1.0, stretch * slack.at(dist))
+                }
+                ShapeKind::Plane => d.z.abs() <= (tol + stretch * slack.dir) * len(d),
+            };
+        }
+        if let Some(cone) = self.cone(prim) {
+            return cone_grazing(cone, ray, tol * self.magnitude(prim, ray.origin), slack);
+        }
+        if let Some(k) = self.kind(prim) {
+            let nudge = tol * self.magnitude(prim, ray.origin);
+            return self.kinds.grazing(k, ray, nudge, slack).unwrap_or(false);
+        }
+        let poly = &self.polygons[i - ns - self.shapes.len()];
+        let (n, d) = (poly.normal, ray.dir);
+        let cos = n.dot(d).abs() / len(d);
+        if cos <= tol + slack.dir {
+            return true;
+        }
+        let Some(&anchor) = poly.outline.first() else { return false };
+        let t = n.dot(anchor - ray.origin) / n.dot(d);
+        let p = ray.at(t);
+        let m = poly.outline.len();
+        let edge = (0..m)
+            .map(|j| segment_distance(p, poly.outline[j], poly.outline[(j + 1) % m]))
+            .fold(f64::INFINITY, f64::min);
+        edge * cos <= tol * (len(ray.origin) + len(p)) + slack.at(t)
+    }
+
+    /// The unit geometric normal of `prim` at `ray`'s point `t`: [`Twin::surface`]'s, but a polygon's plane
+    /// normal rather than its interpolated vertex normals (the surface the hit's `t` is measured on).
+    fn geometric_normal(&self, ray: &Ray<f64>, t: f64, prim: u32) -> V3<f64> {
+        let first = self.spheres.len() + self.shapes.len();
+        match (prim as usize).checked_sub(first).and_then(|k| self.polygons.get(k)) {
+            Some(poly) => poly.normal,
+            None => self.surface(ray, t, prim).1,
+        }
+    }
+
+    /// True when `ray` (leaving `from`) meets both `a` and `b` in f64 so close together that a ray moved by
+    /// rounding, `k·ε32·(|o| + t)`, plus `slack` (how far the f32 ray strays) can meet them in the other
+    /// order (explanation "tie").
+    ///
+    /// To first order, moving a ray by `δ` (its point at `t` by `δ(t)`) moves its hit on a surface with unit
+    /// normal `n` by `−(n·δ)/(n·d)` along it: by up to `|δ|/|cos|`, `cos` the cosine of incidence. A common
+    /// displacement (the stray of the f32 ray from the f64 one) moves `ta − tb` by `δ·g`, `g = n_a/(n_a·d) −
+    /// n_b/(n_b·d)`; each kernel's own rounding, a displacement of its own, moves its `t` by it over its
+    /// `|cos|`. So the order can change when `|ta − tb| ≤ (k·ε32·(|o| + t) + slack)·w`, with the weight
+    /// `w = max(|g|, mean of 1/|cos_a| and 1/|cos_b|)`: 1 where both are met head on; at a slant on planes
+    /// crossing near the hits `t` moves by many times the displacement (graze takes over where a cosine is
+    /// within rounding of 0).
+    pub fn tie(&self, a: u32, b: u32, ray: &Ray<f64>, from: Departure, k: f64, slack: Slack) -> bool {
+        let (Some(ta), Some(tb)) = (self.hit_of(a, ray, from), self.hit_of(b, ray, from)) else {
+            return false;
+        };
+        let t = ta.max(tb);
+        // n/(n·d): the hit's move along the ray per unit displacement, as a vector.
+        let rate = |prim: u32, tp: f64| {
+            let n = self.geometric_normal(ray, tp, prim);
+            n * (1.0 / n.dot(ray.dir))
+        };
+        let (ga, gb) = (rate(a, ta), rate(b, tb));
+        let w = len(ga - gb).max(0.5 * (len(ga) + len(gb)));
+        (ta - tb).abs() <= (k * EPS32 * (len(ray.origin) + t) + slack.at(t)) * w
+    }
+
+    /// True when the f32 renderer's `hit` along its own f32 `ray` is the sphere contact rule's entry
+    /// (ARCHITECTURE.md, "Self-intersection"; `geometry/sphere.rs`): a sphere met at exactly `t = 0`
+    /// by a ray heading toward its centre from within the rule's band of its surface. Such a hit is the
+    /// renderer treating the origin as on that sphere, not a re-hit of the surface the ray leaves.
+    ///
+    /// The band is `|c| ≤ CONTACT_ROUNDINGS·ε32·(bound + 2r·|o|∞)`, `c = |oc|² − r²` in f32, `bound =
+    /// |oc|² + r²` (the eye-term form, taken only where its bound is smaller, has a narrower band). This
+    /// checks the exact `c` of the f32 origin and the scene's sphere against `CONTACT_C_ROUNDINGS` more:
+    /// the f32 `c` is off from it by the centre's rounding to f32 (`2|oc|·ε32·|C|`, `|C| ≤ |oc| + √3·|o|∞`),
+    /// `oc`'s subtraction (`2ε32·|oc|²`), its square (`3ε32·|oc|²`) and `r²` (`3ε32·r²`): at most
+    /// `7ε32·(bound + 2r·|o|∞)` near the surface. The heading, `oc·d ≥ 0` in f32, is allowed what the
+    /// centre's rounding (`ε32·|C|`), `oc`'s and the dot product's (`4ε32·|oc|`) can move it by.
+    pub fn contact_entry(&self, hit: Hit64, ray: &Ray<f32>) -> bool {
+        let Some(&(centre, r)) = self.spheres.get(hit.prim as usize) else { return false };
+        if hit.t != 0.0 {
+            return false;
+        }
+        let (o, d) = (ray.origin.to_f64(), ray.dir.to_f64());
+        let oc = centre - o;
+        let c = (len(oc) - r) * (len(oc) + r);
+        let reach = o.x.abs().max(o.y.abs()).max(o.z.abs());
+        let band = (CONTACT_ROUNDINGS + CONTACT_C_ROUNDINGS) * EPS32 * (oc.dot(oc) + r * r + 2.0 * r * reach);
+        let heading_in = oc.dot(d) >= -EPS32 * (4.0 * len(oc) + len(centre)) * len(d);
+        heading_in && c.abs() <= band
+    }
+
+    /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
+    /// `slack` for spheres, the object-space equivalent for shapes (unit sphere or plane z = 0), the distance
+    /// to the plane for polygons, for cones the distance to the lateral surface (to the infinite cone between
+    /// the end planes, to the nearer rim circle beyond them) within `k·ε32` of `Twin::magnitude`'s scale. This is where a ray that starts at `p` (a secondary ray's origin on another
+    /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
+    /// find or miss `prim` by rounding.
+    pub(crate) fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
+        if prim == NO_PRIM || prim as usize >= self.len() {
+            return false;
+        }
+        let tol = k * EPS32;
+        let i = prim as usize;
+        let ns = self.spheres.len();
+        if i < ns {
+            let (c, r) = self.spheres[i];
+            return (len(p - c) - r).abs() <= tol * self.magnitude(prim, p) + slack;
+        }
+        if i < ns + self.shapes.len() {
+            let s = &self.shapes[i - ns];
+            let m = &s.object_from_world;
+            let q = m.vector(p - s.center);
+            let c = s.center;
+            let spread = len(m.cols[0]) * (p.x.abs() + c.x.abs())
+                + len(m.cols[1]) * (p.y.abs() + c.y.abs())
+                + len(m.cols[2]) * (p.z.abs() + c.z.abs());
+            let off = match s.kind {
+                ShapeKind::Sphere => (len(q) - 1.0).abs(),
+                ShapeKind::Plane => q.z.abs(),
+            };
+            return off <= tol * (spread + 1.0) + norm_bound(m) * slack;
+        }
+        if let Some(cone) = self.cone(prim) {
+            let q = cone.frame.to_object(p);
+            let radial = (q.x * q.x + q.y * q.y).sqrt();
+            let z = q.z.clamp(0.0, cone.height);
+            let rho = cone.slope.mul_add(z, cone.base_radius);
+            let off = if z == q.z {
+                (radial - rho).abs() / cone.slope.hypot(1.0)
+            } else {
+                (q.z - z).hypot(radial - rho)
+            };
+            return off <= tol * self.magnitude(prim, p) + slack;
+        }
+        if let Some(off) = self.kind(prim).and_then(|k| self.kinds.distance(k, p)) {
+            return off <= tol * self.magnitude(prim, p) + slack;
+        }
+        let poly = &self.polygons[i - ns - self.shapes.len()];
+        let Some(&anchor) = poly.outline.first() else { return false };
+        let extent = poly.outline.iter().map(|&x| len(x - anchor)).fold(0.0, f64::max);
+        poly.normal.dot(p - anchor).abs() <= tol * (len(p) + len(anchor) + extent) + slack
+    }
+}
+
+/// `ray`'s line against `cone`'s quadric, in f64: the ray in the cone's frame and the kernel's
+/// `[a, b, c, Δ]` of `a·t² + 2b·t + c = 0` ([`crate::geometry::cone`]; `Δ = b² − a·c` in its perpendicular
+/// form).
+fn cone_line(cone: &Cone<f64>, ray: &Ray<f64>) -> (Ray<f64>, [f64; 4]) {
+    let local = cone.frame.ray_to_object(ray);
+    let (o, d) = (local.origin, local.dir);
+    let rho = cone.slope.mul_add(o.z, cone.base_radius);
+    let g = cone.slope * d.z;
+    let a = d.x * d.x + d.y * d.y - g * g;
+    let b = o.x * d.x + o.y * d.y - g * rho;
+    let c = o.x * o.x + o.y * o.y - rho * rho;
+    let (px, py) = (rho * d.x - g * o.x, rho * d.y - g * o.y);
+    let cross = o.x * d.y - o.y * d.x;
+    (local, [a, b, c, px * px + py * py - cross * cross])
+}
+
+/// Whether moving `ray`'s line by `nudge` plus `slack` can change whether it hits `cone` ([`Twin::grazing`]).
+///
+/// - **Tangency.** Along the line, `f = x² + y² − ρ(z)²` is `a·t² + 2b·t + c`, whose extremum is `−Δ/a` at
+///   `t* = −b/a`. Moving the line by `δ` changes that extremum by at most `|∇f(p*)|·δ` to first order, so
+///   two roots can merge or appear when `|Δ/a| ≤ |∇f(p*)|·δ`. It counts where the roots a nudge makes lie
+///   within `sqrt(|∇f|·δ/|a|)` of `t*` in t (the quadratic's spread for that change of its extremum), so
+///   where that window reaches `[0, ∞)` and, in height, the end planes.
+/// - **Rim.** A root in front of the origin moves along the surface by up to `δ / cos` (the cosine of
+///   incidence with the outward normal there) when the line moves by `δ`, so it can cross an end plane when
+///   its height is within that of 0 or `h`.
+fn cone_grazing(cone: &Cone<f64>, ray: &Ray<f64>, nudge: f64, slack: Slack) -> bool {
+    let (local, [a, b, c, disc]) = cone_line(cone, ray);
+    let d = local.dir;
+    let dl = len(d);
+    let h = cone.height;
+    if a != 0.0 {
+        let ts = -b / a;
+        let p = local.at(ts);
+        let rho = cone.slope.mul_add(p.z, cone.base_radius);
+        let grad = 2.0 * (p.x * p.x + p.y * p.y + (cone.slope * rho).powi(2)).sqrt();
+        let delta = nudge + slack.at(ts * dl);
+        let spread = (grad * delta / a.abs()).sqrt() + delta / dl;
+        let reach = d.z.abs() * spread;
+        let in_range = ts + spread >= 0.0 && p.z >= -reach && p.z <= h + reach;
+        if in_range && (disc / a).abs() <= grad * delta {
+            return true;
+        }
+    }
+    if disc.is_nan() || disc < 0.0 {
+        return false;
+    }
+    let root = disc.sqrt();
+    let q = if b >= 0.0 { -(b + root) } else { root - b };
+    let roots = if q == 0.0 { [q / a; 2] } else { [q / a, c / q] };
+    roots.into_iter().filter(|t| t.is_finite() && *t >= 0.0).any(|t| {
+        let p = local.at(t);
+        let rim = p.z.abs().min((p.z - h).abs());
+        let cos = cone.object_normal(p).dot(d).abs() / dl;
+        rim * cos <= nudge + slack.at(t * dl)
+    })
+}
+
+/// Distance from `p` to the segment `a..b`.
+fn segment_distance(p: V3<f64>, a: V3<f64>, b: V3<f64>) -> f64 {
+    let ab = b - a;
+    let dd = ab.dot(ab);
+    let s = if dd > 0.0 { ((p - a).dot(ab) / dd).clamp(0.0, 1.0) } else { 0.0 };
+    len(p - (a + ab * s))
+}
