@@ -18,9 +18,11 @@ use std::process::Command;
 
 use bareray::accuracy::{run, Hit64, Options, Slack, Twin, EPS32, K_TIE};
 use bareray::geometry::{first_root, sphere_roots, Departure, Ray, ShapeKind, NO_PRIM};
+use bareray::kinds::cone::ConeDesc;
+use bareray::kinds::KindDescs;
 use bareray::math::SplitMix64;
 use bareray::math::V3;
-use bareray::scene::desc::{ConeDesc, LightDesc, Material, SceneDesc, SphereDesc};
+use bareray::scene::desc::{LightDesc, Material, SceneDesc, SphereDesc};
 use common::camera;
 use glam::{DAffine3, DMat3, DVec3};
 
@@ -122,13 +124,16 @@ fn cylinder_in_the_twin_matches_the_closed_form() {
     let eye = DVec3::new(0.25, 0.5, -4.0);
     let desc = SceneDesc {
         camera: camera(eye, DVec3::new(0.25, 0.5, 6.0), DVec3::Y, 20.0, 64, 48),
-        cones: vec![ConeDesc {
-            base: DVec3::new(0.25, -1.0, 6.0),
-            base_radius: 1.0,
-            apex: DVec3::new(0.25, 2.0, 6.0),
-            apex_radius: 1.0,
-            material: 0,
-        }],
+        kinds: KindDescs {
+            cones: vec![ConeDesc {
+                base: DVec3::new(0.25, -1.0, 6.0),
+                base_radius: 1.0,
+                apex: DVec3::new(0.25, 2.0, 6.0),
+                apex_radius: 1.0,
+                material: 0,
+            }],
+            ..KindDescs::default()
+        },
         lights: vec![LightDesc {
             position: DVec3::new(-3.0, 4.0, -2.0),
             color: V3::all(1.0),

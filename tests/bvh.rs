@@ -537,7 +537,7 @@ fn shape_bvh_equals_brute_force_at_every_width() {
 
 /// `n` random open cones and cylinders beside three spheres (and their two duplicates).
 fn cone_field(n: usize, seed: u64) -> SceneDesc {
-    use bareray::scene::desc::ConeDesc;
+    use bareray::kinds::cone::ConeDesc;
     let mut desc = field(3, seed);
     let mut rng = Rng::new(seed);
     for k in 0..n {
@@ -547,7 +547,13 @@ fn cone_field(n: usize, seed: u64) -> SceneDesc {
         let r0 = rng.range(0.01, 0.3) * size;
         // Cylinders, pointed cones and truncated ones.
         let r1 = [r0, 0.0, rng.range(0.01, 0.3) * size][k % 3];
-        desc.cones.push(ConeDesc { base, base_radius: r0, apex: base + axis, apex_radius: r1, material: 0 });
+        desc.kinds.cones.push(ConeDesc {
+            base,
+            base_radius: r0,
+            apex: base + axis,
+            apex_radius: r1,
+            material: 0,
+        });
     }
     desc
 }
@@ -560,9 +566,9 @@ fn cone_bvh_equals_brute_force_at_every_width() {
         let desc = cone_field(n, seed);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.cone_bvh.is_some() && brute.geometry.cone_bvh.is_none());
+        assert!(bvh.geometry.kinds.trees()[0] && !brute.geometry.kinds.trees()[0]);
         let rays = rays(&desc, 3000, seed + 100);
-        let base = brute.geometry.cone_base() as u32;
+        let base = brute.geometry.kinds_base() as u32;
         let cone_hits = rays.iter().filter(|r| {
             let h = brute.geometry.intersect(r, Departure::CAMERA, f32::INFINITY);
             h.prim >= base && h.prim != u32::MAX
@@ -577,7 +583,7 @@ fn cone_bvh_equals_brute_force_at_every_width() {
 /// wall, outward never (the solid a cone bounds is convex); inside a flaring cone, across the cup.
 #[test]
 fn rays_leaving_a_cone_meet_it_again() {
-    use bareray::scene::desc::ConeDesc;
+    use bareray::kinds::cone::ConeDesc;
     let mut desc = field(1, 41);
     desc.spheres.clear();
     let tube =
@@ -589,11 +595,11 @@ fn rays_leaving_a_cone_meet_it_again() {
         apex_radius: 3.0,
         material: 0,
     };
-    desc.cones.extend([tube, flare]);
+    desc.kinds.cones.extend([tube, flare]);
     for accel in [Accel::Bvh, Accel::Brute] {
         let scene = Scene::compile_with(&desc, accel).unwrap();
         let g = &scene.geometry;
-        let (tube_id, flare_id) = (g.cone_base() as u32, g.cone_base() as u32 + 1);
+        let (tube_id, flare_id) = (g.kinds_base() as u32, g.kinds_base() as u32 + 1);
         let origin = scene.to_rendering(DVec3::new(1.0, 0.0, 2.0));
         let across = Ray::new(origin, V3::new(-1.0, 0.0, 0.0));
         let hit = g.intersect(&across, Departure { prim: tube_id, inward: true }, f32::INFINITY);

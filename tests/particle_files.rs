@@ -306,12 +306,15 @@ fn the_periodic_box_is_drawn_as_cylinders_and_framed() {
     ];
     for (name, text, particles, [near, far]) in cases {
         let plain = read(dir.path(), name, &text, &LoadOptions::default()).desc;
-        assert!(plain.cones.is_empty() && plain.spheres.len() == particles, "{name}: no box unless asked");
+        assert!(
+            plain.kinds.cones.is_empty() && plain.spheres.len() == particles,
+            "{name}: no box unless asked"
+        );
         let read = read(dir.path(), name, &text, &boxed);
         let desc = &read.desc;
         assert!(read.warnings.is_empty(), "{name}: {:?}", read.warnings);
         assert_eq!(
-            (desc.cones.len(), desc.spheres.len()),
+            (desc.kinds.cones.len(), desc.spheres.len()),
             (12, particles + 8),
             "{name}: 12 edges, 8 corners"
         );
@@ -320,13 +323,13 @@ fn the_periodic_box_is_drawn_as_cylinders_and_framed() {
         for corner in [near, far] {
             assert!(corners.iter().any(|c| (*c - corner).length() < 1e-9), "{name}: {corner} in {corners:?}");
         }
-        let r = desc.cones[0].base_radius;
+        let r = desc.kinds.cones[0].base_radius;
         let diagonal = (far - near).length();
         assert!(
             (r - 0.0015 * diagonal).abs() < 1e-9 * diagonal,
             "{name}: radius {r} for diagonal {diagonal}"
         );
-        for cone in &desc.cones {
+        for cone in &desc.kinds.cones {
             assert_eq!((cone.base_radius, cone.apex_radius, cone.material), (r, r, 1), "{name}");
             let on_corner = |p: DVec3| corners.iter().any(|c| (*c - p).length() < 1e-9);
             assert!(on_corner(cone.base) && on_corner(cone.apex), "{name}: an edge between corners");
@@ -345,7 +348,7 @@ fn the_periodic_box_is_drawn_as_cylinders_and_framed() {
         [("q.pqr", PQR.to_owned()), ("z.gro", GRO.replace("   1.86206   1.86206   1.86206", "0 0 0"))]
     {
         let read = read(dir.path(), name, &text, &boxed);
-        assert!(read.desc.cones.is_empty(), "{name}");
+        assert!(read.desc.kinds.cones.is_empty(), "{name}");
         assert_eq!(read.warnings.len(), 1, "{name}: {:?}", read.warnings);
         assert!(read.warnings[0].starts_with("--box: "), "{:?}", read.warnings);
     }

@@ -321,8 +321,11 @@ fn torus_left_at_a_grazing_slant_is_met_again_near_its_start() {
     let near = accuracy::K_SELF * accuracy::EPS32 * point.dot(point).sqrt();
     assert!(again.prim == hit.prim && again.t > 0.0 && again.t <= near, "{again:?}, near {near:e}");
     // The torus in the twin's space: its prim is the registered kinds' first id plus k.
-    let k =
-        hit.prim as usize - desc.spheres.len() - desc.shapes.len() - desc.polygons.len() - desc.cones.len();
+    let k = hit.prim as usize
+        - desc.spheres.len()
+        - desc.shapes.len()
+        - desc.polygons.len()
+        - desc.kinds.cones.len();
     let torus = &desc.kinds.tori[k];
     let (centre, axis) = (torus.centre - twin.origin, torus.axis.normalize());
     let tube = |t: f64| {

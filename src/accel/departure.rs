@@ -1,16 +1,16 @@
 //! Where a ray meets the primitive it leaves again, which no kind's query finds (the departure primitive is
-//! skipped there): the exit from a solid it heads into, and the next meeting with an open cone or a registered
-//! kind that a departing ray can meet again (a torus).
+//! skipped there): the exit from a solid it heads into, and the next meeting with a registered kind that a
+//! departing ray can meet again (an open cone, a torus).
 
-use crate::geometry::{far_root, rehit_cone, sphere_roots, DeparturePacket, Ray, RayPacket};
+use crate::geometry::{far_root, sphere_roots, DeparturePacket, Ray, RayPacket};
 use crate::simd::{set_bits, IdLanes, Lanes};
 
 use super::{Geometry, PrimRef};
 
 impl Geometry {
     /// For lanes whose ray heads into the solid it leaves: its exit from that solid; for lanes whose ray
-    /// leaves an open cone or a kind that [meets again](crate::kinds::Kind::MEETS_AGAIN): where it meets
-    /// that primitive again. A candidate hit either way. Computed lane by lane
+    /// leaves a kind that [meets again](crate::kinds::Kind::MEETS_AGAIN) (an open cone, a torus): where it
+    /// meets that primitive again. A candidate hit either way. Computed lane by lane
     /// with the scalar kernels (each lane's primitive differs), so every width gets the scalar bits.
     pub(super) fn departure_exits_k<F: Lanes>(
         &self,
@@ -18,7 +18,7 @@ impl Geometry {
         from: &DeparturePacket<F>,
     ) -> (F::Mask, F) {
         let inward = F::move_mask(from.inward & rays.active);
-        let again = match self.cones.is_empty() && self.kinds.is_empty() {
+        let again = match self.kinds.is_empty() {
             true => 0,
             false => set_bits(F::move_mask(rays.active))
                 .filter(|&i| self.meets_again(from.prim.lane(i)))
@@ -39,19 +39,17 @@ impl Geometry {
         (F::mask_from_bits(found), F::from_lanes(t.as_ref()))
     }
 
-    /// Whether a ray leaving primitive `prim` can meet it again whichever side it heads to: open cones, and
-    /// the registered kinds that say so ([`crate::kinds::Kind::MEETS_AGAIN`]).
+    /// Whether a ray leaving primitive `prim` can meet it again whichever side it heads to: the registered
+    /// kinds that say so ([`crate::kinds::Kind::MEETS_AGAIN`]: open cones, tori).
     fn meets_again(&self, prim: u32) -> bool {
         let i = prim as usize;
-        (self.cone_base()..self.kinds_base()).contains(&i)
-            || (i >= self.kinds_base() && self.kinds.meets_again(i - self.kinds_base()))
+        i >= self.kinds_base() && self.kinds.meets_again(i - self.kinds_base())
     }
 
     /// For a ray that leaves a solid primitive toward its inside: where it leaves the primitive again.
-    /// Planar primitives (planes, polygons) have no inside, so nothing. For a ray leaving an open cone:
-    /// where it meets the cone again ([`rehit_cone`]), whichever side the shading took it to be on (an open
-    /// surface is seen from inside through its ends, so the side a ray heads to is decided by the kernel).
-    /// For a registered kind: its [`crate::kinds::Kind::rehit`].
+    /// Planar primitives (planes, polygons) have no inside, so nothing. For a registered kind: its
+    /// [`crate::kinds::Kind::rehit`], whichever side the shading took the ray to be on (an open cone is seen
+    /// from inside through its ends, so the side a ray heads to is decided by the kernel).
     fn exit_of_departure(&self, ray: &Ray<f32>, prim: u32, t_max: f32) -> Option<f32> {
         let roots = match self.prim(prim) {
             PrimRef::Sphere(i) => sphere_roots(self.spheres.center(i), self.spheres.r[i], ray),
@@ -60,10 +58,6 @@ impl Geometry {
                 sphere_roots(centre, r, ray)
             }
             PrimRef::Shape(shape) if shape.kind.is_solid() => shape.unit_sphere_roots(&shape.to_object(ray)),
-            PrimRef::Cone(k) => {
-                let (hit, t) = rehit_cone(&self.cones.cone(k), ray, t_max);
-                return hit.then_some(t);
-            }
             PrimRef::Kind(k) => return self.kinds.rehit(k, ray, t_max),
             PrimRef::Shape(_) | PrimRef::Polygon(_) => return None,
         };

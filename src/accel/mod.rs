@@ -3,12 +3,11 @@
 //!
 //! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's `crate::bvh::LeafQuery`):
 //! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]), bounded transformed shapes
-//! ([`ShapeQuery`]) and open cones and cylinders ([`ConeQuery`]); a kind with few items is tested brute force by the same query, and so are unbounded
-//! shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
+//! ([`ShapeQuery`]) and each registered kind ([`crate::kinds`]: open cones, tori); a kind with few items is tested
+//! brute force by the same query, and so are unbounded shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
 //! walk exactly as it is without other kinds.
 
 mod colors;
-mod cone_query;
 mod departure;
 mod near_first;
 pub mod pkd;
@@ -21,7 +20,6 @@ pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
 pub use crate::bvh::work::{
     probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
 };
-pub use cone_query::{ConeItems, ConeQuery};
 pub use near_first::NearFirst;
 pub use pkd::Particles;
 pub use polygons::Polygons;
@@ -33,13 +31,13 @@ use crate::bvh::{Bvh, LeafQuery};
 use crate::kinds::{Kind, KindItems, KindStores, VisitItems};
 
 use crate::geometry::{
-    Cones, Departure, DeparturePacket, Hit, HitPacket, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
+    Departure, DeparturePacket, Hit, HitPacket, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
 };
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the spheres of the particle tree (a scene has
-/// one or the other), then the shapes, then the polygons, then the cones, then the registered kinds' items
+/// one or the other), then the shapes, then the polygons, then the registered kinds' items
 /// ([`crate::kinds`]) kind by kind.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
@@ -61,13 +59,7 @@ pub struct Geometry {
     pub polygons: Polygons,
     /// The BVH over the polygons' triangles, or `None` for brute force.
     pub polygon_bvh: Option<Bvh>,
-    /// Open cones and cylinders, in file order.
-    pub cones: Cones,
-    /// The BVH over the cones, or `None` for brute force.
-    pub cone_bvh: Option<Bvh>,
-    /// With a cone BVH: its items, the cones' indices in its leaf order.
-    pub cone_order: Vec<u32>,
-    /// The registered kinds' items and trees ([`crate::kinds`]), ids after the cones.
+    /// The registered kinds' items and trees ([`crate::kinds`]), ids after the polygons.
     pub kinds: KindStores,
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
@@ -127,8 +119,6 @@ pub(crate) enum PrimRef<'a> {
     Shape(&'a Shape<f32>),
     /// Index into [`Geometry::polygons`].
     Polygon(usize),
-    /// Index into [`Geometry::cones`].
-    Cone(usize),
     /// Index over the registered kinds' items in id order ([`Geometry::kinds`]).
     Kind(usize),
 }
@@ -234,10 +224,7 @@ impl Geometry {
 
     /// Whether the scene has primitives other than spheres and particles.
     fn has_other_kinds(&self) -> bool {
-        !(self.polygons.is_empty()
-            && self.shapes.is_empty()
-            && self.cones.is_empty()
-            && self.kinds.is_empty())
+        !(self.polygons.is_empty() && self.shapes.is_empty() && self.kinds.is_empty())
     }
 
     /// The closest hits of every kind but spheres (and particles unless `particles`), merged into `best`.
@@ -267,10 +254,6 @@ impl Geometry {
                 rays.active,
                 best,
             );
-        }
-        if !self.cones.is_empty() {
-            let q = self.cone_query(rays, from);
-            intersect_items(self.cone_bvh.as_ref(), &q, self.cones.len(), rays.active, best);
         }
         if !self.kinds.is_empty() {
             let base = self.kinds_base() as u32;
@@ -341,12 +324,6 @@ impl Geometry {
             blocked =
                 blocked | occluded_items(self.shape_bvh.as_ref(), &tree, 0, live & !blocked, &mut shape);
         }
-        if !self.cones.is_empty() {
-            let q = self.cone_query(rays, from);
-            let mut cone = 0;
-            let n = self.cones.len();
-            blocked = blocked | occluded_items(self.cone_bvh.as_ref(), &q, n, live & !blocked, &mut cone);
-        }
         if !self.kinds.is_empty() && !(blocked | !live).all() {
             let base = self.kinds_base() as u32;
             let mut visit = OccludedKinds { rays, from, live, blocked, base };
@@ -400,27 +377,14 @@ impl Geometry {
         }
     }
 
-    /// The cone part of a packet query: the BVH's items, or every cone without one.
-    fn cone_query<'a, F: Lanes>(
-        &'a self,
-        rays: &RayPacket<F>,
-        from: &DeparturePacket<F>,
-    ) -> ConeQuery<'a, F> {
-        let order = self.cone_bvh.as_ref().map(|_| self.cone_order.as_slice());
-        Self::item_query(ConeItems { cones: &self.cones, order, base: self.cone_base() as u32 }, rays, from)
-    }
-
     /// The BVHs the scene has.
     pub fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
-        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh, &self.cone_bvh]
-            .into_iter()
-            .flatten()
-            .chain(self.kinds.bvhs())
+        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh].into_iter().flatten().chain(self.kinds.bvhs())
     }
 
     /// The BVHs the scene has, to change their walk settings.
     pub(crate) fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
-        [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh, &mut self.cone_bvh]
+        [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh]
             .into_iter()
             .flatten()
             .chain(self.kinds.bvhs_mut())
@@ -527,15 +491,10 @@ impl Geometry {
         self.shape_base() + self.shapes.len()
     }
 
-    /// The id of the first cone (cone k has id `cone_base() + k`).
-    pub fn cone_base(&self) -> usize {
-        self.polygon_base() + self.polygons.len()
-    }
-
     /// The id of the registered kinds' first item (their items are numbered on from it in the registry's
     /// order).
-    pub(crate) fn kinds_base(&self) -> usize {
-        self.cone_base() + self.cones.len()
+    pub fn kinds_base(&self) -> usize {
+        self.polygon_base() + self.polygons.len()
     }
 
     /// What primitive id `prim` (< `len()`) refers to.
@@ -547,10 +506,8 @@ impl Geometry {
             PrimRef::Particle(i - self.spheres.len())
         } else if i < self.polygon_base() {
             PrimRef::Shape(&self.shapes[i - self.shape_base()])
-        } else if i < self.cone_base() {
-            PrimRef::Polygon(i - self.polygon_base())
         } else if i < self.kinds_base() {
-            PrimRef::Cone(i - self.cone_base())
+            PrimRef::Polygon(i - self.polygon_base())
         } else {
             PrimRef::Kind(i - self.kinds_base())
         }
@@ -597,15 +554,6 @@ impl Geometry {
                     normal: p.shading_normal(k, point),
                     object_point: point + self.origin,
                     material: p.material[k],
-                }
-            }
-            PrimRef::Cone(k) => {
-                let cone = self.cones.cone(k);
-                SurfacePoint {
-                    point,
-                    normal: cone.normal(point),
-                    object_point: cone.frame.to_object(point),
-                    material: self.cones.material[k],
                 }
             }
             PrimRef::Kind(k) => {

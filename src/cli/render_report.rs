@@ -98,13 +98,12 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     let n = features.counts;
     let _ = writeln!(
         out,
-        "scene: {} ({}, {}, {}, {}, {}{}), {}, {}{}",
+        "scene: {} ({}, {}, {}, {}{}), {}, {}{}",
         plural(g.len(), "primitive"),
         plural(n.spheres, "sphere"),
         plural(n.ellipsoids, "ellipsoid"),
         plural(n.planes, "plane"),
         plural(n.polygons, "polygon"),
-        plural(n.cones, "cone"),
         g.kinds.counted().iter().map(|c| format!(", {c}")).collect::<String>(),
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material"),
@@ -156,10 +155,9 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
     };
     let _ = writeln!(
         out,
-        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}, cones by {}{}",
+        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}{}",
         search(&g.polygon_bvh),
         search(&g.shape_bvh),
-        search(&g.cone_bvh),
         (bareray::kinds::NAMES.iter().zip(g.kinds.trees()).zip(g.kinds.counts()))
             .filter(|(_, n)| *n > 0)
             .map(|((name, tree), _)| format!(", {name} by {}", if tree { "BVH" } else { "brute force" }))
@@ -202,11 +200,7 @@ fn plural(n: usize, thing: &str) -> String {
 /// while some material has a diffuse or specular term (which only lights light).
 pub(super) fn scene_warnings(desc: &SceneDesc) -> Vec<&'static str> {
     let mut warnings = Vec::new();
-    if desc.spheres.is_empty()
-        && desc.shapes.is_empty()
-        && desc.polygons.is_empty()
-        && desc.cones.is_empty()
-        && desc.kinds.is_empty()
+    if desc.spheres.is_empty() && desc.shapes.is_empty() && desc.polygons.is_empty() && desc.kinds.is_empty()
     {
         warnings.push("no objects");
     }

@@ -17,9 +17,7 @@ pub struct Counts {
     pub planes: usize,
     /// Polygons.
     pub polygons: usize,
-    /// Open cones and cylinders.
-    pub cones: usize,
-    /// The registered kinds' items ([`crate::kinds`]), in the registry's order.
+    /// The registered kinds' items ([`crate::kinds`]: open cones, tori), in the registry's order.
     pub(crate) kinds: [usize; crate::kinds::COUNT],
 }
 
@@ -56,7 +54,6 @@ impl Features {
                 ellipsoids: kind(ShapeKind::Sphere),
                 planes: kind(ShapeKind::Plane),
                 polygons: g.polygons.len(),
-                cones: g.cones.len(),
                 kinds: g.kinds.counts(),
             },
             bvh: g.bvhs().next().is_some(),
@@ -77,14 +74,13 @@ impl Features {
             ("ellipsoids", self.counts.ellipsoids > 0),
             ("planes", self.counts.planes > 0),
             ("polygons", self.counts.polygons > 0),
-            ("cones", self.counts.cones > 0),
             ("direct light + shadow rays", self.direct),
             ("reflection", self.reflection),
             ("refraction", self.refraction),
             ("antialiasing", self.antialiasing),
             ("ambient occlusion rays", self.ao),
         ];
-        list.splice(6..6, kinds);
+        list.splice(5..5, kinds);
         list
     }
 }

@@ -45,8 +45,7 @@ impl RenderingFrame {
     pub(crate) fn of(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Self {
         let eye = desc.camera.eye;
         let at_eye = Self { origin: eye, start: 0.0 };
-        let unbounded = desc.shapes.iter().any(|s| !s.kind.is_solid())
-            || desc.cones.iter().any(|c| !(c.base - c.apex).is_finite());
+        let unbounded = desc.shapes.iter().any(|s| !s.kind.is_solid());
         let Some((lo, hi)) = bounded_box(desc, extra).filter(|_| !unbounded) else {
             return at_eye;
         };
@@ -66,15 +65,11 @@ impl RenderingFrame {
 }
 
 /// The box around every bounded primitive and the box `extra`, in f64 world space (`None` without any):
-/// spheres, ellipsoids (the unit sphere's box under their map), polygons, cones and the registered kinds.
+/// spheres, ellipsoids (the unit sphere's box under their map), polygons and the registered kinds.
 pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
     let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
     let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
     let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
-    let cones = desc
-        .cones
-        .iter()
-        .flat_map(|c| ball(c.base, c.base_radius).into_iter().chain(ball(c.apex, c.apex_radius)));
     let shapes = desc.shapes.iter().filter(|s| s.kind.is_solid()).flat_map(|s| {
         let (c, half) = shape_extent(&s.world_from_object);
         [c - half, c + half]
@@ -84,7 +79,6 @@ pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option
         .chain(kinds)
         .chain(extra.into_iter().flatten())
         .chain(vertices)
-        .chain(cones)
         .chain(shapes)
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
     lo.cmple(hi).all().then_some((lo, hi))

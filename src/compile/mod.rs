@@ -313,15 +313,6 @@ impl Scene {
         for p in &desc.polygons {
             push_polygon(&mut geometry.polygons, p, origin);
         }
-        for c in &desc.cones {
-            let (base, apex) = (c.base - origin, c.apex - origin);
-            // A cone the readers would have rejected (a `SceneDesc` built by hand) still gets its id, as a
-            // needle no ray can see.
-            if geometry.cones.push(base, c.base_radius, apex, c.apex_radius, c.material).is_none() {
-                let needle = base + glam::DVec3::X * base.abs().max_element().max(1.0) * 1e-6;
-                geometry.cones.push(base, 0.0, needle, f64::MIN_POSITIVE, c.material);
-            }
-        }
         // obvhs cannot order boxes with infinite or NaN corners; readers reject such input, and a scene built
         // by hand with them falls back to brute force rather than failing.
         let sp = &geometry.spheres;
@@ -337,10 +328,8 @@ impl Scene {
             materials.push(Material::default());
         }
         let bounded = shape_boxes(desc, origin);
-        let cones_finite = geometry.cones.height.iter().all(|h| h.is_finite());
         let job = BvhJob {
             accel,
-            cones: cones_finite && wants(geometry.cones.len()),
             shapes: wants(bounded.len()).then_some(bounded),
             spheres: finite && wants(geometry.spheres.len()),
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
@@ -396,7 +385,7 @@ impl Scene {
             (g.spheres, g.sphere_bvh) = (spheres, Some(tree));
             self.build += stats;
         }
-        // Triangles, ellipsoids and cones cost more to test than a sphere: their trees split smaller ranges.
+        // Triangles, ellipsoids and the registered kinds' items cost more to test than a sphere: their trees split smaller ranges.
         let dearer = BuildOptions { builder: job.options.builder.for_dearer_items(), ..job.options };
         if job.polygons {
             let p = &g.polygons;
@@ -415,14 +404,6 @@ impl Scene {
             g.loose_shapes =
                 (0..g.shapes.len() as u32).filter(|&k| !g.shapes[k as usize].kind.is_solid()).collect();
             (g.shape_order, g.shape_bvh) = (order, Some(tree));
-            self.build += stats;
-        }
-        if job.cones {
-            let cones = &g.cones;
-            let item_box = |j: usize| padded(cones.bounds(j), job.options.pad);
-            let order = |order: &[u32]| order.to_vec();
-            let (tree, order, stats) = bvh::build(cones.len(), item_box, dearer, order);
-            (g.cone_order, g.cone_bvh) = (order, Some(tree));
             self.build += stats;
         }
         let build = &mut self.build;
@@ -490,8 +471,6 @@ fn wants_tree(accel: Accel, items: usize) -> bool {
 struct BvhJob {
     /// The acceleration asked for: the registered kinds' trees follow it.
     accel: Accel,
-    /// Whether to build the cones' BVH.
-    cones: bool,
     /// The bounded shapes' indices and boxes, when they get a BVH.
     shapes: Option<Vec<(u32, Aabb)>>,
     /// Whether to build the spheres' BVH.

@@ -277,11 +277,6 @@ impl Cones {
         self.height.len()
     }
 
-    /// True when there are none.
-    pub(crate) fn is_empty(&self) -> bool {
-        self.height.is_empty()
-    }
-
     /// Cone `i`'s values.
     #[inline(always)]
     pub fn cone(&self, i: usize) -> Cone<f32> {

@@ -48,6 +48,7 @@ use crate::geometry::polygon::triangulate;
 use crate::math::Rgb;
 
 use super::error::SceneError;
+use crate::kinds::cone::ConeDesc;
 use crate::scene::desc::*;
 
 mod chunks;
@@ -359,7 +360,7 @@ impl<'a> Reader<'a> {
             return Err(self.err(line, format!("cone base and apex are the same point {base}")));
         }
         let material = self.current_material();
-        self.desc.cones.push(ConeDesc { base, base_radius, apex, apex_radius, material });
+        self.desc.kinds.cones.push(ConeDesc { base, base_radius, apex, apex_radius, material });
         Ok(())
     }
 
@@ -420,13 +421,13 @@ mod tests {
             "{VIEW}f 1 0 0 1 0 0 0 0\nc 0 0 0 1 0 0 2 0.5\nc\n1 2 3\n 0 # base\n4 5 6 2\n"
         ))
         .unwrap();
-        assert_eq!(d.cones.len(), 2);
-        let c = d.cones[0];
+        assert_eq!(d.kinds.cones.len(), 2);
+        let c = d.kinds.cones[0];
         assert_eq!(
             (c.base, c.base_radius, c.apex, c.apex_radius),
             (DVec3::ZERO, 1.0, DVec3::new(0.0, 0.0, 2.0), 0.5)
         );
-        let c = d.cones[1];
+        let c = d.kinds.cones[1];
         assert_eq!(
             (c.base, c.base_radius, c.apex, c.apex_radius),
             (DVec3::new(1.0, 2.0, 3.0), 0.0, DVec3::new(4.0, 5.0, 6.0), 2.0)

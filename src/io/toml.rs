@@ -39,8 +39,6 @@ macro_rules! file_with_kinds {
             #[serde(default)]
             planes: Vec<PlaneToml>,
             #[serde(default)]
-            cones: Vec<ConeToml>,
-            #[serde(default)]
             polygons: Vec<PolygonToml>,
             $(
                 #[serde(default)]
@@ -201,16 +199,6 @@ struct PlaneToml {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct ConeToml {
-    base: Spanned<Vec3>,
-    base_radius: Spanned<f64>,
-    apex: Spanned<Vec3>,
-    apex_radius: Spanned<f64>,
-    material: Option<Spanned<String>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct PolygonToml {
     vertices: Spanned<Vec<Vec3>>,
     normals: Option<Spanned<Vec<Vec3>>>,
@@ -366,42 +354,11 @@ impl Reader<'_> {
                 material: material(p.material.as_ref())?,
             });
         }
-        for c in &file.cones {
-            desc.cones.push(self.cone(c, material(c.material.as_ref())?)?);
-        }
         for p in &file.polygons {
             desc.polygons.push(self.polygon(p, material(p.material.as_ref())?)?);
         }
         desc.kinds = kinds;
         Ok(desc)
-    }
-
-    /// A `[[cones]]` entry: finite points within f32 range, radii not negative (not both 0), distinct ends.
-    fn cone(&self, c: &ConeToml, material: u32) -> Result<ConeDesc, SceneError> {
-        let point = |v: &Spanned<Vec3>, key: &str| {
-            if v.get_ref().iter().all(|x| x.is_finite() && (*x as f32).is_finite()) {
-                Ok(DVec3::from(*v.get_ref()))
-            } else {
-                Err(self
-                    .err(v.span(), format!("{key} must be finite (within f32 range), got {:?}", v.get_ref())))
-            }
-        };
-        let radius = |v: &Spanned<f64>, key: &str| {
-            self.ranged(v, key, |r| r >= 0.0 && (r as f32).is_finite(), "a non-negative number")
-                .map(|_| *v.get_ref())
-        };
-        let (base, apex) = (point(&c.base, "base")?, point(&c.apex, "apex")?);
-        let (base_radius, apex_radius) =
-            (radius(&c.base_radius, "base_radius")?, radius(&c.apex_radius, "apex_radius")?);
-        if base_radius == 0.0 && apex_radius == 0.0 {
-            return Err(self.err(c.base_radius.span(), "a cone needs a positive radius at one end at least"));
-        }
-        if base == apex {
-            return Err(
-                self.err(c.apex.span(), format!("cone apex must differ from its base, both are {base}"))
-            );
-        }
-        Ok(ConeDesc { base, base_radius, apex, apex_radius, material })
     }
 
     /// A `[[polygons]]` entry: at least three finite vertices (within f32 range) that triangulate (NFF's
@@ -656,11 +613,11 @@ mod tests {
              base_radius = 0.5\napex = [1, 1, 3]\napex_radius = 0.5\n",
         )
         .unwrap();
-        assert_eq!(d.cones.len(), 2);
-        let c = d.cones[0];
+        assert_eq!(d.kinds.cones.len(), 2);
+        let c = d.kinds.cones[0];
         assert_eq!((c.base, c.base_radius, c.apex, c.apex_radius), (DVec3::ZERO, 1.0, DVec3::Y * 2.0, 0.0));
         assert_eq!(d.materials[c.material as usize].color, Rgb::new(1.0, 0.0, 0.0));
-        assert_eq!(d.cones[1].material, 0);
+        assert_eq!(d.kinds.cones[1].material, 0);
     }
 
     #[test]

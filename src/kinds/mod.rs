@@ -5,7 +5,7 @@
 //! ([`KindStores`]) and the twin (`KindTwins`) are written once over it.
 //!
 //! Adding a kind: a folder here with a type implementing [`Kind`], and its name in `registry!`. Its
-//! primitive ids follow the built-in kinds' (spheres, shapes, polygons, cones) in the list's order.
+//! primitive ids follow the built-in kinds' (spheres, shapes, polygons) in the list's order.
 //!
 //! ```
 //! use bareray::kinds::{KindDescs, COUNT, NAMES};
@@ -27,6 +27,7 @@ use crate::geometry::Ray;
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
+pub mod cone;
 pub mod placement;
 pub mod torus;
 
@@ -35,7 +36,7 @@ pub mod torus;
 /// below and the TOML reader are generated that way, so this line is the only place a kind is registered.
 macro_rules! registry {
     ($then:ident) => {
-        $then! { tori: $crate::kinds::torus::Torus }
+        $then! { cones: $crate::kinds::cone::OpenCone, tori: $crate::kinds::torus::Torus }
     };
 }
 pub(crate) use registry;

@@ -480,22 +480,6 @@ pub struct PolygonDesc {
     pub material: u32,
 }
 
-/// An open truncated cone (NFF `c`): the lateral surface between two end discs, no caps; a cylinder when
-/// the radii are equal, pointed when one is 0.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ConeDesc {
-    /// Centre of the base end.
-    pub base: DVec3,
-    /// Radius at the base (≥ 0).
-    pub base_radius: f64,
-    /// Centre of the other end (≠ `base`).
-    pub apex: DVec3,
-    /// Radius at the apex end (≥ 0; not both radii 0).
-    pub apex_radius: f64,
-    /// Index into `SceneDesc::materials`.
-    pub material: u32,
-}
-
 /// A whole scene as data.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SceneDesc {
@@ -519,9 +503,7 @@ pub struct SceneDesc {
     pub shapes: Vec<ShapeDesc>,
     /// Planar polygons: ids after the shapes, one per polygon however it is triangulated.
     pub polygons: Vec<PolygonDesc>,
-    /// Open cones and cylinders, in file order.
-    pub cones: Vec<ConeDesc>,
-    /// The registered kinds' items ([`crate::kinds`]): ids after the cones, kind by kind in the registry's
-    /// order.
+    /// The registered kinds' items ([`crate::kinds`]: open cones, tori): ids after the polygons, kind by
+    /// kind in the registry's order.
     pub kinds: KindDescs,
 }

@@ -3,18 +3,19 @@
 //!
 //! It reads the [`SceneDesc`] (already f64) and never the compiled f32 scene, and works in the renderer's
 //! rendering space ([`RenderingFrame`]: origin at the eye, or at a far scene's centre): every position `p`
-//! is stored as `p − origin`, computed in f64 (sphere centres, shape translations, polygon vertices, cone
-//! bases and apexes, lights), and camera rays start where the renderer's do (at exactly 0, or a far scene's
-//! start distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to f32. Intersections run the generic kernels
-//! of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`], [`Shape::intersect`],
-//! [`intersect_triangle`], [`intersect_cone`] on [`Cone<f64>`]), with the renderer's rules: closest hit by the
-//! total order (smaller t, then lower id), and a ray that leaves a primitive ([`Departure`]) never hits it
-//! again except, for a solid left toward its inside, at its exit root, and for an open cone, wherever it
-//! meets that cone again ([`rehit_cone`], whichever side the ray heads to, as `accel/departure.rs` rules).
+//! is stored as `p − origin`, computed in f64 (sphere centres, shape translations, polygon vertices, the
+//! registered kinds' items, lights), and camera rays start where the renderer's do (at exactly 0, or a far
+//! scene's start distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to
+//! f32. Intersections run the generic kernels of [`crate::geometry`] instantiated at f64
+//! ([`intersect_sphere`], [`Shape::intersect`], [`intersect_triangle`]) and each registered kind's f64 form
+//! ([`crate::kinds::Kind::intersect64`]), with the renderer's rules: closest hit by the total order (smaller
+//! t, then lower id), and a ray that leaves a primitive ([`Departure`]) never hits it again except, for a
+//! solid left toward its inside, at its exit root, and for a kind that says so (an open cone, a torus),
+//! wherever it meets that item again ([`crate::kinds::Kind::rehit64`], as `accel/departure.rs` rules).
 //!
 //! Ids are scene-file ids: spheres `0..` in file order, then shapes, then polygons (one id per polygon), then
-//! cones. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from [`TWIN_BVH_MIN_SPHERES`]
-//! on; shapes, polygons and cones brute force (planes are unbounded).
+//! the registered kinds' items. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from
+//! [`TWIN_BVH_MIN_SPHERES`] on; the rest brute force (planes are unbounded).
 
 use std::ops::Range;
 
@@ -24,8 +25,8 @@ use crate::camera::{Camera, CameraError};
 use crate::compile::RenderingFrame;
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::{
-    far_root, first_root, intersect_cone, intersect_sphere, intersect_triangle, rehit_cone, sphere_roots,
-    Cone, Departure, Ray, Shape, ShapeKind, NO_PRIM,
+    far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, Shape,
+    ShapeKind, NO_PRIM,
 };
 use crate::kinds::KindTwins;
 use crate::math::{Affine, V3};
@@ -87,8 +88,7 @@ pub struct Twin {
     shapes: Vec<Shape<f64>>,
     tris: Vec<Tri64>,
     polygons: Vec<Polygon64>,
-    cones: Vec<Cone<f64>>,
-    /// The registered kinds' items, ids after the cones.
+    /// The registered kinds' items, ids after the polygons.
     kinds: KindTwins,
     bvh: Option<Bvh64>,
 }
@@ -167,18 +167,6 @@ impl Twin {
                 outline: vertices.iter().map(|&x| v(x)).collect(),
             });
         }
-        let cones = desc
-            .cones
-            .iter()
-            .map(|c| {
-                let (base, apex) = (c.base - origin, c.apex - origin);
-                // compile's rule: a cone the readers would have rejected still gets its id, as a needle.
-                Cone::new(base, c.base_radius, apex, c.apex_radius).unwrap_or_else(|| {
-                    let needle = base + DVec3::X * base.abs().max_element().max(1.0) * 1e-6;
-                    Cone::new(base, 0.0, needle, f64::MIN_POSITIVE).expect("a needle is a valid cone")
-                })
-            })
-            .collect();
         let finite = spheres
             .iter()
             .all(|(c, r)| c.x.is_finite() && c.y.is_finite() && c.z.is_finite() && r.is_finite());
@@ -191,7 +179,6 @@ impl Twin {
             shapes,
             tris,
             polygons,
-            cones,
             kinds: desc.kinds.twins(origin),
             bvh,
         })
@@ -203,27 +190,20 @@ impl Twin {
     }
 
     /// Whether a ray leaving primitive `prim` can meet it again away from its origin whichever way it heads:
-    /// an open cone's far wall, or a registered kind's that says so (a solid's exit needs the ray to head
-    /// inward).
+    /// a registered kind's that says so (an open cone's far wall, a torus; a solid's exit needs the ray to
+    /// head inward).
     pub(crate) fn meets_again(&self, prim: u32) -> bool {
-        let i = prim as usize;
-        (self.cone_base()..self.kinds_base()).contains(&i)
-            || self.kind(prim).is_some_and(|k| self.kinds.meets_again(k))
+        self.kind(prim).is_some_and(|k| self.kinds.meets_again(k))
     }
 
     /// The id of the registered kinds' first item.
     fn kinds_base(&self) -> usize {
-        self.cone_base() + self.cones.len()
+        self.spheres.len() + self.shapes.len() + self.polygons.len()
     }
 
     /// Primitive `prim`'s index over the registered kinds' items, when it is one.
     fn kind(&self, prim: u32) -> Option<usize> {
         (prim as usize).checked_sub(self.kinds_base()).filter(|&k| k < self.kinds.len())
-    }
-
-    /// The id of the first cone (cone k has id `cone_base() + k`).
-    fn cone_base(&self) -> usize {
-        self.spheres.len() + self.shapes.len() + self.polygons.len()
     }
 
     /// True when the scene has no primitives.
@@ -276,16 +256,6 @@ impl Twin {
                 }
             }
         }
-        let nc = self.cone_base() as u32;
-        for (k, cone) in self.cones.iter().enumerate() {
-            let id = nc + k as u32;
-            if id != from.prim {
-                let (hit, t) = intersect_cone(cone, ray, t_max);
-                if hit {
-                    best.update(id, t);
-                }
-            }
-        }
         let mut kinds = (best.prim, best.t);
         self.kinds.intersect(self.kinds_base() as u32, from.prim, ray, t_max, &mut kinds);
         best.update(kinds.0, kinds.1);
@@ -296,24 +266,16 @@ impl Twin {
     }
 
     /// Where `ray` meets the primitive it leaves again, in `[0, t_max)`: for a solid left toward its inside,
-    /// its exit root; for an open cone, left to either side, where it meets the cone again ([`rehit_cone`]).
+    /// its exit root; for a registered kind left to either side (an open cone, a torus), where it meets the
+    /// item again ([`crate::kinds::Kind::rehit64`]).
     fn departure_hit(&self, from: Departure, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
         if let Some(k) = self.kind(from.prim) {
             return self.kinds.rehit(k, ray, t_max);
         }
-        match self.cone(from.prim) {
-            Some(cone) => {
-                let (hit, t) = rehit_cone(cone, ray, t_max);
-                hit.then_some(t)
-            }
-            None if from.inward => self.exit(from.prim, ray, t_max),
-            None => None,
+        match from.inward {
+            true => self.exit(from.prim, ray, t_max),
+            false => None,
         }
-    }
-
-    /// Primitive `prim` when it is a cone.
-    fn cone(&self, prim: u32) -> Option<&Cone<f64>> {
-        (prim as usize).checked_sub(self.cone_base()).and_then(|k| self.cones.get(k))
     }
 
     /// Whether `ray` meets anything in `[0, t_max)` (its departure surface's near side excluded).
@@ -354,8 +316,6 @@ impl Twin {
             first_root(&sphere_roots(self.spheres[i].0, self.spheres[i].1, ray), f64::INFINITY)
         } else if i < ns + self.shapes.len() {
             self.shapes[i - ns].intersect(ray, f64::INFINITY)
-        } else if let Some(cone) = self.cone(prim) {
-            intersect_cone(cone, ray, f64::INFINITY)
         } else {
             let mut best = Hit64::MISS;
             for tri in &self.tris[self.polygons[i - ns - self.shapes.len()].tris.clone()] {
@@ -402,8 +362,6 @@ impl Twin {
                 ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
             };
             s.normal_to_world.vector(n).normalize()
-        } else if let Some(cone) = self.cone(prim) {
-            cone.normal(point)
         } else if let Some(n) = self.kind(prim).and_then(|k| self.kinds.normal(k, point)) {
             n
         } else {

@@ -2,7 +2,7 @@
 //! explain an f32/f64 disagreement by it (grazing, ties in t, contact entries, starts near a surface).
 
 use super::{len, norm_bound, Hit64, Slack, Twin, CONTACT_C_ROUNDINGS, EPS32};
-use crate::geometry::{Cone, Departure, Ray, ShapeKind, CONTACT_ROUNDINGS, NO_PRIM};
+use crate::geometry::{Departure, Ray, ShapeKind, CONTACT_ROUNDINGS, NO_PRIM};
 use crate::math::V3;
 
 impl Twin {
@@ -19,9 +19,6 @@ impl Twin {
             o + len(c - origin) + r
         } else if i < ns + self.shapes.len() {
             o + len(self.shapes[i - ns].center - origin)
-        } else if let Some(cone) = self.cone(prim) {
-            let apex_radius = cone.base_radius + cone.slope * cone.height;
-            o + len(cone.frame.origin - origin) + cone.height + cone.base_radius.max(apex_radius)
         } else if let Some(scale) = self.kind(prim).and_then(|k| self.kinds.scale(k, origin)) {
             o + scale
         } else {
@@ -80,9 +77,6 @@ impl Twin {
                 }
                 ShapeKind::Plane => d.z.abs() <= (tol + stretch * slack.dir) * len(d),
             };
-        }
-        if let Some(cone) = self.cone(prim) {
-            return cone_grazing(cone, ray, tol * self.magnitude(prim, ray.origin), slack);
         }
         if let Some(k) = self.kind(prim) {
             let nudge = tol * self.magnitude(prim, ray.origin);
@@ -198,18 +192,6 @@ impl Twin {
             };
             return off <= tol * (spread + 1.0) + norm_bound(m) * slack;
         }
-        if let Some(cone) = self.cone(prim) {
-            let q = cone.frame.to_object(p);
-            let radial = (q.x * q.x + q.y * q.y).sqrt();
-            let z = q.z.clamp(0.0, cone.height);
-            let rho = cone.slope.mul_add(z, cone.base_radius);
-            let off = if z == q.z {
-                (radial - rho).abs() / cone.slope.hypot(1.0)
-            } else {
-                (q.z - z).hypot(radial - rho)
-            };
-            return off <= tol * self.magnitude(prim, p) + slack;
-        }
         if let Some(off) = self.kind(prim).and_then(|k| self.kinds.distance(k, p)) {
             return off <= tol * self.magnitude(prim, p) + slack;
         }
@@ -218,64 +200,6 @@ impl Twin {
         let extent = poly.outline.iter().map(|&x| len(x - anchor)).fold(0.0, f64::max);
         poly.normal.dot(p - anchor).abs() <= tol * (len(p) + len(anchor) + extent) + slack
     }
-}
-
-/// `ray`'s line against `cone`'s quadric, in f64: the ray in the cone's frame and the kernel's
-/// `[a, b, c, Δ]` of `a·t² + 2b·t + c = 0` ([`crate::geometry::cone`]; `Δ = b² − a·c` in its perpendicular
-/// form).
-fn cone_line(cone: &Cone<f64>, ray: &Ray<f64>) -> (Ray<f64>, [f64; 4]) {
-    let local = cone.frame.ray_to_object(ray);
-    let (o, d) = (local.origin, local.dir);
-    let rho = cone.slope.mul_add(o.z, cone.base_radius);
-    let g = cone.slope * d.z;
-    let a = d.x * d.x + d.y * d.y - g * g;
-    let b = o.x * d.x + o.y * d.y - g * rho;
-    let c = o.x * o.x + o.y * o.y - rho * rho;
-    let (px, py) = (rho * d.x - g * o.x, rho * d.y - g * o.y);
-    let cross = o.x * d.y - o.y * d.x;
-    (local, [a, b, c, px * px + py * py - cross * cross])
-}
-
-/// Whether moving `ray`'s line by `nudge` plus `slack` can change whether it hits `cone` ([`Twin::grazing`]).
-///
-/// - **Tangency.** Along the line, `f = x² + y² − ρ(z)²` is `a·t² + 2b·t + c`, whose extremum is `−Δ/a` at
-///   `t* = −b/a`. Moving the line by `δ` changes that extremum by at most `|∇f(p*)|·δ` to first order, so
-///   two roots can merge or appear when `|Δ/a| ≤ |∇f(p*)|·δ`. It counts where the roots a nudge makes lie
-///   within `sqrt(|∇f|·δ/|a|)` of `t*` in t (the quadratic's spread for that change of its extremum), so
-///   where that window reaches `[0, ∞)` and, in height, the end planes.
-/// - **Rim.** A root in front of the origin moves along the surface by up to `δ / cos` (the cosine of
-///   incidence with the outward normal there) when the line moves by `δ`, so it can cross an end plane when
-///   its height is within that of 0 or `h`.
-fn cone_grazing(cone: &Cone<f64>, ray: &Ray<f64>, nudge: f64, slack: Slack) -> bool {
-    let (local, [a, b, c, disc]) = cone_line(cone, ray);
-    let d = local.dir;
-    let dl = len(d);
-    let h = cone.height;
-    if a != 0.0 {
-        let ts = -b / a;
-        let p = local.at(ts);
-        let rho = cone.slope.mul_add(p.z, cone.base_radius);
-        let grad = 2.0 * (p.x * p.x + p.y * p.y + (cone.slope * rho).powi(2)).sqrt();
-        let delta = nudge + slack.at(ts * dl);
-        let spread = (grad * delta / a.abs()).sqrt() + delta / dl;
-        let reach = d.z.abs() * spread;
-        let in_range = ts + spread >= 0.0 && p.z >= -reach && p.z <= h + reach;
-        if in_range && (disc / a).abs() <= grad * delta {
-            return true;
-        }
-    }
-    if disc.is_nan() || disc < 0.0 {
-        return false;
-    }
-    let root = disc.sqrt();
-    let q = if b >= 0.0 { -(b + root) } else { root - b };
-    let roots = if q == 0.0 { [q / a; 2] } else { [q / a, c / q] };
-    roots.into_iter().filter(|t| t.is_finite() && *t >= 0.0).any(|t| {
-        let p = local.at(t);
-        let rim = p.z.abs().min((p.z - h).abs());
-        let cos = cone.object_normal(p).dot(d).abs() / dl;
-        rim * cos <= nudge + slack.at(t * dl)
-    })
 }
 
 /// Distance from `p` to the segment `a..b`.

@@ -18,8 +18,9 @@ use super::elements::{self, FALLBACK_COLOR, FALLBACK_RADIUS};
 use super::types::Types;
 use super::{Cell, Frame, Kind, ParticleOptions, Unit};
 use crate::io::xyzr;
+use crate::kinds::cone::ConeDesc;
 use crate::math::{Rgb, Rgb8};
-use crate::scene::desc::{ConeDesc, Material, SceneDesc, SphereDesc};
+use crate::scene::desc::{Material, SceneDesc, SphereDesc};
 
 /// Colours of LAMMPS types 1, 2, … (repeating): red, blue, yellow, green, orange, violet, cyan, grey.
 pub(crate) const TYPE_COLORS: [u32; 8] =
@@ -130,7 +131,7 @@ pub(crate) fn scene(
     if let Some((cell, radius)) = corners {
         desc.materials.push(material_of(BOX_COLOR));
         let c = cell.corners();
-        desc.cones.extend(Cell::edge_corners().iter().map(|&(i, j)| ConeDesc {
+        desc.kinds.cones.extend(Cell::edge_corners().iter().map(|&(i, j)| ConeDesc {
             base: c[i],
             base_radius: radius,
             apex: c[j],
