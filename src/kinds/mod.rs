@@ -118,6 +118,9 @@ pub trait Kind: Clone + Debug + Default + Send + Sync + 'static {
 
     /// The item in f64, moved by `−origin` (the twin's camera-relative space).
     fn twin(desc: &Self::Desc, origin: DVec3) -> Self::Twin;
+    /// Item `k` as stored (f32, rendering space) widened exactly to f64: an oracle over the compiled scene
+    /// measures the kernel's f32 arithmetic alone, not the rounding of the description.
+    fn widen(store: &Self::Store, k: usize) -> Self::Twin;
     /// The closest hit in `[0, t_max)`, by a method independent of [`Kind::test`]'s where one exists (so
     /// that a miss of the f32 method shows).
     fn intersect64(item: &Self::Twin, ray: &Ray<f64>, t_max: f64) -> Option<f64>;
@@ -240,7 +243,7 @@ macro_rules! per_kind {
 
         /// Every registered kind's items in f64, for the accuracy twin.
         #[derive(Clone, Debug, Default)]
-        pub(crate) struct KindTwins {
+        pub struct KindTwins {
             $(
                 #[doc = concat!("The `", stringify!($field), "` in f64.")]
                 pub(crate) $field: Vec<<$kind as Kind>::Twin>,
@@ -296,6 +299,14 @@ macro_rules! per_kind {
         // With no kind registered, the per-kind parts expand to nothing and leave arguments unused.
         #[allow(unused_variables, unused_mut)]
         impl KindStores {
+            /// Every item as stored, widened exactly to f64 ([`Kind::widen`]), in id order.
+            pub fn widened(&self) -> KindTwins {
+                KindTwins {
+                    $($field: (0..<$kind as Kind>::len(&self.$field.store))
+                        .map(|k| <$kind as Kind>::widen(&self.$field.store, k))
+                        .collect(),)*
+                }
+            }
             /// Calls `v` with each kind's items in id order.
             pub(crate) fn visit(&self, v: &mut impl VisitItems) {
                 $(v.visit::<$kind>(&self.$field);)*
@@ -382,12 +393,16 @@ macro_rules! per_kind {
         #[allow(unused_variables, unused_mut)]
         impl KindTwins {
             /// The number of items of every kind.
-            pub(crate) fn len(&self) -> usize {
+            pub fn len(&self) -> usize {
                 0 $(+ self.$field.len())*
+            }
+            /// True when there are none.
+            pub fn is_empty(&self) -> bool {
+                self.len() == 0
             }
             /// The closest hit in `[0, t_max)` over every item but `skip` (ids from `base`), as `(id, t)`
             /// merged into `best` where nearer (ties to the lower id).
-            pub(crate) fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
+            pub fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
                 #[allow(unused_mut)]
                 let mut id = base;
                 $(
@@ -416,7 +431,7 @@ macro_rules! per_kind {
                 }; $($field: $kind),*)
             }
             /// Item `id`'s hit along `ray` in `[0, inf)`.
-            pub(crate) fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
+            pub fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| K::intersect64(&items[k], ray, f64::INFINITY); $($field: $kind),*)
             }
             /// Item `id`'s outward unit normal at `point`.
@@ -424,15 +439,15 @@ macro_rules! per_kind {
                 dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], point)); $($field: $kind),*)
             }
             /// [`Kind::scale64`] of item `id`.
-            pub(crate) fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
+            pub fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::scale64(&items[k], origin)); $($field: $kind),*)
             }
             /// [`Kind::grazing64`] of item `id`.
-            pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
+            pub fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
                 dispatch!(self, id, None, |items, K, k| Some(K::grazing64(&items[k], ray, nudge, stray)); $($field: $kind),*)
             }
             /// [`Kind::distance64`] of item `id` from `p`.
-            pub(crate) fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
+            pub fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::distance64(&items[k], p)); $($field: $kind),*)
             }
         }

@@ -1,11 +1,14 @@
 //! The f64 oracle: a scene's f32 geometry (centres, radii, the f32 inverse transforms, triangle edges)
 //! widened exactly to f64 and intersected by the f64 instances of the same kernels, brute force. What it
 //! measures against the f32 path is the f32 arithmetic of the kernels, not the rounding of the scene
-//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, shapes, polygons),
-//! as `Geometry::intersect` reports them.
+//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, shapes, polygons,
+//! then the registered kinds' items: cones, tori), as `Geometry::intersect` reports them. The registered
+//! kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a kind
+//! is covered here as soon as it is registered.
 
 use bareray::accel::Geometry;
 use bareray::geometry::{intersect_sphere, intersect_triangle, sphere_roots, Ray, Shape, ShapeKind, NO_PRIM};
+use bareray::kinds::{KindTwins, Stray};
 use bareray::math::V3;
 
 use super::wide::{dv, wide, wide_shape};
@@ -17,6 +20,9 @@ pub struct Oracle {
     spheres: Vec<(V3<f64>, f64)>,
     shapes: Vec<Shape<f64>>,
     tris: Vec<Tri>,
+    /// The registered kinds' items, widened, with ids from `kinds_base`.
+    kinds: KindTwins,
+    kinds_base: u32,
 }
 
 /// A triangle for the oracle: v0, e1, e2 and its polygon's primitive id.
@@ -33,12 +39,29 @@ impl Oracle {
             tris: (0..p.triangles())
                 .map(|j| (wide(p.v0[j]), wide(p.e1[j]), wide(p.e2[j]), base + p.polygon[j]))
                 .collect(),
+            kinds: g.kinds.widened(),
+            kinds_base: g.kinds_base() as u32,
         }
+    }
+
+    /// Primitive `prim`'s index over the registered kinds' items, when it is one.
+    fn kind(&self, prim: u32) -> Option<usize> {
+        let k = prim.checked_sub(self.kinds_base)? as usize;
+        (k < self.kinds.len()).then_some(k)
+    }
+
+    /// The scale a kind's item and a ray's coordinates relative to it are rounded at (`|o|` plus the item's
+    /// own, [`bareray::kinds::Kind::scale64`]).
+    fn kind_scale(&self, k: usize, origin: V3<f64>) -> f64 {
+        dv(origin).length() + self.kinds.scale(k, origin).unwrap_or(0.0)
     }
 
     /// The hit of `ray` with primitive `prim` alone, in `[0, inf)`.
     pub fn hit_of(&self, prim: u32, ray: &Ray<f64>) -> Option<f64> {
         let i = prim as usize;
+        if let Some(k) = self.kind(prim) {
+            return self.kinds.hit_of(k, ray);
+        }
         let ns = self.spheres.len();
         let (hit, t) = if i < ns {
             intersect_sphere(self.spheres[i].0, self.spheres[i].1, ray, f64::INFINITY)
@@ -81,13 +104,19 @@ impl Oracle {
                 best = (id, t);
             }
         }
+        self.kinds.intersect(self.kinds_base, skip, ray, f64::INFINITY, &mut best);
         best
     }
 
     /// True when `ray` starts within `k` f32 roundings of the surface of solid `prim` (its near root is within
     /// `k·ε·(|c − o| + r)/|d|` of zero): at the contact point of touching spheres a ray leaving one sphere
     /// starts on the other, and whether it enters at t ≈ 0 or is already inside is decided by rounding.
+    /// For a registered kind's item: the origin lies within `k` roundings of its scale of the surface.
     pub fn starts_on(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
+        if let Some(item) = self.kind(prim) {
+            let off = self.kinds.distance(item, ray.origin).unwrap_or(f64::INFINITY);
+            return off <= k * EPS32 * self.kind_scale(item, ray.origin);
+        }
         let i = prim as usize;
         if prim == NO_PRIM || i >= self.spheres.len() {
             return false;
@@ -101,10 +130,16 @@ impl Oracle {
     /// True when `ray` passes within `k` f32 roundings (of the coordinates involved) of tangency with `prim`:
     /// the line's distance l from the centre differs from the radius by at most `k·ε·(|c| + r)`, in object
     /// space for ellipsoids (with the transform's magnitudes in the scale). Planes: the direction is within
-    /// `k·ε` of parallel. That is where the f32 and f64 kernels may legitimately disagree on hit or miss.
+    /// `k·ε` of parallel. A registered kind's item: its own rule ([`bareray::kinds::Kind::grazing64`]) for a
+    /// nudge of `k` roundings of its scale. That is where the f32 and f64 kernels may legitimately disagree on
+    /// hit or miss.
     pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
         if prim == NO_PRIM {
             return false;
+        }
+        if let Some(item) = self.kind(prim) {
+            let nudge = k * EPS32 * self.kind_scale(item, ray.origin);
+            return self.kinds.grazing(item, ray, nudge, Stray::default()).unwrap_or(false);
         }
         let i = prim as usize;
         let ns = self.spheres.len();

@@ -168,6 +168,10 @@ impl Kind for OpenCone {
         d.cone(origin)
     }
 
+    fn widen(store: &Cones, k: usize) -> Cone<f64> {
+        store.cone(k).map(f64::from)
+    }
+
     fn intersect64(cone: &Cone<f64>, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
         let (hit, t) = intersect_cone(cone, ray, t_max);
         hit.then_some(t)

@@ -213,6 +213,10 @@ impl Kind for Torus {
         d.shape(origin)
     }
 
+    fn widen(store: &Tori, k: usize) -> TorusShape<f64> {
+        store.shapes[k].map(f64::from)
+    }
+
     fn intersect64(t: &TorusShape<f64>, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
         twin::roots(t, ray).into_iter().find(|&s| s >= 0.0 && s < t_max)
     }
