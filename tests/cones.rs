@@ -4,7 +4,8 @@
 
 use crate::common;
 
-use bareray::geometry::{intersect_cone, Cone, Cones, Ray};
+use bareray::geometry::Ray;
+use bareray::kinds::cone::{intersect_cone, Cone, Cones};
 use bareray::math::SplitMix64;
 use bareray::math::V3;
 use common::wide::wide_ray;

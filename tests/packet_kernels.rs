@@ -10,9 +10,10 @@ use crate::common;
 use bareray::accel::Geometry;
 use bareray::camera::Camera;
 use bareray::geometry::{
-    intersect_cone, intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k,
-    sphere_roots, Cone, Departure, Hit, Ray, RayPacket, Shape, ShapeKind, Spheres,
+    intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k, sphere_roots, Departure,
+    Hit, Ray, RayPacket, Shape, ShapeKind, Spheres,
 };
+use bareray::kinds::cone::{intersect_cone, Cone};
 use bareray::math::{Vec3f, V3};
 use bareray::scene::desc::CameraDesc;
 use bareray::simd::{IdLanes, Lanes};

@@ -277,7 +277,7 @@ fn oracle_grazing_tilted_planes() {
 /// the cone and torus scenes of `scenes/` and `scenes/stress/` at their own cameras, 160×120. Proves the f32
 /// kernels' hits match their f64 forms (the cone kernel at f64; for tori the independent closed-form
 /// quartic): same primitive on every pixel, t within the kernels' stated bounds. Measured, max relative t
-/// error: cones 1.8e-6, cones-grazing 2.0e-5 (the cone kernel's bound near tangency, `geometry::cone`), tori
+/// error: cones 1.8e-6, cones-grazing 2.0e-5 (the cone kernel's bound near tangency, `kinds::cone::kernel`), tori
 /// 1.3e-6, torus-inside 1.1e-5 (t short against the ray's scale inside the tube), tori-distant 7.9e-7; no id
 /// mismatch. Bounds about 2.5× those; mismatches ≤ 1e-3 of the pixels, none unexplained.
 #[test]

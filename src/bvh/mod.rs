@@ -5,7 +5,7 @@
 //!
 //! The tree knows nothing of primitives. It is built over one box per item ([`build()`]), returns the leaf
 //! order of the items (their owner stores them in that order, so leaves index the arrays directly), and its
-//! walks ask a `LeafQuery` to test the items of a leaf: spheres, triangles and cones each implement it, and
+//! walks ask a `LeafQuery` to test the items of a leaf: spheres, triangles and the registered kinds each implement it, and
 //! each kind's walk is monomorphised over its own query.
 //!
 //! Culling is conservative: boxes are padded by a bound on the kernels' rounding error (`padding`), and every

@@ -1,25 +1,24 @@
 //! Primitives and their intersection kernels. Each kernel is generic over [`crate::math::Real`]: the f32
 //! instance serves single rays (K = 1, the scalar path among them), the f64 instance the accuracy oracle.
 
-pub mod cone;
 mod ellipse;
 mod frame;
 mod packet;
 mod plane;
 pub mod polygon;
 mod ray;
+mod round;
 mod shape;
 mod sphere;
 mod spheres;
 
-pub use cone::{intersect_cone, rehit_cone, Cone, Cones};
-pub(crate) use cone::{round_down, round_up};
 pub use ellipse::{Ellipse, Part};
 pub use frame::Frame;
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
 pub use plane::intersect_plane;
 pub use polygon::{intersect_triangle, stays_off_plane};
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
+pub(crate) use round::{round_down, round_up};
 pub use shape::{Shape, ShapeKind};
 pub use sphere::{
     at_eye, far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,

@@ -1,16 +1,19 @@
 //! Open cones and cylinders (TOML `[[cones]]`, NFF `c`): the lateral surface of a truncated cone between
 //! its two end discs, without caps. An open surface: a ray leaving one can meet it again through an open end
-//! or across the axis ([`Kind::MEETS_AGAIN`]). The kernel, generic over lanes and precision, is
-//! [`crate::geometry::cone`]; the twin runs it at f64, with its own grazing and distance rules ([`twin`]).
+//! or across the axis ([`Kind::MEETS_AGAIN`]). The kernel, generic over lanes and precision: [`kernel`]; the
+//! twin runs it at f64, with its own grazing and distance rules ([`twin`]).
 
+pub mod kernel;
 pub mod twin;
 
 use glam::DVec3;
 use serde::Deserialize;
 use toml::Spanned;
 
+pub use kernel::{intersect_cone, rehit_cone, Cone, Cones};
+
 use super::{Kind, KindError, Stray};
-use crate::geometry::{intersect_cone, rehit_cone, Cone, Cones, Ray};
+use crate::geometry::Ray;
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 

@@ -1,12 +1,13 @@
 //! The open cone's rules for the accuracy twin: where a nudge of a ray's line can change its hit (tangency
 //! or an end rim), and the distance from a point to the surface.
 
-use crate::geometry::{Cone, Ray};
+use super::Cone;
+use crate::geometry::Ray;
 use crate::kinds::Stray;
 use crate::math::V3;
 
 /// `ray`'s line against `cone`'s quadric, in f64: the ray in the cone's frame and the kernel's
-/// `[a, b, c, Δ]` of `a·t² + 2b·t + c = 0` ([`crate::geometry::cone`]; `Δ = b² − a·c` in its perpendicular
+/// `[a, b, c, Δ]` of `a·t² + 2b·t + c = 0` ([`super::kernel`]; `Δ = b² − a·c` in its perpendicular
 /// form).
 fn cone_line(cone: &Cone<f64>, ray: &Ray<f64>) -> (Ray<f64>, [f64; 4]) {
     let local = cone.frame.ray_to_object(ray);

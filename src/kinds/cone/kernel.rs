@@ -52,9 +52,8 @@
 
 use glam::DVec3;
 
+use crate::geometry::{round_down, round_up, Frame, Ray};
 use crate::math::{Real, Vec3f, V3};
-
-use super::{Frame, Ray};
 
 /// One cone's values, ready to intersect: a scalar cone, one splatted over lanes, or a widened one for the
 /// f64 oracle.
@@ -298,26 +297,6 @@ impl Cones {
     /// f32: the exact f64 box padded by [`BOUNDS_ROUNDINGS`] and rounded outwards to f32.
     pub(crate) fn bounds(&self, i: usize) -> (Vec3f, Vec3f) {
         (self.lo[i], self.hi[i])
-    }
-}
-
-/// The largest f32 not above `v`.
-pub(crate) fn round_down(v: f64) -> f32 {
-    let r = v as f32;
-    if f64::from(r) > v {
-        r.next_down()
-    } else {
-        r
-    }
-}
-
-/// The smallest f32 not below `v`.
-pub(crate) fn round_up(v: f64) -> f32 {
-    let r = v as f32;
-    if f64::from(r) < v {
-        r.next_up()
-    } else {
-        r
     }
 }
 
