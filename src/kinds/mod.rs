@@ -28,7 +28,7 @@ use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
 pub mod cone;
-pub mod placement;
+pub(crate) mod placement;
 pub mod torus;
 
 /// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in

@@ -16,8 +16,8 @@ use crate::film::Image;
 use crate::math::Rgb;
 use crate::scene::desc::Transfer;
 
-pub mod exr;
-pub mod held;
+pub(crate) mod exr;
+pub(crate) mod held;
 mod netpbm;
 mod png;
 mod radiance;

@@ -1,9 +1,9 @@
 //! Antialiasing: where samples go inside a pixel (supersampling) and filters over the finished image
 //! (postfiltering).
 
-pub mod filter;
+pub(crate) mod filter;
 mod postfilter;
-pub mod sequence;
+pub(crate) mod sequence;
 
 pub(crate) use postfilter::{lecture_3x3, lecture_3x3_pixel};
 

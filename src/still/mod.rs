@@ -21,7 +21,7 @@ mod check;
 pub mod merge;
 #[cfg(feature = "mpi")]
 pub mod mpi;
-pub mod resume;
+pub(crate) mod resume;
 
 pub use check::{check, Estimate, Limit, MAX_SIDE};
 use resume::Resume;
@@ -54,7 +54,7 @@ pub struct Job {
     /// The fewest bands the window is cut into where the budget would allow bigger ones (`MIN_BANDS`
     /// unless set; 1 lets the budget alone decide).
     pub min_bands: u32,
-    /// Resumable ([`resume`]): the hash of everything that decides the files' bytes (scene, settings,
+    /// Resumable (`resume`): the hash of everything that decides the files' bytes (scene, settings,
     /// window, format), which a side file must match to be used. `None`: no side file.
     pub resume: Option<u64>,
 }

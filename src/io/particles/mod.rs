@@ -1,22 +1,22 @@
-//! Particle files as simulation codes write them: XYZ and extended XYZ ([`xyz`]), PDB and PQR ([`pdb`]),
-//! GROMACS `.gro` ([`gro`]) and LAMMPS dumps ([`lammps`]), each also gzip- or bzip2-compressed. A reader
+//! Particle files as simulation codes write them: XYZ and extended XYZ (`xyz`), PDB and PQR (`pdb`),
+//! GROMACS `.gro` (`gro`) and LAMMPS dumps (`lammps`), each also gzip- or bzip2-compressed. A reader
 //! turns one frame of a file into a [`Frame`]: centres, a kind per particle (an element or a LAMMPS type)
-//! the radii or colours the file gives, and its periodic box (`Cell`) if it has one. [`scene`] then
-//! chooses radii and colours by kind (the tables in [`elements`], a types sidecar ([`types`]) and the
+//! the radii or colours the file gives, and its periodic box (`Cell`) if it has one. `scene` then
+//! chooses radii and colours by kind (the tables in `elements`, a types sidecar ([`types`]) and the
 //! overrides of [`ParticleOptions`]), gives every particle one material and its own colour
 //! ([`crate::scene::SceneDesc::sphere_colors`]), draws the box if asked and frames the particles; [`arrays`]
 //! does the same for spheres given as arrays. Every error names the file and, where there is one, the line
 //! (of the decompressed text).
 
 pub mod arrays;
-pub mod elements;
-pub mod gro;
-pub mod lammps;
-pub mod pdb;
-pub mod scene;
-pub mod text;
+pub(crate) mod elements;
+pub(crate) mod gro;
+pub(crate) mod lammps;
+pub(crate) mod pdb;
+pub(crate) mod scene;
+pub(crate) mod text;
 pub mod types;
-pub mod xyz;
+pub(crate) mod xyz;
 
 use std::io::Read;
 use std::path::{Path, PathBuf};

@@ -1,10 +1,10 @@
 //! Open cones and cylinders (TOML `[[cones]]`, NFF `c`): the lateral surface of a truncated cone between
 //! its two end discs, without caps. An open surface: a ray leaving one can meet it again through an open end
 //! or across the axis ([`Kind::MEETS_AGAIN`]). The kernel, generic over lanes and precision: [`kernel`]; the
-//! twin runs it at f64, with its own grazing and distance rules ([`twin`]).
+//! twin runs it at f64, with its own grazing and distance rules (`twin`).
 
 pub mod kernel;
-pub mod twin;
+pub(crate) mod twin;
 
 use glam::DVec3;
 use serde::Deserialize;
