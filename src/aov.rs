@@ -10,7 +10,7 @@ use rayon::prelude::*;
 
 use crate::compile::Scene;
 use crate::geometry::NO_PRIM;
-use crate::output::{self, exr::Channel, Frame, OutputError};
+use crate::output::exr::Channel;
 use crate::render::{trace_primary_window_lanes, Window};
 
 /// One kind of AOV.
@@ -108,23 +108,6 @@ pub fn samples(
         });
     });
     out
-}
-
-/// Writes the AOVs `which` of the whole image to `path` as float EXR channels, in bands of rows.
-pub fn write(
-    scene: &Scene,
-    lanes: usize,
-    pool: &rayon::ThreadPool,
-    which: &[Aov],
-    path: &Path,
-) -> Result<(), OutputError> {
-    let (width, height) = (scene.camera.width, scene.camera.height);
-    let band = crate::render::band_rows(width, 16 << 20);
-    let mut bands = (0..height).step_by(band as usize).map(|y| {
-        samples(scene, lanes, pool, Window { x0: 0, y0: y, x1: width, y1: (y + band).min(height) }, which)
-    });
-    let channels = channels(which, scene.geometry.len());
-    output::write_channels(path, Frame::whole(width, height), &channels, &[], &mut bands)
 }
 
 /// The AOV file for an image output: `out.png` → `out.aov.exr`.

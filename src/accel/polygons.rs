@@ -44,13 +44,6 @@ impl Polygons {
     pub fn triangles(&self) -> usize {
         self.v0.len()
     }
-    /// Bytes of the arrays' contents.
-    pub fn bytes(&self) -> usize {
-        let vectors =
-            (self.v0.len() + self.e1.len() + self.e2.len() + self.normal.len()) * size_of::<Vec3f>();
-        let ids = (self.polygon.len() + self.members.len() + self.first.len() + self.material.len()) * 4;
-        vectors + ids + self.vertex_normals.len() * size_of::<Option<[Vec3f; 3]>>()
-    }
 
     /// Appends a polygon given as triangles `[a, b, c]` over `vertices`, with optional per-vertex normals.
     pub(crate) fn push(

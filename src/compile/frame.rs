@@ -59,7 +59,8 @@ impl RenderingFrame {
     }
 
     /// Whether camera rays start away from the eye.
-    pub fn is_far(&self) -> bool {
+    #[cfg(test)]
+    pub(crate) fn is_far(&self) -> bool {
         self.start != 0.0
     }
 }

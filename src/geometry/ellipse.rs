@@ -39,7 +39,8 @@ fn dot(a: [f64; 2], b: [f64; 2]) -> f64 {
 impl Ellipse {
     /// The ellipse with semi-axes `axes[0]` along the direction at `angle` (radians from +x, toward +y) and
     /// `axes[1]` across it.
-    pub fn from_axes(centre: [f64; 2], axes: [f64; 2], angle: f64) -> Ellipse {
+    #[cfg(test)]
+    pub(crate) fn from_axes(centre: [f64; 2], axes: [f64; 2], angle: f64) -> Ellipse {
         let (s, c) = angle.sin_cos();
         Ellipse { centre, to_unit: [[c / axes[0], s / axes[0]], [-s / axes[1], c / axes[1]]] }
     }

@@ -287,13 +287,6 @@ macro_rules! per_kind {
                 $(boxes.extend(self.$field.iter().map(<$kind as Kind>::world_box));)*
                 boxes
             }
-            /// Each item's material index, in id order.
-            pub fn materials(&self) -> Vec<u32> {
-                #[allow(unused_mut)]
-                let mut out = Vec::new();
-                $(out.extend(self.$field.iter().map(<$kind as Kind>::material));)*
-                out
-            }
         }
 
         // With no kind registered, the per-kind parts expand to nothing and leave arguments unused.

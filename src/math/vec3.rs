@@ -81,10 +81,6 @@ impl V3<f32> {
     pub fn to_f64(self) -> V3<f64> {
         self.map(f64::from)
     }
-    /// The largest component.
-    pub fn max_component(self) -> f32 {
-        self.x.max(self.y).max(self.z)
-    }
 }
 
 impl V3<f64> {

@@ -8,7 +8,7 @@
 //! `mid = lo + (hi − lo)/2`; sphere `mid` is the node, split on the widest axis of its range's box, and every centre in `lo..mid`
 //! is at or below its centre on that axis, every centre in `mid + 1..hi` at or above (ties ordered by file
 //! index). Ranges of at most [`LEAF`] spheres are leaves. No node holds a box: a walk carries its node's box
-//! down, cutting it at the split plane widened by the largest radius ([`Particles::r_max`]; one bound for the
+//! down, cutting it at the split plane widened by the largest radius (`Particles::r_max`; one bound for the
 //! whole field, as the paper's, so a field of very mixed radii culls less well but never wrongly).
 //!
 //! **Records.** The spheres' world-space values, `x, y, z, r`, as the file holds them (in a private mapping
@@ -259,11 +259,6 @@ impl Particles {
     /// True when there are none.
     pub fn is_empty(&self) -> bool {
         self.key.is_empty()
-    }
-
-    /// The largest radius (f32).
-    pub fn r_max(&self) -> f32 {
-        self.r_max
     }
 
     /// Whether the records are a mapped file's.
