@@ -9,8 +9,9 @@
 //!
 //! The test below checks [`CI_SCENES`] seeds; the ignored one checks [`CAMPAIGN_SCENES`] (from
 //! `RANDOM_SCENES_FIRST`, `RANDOM_SCENES_COUNT` scenes if set) and prints how many failed:
-//! `cargo test --release --test suite random_scenes:: -- --ignored --nocapture`. A failure prints its seed
-//! and what failed, and writes the scene as TOML into the system's temporary directory (its path printed).
+//! `cargo test --release --test random_scenes -- --ignored --nocapture` (a binary of this file alone), or
+//! `--test suite random_scenes:: -- --ignored`. A failure prints its seed and what failed, and writes the
+//! scene as TOML into the system's temporary directory (its path printed).
 //! Every failure the campaign found is a scene in scenes/stress/: fixed ones there (checked by
 //! tests/accuracy.rs and tests/render.rs, with a test of their own here or, for the accuracy report's
 //! explanations, in tests/accuracy.rs), open ones in scenes/stress/open/ (the ignored [`open_failures`]
