@@ -246,6 +246,16 @@ impl Camera<f64> {
         if self.start != 0.0 {
             return None;
         }
+        self.window_pyramid(sx, sy)
+    }
+
+    /// The planes of [`Camera::pyramid`] through the eye (rounded to f32) whether or not the rays start
+    /// there: a [`Pyramid`] that encloses every exact direction from the eye toward the window, for tests of
+    /// what those directions may reach (coverage's tiles). The widening also covers the apex's rounding
+    /// where the eye is not at the origin of rendering space (a far scene): it moves the planes by at most
+    /// 2⁻²⁴·|n|₁·|eye|, an angle below 2⁻²³ seen from the eye at the geometry's distance (beyond half of
+    /// |eye|), within the room above the normals' own rounding.
+    pub(crate) fn window_pyramid(&self, sx: [f32; 2], sy: [f32; 2]) -> Option<Pyramid> {
         // `directions4`'s operations: the edge lanes get these very U and V, and since rounding is
         // monotone every lane between them lies between.
         let window = |s: f32, scale: f64, offset: f64, half: f64| (f64::from(s) * scale + offset) * half;

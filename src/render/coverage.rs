@@ -48,9 +48,10 @@
 //!   the next sphere lies beyond the farthest grid point's depth; and after 64 spheres.
 
 use crate::accel::NearFirst;
+use crate::bvh::Frustum;
 use crate::camera::Camera;
 use crate::compile::Scene;
-use crate::geometry::{Ellipse, RayPacket};
+use crate::geometry::{Ellipse, RayPacket, Spheres};
 use crate::math::Rgb;
 use crate::shade::Tracer;
 use crate::simd::Lanes;
@@ -120,21 +121,25 @@ impl View {
         [p[0] * self.au + self.bu, p[1] * self.av + self.bv, 1.0]
     }
 
-    /// A rendering-space vector in the frame.
     /// A rendering-space point as a vector from the eye, in f64.
     fn eye_to(&self, p: [f32; 3]) -> V {
         [0, 1, 2].map(|a| f64::from(p[a]) - self.eye[a])
     }
 
+    /// A rendering-space vector in the frame.
     fn to_frame(&self, c: V) -> V {
         [dot(c, self.right), dot(c, self.up), dot(c, self.forward)]
     }
+}
 
-    /// A frame vector in rendering space.
-    fn to_rendering(&self, n: V) -> V {
-        let (x, y, z) = (self.right, self.up, self.forward);
-        [0, 1, 2].map(|a| x[a] * n[0] + y[a] * n[1] + z[a] * n[2])
-    }
+/// The largest coordinate magnitude of `spheres`' boxes (a tree's `extent`, for spheres kept without one).
+fn spheres_extent(spheres: &Spheres) -> f32 {
+    (0..spheres.len())
+        .map(|i| {
+            let (c, r) = (spheres.center(i), spheres.r[i]);
+            c.x.abs().max(c.y.abs()).max(c.z.abs()) + r
+        })
+        .fold(0.0, f32::max)
 }
 
 /// A sphere in the camera's frame (from the eye), in f64 from its stored f32 values.
@@ -352,36 +357,33 @@ impl<'a> Coverage<'a> {
         if view.au == 0.0 || view.av == 0.0 {
             return;
         }
-        let lo = [f64::from(tile.x0), f64::from(tile.y0)];
-        let hi = [f64::from(tile.x0 + tile.w), f64::from(tile.y0 + tile.h)];
-        let (a, b) = (view.dir(lo), view.dir(hi));
-        // The pyramid's inward normals in the frame: u ≥ u0, u ≤ u1, v ≥ v0, v ≤ v1.
-        let (u0, u1) = (a[0].min(b[0]), a[0].max(b[0]));
-        let (v0, v1) = (a[1].min(b[1]), a[1].max(b[1]));
-        let sides: [V; 4] = [[1.0, 0.0, -u0], [-1.0, 0.0, u1], [0.0, 1.0, -v0], [0.0, -1.0, v1]];
-        let world = sides.map(|n| view.to_rendering(n));
+        let spheres = &scene.geometry.spheres;
+        let bvh = scene.geometry.sphere_bvh.as_ref();
+        // The packet walks' frustum of the tile's pixel squares: it keeps every box and sphere an exact
+        // direction through the tile may reach. A view too wide for one (beyond about 177°) culls nothing.
+        let frustum = scene
+            .camera_f64
+            .window_pyramid(
+                [tile.x0, tile.x0 + tile.w].map(|x| x as f32),
+                [tile.y0, tile.y0 + tile.h].map(|y| y as f32),
+            )
+            .map(|p| Frustum::new(&p, bvh.map_or_else(|| spheres_extent(spheres), |b| b.extent)));
         let box_key = |lo: [f32; 3], hi: [f32; 3]| {
-            let (lo, hi) = (view.eye_to(lo), view.eye_to(hi));
-            for n in &world {
-                let far: f64 = (0..3).map(|a| (n[a] * lo[a]).max(n[a] * hi[a])).sum();
-                let size: f64 = (0..3).map(|a| n[a].abs() * lo[a].abs().max(hi[a].abs())).sum();
-                if far < -1e-9 * size {
-                    return None;
-                }
+            if frustum.as_ref().is_some_and(|f| !f.may_enter(lo, hi)) {
+                return None;
             }
+            let (lo, hi) = (view.eye_to(lo), view.eye_to(hi));
             let gap = |a: usize| lo[a].max(0.0).max(-hi[a]);
             Some((gap(0).powi(2) + gap(1).powi(2) + gap(2).powi(2)).sqrt())
         };
-        let spheres = &scene.geometry.spheres;
         let view = &*view;
         let ball = |i: usize| {
             let c = view.eye_to([spheres.cx[i], spheres.cy[i], spheres.cz[i]]);
             Ball::new(view.to_frame(c), f64::from(spheres.r[i]))
         };
         let item_key = |i: usize| {
-            let b = ball(i);
-            let meets = sides.iter().all(|n| dot(*n, b.c) >= -b.r * dot(*n, *n).sqrt() * (1.0 + 1e-9));
-            meets.then(|| (b.dist - b.r).max(0.0))
+            let meets = frustum.as_ref().is_none_or(|f| f.may_meet(spheres.center(i), spheres.r[i]));
+            meets.then(|| (ball(i).dist - f64::from(spheres.r[i])).max(0.0))
         };
         let visit = |i: usize, key: f64| {
             let ball = ball(i);
