@@ -329,14 +329,12 @@ macro_rules! per_kind {
                 [$(self.$field.bvh.is_some()),*]
             }
             /// The kinds' trees.
-            pub(crate) fn bvhs(&self) -> Vec<&Bvh> {
-                let trees: Vec<Option<&Bvh>> = vec![$(self.$field.bvh.as_ref()),*];
-                trees.into_iter().flatten().collect()
+            pub(crate) fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
+                [$(self.$field.bvh.as_ref()),*].into_iter().flatten()
             }
             /// The kinds' trees, to change their walk settings.
-            pub(crate) fn bvhs_mut(&mut self) -> Vec<&mut Bvh> {
-                let trees: Vec<Option<&mut Bvh>> = vec![$(self.$field.bvh.as_mut()),*];
-                trees.into_iter().flatten().collect()
+            pub(crate) fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
+                [$(self.$field.bvh.as_mut()),*].into_iter().flatten()
             }
             /// Builds a tree for each kind that `wants` one (given its number of items), where every
             /// item's box is finite: `build(n, box of item k)` returns the tree and its leaf order.

@@ -360,6 +360,24 @@ impl<F: Lanes> Packets<F> {
         points: &[(u32, u32)],
         lattice: &mut Lattice,
     ) {
+        if scene.camera_f64.start != 0.0 {
+            self.trace_from::<true>(scene, tracer, tile, unit, points, lattice);
+        } else {
+            self.trace_from::<false>(scene, tracer, tile, unit, points, lattice);
+        }
+    }
+
+    /// [`Packets::trace`] for a camera whose rays start at the eye (`FAR` false) or at its start points
+    /// ([`Camera::rays_in`](crate::camera::Camera::rays_in)).
+    fn trace_from<const FAR: bool>(
+        &mut self,
+        scene: &Scene,
+        tracer: &mut Tracer<F>,
+        tile: Tile,
+        unit: u32,
+        points: &[(u32, u32)],
+        lattice: &mut Lattice,
+    ) {
         let camera = &scene.camera_f64;
         let pyramids = scene.geometry.culls_by_pyramid() && F::K > 1;
         let step = 1.0 / unit as f32;
@@ -376,7 +394,7 @@ impl<F: Lanes> Packets<F> {
                 let at = |i: usize| chunk[i.min(chunk.len() - 1)];
                 let sx = F::from_fn(|i| tile.x0 as f32 + at(i).0 as f32 * step);
                 let sy = F::from_fn(|i| tile.y0 as f32 + at(i).1 as f32 * step);
-                let ray = camera.rays(sx, sy);
+                let ray = camera.rays_in::<F, FAR>(sx, sy);
                 let (rx, ry) = (range(sx), range(sy));
                 (xs, ys) = ([xs[0].min(rx[0]), xs[1].max(rx[1])], [ys[0].min(ry[0]), ys[1].max(ry[1])]);
                 let pyramid = pyramids.then(|| camera.pyramid(rx, ry)).flatten();

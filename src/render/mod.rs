@@ -367,6 +367,21 @@ pub(crate) fn for_each_packet_at<F: Lanes>(
     tile: Tile,
     offsets: &Offsets,
     pyramids: bool,
+    visit: impl FnMut(&RayPacket<F>, Block),
+) {
+    if camera.start != 0.0 {
+        packets_at::<F, true>(camera, tile, offsets, pyramids, visit);
+    } else {
+        packets_at::<F, false>(camera, tile, offsets, pyramids, visit);
+    }
+}
+
+/// [`for_each_packet_at`] for a camera whose rays start at the eye (`FAR` false) or at its start points.
+fn packets_at<F: Lanes, const FAR: bool>(
+    camera: &Camera<f64>,
+    tile: Tile,
+    offsets: &Offsets,
+    pyramids: bool,
     mut visit: impl FnMut(&RayPacket<F>, Block),
 ) {
     let (bw, bh) = block::<F>();
@@ -391,7 +406,7 @@ pub(crate) fn for_each_packet_at<F: Lanes>(
             };
             let sx = (F::splat_f32(x0 as f32) + lane_x) + dx;
             let sy = (F::splat_f32(y0 as f32) + lane_y) + dy;
-            let ray = camera.rays(sx, sy);
+            let ray = camera.rays_in::<F, FAR>(sx, sy);
             let active = if b.w == bw && b.h == bh {
                 F::mask_from_bits(u32::MAX)
             } else {
