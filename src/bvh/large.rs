@@ -42,6 +42,11 @@ struct Pending {
 pub(crate) struct MemberSides {
     /// Per side, the normals' components.
     normal: [[f32x16; 3]; 4],
+    /// Per side, the normals' components where positive, else 0: with `below`, a box's corner farthest
+    /// along a normal without a select (`n·corner = n⁺·hi + n⁻·lo` per axis, one term an exact zero).
+    above: [[f32x16; 3]; 4],
+    /// Per side, the normals' components where negative, else 0.
+    below: [[f32x16; 3]; 4],
     /// Per side, `|n|` rounded up, for balls.
     norm: [f32x16; 4],
     /// Per side, the offsets (with [`Side::all`]'s slack); `-inf` for members without a pyramid.
@@ -78,7 +83,10 @@ impl MemberSides {
         let norm = normal.map(|n| {
             (n[2].mul_add(n[2], n[1].mul_add(n[1], n[0] * n[0]))).sqrt() * f32x16::splat(Side::NORM_UP)
         });
-        Self { normal, norm, offset }
+        let zero = f32x16::splat(0.0);
+        let above = normal.map(|n| n.map(|c| c.fast_max(zero)));
+        let below = normal.map(|n| n.map(|c| c.fast_min(zero)));
+        Self { normal, above, below, norm, offset }
     }
 
     /// Bit p set where member p's frustum may reach child `c` of `n`: the box's corner farthest along each
@@ -93,14 +101,15 @@ impl MemberSides {
     #[inline(always)]
     pub(crate) fn reaching_corners(&self, planes: [(f32, f32); 3]) -> u32 {
         let zero = f32x16::splat(0.0);
+        let (lo, hi) = (planes.map(|p| f32x16::splat(p.0)), planes.map(|p| f32x16::splat(p.1)));
         let mut outside = 0;
-        for (normal, offset) in self.normal.iter().zip(&self.offset) {
-            let corner = |a: usize| {
-                let (lo, hi) = (f32x16::splat(planes[a].0), f32x16::splat(planes[a].1));
-                Real::select(zero.le(normal[a]), hi, lo)
-            };
-            let s = corner(2)
-                .mul_add(normal[2], corner(1).mul_add(normal[1], corner(0).mul_add(normal[0], -*offset)));
+        for ((above, below), offset) in self.above.iter().zip(&self.below).zip(&self.offset) {
+            // Each axis adds its corner's product and an exact zero (the box is finite), in the order of
+            // the select form `corner·n`, so the sum is that form's to the bit.
+            let mut s = -*offset;
+            for a in 0..3 {
+                s = hi[a].mul_add(above[a], lo[a].mul_add(below[a], s));
+            }
             outside |= f32x16::move_mask(s.lt(zero));
         }
         !outside
@@ -181,22 +190,17 @@ impl Bvh {
     }
 }
 
-/// The largest of `t`'s lanes, none of them NaN (hit distances, inf or −inf), by halves of an array with
-/// room for the widest lane type (K ≤ 16): without [`f32::max`]'s NaN rule the compiler keeps the halving in
-/// vector registers (with it, lane by lane).
+/// The largest of `t`'s lanes, none of them NaN (hit distances, inf or −inf), from an array with room for
+/// the widest lane type (K ≤ 16): four 4-lane maxima (no NaN rule to keep), then the last four lanes.
 #[inline(always)]
 pub(crate) fn farthest<F: Lanes>(t: F) -> f32 {
     let mut a = [f32::NEG_INFINITY; 16];
     a[..F::K].copy_from_slice(t.to_array().as_ref());
     debug_assert!(!a.iter().any(|v| v.is_nan()), "a NaN hit distance");
-    let mut w = a.len() / 2;
-    while w > 0 {
-        for i in 0..w {
-            a[i] = if a[i + w] > a[i] { a[i + w] } else { a[i] };
-        }
-        w /= 2;
-    }
-    a[0]
+    let quarter = |k: usize| f32x4::from([a[4 * k], a[4 * k + 1], a[4 * k + 2], a[4 * k + 3]]);
+    let m = quarter(0).fast_max(quarter(1)).fast_max(quarter(2).fast_max(quarter(3))).to_array();
+    let larger = |x: f32, y: f32| if y > x { y } else { x };
+    larger(larger(m[0], m[1]), larger(m[2], m[3]))
 }
 
 /// The members of a large packet of `packets` (with `hits` hit packets to fill): each member's live lanes
@@ -308,8 +312,10 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
                 any |= m;
             }
             for p in set_bits(any) {
-                let mine = chunk.clone().filter(|&i| reach[i - start] >> p & 1 == 1);
-                let mine_count = mine.clone().count();
+                // Bit k for the chunk's item start + k that member p may meet.
+                let bits = reach.iter().enumerate().fold(0u32, |b, (k, m)| b | (m >> p & 1) << k);
+                let mine = set_bits(bits).map(|k| start + k);
+                let mine_count = bits.count_ones() as usize;
                 tests += mine_count;
                 lanes += mine_count * F::move_mask(self.live[p]).count_ones() as usize;
                 made(self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
