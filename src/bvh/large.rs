@@ -27,12 +27,12 @@ use crate::simd::{set_bits, Lanes};
 /// The most packets a large packet holds: a 16×16-pixel tile of 4×4-ray packets.
 pub const MAX_PACKETS: usize = 16;
 
-/// A child waiting on the stack: slot `slot` of node `parent`, which the members of `members` (bit p for
-/// member p) may reach, no nearer than `near` to the shared origin.
+/// A child waiting on the stack: its node (`count` 0) or its leaf's `count` items from `child`, which the
+/// members of `members` (bit p for member p) may reach, no nearer than `near` to the shared origin.
 #[derive(Clone, Copy)]
 struct Pending {
-    parent: u32,
-    slot: u8,
+    child: u32,
+    count: u8,
     members: u16,
     near: f32,
 }
@@ -259,9 +259,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             if members == 0 {
                 continue;
             }
-            let n = &self.bvh.nodes[e.parent as usize];
-            let slot = usize::from(e.slot);
-            let (child, count) = (n.child[slot], n.count[slot]);
+            let (child, count) = (e.child, e.count);
             if count == 0 {
                 let tested = self.push_children(child, members, far, &mut stack);
                 boxes += tested;
@@ -272,7 +270,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             }
             let first = child as usize;
             let (tests, lanes) =
-                self.intersect_leaf(first..first + usize::from(count), members, best, &mut far);
+                self.intersect_leaf(first..first + usize::from(count), members, best, &mut far, counting);
             prims += tests;
             prim_lanes += lanes;
         }
@@ -287,7 +285,8 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
     }
 
     /// Each of `members`' closest hits among `items`, each member testing the items its frustum may meet;
-    /// updates the members' `far`. Returns the member–item tests made and the live rays they served.
+    /// updates the members' `far`. Returns the member–item tests made and, when `counting`, the live rays
+    /// they served.
     #[inline(always)]
     fn intersect_leaf(
         &mut self,
@@ -295,6 +294,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
         members: u32,
         best: &mut [HitPacket<F>],
         far: &mut f32x16,
+        counting: bool,
     ) -> (usize, usize) {
         let (mut tests, mut lanes) = (0, 0);
         let mut updated = far.to_array();
@@ -317,7 +317,9 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
                 let mine = set_bits(bits).map(|k| start + k);
                 let mine_count = bits.count_ones() as usize;
                 tests += mine_count;
-                lanes += mine_count * F::move_mask(self.live[p]).count_ones() as usize;
+                if counting {
+                    lanes += mine_count * F::move_mask(self.live[p]).count_ones() as usize;
+                }
                 made(self.made, &self.query, p).intersect(mine, self.live[p], &mut best[p]);
                 updated[p] = farthest(F::select(self.live[p], best[p].t, F::splat_f32(f32::NEG_INFINITY)));
             }
@@ -339,7 +341,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             let done = f32x16::move_mask(far.lt(f32x16::splat(near[c])));
             let reach = self.sides.reaching_box(n, c) & members & !done;
             stack.push_if(
-                Pending { parent: at, slot: c as u8, members: reach as u16, near: near[c] },
+                Pending { child: n.child[c], count: n.count[c], members: reach as u16, near: near[c] },
                 reach != 0,
             );
         }
