@@ -189,8 +189,8 @@ impl Camera<f64> {
 
     /// [`Camera::rays`] with the choice between the eye and the start points made by the caller: a packet
     /// loop compiled for each `FAR` and chosen once per pass tests nothing per packet. (With the test in
-    /// every call, the near path compiled to about a tenth more instructions per frame of camera rays on a
-    /// small field: PERF.md, Register, "Camera rays' origin chosen once per pass".)
+    /// every call, the near path compiled to more instructions: PERF.md, Register, "Camera rays' origin
+    /// chosen once per pass".)
     #[inline(always)]
     pub(crate) fn rays_in<F: Lanes, const FAR: bool>(&self, sx: F, sy: F) -> Ray<F> {
         if FAR {
