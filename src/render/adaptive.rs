@@ -309,7 +309,11 @@ fn refine_tile<F: Lanes>(
             new.sort_unstable_by_key(|&(key, _)| key);
             points.clear();
             points.extend(new.iter().map(|&(_, p)| p));
-            packets.trace(scene, tracer, tile, unit, &points, lattice);
+            if scene.camera_f64.start != 0.0 {
+                packets.trace::<true>(scene, tracer, tile, unit, &points, lattice);
+            } else {
+                packets.trace::<false>(scene, tracer, tile, unit, &points, lattice);
+            }
             squares =
                 squares.iter().flat_map(|&(x, y)| [(x, y), (x + h, y), (x, y + h), (x + h, y + h)]).collect();
         }
@@ -351,25 +355,9 @@ impl<F: Lanes> Packets<F> {
     /// packet with the pyramid of its points and [`crate::bvh::MAX_PACKETS`] packets as one large packet, and
     /// stores their colours and ids in `lattice`. A point's position is `x0 + p·2^-depth`, the same bits from
     /// whichever tile shares it.
-    fn trace(
-        &mut self,
-        scene: &Scene,
-        tracer: &mut Tracer<F>,
-        tile: Tile,
-        unit: u32,
-        points: &[(u32, u32)],
-        lattice: &mut Lattice,
-    ) {
-        if scene.camera_f64.start != 0.0 {
-            self.trace_from::<true>(scene, tracer, tile, unit, points, lattice);
-        } else {
-            self.trace_from::<false>(scene, tracer, tile, unit, points, lattice);
-        }
-    }
-
-    /// [`Packets::trace`] for a camera whose rays start at the eye (`FAR` false) or at its start points
+    /// `FAR` says whether the camera's rays start away from the eye
     /// ([`Camera::rays_in`](crate::camera::Camera::rays_in)).
-    fn trace_from<const FAR: bool>(
+    fn trace<const FAR: bool>(
         &mut self,
         scene: &Scene,
         tracer: &mut Tracer<F>,
