@@ -198,7 +198,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             return background;
         }
         let s = self.surface(rays, hit, found, depth == 0);
-        let view = -rays.dir;
+        let view = -rays.ray.dir;
         let mut color = s.base.mul_elem(splat_rgb::<F>(self.scene.render.ambient)) * s.ambient;
         let zero_f = F::splat_f32(0.0);
         let lambert_or_phong = found & (s.diffuse.gt(zero_f) | s.specular.gt(zero_f));
@@ -265,11 +265,11 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         // (the eye not on the surface).
         let c_eye = gather(&spheres.c_eye);
         let zero_f = F::splat_f32(0.0);
-        let camera_lanes = if camera { found & at_eye(rays.origin) } else { F::mask_from_bits(0) };
+        let camera_lanes = if camera { found & at_eye(rays.ray.origin) } else { F::mask_from_bits(0) };
         let from_eye = camera_lanes & (c_eye.lt(zero_f) | c_eye.gt(zero_f));
         let eye_inside = c_eye.lt(zero_f);
         let outward = V3::select(found, (point - center).normalize(), zero);
-        let (normal, inside) = facing(outward, rays.dir, from_eye, eye_inside);
+        let (normal, inside) = facing(outward, rays.ray.dir, from_eye, eye_inside);
         let splat = F::splat_f32;
         // The spheres' own colours, when they have them, replace the material's.
         let base = match spheres.color.is_empty() {
@@ -344,7 +344,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let lane = |k: usize| F::from_lanes(v[k].as_ref());
         let v3 = |k: usize| V3::new(lane(k), lane(k + 1), lane(k + 2));
         let (normal, inside) =
-            facing(v3(3), rays.dir, F::mask_from_bits(known), F::mask_from_bits(eye_inside));
+            facing(v3(3), rays.ray.dir, F::mask_from_bits(known), F::mask_from_bits(eye_inside));
         Surface {
             point: v3(0),
             normal,
@@ -425,7 +425,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let mut refracted = None;
         if transmitting.any() {
             let eta = F::select(s.inside, s.ior, one / s.ior);
-            let (through, dir, fresnel) = refract(rays.dir, s.normal, eta);
+            let (through, dir, fresnel) = refract(rays.ray.dir, s.normal, eta);
             let through = transmitting & through;
             let split = through & s.fresnel;
             kr = F::select(split, kr + kt * fresnel, kr);
@@ -441,7 +441,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let mirror = found & (kr * weight).gt(min_weight);
         if mirror.any() {
             self.counts.reflection += lanes_set::<F>(mirror);
-            let d = rays.dir;
+            let d = rays.ray.dir;
             let dir = (d - s.normal * (F::splat_f32(2.0) * d.dot(s.normal))).normalize();
             let next = RayPacket::new(s.point, dir, F::splat_f32(f32::INFINITY), mirror);
             let from = DeparturePacket { prim, inward: s.inside };
@@ -594,9 +594,9 @@ mod tests {
                     let d = |v: wide::f32x8| v.lane(i);
                     // The flipped normal points back out where `inside` is set.
                     let sign = if f32x8::mask_lane(s.inside, i) { -1.0 } else { 1.0 };
-                    sign * (d(s.normal.x) * d(rays.dir.x)
-                        + d(s.normal.y) * d(rays.dir.y)
-                        + d(s.normal.z) * d(rays.dir.z))
+                    sign * (d(s.normal.x) * d(rays.ray.dir.x)
+                        + d(s.normal.y) * d(rays.ray.dir.y)
+                        + d(s.normal.z) * d(rays.ray.dir.z))
                 };
                 let lanes = tracer.sphere_surface(&rays, &hit, found, true);
                 assert_eq!(lanes.is_some(), stretch == 1.0 && found.any());

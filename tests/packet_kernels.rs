@@ -219,8 +219,8 @@ fn check_sphere_kernels<F: Lanes>(case: &Case) -> Result<(), TestCaseError> {
     for (packet, rays) in case.packets::<F>() {
         for &(c, r) in &case.spheres {
             let (ck, rk) = (F::splat_v3(c), F::splat_f32(r));
-            let roots = sphere_roots(ck, rk, &packet.ray());
-            let (hit, t) = intersect_sphere(ck, rk, &packet.ray(), packet.t_max);
+            let roots = sphere_roots(ck, rk, packet.ray());
+            let (hit, t) = intersect_sphere(ck, rk, packet.ray(), packet.t_max);
             for (i, (ray, t_max, _)) in rays.iter().enumerate() {
                 let want = sphere_roots(c, r, ray);
                 check_mask("sphere_roots", F::K, i, F::mask_lane(roots.hit, i), want.hit)?;
@@ -237,7 +237,7 @@ fn check_sphere_kernels<F: Lanes>(case: &Case) -> Result<(), TestCaseError> {
 
 fn check_plane_kernel<F: Lanes>(case: &Case) -> Result<(), TestCaseError> {
     for (packet, rays) in case.packets::<F>() {
-        let (hit, t) = intersect_plane(&packet.ray(), packet.t_max);
+        let (hit, t) = intersect_plane(packet.ray(), packet.t_max);
         for (i, (ray, t_max, _)) in rays.iter().enumerate() {
             let (want_hit, want_t) = intersect_plane(ray, *t_max);
             check_mask("intersect_plane", F::K, i, F::mask_lane(hit, i), want_hit)?;
@@ -250,7 +250,7 @@ fn check_plane_kernel<F: Lanes>(case: &Case) -> Result<(), TestCaseError> {
 fn check_shape_kernel<F: Lanes>(case: &Case, shape: &Shape<f32>) -> Result<(), TestCaseError> {
     let lanes = shape.to_lanes::<F>();
     for (packet, rays) in case.packets::<F>() {
-        let (hit, t) = lanes.intersect(&packet.ray(), packet.t_max);
+        let (hit, t) = lanes.intersect(packet.ray(), packet.t_max);
         for (i, (ray, t_max, _)) in rays.iter().enumerate() {
             let (want_hit, want_t) = shape.intersect(ray, *t_max);
             check_mask("Shape::intersect", F::K, i, F::mask_lane(hit, i), want_hit)?;
@@ -319,7 +319,7 @@ fn check_cone_kernel<F: Lanes>(cone: &Cone<f32>, rays: &[LaneRay]) -> Result<(),
     let lanes = cone.map(F::splat_f32);
     for chunk in rays.chunks(F::K) {
         let packet = RayPacket::<F>::from_fn(|i| chunk.get(i).copied().unwrap_or((chunk[0].0, 1.0, false)));
-        let (hit, t) = intersect_cone(&lanes, &packet.ray(), packet.t_max);
+        let (hit, t) = intersect_cone(&lanes, packet.ray(), packet.t_max);
         let local = lanes.frame.to_object(packet.ray().at(t));
         let normal = lanes.object_normal(local);
         for (i, (ray, t_max, _)) in chunk.iter().enumerate() {

@@ -243,17 +243,13 @@ impl Geometry {
             intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, best);
         }
         if !self.shapes.is_empty() {
-            let (tree, loose) = self.shape_queries(rays, from);
             if let Some(bvh) = &self.shape_bvh {
-                bvh.intersect_k(&tree, rays.active, best);
+                bvh.intersect_k(&self.shape_query(rays, from, Some(&self.shape_order)), rays.active, best);
             }
-            intersect_items(
-                None,
-                &loose,
-                loose.items.order.map_or(self.shapes.len(), <[u32]>::len),
-                rays.active,
-                best,
-            );
+            let (loose, n) = self.loose_shapes();
+            if n > 0 {
+                intersect_items(None, &self.shape_query(rays, from, loose), n, rays.active, best);
+            }
         }
         if !self.kinds.is_empty() {
             let base = self.kinds_base() as u32;
@@ -317,12 +313,17 @@ impl Geometry {
             }
         }
         if !self.shapes.is_empty() {
-            let (tree, loose) = self.shape_queries(rays, from);
             let mut shape = 0;
-            let n = loose.items.order.map_or(self.shapes.len(), <[u32]>::len);
-            blocked = blocked | occluded_items(None, &loose, n, live & !blocked, &mut shape);
-            blocked =
-                blocked | occluded_items(self.shape_bvh.as_ref(), &tree, 0, live & !blocked, &mut shape);
+            let (loose, n) = self.loose_shapes();
+            if n > 0 {
+                let q = self.shape_query(rays, from, loose);
+                blocked = blocked | occluded_items(None, &q, n, live & !blocked, &mut shape);
+            }
+            if self.shape_bvh.is_some() && !(blocked | !live).all() {
+                let q = self.shape_query(rays, from, Some(&self.shape_order));
+                blocked =
+                    blocked | occluded_items(self.shape_bvh.as_ref(), &q, 0, live & !blocked, &mut shape);
+            }
         }
         if !self.kinds.is_empty() && !(blocked | !live).all() {
             let base = self.kinds_base() as u32;
@@ -339,22 +340,24 @@ impl Geometry {
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> SphereQuery<'a, F> {
-        SphereQuery::new(&self.spheres, rays.ray(), rays.t_max, from.prim, rays.pyramid, rays.active)
+        SphereQuery::new(&self.spheres, *rays.ray(), rays.t_max, from.prim, rays.pyramid, rays.active)
     }
 
     /// A query of one kind's `items` for the packet.
-    fn item_query<F: Lanes, T: ItemTest>(
+    #[inline(always)]
+    fn item_query<'r, F: Lanes, T: ItemTest>(
         items: T,
-        rays: &RayPacket<F>,
+        rays: &'r RayPacket<F>,
         from: &DeparturePacket<F>,
-    ) -> ItemQuery<F, T> {
+    ) -> ItemQuery<F, T, &'r Ray<F>> {
         ItemQuery { items, ray: rays.ray(), t_max: rays.t_max, skip: from.prim, pyramid: rays.pyramid }
     }
 
     /// The triangle part of a packet query.
+    #[inline(always)]
     fn triangle_query<'a, F: Lanes>(
         &'a self,
-        rays: &RayPacket<F>,
+        rays: &'a RayPacket<F>,
         from: &DeparturePacket<F>,
     ) -> TriangleQuery<'a, F> {
         let plane_cull = self.polygon_bvh.is_none();
@@ -362,18 +365,24 @@ impl Geometry {
         Self::item_query(triangles, rays, from)
     }
 
-    /// The shape part of a packet query: the shapes of the BVH (if any), and those tested brute force (all
-    /// of them without a BVH).
-    fn shape_queries<'a, F: Lanes>(
+    /// The shape part of a packet query over the shapes `order` lists (file positions), or over every shape.
+    /// Built where it is used, only when it is: the query holds the rays, and moving it costs a copy.
+    #[inline(always)]
+    fn shape_query<'a, F: Lanes>(
         &'a self,
-        rays: &RayPacket<F>,
+        rays: &'a RayPacket<F>,
         from: &DeparturePacket<F>,
-    ) -> (ShapeQuery<'a, F>, ShapeQuery<'a, F>) {
-        let base = self.shape_base() as u32;
-        let query = |order| Self::item_query(Shapes { shapes: &self.shapes, order, base }, rays, from);
+        order: Option<&'a [u32]>,
+    ) -> ShapeQuery<'a, F> {
+        Self::item_query(Shapes { shapes: &self.shapes, order, base: self.shape_base() as u32 }, rays, from)
+    }
+
+    /// The shapes tested brute force, as the `order` of [`Geometry::shape_query`] (every shape without a
+    /// shape BVH), and how many they are.
+    fn loose_shapes(&self) -> (Option<&[u32]>, usize) {
         match self.shape_bvh {
-            Some(_) => (query(Some(&self.shape_order)), query(Some(&self.loose_shapes))),
-            None => (query(Some(&[])), query(None)),
+            Some(_) => (Some(&self.loose_shapes), self.loose_shapes.len()),
+            None => (None, self.shapes.len()),
         }
     }
 

@@ -28,4 +28,4 @@ impl ItemTest for Shapes<'_> {
 }
 
 /// A query of rays against transformed shapes.
-pub type ShapeQuery<'a, F> = ItemQuery<F, Shapes<'a>>;
+pub type ShapeQuery<'a, F> = ItemQuery<F, Shapes<'a>, &'a Ray<F>>;

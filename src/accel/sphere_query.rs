@@ -15,15 +15,13 @@ use crate::bvh::{LeafQuery, SingleLeafQuery};
 pub struct SphereQuery<'a, F: Lanes> {
     /// The spheres.
     pub(crate) spheres: &'a Spheres,
-    /// The rays.
-    pub(crate) ray: Ray<F>,
     /// Exclusive end of each ray's range.
     pub(crate) t_max: F,
     /// The departure sphere of each ray.
     pub(crate) skip: F::Ids,
     /// Planes enclosing the live rays, from the packet's maker ([`crate::geometry::RayPacket::pyramid`]).
     pub(crate) pyramid: Option<Pyramid>,
-    /// The rays' per-ray terms, shared by every sphere test.
+    /// The rays and their per-ray terms, shared by every sphere test.
     terms: SphereRay<F>,
     /// The lanes that start at the eye.
     eye: EyeLanes<F::Mask>,
@@ -42,7 +40,7 @@ impl<'a, F: Lanes> SphereQuery<'a, F> {
     ) -> Self {
         let terms = SphereRay::new(ray);
         let eye = EyeLanes::of(terms.from_eye(), live);
-        Self { spheres, ray, t_max, skip, pyramid, terms, eye }
+        Self { spheres, t_max, skip, pyramid, terms, eye }
     }
 
     /// The roots of sphere `i` (splatted) for these rays ([`crate::geometry::sphere_roots_of`]).
@@ -79,7 +77,7 @@ impl<'a, F: Lanes> LeafQuery<F> for SphereQuery<'a, F> {
 
     #[inline(always)]
     fn ray(&self) -> &Ray<F> {
-        &self.ray
+        &self.terms.ray
     }
     #[inline(always)]
     fn t_max(&self) -> F {
@@ -106,7 +104,6 @@ impl<'a, F: Lanes> LeafQuery<F> for SphereQuery<'a, F> {
         };
         SphereQuery {
             spheres: self.spheres,
-            ray: terms.ray,
             t_max: self.t_max.lane(i),
             skip: self.skip.lane(i),
             pyramid: None,

@@ -42,4 +42,4 @@ impl ItemTest for Triangles<'_> {
 }
 
 /// A query of rays against the triangles.
-pub type TriangleQuery<'a, F> = ItemQuery<F, Triangles<'a>>;
+pub type TriangleQuery<'a, F> = ItemQuery<F, Triangles<'a>, &'a Ray<F>>;

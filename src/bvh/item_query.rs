@@ -2,6 +2,8 @@
 //! shared between items: triangles, transformed shapes, cones. Each kind says only how to test item `j`
 //! ([`ItemTest`]); the loops, the departure rule and the one-ray form are written once, here.
 
+use std::borrow::Borrow;
+
 use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Vec3f, V3};
 use crate::simd::{IdLanes, Lanes};
@@ -22,14 +24,15 @@ pub trait ItemTest: Copy {
     }
 }
 
-/// A query of rays against the items of one kind: the rays, each ray's exclusive end `t_max`, and the
-/// primitive each ray leaves (`skip`, never reported).
+/// A query of rays against the items of one kind: the rays (`R`: borrowed from the packet, which a packet
+/// query does rather than copy them, or owned, as one lane's query is), each ray's exclusive end `t_max`, and
+/// the primitive each ray leaves (`skip`, never reported).
 #[derive(Clone, Copy)]
-pub struct ItemQuery<F: Lanes, T: ItemTest> {
+pub struct ItemQuery<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy = Ray<F>> {
     /// The kind's items.
     pub(crate) items: T,
     /// The rays.
-    pub(crate) ray: Ray<F>,
+    pub(crate) ray: R,
     /// Exclusive end of each ray's range.
     pub(crate) t_max: F,
     /// The departure primitive of each ray.
@@ -38,22 +41,22 @@ pub struct ItemQuery<F: Lanes, T: ItemTest> {
     pub(crate) pyramid: Option<Pyramid>,
 }
 
-impl<F: Lanes, T: ItemTest> ItemQuery<F, T> {
+impl<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy> ItemQuery<F, T, R> {
     /// Item `j`'s hits for the lanes of `live` (the departure primitive's excluded), its t and id.
     #[inline(always)]
     fn item(&self, j: usize, live: F::Mask) -> (F::Mask, F, F::Ids) {
-        let (hit, t, id) = self.items.test(j, &self.ray, self.t_max);
+        let (hit, t, id) = self.items.test(j, self.ray.borrow(), self.t_max);
         let id = F::Ids::splat(id);
         (live & hit & !F::ids_eq(id, self.skip), t, id)
     }
 }
 
-impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
+impl<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy> LeafQuery<F> for ItemQuery<F, T, R> {
     type One = ItemQuery<f32, T>;
 
     #[inline(always)]
     fn ray(&self) -> &Ray<F> {
-        &self.ray
+        self.ray.borrow()
     }
     #[inline(always)]
     fn t_max(&self) -> F {
@@ -71,9 +74,10 @@ impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
     #[inline(always)]
     fn lane(&self, i: usize) -> ItemQuery<f32, T> {
         let lane = |v: &V3<F>| V3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i));
+        let ray = self.ray();
         ItemQuery {
             items: self.items,
-            ray: Ray { origin: lane(&self.ray.origin), dir: lane(&self.ray.dir) },
+            ray: Ray { origin: lane(&ray.origin), dir: lane(&ray.dir) },
             t_max: self.t_max.lane(i),
             skip: self.skip.lane(i),
             pyramid: None,
@@ -83,7 +87,7 @@ impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
     #[inline(always)]
     fn intersect(&self, items: impl Iterator<Item = usize>, live: F::Mask, best: &mut HitPacket<F>) {
         for j in items {
-            let lanes = live & !self.items.culled(j, &self.ray, best.t.min_of(self.t_max));
+            let lanes = live & !self.items.culled(j, self.ray(), best.t.min_of(self.t_max));
             if !lanes.any() {
                 continue;
             }
@@ -96,7 +100,7 @@ impl<F: Lanes, T: ItemTest> LeafQuery<F> for ItemQuery<F, T> {
     fn occluded(&self, items: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask {
         let mut blocked = F::mask_from_bits(0);
         for j in items {
-            let lanes = live & !self.items.culled(j, &self.ray, self.t_max);
+            let lanes = live & !self.items.culled(j, self.ray(), self.t_max);
             if !lanes.any() {
                 continue;
             }

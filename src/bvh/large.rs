@@ -183,7 +183,7 @@ impl Bvh {
             live,
             sides: MemberSides::new(packets, pyramid.apex, self.extent),
             tile: Frustum::new(pyramid, self.extent),
-            octant: negative(lead.dir.x) | negative(lead.dir.y) << 1 | negative(lead.dir.z) << 2,
+            octant: negative(lead.ray.dir.x) | negative(lead.ray.dir.y) << 1 | negative(lead.ray.dir.z) << 2,
             origin: pyramid.apex,
         };
         walk.run(alive, best);
@@ -221,7 +221,7 @@ pub(crate) fn members<F: Lanes>(packets: &[RayPacket<F>], hits: usize) -> ([F::M
 /// premise).
 fn unit_directions<F: Lanes>(rays: &RayPacket<F>) -> bool {
     (0..F::K).filter(|&i| F::mask_lane(rays.active, i)).all(|i| {
-        let d = [rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i)].map(f64::from);
+        let d = [rays.ray.dir.x.lane(i), rays.ray.dir.y.lane(i), rays.ray.dir.z.lane(i)].map(f64::from);
         ((d[0] * d[0] + d[1] * d[1] + d[2] * d[2]) - 1.0).abs() <= 8.0 * f64::from(f32::EPSILON)
     })
 }

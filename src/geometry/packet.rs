@@ -23,10 +23,9 @@ use super::{first_root, sphere_approach, sphere_roots_of, EyeLanes, Hit, Ray, Sp
 /// whole registers and never shuffles. `F = f32` is a packet of one ray.
 #[derive(Clone, Copy, Debug)]
 pub struct RayPacket<F: Lanes> {
-    /// Ray origins.
-    pub(crate) origin: V3<F>,
-    /// Ray directions (not necessarily unit length).
-    pub(crate) dir: V3<F>,
+    /// The rays: origins and directions (not necessarily unit length). Queries borrow them rather than copy
+    /// them (at K = 16 they are 384 bytes).
+    pub(crate) ray: Ray<F>,
     /// Exclusive upper end of each ray's range `[0, t_max)`.
     pub t_max: F,
     /// Lanes that carry a ray; the others are ignored by every kernel and report misses.
@@ -56,13 +55,13 @@ impl<F: Lanes> RayPacket<F> {
     /// Rays over `[0, t_max)` in the `active` lanes, with no known pyramid.
     #[inline(always)]
     pub fn new(origin: V3<F>, dir: V3<F>, t_max: F, active: F::Mask) -> Self {
-        Self { origin, dir, t_max, active, pyramid: None }
+        Self { ray: Ray::new(origin, dir), t_max, active, pyramid: None }
     }
 
     /// The rays as a [`Ray`] of lanes, the form the generic kernels take.
     #[inline(always)]
-    pub fn ray(&self) -> Ray<F> {
-        Ray::new(self.origin, self.dir)
+    pub fn ray(&self) -> &Ray<F> {
+        &self.ray
     }
 
     /// Lane `i` gets `f(i) = (ray, t_max, active)`.
@@ -87,7 +86,7 @@ impl<F: Lanes> RayPacket<F> {
     /// Lane `i` as a scalar ray, its `t_max` and whether it is active.
     pub fn lane(&self, i: usize) -> (Ray<f32>, f32, bool) {
         let v = |p: V3<F>| V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
-        (Ray::new(v(self.origin), v(self.dir)), self.t_max.lane(i), F::mask_lane(self.active, i))
+        (Ray::new(v(self.ray.origin), v(self.ray.dir)), self.t_max.lane(i), F::mask_lane(self.active, i))
     }
 }
 
@@ -164,7 +163,7 @@ pub fn intersect_spheres_k<F: Lanes>(spheres: &Spheres, packet: &RayPacket<F>) -
         return HitPacket::miss();
     }
     let mut found = F::mask_from_bits(0);
-    let terms = SphereRay::new(ray);
+    let terms = SphereRay::new(*ray);
     let eye = EyeLanes::of(terms.from_eye(), packet.active);
     for i in 0..spheres.len() {
         let centre = F::splat_v3(spheres.center(i));

@@ -54,7 +54,7 @@ impl<F: Lanes> Tracer<'_, F> {
     ) -> F {
         let mut open = [0u32; 16];
         for i in set_bits(F::move_mask(found)) {
-            let shift = rotation(rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i));
+            let shift = rotation(rays.ray.dir.x.lane(i), rays.ray.dir.y.lane(i), rays.ray.dir.z.lane(i));
             let lane = |v: &V3<F>| F::splat_v3(V3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i)));
             let (point, normal) = (lane(&s.point), lane(&s.normal));
             let inward = F::mask_from_bits(if F::mask_lane(s.inside, i) { u32::MAX } else { 0 });
@@ -90,7 +90,7 @@ impl<F: Lanes> Tracer<'_, F> {
         let bits = F::move_mask(found);
         let mut shift = [(0.0, 0.0); 16];
         for i in set_bits(bits) {
-            shift[i] = rotation(rays.dir.x.lane(i), rays.dir.y.lane(i), rays.dir.z.lane(i));
+            shift[i] = rotation(rays.ray.dir.x.lane(i), rays.ray.dir.y.lane(i), rays.ray.dir.z.lane(i));
         }
         let one = F::splat_f32(1.0);
         let mut open = F::splat_f32(0.0);

@@ -55,7 +55,7 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
         base: u32,
     ) -> Self {
         let ray = rays.ray();
-        let terms = SphereRay::new(ray);
+        let terms = SphereRay::new(*ray);
         let eye = EyeLanes::of(terms.from_eye(), rays.active);
         Self {
             tree,
@@ -63,7 +63,7 @@ impl<'a, F: Lanes, R: Record> Query<'a, F, R> {
             terms,
             eye,
             eye_terms: tree.eye_terms_help || !matches!(eye, EyeLanes::None),
-            slab: SlabRays::new(&ray),
+            slab: SlabRays::new(ray),
             frustum: rays.pyramid.map(|p| Frustum::new(&p, tree.extent())),
             t_max: rays.t_max,
             skip: from.prim,
