@@ -54,20 +54,30 @@ struct Rule {
 }
 
 impl Rule {
-    /// Whether the square with corners `c` splits at `level`.
-    fn splits(&self, c: [Point; 4], level: u32) -> bool {
-        let range = |v: [f32; 4]| v[0].max(v[1]).max(v[2]).max(v[3]) - v[0].min(v[1]).min(v[2]).min(v[3]);
-        let spread =
-            range(c.map(|p| p.colour.x)).max(range(c.map(|p| p.colour.y))).max(range(c.map(|p| p.colour.z)));
-        if spread > self.threshold && level < (self.depth - 1).max(1) {
+    /// Whether the square with corners `c` splits at `level`. The cheap tests come first: ids, then depths,
+    /// then colours (the answer is their `or`, whatever the order).
+    fn splits(&self, c: [&Point; 4], level: u32) -> bool {
+        if c[1].key != c[0].key || c[2].key != c[0].key || c[3].key != c[0].key {
             return true;
         }
-        let ids_differ = c[1].key != c[0].key || c[2].key != c[0].key || c[3].key != c[0].key;
+        // Colours and depths are never NaN, so plain comparisons give `f32::max`'s and `f32::min`'s values.
+        let max = |a: f32, b: f32| if a > b { a } else { b };
+        let min = |a: f32, b: f32| if a < b { a } else { b };
+        let range =
+            |v: [f32; 4]| max(max(v[0], v[1]), max(v[2], v[3])) - min(min(v[0], v[1]), min(v[2], v[3]));
         let t = c.map(|p| p.t);
-        let (near, far) = (t[0].min(t[1]).min(t[2]).min(t[3]), t[0].max(t[1]).max(t[2]).max(t[3]));
-        // Misses (t = inf) differ from hits by id; all four missing is no reason to split.
-        let grazing = far.is_finite() && far > near * DEPTH_RATIO;
-        ids_differ || grazing
+        let (near, far) = (min(min(t[0], t[1]), min(t[2], t[3])), max(max(t[0], t[1]), max(t[2], t[3])));
+        // All four missing (t = inf) is no reason to split.
+        if far.is_finite() && far > near * DEPTH_RATIO {
+            return true;
+        }
+        level < (self.depth - 1).max(1) && {
+            let spread = max(
+                max(range(c.map(|p| p.colour.x)), range(c.map(|p| p.colour.y))),
+                range(c.map(|p| p.colour.z)),
+            );
+            spread > self.threshold
+        }
     }
 }
 
@@ -282,11 +292,14 @@ fn refine_tile<F: Lanes>(
             }
         }
         preload(lattice);
-        // Squares by their top-left lattice point; their size is the level's.
+        // Squares by their top-left lattice point, their size the level's, in Z-order (Morton order): each
+        // level's squares are their parents' quarters in the same order, so the points they add, taken square
+        // by square, come in nearly Z-order too, and K neighbours make a packet with no sort.
         let mut squares: Vec<(u32, u32)> =
             (0..tile.h).flat_map(|y| (0..tile.w).map(move |x| (x * unit, y * unit))).collect();
+        squares.sort_unstable_by_key(|&(x, y)| z_order(x, y));
         let mut packets = Packets::default();
-        let (mut new, mut points) = (Vec::new(), Vec::new());
+        let mut points = Vec::new();
         for level in 0..depth {
             let s = unit >> level;
             let h = s / 2;
@@ -296,19 +309,15 @@ fn refine_tile<F: Lanes>(
             if squares.is_empty() {
                 break;
             }
-            new.clear();
+            points.clear();
             for &(x, y) in &squares {
                 lattice.mark_split((x, y), level);
                 for p in [(x + h, y), (x, y + h), (x + h, y + h), (x + s, y + h), (x + h, y + s)] {
                     if lattice.claim(p) {
-                        new.push((z_order(p.0 / h, p.1 / h), p));
+                        points.push(p);
                     }
                 }
             }
-            // Distinct points have distinct keys: the order is the same whatever the sort.
-            new.sort_unstable_by_key(|&(key, _)| key);
-            points.clear();
-            points.extend(new.iter().map(|&(_, p)| p));
             if scene.camera_f64.start != 0.0 {
                 packets.trace::<true>(scene, tracer, tile, unit, &points, lattice);
             } else {
@@ -369,10 +378,12 @@ impl<F: Lanes> Packets<F> {
         let camera = &scene.camera_f64;
         let pyramids = scene.geometry.culls_by_pyramid() && F::K > 1;
         let step = 1.0 / unit as f32;
-        let range = |v: F| {
-            (0..F::K)
-                .map(|i| v.lane(i))
-                .fold([f32::INFINITY, f32::NEG_INFINITY], |[lo, hi], c| [lo.min(c), hi.max(c)])
+        // A coordinate's range over a chunk's points, from its extreme points: `x0 + p·step` rounds
+        // monotonically in p, so these are the extremes of the lanes' values.
+        let range = |chunk: &[(u32, u32)], coordinate: fn(&(u32, u32)) -> u32, x0: u32| {
+            let (lo, hi) =
+                chunk.iter().map(coordinate).fold((u32::MAX, 0), |(lo, hi), c| (lo.min(c), hi.max(c)));
+            [x0 as f32 + lo as f32 * step, x0 as f32 + hi as f32 * step]
         };
         for group in points.chunks(F::K * crate::bvh::MAX_PACKETS) {
             self.rays.clear();
@@ -383,7 +394,7 @@ impl<F: Lanes> Packets<F> {
                 let sx = F::from_fn(|i| tile.x0 as f32 + at(i).0 as f32 * step);
                 let sy = F::from_fn(|i| tile.y0 as f32 + at(i).1 as f32 * step);
                 let ray = camera.rays_in::<F, FAR>(sx, sy);
-                let (rx, ry) = (range(sx), range(sy));
+                let (rx, ry) = (range(chunk, |p| p.0, tile.x0), range(chunk, |p| p.1, tile.y0));
                 (xs, ys) = ([xs[0].min(rx[0]), xs[1].max(rx[1])], [ys[0].min(ry[0]), ys[1].max(ry[1])]);
                 let pyramid = pyramids.then(|| camera.pyramid(rx, ry)).flatten();
                 let active = F::lanes_below(chunk.len());
@@ -432,8 +443,8 @@ impl Lattice {
     fn index(&self, (x, y): (u32, u32)) -> usize {
         (y * self.width + x) as usize
     }
-    fn get(&self, p: (u32, u32)) -> Point {
-        self.points[self.index(p)]
+    fn get(&self, p: (u32, u32)) -> &Point {
+        &self.points[self.index(p)]
     }
     fn set(&mut self, p: (u32, u32), point: Point) {
         let i = self.index(p);
