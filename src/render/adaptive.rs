@@ -83,7 +83,9 @@ impl Rule {
 
 /// Traces rows `rows` of columns `columns` of the image under adaptive supersampling (`threshold`, `depth`):
 /// the pixels row-major, and the rays and tests it took. The corners in one pass over the band's tiles,
-/// then the refinement by strips of tiles, on `pool`.
+/// then the refinement in two passes, each tile a job on `pool`: first the tiles whose row and column add
+/// up to an even number, no two of which share an edge, then the others, which take the points their four
+/// neighbours traced on their shared edges.
 pub(super) fn adaptive_rows<F: Lanes>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
@@ -96,40 +98,34 @@ pub(super) fn adaptive_rows<F: Lanes>(
     let (corners, mut counts, mut work) =
         band_corners::<F>(scene, pool, &local, (columns.start, rows.start), (width, height));
     let mut band_pixels = vec![Rgb::default(); width as usize * height as usize];
-    let parts = tile_rows(&mut band_pixels, width, &local);
-    // Strips of one tile row each: the even ones first, then the odd ones, which take the points the even
-    // ones traced on their shared edges.
-    let per_strip = width.div_ceil(TILE) as usize;
-    let mut strips: [Vec<Strip>; 2] = [Vec::new(), Vec::new()];
-    let mut parts = parts.into_iter();
-    for (i, tiles) in local.chunks(per_strip).enumerate() {
-        strips[i % 2].push(Strip { tiles, parts: parts.by_ref().take(per_strip).collect() });
-    }
-    let [even, odd] = strips;
+    let per_row = width.div_ceil(TILE) as usize;
     let band = Band {
         scene,
         origin: (columns.start, rows.start),
         width,
+        per_row,
         corners: &corners,
         rule: Rule { threshold, depth },
         counter,
     };
-    let no_seams: Vec<Seam> = Vec::new();
-    let traced_even: Vec<_> = pool.install(|| {
-        even.into_par_iter()
-            .with_max_len(1)
-            .map(|strip| band.refine_strip::<F>(strip, &no_seams, 0))
-            .collect()
+    let mut passes: [Vec<TileJob>; 2] = [Vec::new(), Vec::new()];
+    for (k, (&tile, part)) in local.iter().zip(tile_rows(&mut band_pixels, width, &local)).enumerate() {
+        passes[(k / per_row + k % per_row) % 2].push(TileJob { index: k, tile, part });
+    }
+    let [first, second] = passes;
+    let mut edges: Vec<Option<Edges>> = vec![None; local.len()];
+    let traced: Vec<_> = pool.install(|| {
+        first.into_par_iter().with_max_len(1).map(|job| band.refine::<F>(job, &[], true)).collect()
     });
-    let seams: Vec<Seam> = traced_even.iter().map(|(seam, ..)| seam.clone()).collect();
-    let traced_odd: Vec<_> = pool.install(|| {
-        odd.into_par_iter()
-            .enumerate()
-            .with_max_len(1)
-            .map(|(i, strip)| band.refine_strip::<F>(strip, &seams, i))
-            .collect()
+    for (index, own, c, w) in traced {
+        edges[index] = own;
+        counts += c;
+        work += w;
+    }
+    let traced: Vec<_> = pool.install(|| {
+        second.into_par_iter().with_max_len(1).map(|job| band.refine::<F>(job, &edges, false)).collect()
     });
-    for (_, c, w) in traced_even.into_iter().chain(traced_odd) {
+    for (_, _, c, w) in traced {
         counts += c;
         work += w;
     }
@@ -178,76 +174,98 @@ fn band_corners<F: Lanes>(
     (corners, counts, work)
 }
 
-/// One tile row of a band: its tiles (band coordinates) and their pixels' rows in the band's buffer.
-struct Strip<'a, 'b> {
-    tiles: &'a [Tile],
-    parts: Vec<Vec<&'b mut [Rgb]>>,
+/// One tile of a band: its index in the band's row-major tiles, its place (band coordinates), and its
+/// pixels' rows in the band's buffer.
+struct TileJob<'b> {
+    index: usize,
+    tile: Tile,
+    part: Vec<&'b mut [Rgb]>,
 }
 
-/// The lattice points a strip traced on its top and bottom edges, by lattice column across the band.
+/// The lattice points a tile traced or took on its four edges, each edge in lattice steps left to right or
+/// top to bottom.
 #[derive(Clone, Default)]
-struct Seam {
+struct Edges {
     top: Vec<Option<Point>>,
     bottom: Vec<Option<Point>>,
+    left: Vec<Option<Point>>,
+    right: Vec<Option<Point>>,
 }
 
-/// What every strip of a band shares: the scene, the band's corner in the image, its width, its traced
-/// corners, the split rule and the progress counter.
+/// What every tile of a band shares: the scene, the band's corner in the image, its width and tiles per
+/// row, its traced corners, the split rule and the progress counter.
 struct Band<'a> {
     scene: &'a Scene,
     origin: (u32, u32),
     width: u32,
+    per_row: usize,
     corners: &'a [Point],
     rule: Rule,
     counter: &'a TileCounter<'a>,
 }
 
 impl Band<'_> {
-    /// Refines a strip's tiles left to right, each taking the points the one before traced on their shared
-    /// edge, and for an odd strip (`i`-th) the points of the even strips above and below (`seams[i]`,
-    /// `seams[i + 1]`) on its top and bottom edges; returns the points it traced on its own top and bottom
-    /// edges, and the rays and tests it took.
-    fn refine_strip<F: Lanes>(&self, strip: Strip, seams: &[Seam], i: usize) -> (Seam, RayCounts, Work) {
+    /// Refines one tile, first taking the points its neighbours traced on their shared edges (`edges`, by
+    /// tile index; none traced yet where empty); returns its index, the points on its own edges when
+    /// `export`, and the rays and tests it took.
+    fn refine<F: Lanes>(
+        &self,
+        TileJob { index, tile, mut part }: TileJob,
+        edges: &[Option<Edges>],
+        export: bool,
+    ) -> (usize, Option<Edges>, RayCounts, Work) {
         take_work();
         let mut tracer = Tracer::<F>::new(self.scene);
         let unit = 1u32 << self.rule.depth;
-        let line = (self.width * unit + 1) as usize;
-        let mut own = Seam { top: vec![None; line], bottom: vec![None; line] };
-        let (above, below) = (seams.get(i).map(|s| &s.bottom), seams.get(i + 1).map(|s| &s.top));
-        let mut left: Vec<Option<Point>> = Vec::new();
-        for (&tile, mut part) in strip.tiles.iter().zip(strip.parts) {
-            let corner_width = self.width as usize + 1;
-            let corner =
-                |x: u32, y: u32| self.corners[(tile.y0 + y) as usize * corner_width + (tile.x0 + x) as usize];
-            let at = Tile { x0: tile.x0 + self.origin.0, y0: tile.y0 + self.origin.1, ..tile };
-            let (x0, right) = ((tile.x0 * unit) as usize, (tile.w * unit) as usize);
-            let carried = std::mem::take(&mut left);
-            let preload = |lattice: &mut Lattice| {
-                let (w, h) = (tile.w * unit, tile.h * unit);
-                for (y, p) in carried.iter().enumerate() {
-                    lattice.load((0, y as u32), *p);
-                }
-                for (line, y) in [(above, 0), (below, h)] {
-                    for (x, p) in line.map_or(&[][..], |l| &l[x0..=x0 + w as usize]).iter().enumerate() {
-                        lattice.load((x as u32, y), *p);
-                    }
+        let (w, h) = (tile.w * unit, tile.h * unit);
+        let corner_width = self.width as usize + 1;
+        let corner =
+            |x: u32, y: u32| self.corners[(tile.y0 + y) as usize * corner_width + (tile.x0 + x) as usize];
+        let (row, column) = (index / self.per_row, index % self.per_row);
+        // The traced edges of the tile at (row, column), if it is in the band and has been refined.
+        let neighbour = |row: Option<usize>, column: Option<usize>| {
+            let (row, column) = (row?, column.filter(|&c| c < self.per_row)?);
+            edges.get(row * self.per_row + column)?.as_ref()
+        };
+        let preload = |lattice: &mut Lattice| {
+            let load = |lattice: &mut Lattice, line: &[Option<Point>], at: &dyn Fn(u32) -> (u32, u32)| {
+                for (i, p) in line.iter().enumerate() {
+                    lattice.load(at(i as u32), *p);
                 }
             };
-            let mut export = |lattice: &Lattice| {
-                let h = tile.h * unit;
-                left = (0..=h).map(|y| lattice.known((right as u32, y))).collect();
-                for x in 0..=right {
-                    own.top[x0 + x] = lattice.known((x as u32, 0));
-                    own.bottom[x0 + x] = lattice.known((x as u32, h));
-                }
-            };
-            let pixels = refine_tile(self.scene, &mut tracer, at, corner, self.rule, preload, &mut export);
-            for (row, traced) in part.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
-                row.copy_from_slice(traced);
+            if let Some(e) = neighbour(Some(row), column.checked_sub(1)) {
+                load(lattice, &e.right, &|y| (0, y));
             }
-            self.counter.tile_done();
+            if let Some(e) = neighbour(Some(row), Some(column + 1)) {
+                load(lattice, &e.left, &|y| (w, y));
+            }
+            if let Some(e) = neighbour(row.checked_sub(1), Some(column)) {
+                load(lattice, &e.bottom, &|x| (x, 0));
+            }
+            if let Some(e) = neighbour(Some(row + 1), Some(column)) {
+                load(lattice, &e.top, &|x| (x, h));
+            }
+        };
+        let mut own = None;
+        let keep = |lattice: &Lattice| {
+            if export {
+                let line =
+                    |n: u32, at: &dyn Fn(u32) -> (u32, u32)| (0..=n).map(|i| lattice.known(at(i))).collect();
+                own = Some(Edges {
+                    top: line(w, &|x| (x, 0)),
+                    bottom: line(w, &|x| (x, h)),
+                    left: line(h, &|y| (0, y)),
+                    right: line(h, &|y| (w, y)),
+                });
+            }
+        };
+        let at = Tile { x0: tile.x0 + self.origin.0, y0: tile.y0 + self.origin.1, ..tile };
+        let pixels = refine_tile(self.scene, &mut tracer, at, corner, self.rule, preload, keep);
+        for (row, traced) in part.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
+            row.copy_from_slice(traced);
         }
-        (own, tracer.counts, take_work())
+        self.counter.tile_done();
+        (index, own, tracer.counts, take_work())
     }
 }
 
