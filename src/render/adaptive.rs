@@ -3,11 +3,12 @@
 //! blocks (each tile its own corners: its top and left edges and its inside; the band's right and bottom
 //! edges by the tiles along them). Then each tile, level by level, splits the squares [`Rule`] picks (corners
 //! on different primitives or far apart in depth, down to D levels; colours more than T apart in a
-//! channel, down to D − 1): their edge midpoints and centres are traced (each point once in the tile,
-//! shared by the squares that meet there; a point on the edge between two tiles by each tile that needs
-//! it), sorted along a Z-order curve and packed K at a time, each packet with the pyramid of its points and
-//! up to [`crate::bvh::MAX_PACKETS`] packets walking the tree as one large packet, as camera blocks do. A
-//! square's value is its quarters' mean where it was split, else its corners' mean.
+//! channel, down to D − 1): their edge midpoints and centres are traced, each point once in the band (a
+//! point on the edge between two tiles by the tile refined first, which hands it to the other: tiles are
+//! refined in two passes, each of tiles that share no edge), in the Z-order of their squares and packed K
+//! at a time, each packet with the pyramid of its points and up to [`crate::bvh::MAX_PACKETS`] packets
+//! walking the tree as one large packet, as camera blocks do. A square's value is its quarters' mean where
+//! it was split, else its corners' mean.
 //!
 //! Every decision depends only on the colours, ids and depths of lattice points, which are the same bits
 //! at every width and thread count and whichever tile traces them, so the image is too, and so is the ray
