@@ -102,7 +102,7 @@ impl MemberSides {
     pub(crate) fn reaching_corners(&self, planes: [(f32, f32); 3]) -> u32 {
         let zero = f32x16::splat(0.0);
         let (lo, hi) = (planes.map(|p| f32x16::splat(p.0)), planes.map(|p| f32x16::splat(p.1)));
-        let mut outside = 0;
+        let mut outside = f32x16::mask_from_bits(0);
         for ((above, below), offset) in self.above.iter().zip(&self.below).zip(&self.offset) {
             // Each axis adds its corner's product and an exact zero (the box is finite), in the order of
             // the select form `corner·n`, so the sum is that form's to the bit.
@@ -110,9 +110,10 @@ impl MemberSides {
             for a in 0..3 {
                 s = hi[a].mul_add(above[a], lo[a].mul_add(below[a], s));
             }
-            outside |= f32x16::move_mask(s.lt(zero));
+            // The sides' masks are merged as vectors and turned into bits once.
+            outside = outside | s.lt(zero);
         }
-        !outside
+        !f32x16::move_mask(outside)
     }
 
     /// Bit p set where member p's frustum may meet the ball of radius `r` around `centre`, as in
@@ -121,13 +122,13 @@ impl MemberSides {
     pub(crate) fn reaching_ball(&self, centre: Vec3f, r: f32) -> u32 {
         let (zero, r) = (f32x16::splat(0.0), f32x16::splat(r));
         let (x, y, z) = (f32x16::splat(centre.x), f32x16::splat(centre.y), f32x16::splat(centre.z));
-        let mut outside = 0;
+        let mut outside = f32x16::mask_from_bits(0);
         for ((normal, norm), offset) in self.normal.iter().zip(&self.norm).zip(&self.offset) {
             let s =
                 normal[2].mul_add(z, normal[1].mul_add(y, normal[0].mul_add(x, norm.mul_add(r, -*offset))));
-            outside |= f32x16::move_mask(s.lt(zero));
+            outside = outside | s.lt(zero);
         }
-        !outside
+        !f32x16::move_mask(outside)
     }
 }
 
