@@ -89,20 +89,22 @@ impl MemberSides {
         Self { normal, above, below, norm, offset }
     }
 
-    /// Bit p set where member p's frustum may reach child `c` of `n`: the box's corner farthest along each
-    /// side's normal (per lane) is not below the side, as in [`Frustum`]'s box test.
+    /// Bit p set where member p's frustum may reach child `c` of `n`, no nearer than `near` to the apex,
+    /// before its farthest best hit (`far`, per member): the box's corner farthest along each side's
+    /// normal (per lane) is not below the side, as in [`Frustum`]'s box test.
     #[inline(always)]
-    fn reaching_box(&self, n: &Node, c: usize) -> u32 {
+    fn reaching_box(&self, n: &Node, c: usize, far: f32x16, near: f32) -> u32 {
         let corner = |a: usize| (n.lo()[a][c], n.hi()[a][c]);
-        self.reaching_corners([corner(0), corner(1), corner(2)])
+        self.reaching_corners([corner(0), corner(1), corner(2)], far, near)
     }
 
     /// [`MemberSides::reaching_box`] for the box whose `(low, high)` planes on each axis are `planes`.
     #[inline(always)]
-    pub(crate) fn reaching_corners(&self, planes: [(f32, f32); 3]) -> u32 {
+    pub(crate) fn reaching_corners(&self, planes: [(f32, f32); 3], far: f32x16, near: f32) -> u32 {
         let zero = f32x16::splat(0.0);
         let (lo, hi) = (planes.map(|p| f32x16::splat(p.0)), planes.map(|p| f32x16::splat(p.1)));
-        let mut outside = f32x16::mask_from_bits(0);
+        // Members whose best hits are all nearer than the box are done with it.
+        let mut outside = far.lt(f32x16::splat(near));
         for ((above, below), offset) in self.above.iter().zip(&self.below).zip(&self.offset) {
             // Each axis adds its corner's product and an exact zero (the box is finite), in the order of
             // the select form `corner·n`, so the sum is that form's to the bit.
@@ -339,8 +341,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
         let mut tests = 0;
         for c in n.slots_far_to_near(self.octant).filter(|&c| maybe >> c & 1 == 1) {
             tests += 1;
-            let done = f32x16::move_mask(far.lt(f32x16::splat(near[c])));
-            let reach = self.sides.reaching_box(n, c) & members & !done;
+            let reach = self.sides.reaching_box(n, c, far, near[c]) & members;
             stack.push_if(
                 Pending { child: n.child[c], count: n.count[c], members: reach as u16, near: near[c] },
                 reach != 0,

@@ -72,9 +72,8 @@ impl<'a, F: Lanes, R: Record> Walk<'a, F, R> {
             return None;
         }
         let near = box_distance(min, max, self.origin);
-        let done = f32x16::move_mask(self.far.lt(f32x16::splat(near)));
         let planes = [0, 1, 2].map(|a| (min[a], max[a]));
-        let reach = self.sides.reaching_corners(planes) & members & !done;
+        let reach = self.sides.reaching_corners(planes, self.far, near) & members;
         (reach != 0).then_some(Pending { lo, hi, min, max, members: reach as u16, near })
     }
 
