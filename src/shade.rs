@@ -12,7 +12,7 @@ mod ao;
 use std::marker::PhantomData;
 use std::ops::AddAssign;
 
-use crate::accel::{traced, RayKind};
+use crate::accel::{traced, PrimRef, RayKind};
 use crate::compile::Scene;
 use crate::geometry::{at_eye, DeparturePacket, HitPacket, RayPacket};
 use crate::math::{Mask, Real, Rgb, Vec3f, V3};
@@ -228,7 +228,81 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     /// hit's side from the eye term.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask, camera: bool) -> Surface<F> {
         self.sphere_surface(rays, hit, found, camera)
+            .or_else(|| self.shape_surface(rays, hit, found, camera))
             .unwrap_or_else(|| self.surface_by_lane(rays, hit, found, camera))
+    }
+
+    /// [`Tracer::surface`] for packets whose found lanes all hit one transformed shape (a ground plane,
+    /// most often): object point and normal in lanes by [`crate::accel::Geometry::surface`]'s operations in
+    /// its order (a plane's normal is the same in every lane), the checker's colour lane by lane. `None`
+    /// for any other packet.
+    fn shape_surface(
+        &self,
+        rays: &RayPacket<F>,
+        hit: &HitPacket<F>,
+        found: F::Mask,
+        camera: bool,
+    ) -> Option<Surface<F>> {
+        let geometry = &self.scene.geometry;
+        let bits = F::move_mask(found);
+        let prim = hit.prim.lane(set_bits(bits).next()?);
+        let (PrimRef::Shape(shape), true) =
+            (geometry.prim(prim), set_bits(bits).all(|i| hit.prim.lane(i) == prim))
+        else {
+            return None;
+        };
+        let m = &self.scene.materials[shape.material as usize];
+        let lanes = shape.to_lanes::<F>();
+        let zero = V3::all(F::splat_f32(0.0));
+        let ray = rays.ray();
+        let point = V3::select(found, ray.at(hit.t), zero);
+        let mut object_point = lanes.to_object(ray).at(hit.t);
+        let normal = if shape.kind.is_solid() {
+            lanes.normal_to_world.vector(object_point).normalize()
+        } else {
+            object_point.z = F::splat_f32(0.0);
+            F::splat_v3(shape.world_normal(V3::all(0.0)))
+        };
+        let normal = V3::select(found, normal, zero);
+        // The eye's side, for camera rays from the eye, where the eye term tells it (`Geometry::eye_inside`).
+        let (known, eye_inside) = match geometry.eye_inside(prim) {
+            Some(side) if camera => {
+                let at = found & at_eye(ray.origin);
+                (at, F::mask_from_bits(if side { bits } else { 0 }))
+            }
+            _ => (F::mask_from_bits(0), F::mask_from_bits(0)),
+        };
+        let (normal, inside) = facing(normal, ray.dir, known, eye_inside);
+        let base = match m.checker {
+            None => splat_rgb::<F>(m.color),
+            Some(_) => {
+                let colour = |i: usize| {
+                    let p = V3::new(object_point.x.lane(i), object_point.y.lane(i), object_point.z.lane(i));
+                    if bits >> i & 1 == 1 {
+                        surface_color(m, m.color, p)
+                    } else {
+                        Rgb::new(0.0, 0.0, 0.0)
+                    }
+                };
+                let c: Vec<Rgb> = (0..F::K).map(colour).collect();
+                V3::new(F::from_fn(|i| c[i].x), F::from_fn(|i| c[i].y), F::from_fn(|i| c[i].z))
+            }
+        };
+        let splat = F::splat_f32;
+        Some(Surface {
+            point,
+            normal,
+            inside,
+            base,
+            ambient: splat(m.ambient),
+            diffuse: splat(m.diffuse),
+            specular: splat(m.specular),
+            shininess: splat(m.shininess),
+            reflect: splat(m.reflect),
+            transmit: splat(m.transmit),
+            ior: splat(m.ior),
+            fresnel: F::mask_from_bits(if m.fresnel { bits } else { 0 }),
+        })
     }
 
     /// [`Tracer::surface`] for packets whose found lanes all hit spheres of one material without a checker:
