@@ -267,8 +267,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         // The eye's side, for camera rays from the eye, where the eye term tells it (`Geometry::eye_inside`).
         let (known, eye_inside) = match geometry.eye_inside(prim) {
             Some(side) if camera => {
-                let at = found & at_eye(ray.origin);
-                (at, F::mask_from_bits(if side { bits } else { 0 }))
+                (found & at_eye(ray.origin), F::mask_from_bits(if side { bits } else { 0 }))
             }
             _ => (F::mask_from_bits(0), F::mask_from_bits(0)),
         };
@@ -284,7 +283,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                         Rgb::new(0.0, 0.0, 0.0)
                     }
                 };
-                let c: Vec<Rgb> = (0..F::K).map(colour).collect();
+                let c: [Rgb; 16] = std::array::from_fn(|i| if i < F::K { colour(i) } else { Rgb::default() });
                 V3::new(F::from_fn(|i| c[i].x), F::from_fn(|i| c[i].y), F::from_fn(|i| c[i].z))
             }
         };
