@@ -128,6 +128,34 @@ struct Surface<F: Lanes> {
     fresnel: F::Mask,
 }
 
+impl<F: Lanes> Surface<F> {
+    /// The surface of a packet whose found lanes (`found`, as bits) all have material `m`: the normal turned
+    /// toward the rays and the lanes hit from inside ([`facing`]), and the material's constants in every lane.
+    fn of_material(
+        point: V3<F>,
+        (normal, inside): (V3<F>, F::Mask),
+        base: V3<F>,
+        m: &Material,
+        found: u32,
+    ) -> Self {
+        let splat = F::splat_f32;
+        Self {
+            point,
+            normal,
+            inside,
+            base,
+            ambient: splat(m.ambient),
+            diffuse: splat(m.diffuse),
+            specular: splat(m.specular),
+            shininess: splat(m.shininess),
+            reflect: splat(m.reflect),
+            transmit: splat(m.transmit),
+            ior: splat(m.ior),
+            fresnel: F::mask_from_bits(if m.fresnel { found } else { 0 }),
+        }
+    }
+}
+
 /// Traces packets through one scene, counting rays. One per thread.
 pub struct Tracer<'a, F: Lanes> {
     scene: &'a Scene,
@@ -271,7 +299,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             }
             _ => (F::mask_from_bits(0), F::mask_from_bits(0)),
         };
-        let (normal, inside) = facing(normal, ray.dir, known, eye_inside);
+        let turned = facing(normal, ray.dir, known, eye_inside);
         let base = match m.checker {
             None => splat_rgb::<F>(m.color),
             Some(_) => {
@@ -287,21 +315,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 V3::new(F::from_fn(|i| c[i].x), F::from_fn(|i| c[i].y), F::from_fn(|i| c[i].z))
             }
         };
-        let splat = F::splat_f32;
-        Some(Surface {
-            point,
-            normal,
-            inside,
-            base,
-            ambient: splat(m.ambient),
-            diffuse: splat(m.diffuse),
-            specular: splat(m.specular),
-            shininess: splat(m.shininess),
-            reflect: splat(m.reflect),
-            transmit: splat(m.transmit),
-            ior: splat(m.ior),
-            fresnel: F::mask_from_bits(if m.fresnel { bits } else { 0 }),
-        })
+        Some(Surface::of_material(point, turned, base, m, bits))
     }
 
     /// [`Tracer::surface`] for packets whose found lanes all hit spheres of one material without a checker:
@@ -342,8 +356,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let from_eye = camera_lanes & (c_eye.lt(zero_f) | c_eye.gt(zero_f));
         let eye_inside = c_eye.lt(zero_f);
         let outward = V3::select(found, (point - center).normalize(), zero);
-        let (normal, inside) = facing(outward, rays.ray.dir, from_eye, eye_inside);
-        let splat = F::splat_f32;
+        let turned = facing(outward, rays.ray.dir, from_eye, eye_inside);
         // The spheres' own colours, when they have them, replace the material's.
         let base = match spheres.color.is_empty() {
             true => splat_rgb::<F>(m.color),
@@ -352,20 +365,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 V3::new(F::from_fn(|i| rgb(i).x), F::from_fn(|i| rgb(i).y), F::from_fn(|i| rgb(i).z))
             }
         };
-        Some(Surface {
-            point,
-            normal,
-            inside,
-            base,
-            ambient: splat(m.ambient),
-            diffuse: splat(m.diffuse),
-            specular: splat(m.specular),
-            shininess: splat(m.shininess),
-            reflect: splat(m.reflect),
-            transmit: splat(m.transmit),
-            ior: splat(m.ior),
-            fresnel: F::mask_from_bits(if m.fresnel { bits } else { 0 }),
-        })
+        Some(Surface::of_material(point, turned, base, m, bits))
     }
 
     /// [`Tracer::surface`] lane by lane with the scalar code: any primitives and materials.
