@@ -166,6 +166,8 @@ pub struct Tracer<'a, F: Lanes> {
     shadow_hints: Vec<u32>,
     /// A sphere that blocked the last ambient occlusion packet, tested first for the next one.
     ao_hint: u32,
+    /// The tangent-frame directions of one hit's ambient occlusion rays, reused from hit to hit.
+    ao_directions: Vec<V3<f32>>,
     /// The K = 1 tracer that secondary packets with few live lanes are handed to, lane by lane (`None`
     /// for K = 1).
     sparse: Option<Box<Tracer<'a, f32>>>,
@@ -178,7 +180,16 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let shadow_hints = vec![crate::geometry::NO_PRIM; scene.lights.len()];
         let sparse = (F::K > 1).then(|| Box::new(Tracer::<f32>::new(scene)));
         let ao_hint = crate::geometry::NO_PRIM;
-        Self { scene, counts: RayCounts::default(), shadow_hints, ao_hint, sparse, lanes: PhantomData }
+        let ao_directions = Vec::new();
+        Self {
+            scene,
+            counts: RayCounts::default(),
+            shadow_hints,
+            ao_hint,
+            ao_directions,
+            sparse,
+            lanes: PhantomData,
+        }
     }
 
     /// Radiance along each active camera ray (zero in inactive lanes), by the scene's shading mode.
