@@ -8,6 +8,7 @@
 //! same bits; everything else is lane arithmetic in the one-ray f32 code's operation order.
 
 mod ao;
+mod ao_stream;
 
 use std::marker::PhantomData;
 use std::ops::AddAssign;
@@ -166,6 +167,8 @@ pub struct Tracer<'a, F: Lanes> {
     shadow_hints: Vec<u32>,
     /// A sphere that blocked the last ambient occlusion packet, tested first for the next one.
     ao_hint: u32,
+    /// A packet's ambient occlusion rays regrouped by direction, reused from packet to packet.
+    ao_stream: ao_stream::AoStream,
     /// The tangent-frame directions of one hit's ambient occlusion rays, reused from hit to hit.
     ao_directions: Vec<V3<f32>>,
     /// The K = 1 tracer that secondary packets with few live lanes are handed to, lane by lane (`None`
@@ -187,6 +190,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             shadow_hints,
             ao_hint,
             ao_directions,
+            ao_stream: ao_stream::AoStream::default(),
             sparse,
             lanes: PhantomData,
         }

@@ -71,12 +71,16 @@ fn packet_lanes_are_the_single_ray_tracer() {
     add_floor(&mut desc);
     // 7 directions: one per pixel's hit in each packet at K = 8 and 16, a hit's own packets at K = 4; 20:
     // a hit's own packets at every K, the last one part full.
+    // Rays spread over 0.6 of the field or within 1e-4 of one direction: the second's hits lie close
+    // together on one sphere, whose packets regroup their directions at every sample count.
     for samples in [7, 20] {
         desc.render.shade = ao(samples, None);
         let scene = Scene::compile(&desc).unwrap();
-        check_lanes::<wide::f32x4>(&scene, 1);
-        check_lanes::<wide::f32x8>(&scene, 2);
-        check_lanes::<wide::f32x16>(&scene, 3);
+        for spread in [0.6, 1e-4] {
+            check_lanes::<wide::f32x4>(&scene, 1, spread);
+            check_lanes::<wide::f32x8>(&scene, 2, spread);
+            check_lanes::<wide::f32x16>(&scene, 3, spread);
+        }
     }
 }
 
@@ -90,7 +94,7 @@ fn add_floor(desc: &mut SceneDesc) {
     desc.shapes.push(common::shape(ShapeKind::Plane, floor));
 }
 
-fn check_lanes<F: Lanes>(scene: &Scene, seed: u64) {
+fn check_lanes<F: Lanes>(scene: &Scene, seed: u64, spread: f32) {
     let mut rng = SplitMix64::new(seed);
     let mut packets = Tracer::<F>::new(scene);
     let mut single = Tracer::<f32>::new(scene);
@@ -99,7 +103,7 @@ fn check_lanes<F: Lanes>(scene: &Scene, seed: u64) {
         let rays = RayPacket::<F>::from_fn(|i| {
             let mut u = || rng.unit() as f32 * 2.0 - 1.0;
             let look = scene.to_rendering(glam::DVec3::ZERO);
-            let dir = V3::new(look.x + u() * 0.6, look.y + u() * 0.6, look.z + u() * 0.6);
+            let dir = V3::new(look.x + u() * spread, look.y + u() * spread, look.z + u() * spread);
             (Ray::new(V3::new(0.0, 0.0, 0.0), dir.normalize()), f32::INFINITY, (p + i) % 5 != 0)
         });
         let c = packets.primary(&rays);

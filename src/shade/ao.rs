@@ -2,9 +2,10 @@
 //! `samples` cosine-weighted directions over the hemisphere around the shading normal, each an occlusion
 //! packet (any hit, early exit) of length `distance` leaving the surface as shadow rays do (from the hit
 //! point, skipping the departure primitive); the colour is the surface's times the share that nothing blocks.
-//! With K or more samples a packet holds K directions of one hit (one origin: coherent walks); with fewer, it
-//! holds one direction of each of the K pixels' hits, so that packets run full. Each ray is the same in
-//! both, and each ray's answer is exact, so the counts are the same bits either way.
+//! With K or more samples a packet holds K directions of one hit (one origin: coherent walks), unless the
+//! camera packet's hits lie within a sphere's diameter of each other; then, and with fewer samples than K,
+//! all the camera packet's rays are regrouped by direction into full packets (`ao_stream.rs`). Each ray is
+//! the same in both, and each ray's answer is exact, so the counts are the same bits either way.
 //!
 //! The directions of a hit are a Fibonacci lattice over the unit square (`((k + ½)/n, k/φ)` mod 1, φ the
 //! golden ratio: evenly spread in both coordinates, so in radius and in azimuth) shifted by a random
@@ -35,13 +36,40 @@ impl<F: Lanes> Tracer<'_, F> {
         }
         let s = self.surface(rays, hit, found, true);
         let distance = F::splat_f32(ao.distance.map_or(f32::INFINITY, |d| d as f32));
-        let open = if ao.samples as usize >= F::K {
+        // One hit's directions share an origin, so its packets share the start of their walks; where the hits
+        // lie close together, rays of one direction from all of them run side by side instead, and walk
+        // further together (PERF.md, Register).
+        let open = if ao.samples as usize >= F::K && !self.hits_are_close(hit, &s, found) {
             self.open_by_hit(rays, hit, &s, found, ao, distance)
         } else {
-            self.open_by_pixel(rays, hit, &s, found, ao, distance)
+            self.open_by_direction(rays, hit, &s, found, ao, distance)
         };
         let share = open / F::splat_f32(ao.samples as f32);
         V3::select(found, s.base * share, background)
+    }
+
+    /// Whether the packet has lanes to regroup (K > 1), its found lanes all hit spheres, and their hit points
+    /// lie within the smallest of those spheres' diameters of each other (a box of that diagonal).
+    fn hits_are_close(&self, hit: &HitPacket<F>, s: &Surface<F>, found: F::Mask) -> bool {
+        if F::K == 1 {
+            return false;
+        }
+        let spheres = &self.scene.geometry.spheres;
+        let mut r_min = f32::INFINITY;
+        let (mut lo, mut hi) = ([f32::INFINITY; 3], [f32::NEG_INFINITY; 3]);
+        for i in set_bits(F::move_mask(found)) {
+            let p = hit.prim.lane(i) as usize;
+            if p >= spheres.len() {
+                return false;
+            }
+            r_min = r_min.min(spheres.r[p]);
+            let q = [s.point.x.lane(i), s.point.y.lane(i), s.point.z.lane(i)];
+            for a in 0..3 {
+                (lo[a], hi[a]) = (lo[a].min(q[a]), hi[a].max(q[a]));
+            }
+        }
+        let d2: f32 = (0..3).map(|a| (hi[a] - lo[a]) * (hi[a] - lo[a])).sum();
+        d2 < 4.0 * r_min * r_min
     }
 
     /// How many of each found lane's `ao.samples` occlusion rays nothing blocks, traced K directions of one
@@ -81,42 +109,14 @@ impl<F: Lanes> Tracer<'_, F> {
         }
         F::from_fn(|i| open[i] as f32)
     }
-
-    /// [`Tracer::open_by_hit`] traced one direction of every found lane at a time (lanes = pixels): for
-    /// fewer samples than K, where a hit's own packets would run part empty. Every ray is the same as there,
-    /// so the counts are the same bits.
-    fn open_by_pixel(
-        &mut self,
-        rays: &RayPacket<F>,
-        hit: &HitPacket<F>,
-        s: &Surface<F>,
-        found: F::Mask,
-        ao: Ao,
-        distance: F,
-    ) -> F {
-        let from = DeparturePacket { prim: hit.prim, inward: s.inside };
-        let bits = F::move_mask(found);
-        let mut shift = [(0.0, 0.0); 16];
-        for i in set_bits(bits) {
-            shift[i] = rotation(rays.ray.dir.x.lane(i), rays.ray.dir.y.lane(i), rays.ray.dir.z.lane(i));
-        }
-        let one = F::splat_f32(1.0);
-        let mut open = F::splat_f32(0.0);
-        for k in 0..ao.samples {
-            let local = local_directions::<F>(set_bits(bits).map(|i| (i, shift[i], k)), ao.samples);
-            let probe = RayPacket::new(s.point, around(s.normal, local), distance, found);
-            self.counts.ao += u64::from(bits.count_ones());
-            let (geometry, hint) = (&self.scene.geometry, &mut self.ao_hint);
-            let blocked = traced(RayKind::Ao, || geometry.occluded_hinted_k(&probe, &from, hint));
-            open = F::select(found & !blocked, open + one, open);
-        }
-        open
-    }
 }
 
 /// The packet of local directions whose lane `i` is direction `k` of `n` in the set shifted by `shift`
 /// ([`tangent_directions`], four at a time), for each `(i, shift, k)` given; the other lanes hold 0.
-fn local_directions<F: Lanes>(lanes: impl Iterator<Item = (usize, (f64, f64), u32)>, n: u32) -> V3<F> {
+pub(super) fn local_directions<F: Lanes>(
+    lanes: impl Iterator<Item = (usize, (f64, f64), u32)>,
+    n: u32,
+) -> V3<F> {
     let mut local = [F::splat_f32(0.0).to_array(); 3];
     let mut put = |batch: &[(usize, (f64, f64), u32)]| {
         let at = |j: usize| batch[j.min(batch.len() - 1)];
@@ -155,7 +155,7 @@ fn tangent_set(shift: (f64, f64), n: u32, out: &mut Vec<V3<f32>>) {
 const GOLDEN_STEP: f64 = 0.618_033_988_749_894_8;
 
 /// The random shift of a hit's lattice, in [0, 1)², from the bits of its camera ray's direction.
-fn rotation(x: f32, y: f32, z: f32) -> (f64, f64) {
+pub(super) fn rotation(x: f32, y: f32, z: f32) -> (f64, f64) {
     let packed =
         (u64::from(x.to_bits()) << 32 | u64::from(y.to_bits())) ^ u64::from(z.to_bits()).rotate_left(45);
     let mut rng = SplitMix64::new(SplitMix64::new(packed).next_u64());
