@@ -13,9 +13,9 @@
 //! in the image alone (computed in f64 and rounded once, at every width), so each pixel's samples get their
 //! own directions whatever the tile, thread or packet width, and every ray of a pixel's antialiasing
 //! samples gets its own set. The seed is scalar code per lane; the directions in the tangent frame are
-//! computed four at a time in f64 lanes, sine and cosine by their series (libm's `sin_cos`, called per
-//! direction, took a sixth of a sparse field's AO render: PERF.md, Register); the frame around the normal is
-//! lane arithmetic in the scalar operation order.
+//! computed four at a time in f64 lanes, sine and cosine by their series (cheaper than libm's `sin_cos` per
+//! direction: PERF.md, Register); the frame around the normal is lane arithmetic in the scalar operation
+//! order.
 
 use crate::accel::{traced, RayKind};
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};

@@ -1,9 +1,9 @@
 //! Ambient occlusion with fewer samples than K, or with hits close together: every sample of every found
-//! lane of a camera packet, regrouped by direction, then traced K at a time. The rays come from neighbouring hit points; sorted by the
-//! cell of their direction, each packet holds rays running nearly parallel from nearby origins, which walk
-//! the tree together, where one sample of each of K pixels (random directions) split at once. Each ray is
-//! the one [`super::ao`]'s lattice gives its pixel and sample, and each ray's answer is exact, so the counts
-//! are the same bits in any grouping (PERF.md, Register: measured against the by-pixel packets).
+//! lane of a camera packet, regrouped by direction, then traced K at a time. The rays come from
+//! neighbouring hit points; sorted by the cell of their direction, each packet holds rays running nearly
+//! parallel from nearby origins, which walk the tree together, where one sample of each of K pixels (random
+//! directions) split at once. Each ray is the one [`super::ao`]'s lattice gives its pixel and sample, and
+//! each ray's answer is exact, so the counts are the same bits in any grouping (PERF.md, Register).
 
 use crate::accel::{traced, RayKind};
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
