@@ -183,13 +183,12 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let shadow_hints = vec![crate::geometry::NO_PRIM; scene.lights.len()];
         let sparse = (F::K > 1).then(|| Box::new(Tracer::<f32>::new(scene)));
         let ao_hint = crate::geometry::NO_PRIM;
-        let ao_directions = Vec::new();
         Self {
             scene,
             counts: RayCounts::default(),
             shadow_hints,
             ao_hint,
-            ao_directions,
+            ao_directions: Vec::new(),
             ao_stream: ao_stream::AoStream::default(),
             sparse,
             lanes: PhantomData,

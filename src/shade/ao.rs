@@ -117,26 +117,19 @@ pub(super) fn local_directions<F: Lanes>(
     lanes: impl Iterator<Item = (usize, (f64, f64), u32)>,
     n: u32,
 ) -> V3<F> {
+    let mut items = [(0, (0.0, 0.0), 0); 16];
+    let mut count = 0;
+    for item in lanes {
+        items[count] = item;
+        count += 1;
+    }
     let mut local = [F::splat_f32(0.0).to_array(); 3];
-    let mut put = |batch: &[(usize, (f64, f64), u32)]| {
+    for batch in items[..count].chunks(4) {
         let at = |j: usize| batch[j.min(batch.len() - 1)];
         let dirs = tangent_directions(std::array::from_fn(|j| at(j).1), std::array::from_fn(|j| at(j).2), n);
         for (&(i, _, _), d) in batch.iter().zip(dirs) {
             (local[0].as_mut()[i], local[1].as_mut()[i], local[2].as_mut()[i]) = (d.x, d.y, d.z);
         }
-    };
-    let mut batch = [(0, (0.0, 0.0), 0); 4];
-    let mut filled = 0;
-    for item in lanes {
-        batch[filled] = item;
-        filled += 1;
-        if filled == 4 {
-            put(&batch);
-            filled = 0;
-        }
-    }
-    if filled > 0 {
-        put(&batch[..filled]);
     }
     let [x, y, z] = local.map(|c| F::from_lanes(c.as_ref()));
     V3::new(x, y, z)
