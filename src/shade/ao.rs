@@ -84,13 +84,13 @@ impl<F: Lanes> Tracer<'_, F> {
         distance: F,
     ) -> F {
         let mut open = [0u32; 16];
+        let mut directions = std::mem::take(&mut self.ao_directions);
         for i in set_bits(F::move_mask(found)) {
             let shift = rotation(rays.ray.dir.x.lane(i), rays.ray.dir.y.lane(i), rays.ray.dir.z.lane(i));
             let lane = |v: &V3<F>| F::splat_v3(V3::new(v.x.lane(i), v.y.lane(i), v.z.lane(i)));
             let (point, normal) = (lane(&s.point), lane(&s.normal));
             let inward = F::mask_from_bits(if F::mask_lane(s.inside, i) { u32::MAX } else { 0 });
             let from = DeparturePacket { prim: F::Ids::splat(hit.prim.lane(i)), inward };
-            let mut directions = std::mem::take(&mut self.ao_directions);
             tangent_set(shift, ao.samples, &mut directions);
             for set in directions.chunks(F::K) {
                 // Lanes past the set's end repeat its last direction (inactive, never traced).
@@ -105,8 +105,8 @@ impl<F: Lanes> Tracer<'_, F> {
                 let blocked = traced(RayKind::Ao, || geometry.occluded_hinted_k(&probe, &from, hint));
                 open[i] += F::move_mask(live & !blocked).count_ones();
             }
-            self.ao_directions = directions;
         }
+        self.ao_directions = directions;
         F::from_fn(|i| open[i] as f32)
     }
 }
