@@ -83,3 +83,11 @@ pub mod settings;
 pub mod shade;
 pub mod simd;
 pub mod still;
+
+// The tests of the library's items (tests/library/) name it `bareray::`, as a user would, and reach its
+// crate-private items.
+#[cfg(test)]
+extern crate self as bareray;
+#[cfg(test)]
+#[path = "../tests/library/mod.rs"]
+mod library_tests;

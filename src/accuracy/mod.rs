@@ -61,9 +61,9 @@ use crate::scene::SceneDesc;
 
 pub use twin::{Hit64, Slack, Twin, EPS32, TWIN_BVH_MIN_SPHERES};
 
-/// Tolerance of the "graze" and "facing" explanations, in ε32 of the magnitudes involved (tests/stress_f64_oracle.rs's).
+/// Tolerance of the "graze" and "facing" explanations, in ε32 of the magnitudes involved (tests/library/stress_f64_oracle.rs's).
 pub(crate) const K_GRAZE: f64 = 16.0;
-/// Tolerance of the "tie" explanation, in ε32 of `|o| + t` (tests/stress_f64_oracle.rs's).
+/// Tolerance of the "tie" explanation, in ε32 of `|o| + t` (tests/library/stress_f64_oracle.rs's).
 pub const K_TIE: f64 = 64.0;
 /// Tolerance of the "start" and "light" explanations, in ε32 of the magnitudes involved.
 pub(crate) const K_START: f64 = 16.0;

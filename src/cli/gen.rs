@@ -27,7 +27,7 @@ enum GenCommand {
     /// SPD's sphereflake (`balls`) at a size factor, as NFF.
     #[command(after_help = "Example:\n  bareray gen flake --level 4 -o balls4.nff   # 7381 spheres")]
     Flake(FlakeArgs),
-    /// One scene of the random-scene campaign (tests/random_scenes.rs) by its seed, as TOML.
+    /// One scene of the random-scene campaign (tests/library/random_scenes.rs) by its seed, as TOML.
     #[command(after_help = "Example:\n  bareray gen random --seed 42 -o random-42.toml")]
     Random(RandomArgs),
 }

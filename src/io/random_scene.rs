@@ -1,4 +1,4 @@
-//! Random valid TOML scenes from a seed, for the random-scene campaign (`tests/random_scenes.rs`): the same
+//! Random valid TOML scenes from a seed, for the random-scene campaign (`tests/library/random_scenes.rs`): the same
 //! seed always gives the same text.
 //!
 //! A scene is a cluster of 3 to 14 primitives of every kind the TOML format has: spheres over three decades

@@ -1,64 +1,17 @@
-//! Helpers shared by the integration tests: scene builders, the one call of the renderer and of the binary,
-//! scene-file listing, seeded random numbers ([`rng`]), exact f32 → f64 widening ([`wide`]) and the f64
-//! oracle the stress tests measure the f32 kernels against ([`oracle`]) and the generated-input runs'
-//! hang watchdog ([`watchdog`]).
+//! Helpers shared by the binary's tests (the `suite` and `mpi` binaries): the one call of the binary, its
+//! standard error as text and scene-file listing.
 
-// The test suite and the MPI tests each compile this module and use only part of it.
+// The suite and the MPI tests each compile this module and use only part of it.
 #![allow(dead_code)]
 
-pub mod oracle;
-pub mod rng;
+#[path = "../library/common/files.rs"]
+mod files;
+#[path = "../library/common/watchdog.rs"]
 pub mod watchdog;
-pub mod wide;
 
-use std::path::{Path, PathBuf};
+pub use files::scene_files;
+
 use std::process::{Command, Output};
-
-use bareray::compile::Scene;
-use bareray::film::Image;
-use bareray::geometry::ShapeKind;
-use bareray::io::toml;
-use bareray::render::{render_lanes, thread_pool};
-use bareray::scene::desc::{CameraDesc, SceneDesc, ShapeDesc, SphereDesc};
-use glam::{DAffine3, DVec3};
-
-/// f32 unit roundoff (half an ulp of 1).
-pub const EPS32: f64 = f32::EPSILON as f64 / 2.0;
-
-/// True when `STRESS_MEASURE` is set: the stress tests then print their measurements without asserting
-/// their bounds, for re-measuring after a kernel change.
-pub fn measuring() -> bool {
-    std::env::var("STRESS_MEASURE").is_ok()
-}
-
-/// A camera looking from `eye` at `look` with a horizontal field of view of `hfov` degrees, rays through
-/// pixel centres.
-pub fn camera(eye: DVec3, look: DVec3, up: DVec3, hfov: f64, width: u32, height: u32) -> CameraDesc {
-    CameraDesc::looking_at(eye, look, up, hfov, width, height)
-}
-
-/// A sphere of material 0.
-pub fn sphere(c: DVec3, r: f64) -> SphereDesc {
-    SphereDesc { center: c, radius: r, material: 0 }
-}
-
-/// A transformed shape of material 0.
-pub fn shape(kind: ShapeKind, world_from_object: DAffine3) -> ShapeDesc {
-    ShapeDesc { kind, world_from_object, material: 0 }
-}
-
-pub fn compile(desc: &SceneDesc) -> Scene {
-    Scene::compile(desc).expect("scene compiles")
-}
-
-pub fn parse_toml(src: &str) -> SceneDesc {
-    toml::parse(Path::new("test.toml"), src).expect("scene parses")
-}
-
-/// The one place the renderer is called (8 lanes), so an API change (lanes, options) is adapted here only.
-pub fn render(scene: &Scene, threads: usize) -> Image {
-    render_lanes(scene, 8, &thread_pool(Some(threads)).expect("thread pool"), &()).image
-}
 
 /// Runs the `bareray` binary built with the tests.
 pub fn bareray(args: &[&str]) -> Output {
@@ -68,15 +21,4 @@ pub fn bareray(args: &[&str]) -> Output {
 /// The binary's standard error as text.
 pub fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
-}
-
-/// The scene files (TOML, NFF, xyzr) directly in `dir`, sorted.
-pub fn scene_files(dir: &Path) -> Vec<PathBuf> {
-    let mut all: Vec<PathBuf> = std::fs::read_dir(dir)
-        .unwrap()
-        .map(|e| e.unwrap().path())
-        .filter(|p| p.extension().is_some_and(|e| e == "toml" || e == "nff" || e == "xyzr"))
-        .collect();
-    all.sort();
-    all
 }

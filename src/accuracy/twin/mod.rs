@@ -114,7 +114,7 @@ impl Twin {
     }
 
     /// The twin of `desc`, searching spheres through its BVH when `bvh` is true (and every sphere is finite),
-    /// else brute force: the two give the same hits bit for bit (tests/accuracy.rs).
+    /// else brute force: the two give the same hits bit for bit (tests/library/accuracy.rs).
     pub fn with_bvh(desc: &SceneDesc, bvh: bool) -> Result<Self, CameraError> {
         // The f32 scene's rendering space (compile's frame): tolerances then scale with the magnitudes f32
         // rounds at, and camera rays start where the f32 ones do.

@@ -32,7 +32,7 @@ impl Twin {
     /// - spheres: the line's closest approach l to the centre satisfies `|l − r| ≤ k·ε32·(|c − o| + r)` plus
     ///   `slack` at that distance;
     /// - ellipsoids: the same test in object space, with the scale `Σ|L_i|·(|o_i| + |c_i|) + 1` (L the
-    ///   object-from-world map, whose f32 rounding the object-space ray carries), as tests/stress.rs does;
+    ///   object-from-world map, whose f32 rounding the object-space ray carries), as tests/library/stress_*.rs does;
     /// - planes: the object-space direction is within `k·ε32` (plus the direction slack) of parallel;
     /// - polygons: the direction is within that of parallel to the plane, or the line meets the plane within
     ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline;

@@ -41,7 +41,7 @@
 //! What remains is the conditioning of the problem itself: `a` loses relative accuracy for rays within a few
 //! ε of parallel to a generator line, `c` for origins within a few ε of the surface, and a root near an end
 //! plane may fall on either side of it. Away from such grazing rays the f32 result is the exact result of a
-//! ray nudged by a few roundings: `tests/cones.rs` holds `|t32 − t64|·|d|` against the f64 instance to 150
+//! ray nudged by a few roundings: `tests/library/cones.rs` holds `|t32 − t64|·|d|` against the f64 instance to 150
 //! roundings (2⁻²⁴) of `t·|d| + |origin − B|` and the relative error of `t` to 2e-5 where the hit is at least
 //! as far as the base point, with hit/miss disagreeing only on grazing rays (what it measured:
 //! docs/perf-log/2026-11-accuracy.md, "The cone kernel against its f64 instance"). The `|origin − B|` term is

@@ -28,7 +28,7 @@
 //! computed `h`, with `L ≤ 2(R + r)/|d|` the clipped range; the computed `h` is the exact `h` of a point
 //! moved by a few roundings of the torus's size. So away from tangency the f32 `t` is the exact hit of a
 //! ray nudged by a few ε of `|t·d| + |C − o| + R + r`, the same form of bound as the sphere's and the
-//! cone's (`tests/tori.rs` measures it against the twin's independent f64 method). Near tangency two roots
+//! cone's (`tests/library/tori.rs` measures it against the twin's independent f64 method). Near tangency two roots
 //! merge: the isolation's critical point carries the same few roundings, and hit or miss can go either way
 //! for a ray within that distance of grazing (the twin's explanation "graze").
 

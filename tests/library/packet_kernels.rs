@@ -5,7 +5,7 @@
 //! operand's, and LLVM may commute `a + b`), so only NaN-ness is a property of the formula. Hit lanes never
 //! carry a NaN t.
 
-use crate::common;
+use super::common;
 
 use bareray::accel::Geometry;
 use bareray::camera::Camera;

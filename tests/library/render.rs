@@ -1,6 +1,6 @@
 //! Whole renders checked against closed-form answers, and the image's independence of the thread count.
 
-use crate::common;
+use super::common;
 
 use bareray::compile::Scene;
 use bareray::film::Image;

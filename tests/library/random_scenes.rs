@@ -9,12 +9,11 @@
 //!
 //! The test below checks [`CI_SCENES`] seeds; the ignored one checks [`CAMPAIGN_SCENES`] (from
 //! `RANDOM_SCENES_FIRST`, `RANDOM_SCENES_COUNT` scenes if set) and prints how many failed:
-//! `cargo test --release --test random_scenes -- --ignored --nocapture` (a binary of this file alone), or
-//! `--test suite random_scenes:: -- --ignored`. A failure prints its seed and what failed, and writes the
+//! `cargo test --release --lib random_scenes:: -- --ignored --nocapture`. A failure prints its seed and what failed, and writes the
 //! scene as TOML into the system's temporary directory (its path printed).
 //! Every failure the campaign found is a scene in scenes/stress/: fixed ones there (checked by
-//! tests/accuracy.rs and tests/render.rs, with a test of their own here or, for the accuracy report's
-//! explanations, in tests/accuracy.rs), open ones in scenes/stress/open/ (the ignored [`open_failures`]
+//! tests/library/accuracy.rs and tests/library/render.rs, with a test of their own here or, for the accuracy report's
+//! explanations, in tests/library/accuracy.rs), open ones in scenes/stress/open/ (the ignored [`open_failures`]
 //! checks them).
 
 use std::panic::{catch_unwind, AssertUnwindSafe};
@@ -139,7 +138,7 @@ fn keep(seed: u64) -> PathBuf {
 fn open_scenes() -> Vec<PathBuf> {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/stress/open");
     if dir.is_dir() {
-        crate::common::scene_files(&dir)
+        super::common::scene_files(&dir)
     } else {
         Vec::new()
     }
@@ -261,7 +260,7 @@ fn barycentrics(v0: V3<f32>, e1: V3<f32>, e2: V3<f32>, ray: &Ray<f32>) -> (f64, 
 /// time, where the textbook kernel misses both in some of the same cases (so the test can fail).
 #[test]
 fn fan_diagonals_have_no_cracks() {
-    let mut rng = crate::common::rng::Rng::new(88);
+    let mut rng = super::common::rng::Rng::new(88);
     let f = |v: glam::DVec3| V3::new(v.x as f32, v.y as f32, v.z as f32);
     let (mut cracks, mut textbook_cracks, mut cases) = (0, 0, 0);
     for _ in 0..200_000 {

@@ -7,7 +7,7 @@
 //!
 //! `--nocapture` prints the distances; `STRESS_MEASURE=1` prints them without asserting the bounds.
 
-use crate::common;
+use super::common;
 
 use bareray::geometry::{first_root, sphere_roots, Ray};
 use bareray::math::{Vec3f, V3};

@@ -2,7 +2,7 @@
 //! exactly), so the difference is the f32 arithmetic alone: many seeded random cones and rays, aimed at
 //! the surface, started inside, and sent through the open ends.
 
-use crate::common;
+use super::common;
 
 use bareray::geometry::Ray;
 use bareray::kinds::cone::{intersect_cone, Cone, Cones};

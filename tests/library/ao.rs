@@ -3,7 +3,7 @@
 //! known answers (a point far from everything, a floor beside a wall, the inside of a closed sphere, a
 //! sphere resting on a floor against an f64 Monte Carlo estimate).
 
-use crate::common;
+use super::common;
 
 use bareray::compile::Scene;
 use bareray::film::Image;

@@ -2,7 +2,7 @@
 //! closed-form area of a circle in a square and against brute-force counts, and a sphere field without
 //! overlapping silhouettes against a 32×32 stratified reference on its edge pixels.
 
-use crate::common;
+use super::common;
 
 use bareray::compile::Scene;
 use bareray::film::Image;

@@ -9,7 +9,7 @@
 //!
 //! The default tests, which `cargo test` and so CI run, take 20 000 inputs per reader ([`CI_RUN`]); the
 //! ignored tests are the full run, 1 000 000 per reader ([`FULL_RUN`]):
-//! `cargo test --release --test suite fuzz_readers:: -- --ignored --nocapture`. `BARERAY_FUZZ_INPUTS` replaces the
+//! `cargo test --release --lib fuzz_readers:: -- --ignored --nocapture`. `BARERAY_FUZZ_INPUTS` replaces the
 //! count of either. Each test prints the count it ran and what came of it (`fuzz: toml: 1000000 inputs, …`,
 //! seen with `--nocapture`), and a run of [`PROGRESS`] inputs or more prints how far it got every
 //! [`PROGRESS`] inputs.
@@ -23,7 +23,7 @@
 //! deterministic inputs reproduce it (bisect with `BARERAY_FUZZ_START` / `BARERAY_FUZZ_INPUTS`). A hang is
 //! caught by a watchdog thread, which writes the input and exits the process with failure.
 
-use crate::common;
+use super::common;
 use std::panic::{catch_unwind, AssertUnwindSafe};
 use std::path::{Path, PathBuf};
 

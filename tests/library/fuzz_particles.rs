@@ -5,7 +5,7 @@
 //! file as a whole); none may panic.
 //!
 //! Each input is a function of (sample, index) alone. The default test runs [`CI_RUN`] inputs per sample;
-//! the ignored one [`FULL_RUN`]: `cargo test --test suite fuzz_particles:: -- --ignored --nocapture`, which prints
+//! the ignored one [`FULL_RUN`]: `cargo test --lib fuzz_particles:: -- --ignored --nocapture`, which prints
 //! the count per sample.
 
 use std::io::Write;

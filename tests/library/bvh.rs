@@ -2,7 +2,7 @@
 //! width, for closest hits and occlusion, over random sphere fields and rays (including rays starting inside
 //! spheres, grazing rays and axis-parallel rays), and through whole renders.
 
-use crate::common;
+use super::common;
 
 use bareray::bvh::Bvh;
 use bareray::compile::{Accel, Scene};

@@ -3,7 +3,7 @@
 //! radii from 1e-8 to 1e-2 of the box mixed in one field, duplicated centres, collinear runs in file order —
 //! for camera rays, rays from outside and inside the field, and secondary rays leaving a sphere's surface.
 
-use crate::common;
+use super::common;
 
 use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, HitPacket, Ray, RayPacket, NO_PRIM};

@@ -6,10 +6,10 @@
 //! proves the f32 kernels keep their accuracy where their formulas are stressed (ARCHITECTURE.md "Numerics").
 //!
 //! Bounds were set by measuring first (run with `--nocapture` to see the numbers printed by each test) and
-//! then leaving the margin stated in each test's comment. `STRESS_MEASURE=1 cargo test --test suite stress_ --
+//! then leaving the margin stated in each test's comment. `STRESS_MEASURE=1 cargo test --lib stress_ --
 //! --nocapture` prints the measurements without asserting the bounds.
 
-use crate::common;
+use super::common;
 
 use bareray::compile::Scene;
 use bareray::geometry::{Departure, ShapeKind, NO_PRIM};
@@ -159,7 +159,7 @@ fn oracle_distant_small_spheres() {
 /// on it (touching it). The near root of the planet is the small difference of two numbers near 1e4 that
 /// the perpendicular form's `proj − td` cancelled (1.2e-3 relative error); with the exact eye term and
 /// Vieta's near root it is as accurate as any other hit. Measured: max relative t error 3.0e-7, no id
-/// mismatch. Bounds: 2e-6 relative (the primary-ray bound tests/accuracy.rs holds every stress scene to;
+/// mismatch. Bounds: 2e-6 relative (the primary-ray bound tests/library/accuracy.rs holds every stress scene to;
 /// 6.7×), mismatches ≤ 1e-3.
 #[test]
 fn oracle_planet_close_to_the_surface() {

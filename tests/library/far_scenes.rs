@@ -3,7 +3,7 @@
 //! along (0.48, 0.6, 0.64), filling the view (scenes/stress/cluster-*.toml, written by make_clusters.py
 //! there). Far away the scene is compiled around its own centre and camera rays start just short of it, so
 //! its reflections are as exact as near the eye. Bits across widths and threads, and the bounds every
-//! stress scene meets, are checked with the other stress scenes (tests/render.rs, tests/accuracy.rs).
+//! stress scene meets, are checked with the other stress scenes (tests/library/render.rs, tests/library/accuracy.rs).
 
 use std::path::Path;
 

@@ -8,7 +8,7 @@
 //! Bounds were set by measuring first (`--nocapture` prints the numbers) and then leaving the margin stated
 //! in each test's comment; `STRESS_MEASURE=1` prints the measurements without asserting the bounds.
 
-use crate::common;
+use super::common;
 
 use bareray::compile::Scene;
 use bareray::film::Image;
