@@ -62,7 +62,7 @@ pub(crate) fn channels(which: &[Aov], prim_count: usize) -> Vec<Channel> {
 /// The AOVs of `window`'s pixels (one camera ray per pixel centre, in packets of `lanes`), row-major, each
 /// pixel the little-endian 4-byte samples of `channels``(which, …)` in order: the rows an EXR of them
 /// takes (`output::write_channels`).
-pub fn samples(
+pub(crate) fn samples(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,

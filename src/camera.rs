@@ -9,7 +9,7 @@
 //! Directions depend on d only through the window size, so rays are generated from the window as seen at
 //! unit distance: `dir = normalize(Z_v + u·half_w·X_v + v·half_h·Y_v)` with window coordinates u, v in
 //! [−1, 1]. The frame and the formula are generic over [`Real`]; the renderer evaluates them in f64 and
-//! rounds each ray once to f32 ([`Camera::rays`]), four lanes at a time, so every width traces the same rays.
+//! rounds each ray once to f32 (`Camera::rays`), four lanes at a time, so every width traces the same rays.
 
 use thiserror::Error;
 use wide::f64x4;
@@ -40,25 +40,25 @@ pub enum CameraError {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Camera<F> {
     /// Eye point O.
-    pub eye: V3<F>,
+    pub(crate) eye: V3<F>,
     /// Unit view direction Z_v.
-    pub forward: V3<F>,
+    pub(crate) forward: V3<F>,
     /// Unit X_v = normalize(Z_v × Y_v): the image's +column direction.
-    pub right: V3<F>,
+    pub(crate) right: V3<F>,
     /// Unit Y_v' = X_v × Z_v: the true up, the image's −row direction.
-    pub up: V3<F>,
+    pub(crate) up: V3<F>,
     /// Half the window width over d: tan(θ/2) for an angle.
-    pub half_w: F,
+    pub(crate) half_w: F,
     /// Half the window height over d.
-    pub half_h: F,
+    pub(crate) half_h: F,
     /// Window u = sx·u_scale + u_offset for a pixel-space x coordinate sx (column j's centre is j + ½).
-    pub u_scale: F,
+    pub(crate) u_scale: F,
     /// See `u_scale`.
-    pub u_offset: F,
+    pub(crate) u_offset: F,
     /// Window v = sy·v_scale + v_offset (row 0 at the top, v = +1).
-    pub v_scale: F,
+    pub(crate) v_scale: F,
     /// See `v_scale`.
-    pub v_offset: F,
+    pub(crate) v_offset: F,
     /// Image-plane distance d (for points on the image plane; directions do not depend on it).
     pub(crate) distance: F,
     /// h_res.
@@ -67,7 +67,7 @@ pub struct Camera<F> {
     pub height: u32,
     /// How far from the eye camera rays start: 0 (at the eye) unless the scene lies far from the eye, where
     /// compile makes rays start just short of the geometry so that their f32 origins are as fine as the
-    /// geometry's own coordinates ([`crate::compile::RenderingFrame`]). No geometry is nearer the eye.
+    /// geometry's own coordinates (`crate::compile::RenderingFrame`). No geometry is nearer the eye.
     pub start: F,
 }
 
@@ -168,7 +168,7 @@ impl Camera<f64> {
 
     /// The primary ray through pixel-space point (sx, sy), computed in f64 and rounded once to f32: the
     /// benchmark contract's ray (DESIGN.md) to the nearest f32, so bareray traces exactly the rays an f64
-    /// reference rounds. Every renderer path generates camera rays through [`Camera::rays`], so every width traces
+    /// reference rounds. Every renderer path generates camera rays through `Camera::rays`, so every width traces
     /// the same rays.
     #[inline]
     pub fn ray_f32(&self, sx: f32, sy: f32) -> Ray<f32> {
@@ -179,7 +179,7 @@ impl Camera<f64> {
     /// operations in the same order (IEEE, no fusing), so each lane's ray is bit for bit the scalar one. The
     /// origin is the eye, or in a far scene each lane's start point ([`Camera::start`]).
     #[inline]
-    pub fn rays<F: Lanes>(&self, sx: F, sy: F) -> Ray<F> {
+    pub(crate) fn rays<F: Lanes>(&self, sx: F, sy: F) -> Ray<F> {
         if self.start != 0.0 {
             self.rays_from_start(sx, sy)
         } else {
@@ -262,7 +262,7 @@ impl Camera<f64> {
     /// as Z·d ≥ 1/L − 2⁻²⁴.
     /// Rays that start away from the eye ([`Camera::start`]) get none: their f32 origins are rounded one by
     /// one, so they share no apex.
-    pub fn pyramid(&self, sx: [f32; 2], sy: [f32; 2]) -> Option<Pyramid> {
+    pub(crate) fn pyramid(&self, sx: [f32; 2], sy: [f32; 2]) -> Option<Pyramid> {
         if self.start != 0.0 {
             return None;
         }

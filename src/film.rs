@@ -19,7 +19,7 @@ impl Image {
         Self { width, height, pixels: black_pixels(width as usize * height as usize) }
     }
     /// Pixel (x, y).
-    pub fn get(&self, x: u32, y: u32) -> Rgb {
+    pub(crate) fn get(&self, x: u32, y: u32) -> Rgb {
         self.pixels[y as usize * self.width as usize + x as usize]
     }
     /// Sets pixel (x, y).

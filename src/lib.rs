@@ -13,7 +13,7 @@
 //! 2. [`compile::Scene::compile`] turns the description into the immutable [`compile::Scene`] every render
 //!    thread shares: camera frame, spheres in SoA arrays, BVHs ([`accel::Geometry`]).
 //! 3. [`render::render_lanes`] traces it tile by tile on a thread pool, in packets of K camera rays shaded by
-//!    [`shade`], reporting finished tiles to a [`render::Progress`], into a [`film::Image`] of linear RGB.
+//!    `shade`, reporting finished tiles to a [`render::Progress`], into a [`film::Image`] of linear RGB.
 //! 4. [`output::write_image`] writes the image as PNG, PPM, EXR or HDR, chosen by the file's extension.
 //!    For images of any size, [`still::render`] does 3 and 4 band by band, streaming each finished band
 //!    into the file (memory: the scene and a few bands), for the whole image or a region of it;
@@ -77,10 +77,10 @@ pub mod kinds;
 pub mod math;
 pub mod output;
 pub mod render;
-pub mod sample;
+pub(crate) mod sample;
 pub mod scene;
 pub mod settings;
-pub mod shade;
+pub(crate) mod shade;
 pub mod simd;
 pub mod still;
 

@@ -158,10 +158,10 @@ impl<F: Lanes> Surface<F> {
 }
 
 /// Traces packets through one scene, counting rays. One per thread.
-pub struct Tracer<'a, F: Lanes> {
+pub(crate) struct Tracer<'a, F: Lanes> {
     scene: &'a Scene,
     /// Rays traced so far.
-    pub counts: RayCounts,
+    pub(crate) counts: RayCounts,
     /// Per light, a sphere that blocked the last shadow packet toward it: tested first for the next one
     /// (the shadow cache of Haines & Greenberg; it changes what is tested first, never the answer).
     shadow_hints: Vec<u32>,
@@ -179,7 +179,7 @@ pub struct Tracer<'a, F: Lanes> {
 
 impl<'a, F: Lanes> Tracer<'a, F> {
     /// A tracer over `scene` with zero counts.
-    pub fn new(scene: &'a Scene) -> Self {
+    pub(crate) fn new(scene: &'a Scene) -> Self {
         let shadow_hints = vec![crate::geometry::NO_PRIM; scene.lights.len()];
         let sparse = (F::K > 1).then(|| Box::new(Tracer::<f32>::new(scene)));
         let ao_hint = crate::geometry::NO_PRIM;
@@ -196,7 +196,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 
     /// Radiance along each active camera ray (zero in inactive lanes), by the scene's shading mode.
-    pub fn primary(&mut self, rays: &RayPacket<F>) -> V3<F> {
+    pub(crate) fn primary(&mut self, rays: &RayPacket<F>) -> V3<F> {
         let hit =
             traced(RayKind::Camera, || self.scene.geometry.intersect_k(rays, &DeparturePacket::camera()));
         self.primary_from(rays, hit)

@@ -2,30 +2,30 @@
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
 //! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's `crate::bvh::LeafQuery`):
-//! spheres ([`SphereQuery`]), polygons' triangles ([`TriangleQuery`]), bounded transformed shapes
-//! ([`ShapeQuery`]) and each registered kind ([`crate::kinds`]: open cones, tori); a kind with few items is tested
+//! spheres (`SphereQuery`), polygons' triangles (`TriangleQuery`), bounded transformed shapes
+//! (`ShapeQuery`) and each registered kind ([`crate::kinds`]: open cones, tori); a kind with few items is tested
 //! brute force by the same query, and so are unbounded shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
 //! walk exactly as it is without other kinds.
 
 mod colors;
 mod departure;
 mod near_first;
-pub mod pkd;
+pub(crate) mod pkd;
 mod polygons;
 mod shape_query;
 mod sphere_query;
 mod triangle_query;
-pub use crate::bvh::item_query::{ItemQuery, ItemTest};
+pub(crate) use crate::bvh::item_query::{ItemQuery, ItemTest};
 pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
 pub use crate::bvh::work::{
     probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
 };
-pub use near_first::NearFirst;
-pub use pkd::Particles;
-pub use polygons::Polygons;
-pub use shape_query::{ShapeQuery, Shapes};
-pub use sphere_query::SphereQuery;
-pub use triangle_query::{TriangleQuery, Triangles};
+pub(crate) use near_first::NearFirst;
+pub(crate) use pkd::Particles;
+pub(crate) use polygons::Polygons;
+pub(crate) use shape_query::{ShapeQuery, Shapes};
+pub(crate) use sphere_query::SphereQuery;
+pub(crate) use triangle_query::{TriangleQuery, Triangles};
 
 use crate::bvh::{Bvh, LeafQuery};
 use crate::kinds::{Kind, KindItems, KindStores, VisitItems};
@@ -48,22 +48,22 @@ pub struct Geometry {
     /// Spheres in a particle tree (`--accel pkd`, for fields too large for a BVH) instead of `spheres`.
     pub particles: Particles,
     /// Transformed generic shapes, in file order.
-    pub shapes: Vec<Shape<f32>>,
+    pub(crate) shapes: Vec<Shape<f32>>,
     /// The BVH over the bounded shapes, or `None` when every shape is tested brute force.
     pub shape_bvh: Option<Bvh>,
     /// With a shape BVH: its items, the bounded shapes' indices in its leaf order.
-    pub shape_order: Vec<u32>,
+    pub(crate) shape_order: Vec<u32>,
     /// With a shape BVH: the unbounded shapes (planes), tested brute force beside it.
-    pub loose_shapes: Vec<u32>,
+    pub(crate) loose_shapes: Vec<u32>,
     /// Planar polygons; their triangles in BVH leaf order when there is a BVH.
-    pub polygons: Polygons,
+    pub(crate) polygons: Polygons,
     /// The BVH over the polygons' triangles, or `None` for brute force.
     pub polygon_bvh: Option<Bvh>,
     /// The registered kinds' items and trees ([`crate::kinds`]), ids after the polygons.
     pub kinds: KindStores,
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
-    pub origin: Vec3f,
+    pub(crate) origin: Vec3f,
 }
 
 /// Closest hits of the `n` items of one kind for the lanes of `live`, merged into `best`: through the kind's
@@ -125,11 +125,11 @@ pub(crate) enum PrimRef<'a> {
 
 /// What shading needs to know about a hit point.
 #[derive(Clone, Copy, Debug)]
-pub struct SurfacePoint {
+pub(crate) struct SurfacePoint {
     /// World-space hit point.
-    pub point: Vec3f,
+    pub(crate) point: Vec3f,
     /// Unit geometric normal, pointing out of the primitive (not yet turned toward the ray).
-    pub normal: Vec3f,
+    pub(crate) normal: Vec3f,
     /// The hit point in the primitive's own frame (centre-relative for spheres, z = 0 for planes), for
     /// solid textures.
     pub(crate) object_point: Vec3f,
@@ -183,7 +183,7 @@ impl Geometry {
     /// ([`Bvh::frustum_culling`]) and `pyramid` (enclosing every active ray of the tile), the packets walk
     /// the sphere tree together as one large packet; at most [`crate::bvh::MAX_PACKETS`] packets then. The large
     /// walk culls by frusta alone, so with frustum culling off every packet walks on its own.
-    pub fn intersect_tile<F: Lanes>(
+    pub(crate) fn intersect_tile<F: Lanes>(
         &self,
         packets: &[RayPacket<F>],
         pyramid: Option<&Pyramid>,
@@ -259,7 +259,7 @@ impl Geometry {
 
     /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side
     /// excluded); inactive lanes are false.
-    pub fn occluded_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> F::Mask {
+    pub(crate) fn occluded_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> F::Mask {
         let mut hint = NO_PRIM;
         self.occluded_hinted_k(rays, from, &mut hint)
     }
@@ -268,7 +268,7 @@ impl Geometry {
     /// neighbouring shadow rays tend to be blocked by the same sphere), and leaves in `hint` a sphere that
     /// blocked some lane this time. The answer is the same whatever the hint: it only decides what is
     /// tested first.
-    pub fn occluded_hinted_k<F: Lanes>(
+    pub(crate) fn occluded_hinted_k<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
         from: &DeparturePacket<F>,
@@ -387,7 +387,7 @@ impl Geometry {
     }
 
     /// The BVHs the scene has.
-    pub fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
+    pub(crate) fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
         [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh].into_iter().flatten().chain(self.kinds.bvhs())
     }
 
@@ -405,7 +405,7 @@ impl Geometry {
     /// bits. Turning it on needs the trees, kept by compiling with
     /// [`crate::compile::CompileOptions::scalar`] (which also turns it on); returns whether every BVH walks
     /// as asked.
-    pub fn set_scalar_walk(&mut self, on: bool) -> bool {
+    pub(crate) fn set_scalar_walk(&mut self, on: bool) -> bool {
         let mut all = true;
         for bvh in self.bvhs_mut() {
             bvh.scalar_walk = on;
@@ -455,7 +455,7 @@ impl Geometry {
     }
 
     /// Whether one ray meets anything in `[0, t_max)`: the K = 1 instance of [`Geometry::occluded_k`].
-    pub fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
+    pub(crate) fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
         let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
     }
@@ -496,13 +496,13 @@ impl Geometry {
     }
 
     /// The id of the first polygon (polygon k has id `polygon_base() + k`).
-    pub fn polygon_base(&self) -> usize {
+    pub(crate) fn polygon_base(&self) -> usize {
         self.shape_base() + self.shapes.len()
     }
 
     /// The id of the registered kinds' first item (their items are numbered on from it in the registry's
     /// order).
-    pub fn kinds_base(&self) -> usize {
+    pub(crate) fn kinds_base(&self) -> usize {
         self.polygon_base() + self.polygons.len()
     }
 
@@ -541,7 +541,7 @@ impl Geometry {
     }
 
     /// Position, normal and material of hit `t` on primitive `prim` along `ray`.
-    pub fn surface(&self, ray: &Ray<f32>, t: f32, prim: u32) -> SurfacePoint {
+    pub(crate) fn surface(&self, ray: &Ray<f32>, t: f32, prim: u32) -> SurfacePoint {
         debug_assert_ne!(prim, NO_PRIM);
         let point = ray.at(t);
         match self.prim(prim) {

@@ -57,7 +57,7 @@ impl Ord for Entry {
 
 /// The queue of a nearest-first walk, kept between walks so that each one does not allocate.
 #[derive(Debug, Default)]
-pub struct NearFirst {
+pub(crate) struct NearFirst {
     heap: BinaryHeap<Entry>,
 }
 

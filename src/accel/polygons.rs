@@ -5,15 +5,15 @@ use crate::math::{Vec3f, V3};
 
 /// Planar polygons, stored as triangles that carry their polygon's index: one primitive id per polygon.
 #[derive(Clone, Debug, Default)]
-pub struct Polygons {
+pub(crate) struct Polygons {
     /// Per triangle: first vertex.
-    pub v0: Vec<Vec3f>,
+    pub(crate) v0: Vec<Vec3f>,
     /// Per triangle: second vertex minus the first.
-    pub e1: Vec<Vec3f>,
+    pub(crate) e1: Vec<Vec3f>,
     /// Per triangle: third vertex minus the first.
-    pub e2: Vec<Vec3f>,
+    pub(crate) e2: Vec<Vec3f>,
     /// Per triangle: the polygon it belongs to (`0..len()`).
-    pub polygon: Vec<u32>,
+    pub(crate) polygon: Vec<u32>,
     /// Per triangle: unit vertex normals to interpolate (NFF `pp`), or `None` for flat polygons.
     pub(crate) vertex_normals: Vec<Option<[Vec3f; 3]>>,
     /// The triangles of every polygon, grouped by polygon: polygon k's are `members[first[k]..first[k + 1]]`.
@@ -33,15 +33,15 @@ pub struct Polygons {
 
 impl Polygons {
     /// Number of polygons.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.normal.len()
     }
     /// True when there are none.
-    pub fn is_empty(&self) -> bool {
+    pub(crate) fn is_empty(&self) -> bool {
         self.normal.is_empty()
     }
     /// Number of triangles.
-    pub fn triangles(&self) -> usize {
+    pub(crate) fn triangles(&self) -> usize {
         self.v0.len()
     }
 

@@ -9,7 +9,7 @@ use crate::bvh::item_query::{ItemQuery, ItemTest};
 /// The shapes `order` lists (item j is shape `order[j]`, primitive `base + order[j]`; without a list, shape
 /// j).
 #[derive(Clone, Copy)]
-pub struct Shapes<'a> {
+pub(crate) struct Shapes<'a> {
     /// Every transformed shape of the scene.
     pub(crate) shapes: &'a [Shape<f32>],
     /// The shapes the items are, in the tree's leaf order; `None`: all of them, in order.
@@ -28,4 +28,4 @@ impl ItemTest for Shapes<'_> {
 }
 
 /// A query of rays against transformed shapes.
-pub type ShapeQuery<'a, F> = ItemQuery<F, Shapes<'a>, &'a Ray<F>>;
+pub(crate) type ShapeQuery<'a, F> = ItemQuery<F, Shapes<'a>, &'a Ray<F>>;

@@ -12,7 +12,7 @@ use crate::bvh::{LeafQuery, SingleLeafQuery};
 /// A sphere query as every kernel and traversal takes it: the spheres, the rays, each ray's exclusive end
 /// `t_max`, and the sphere each ray leaves (`skip`, never reported).
 #[derive(Clone, Copy)]
-pub struct SphereQuery<'a, F: Lanes> {
+pub(crate) struct SphereQuery<'a, F: Lanes> {
     /// The spheres.
     pub(crate) spheres: &'a Spheres,
     /// Exclusive end of each ray's range.

@@ -9,7 +9,7 @@ use crate::bvh::item_query::{ItemQuery, ItemTest};
 
 /// The triangles of [`Polygons`], polygon k being primitive `base + k`.
 #[derive(Clone, Copy)]
-pub struct Triangles<'a> {
+pub(crate) struct Triangles<'a> {
     /// The polygons and their triangles.
     pub(crate) polygons: &'a Polygons,
     /// The id of polygon 0.
@@ -42,4 +42,4 @@ impl ItemTest for Triangles<'_> {
 }
 
 /// A query of rays against the triangles.
-pub type TriangleQuery<'a, F> = ItemQuery<F, Triangles<'a>, &'a Ray<F>>;
+pub(crate) type TriangleQuery<'a, F> = ItemQuery<F, Triangles<'a>, &'a Ray<F>>;

@@ -49,7 +49,7 @@ fn axis(v: V3<f64>, k: usize) -> f64 {
 impl Bvh64 {
     /// Builds the tree over `spheres` (centre, radius), whose ids are their indices. All values must be
     /// finite (the caller falls back to brute force otherwise).
-    pub fn build(spheres: &[(V3<f64>, f64)]) -> Self {
+    pub(crate) fn build(spheres: &[(V3<f64>, f64)]) -> Self {
         let mut order: Vec<u32> = (0..spheres.len() as u32).collect();
         let mut nodes = Vec::with_capacity(2 * spheres.len() / LEAF + 1);
         if !spheres.is_empty() {

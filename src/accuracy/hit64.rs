@@ -4,11 +4,11 @@ use crate::geometry::NO_PRIM;
 
 /// A closest hit in f64: its parameter (`inf` on a miss) and scene-file id ([`NO_PRIM`] on a miss).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Hit64 {
+pub(crate) struct Hit64 {
     /// Ray parameter (the direction's units).
-    pub t: f64,
+    pub(crate) t: f64,
     /// Scene-file id.
-    pub prim: u32,
+    pub(crate) prim: u32,
 }
 
 impl Hit64 {

@@ -1,7 +1,7 @@
 //! `bareray accuracy`: the f32 renderer against an f64 twin of the same scene, ray by ray.
 //!
 //! Every primary ray (one per pixel centre) is traced by the renderer's own primary-hit pass
-//! ([`crate::render::trace_primary_lanes`], packets of K) and by the [`Twin`], an independent f64 tracer
+//! ([`crate::render::trace_primary_lanes`], packets of K) and by the `Twin`, an independent f64 tracer
 //! over the exact [`SceneDesc`] in camera-relative space with unrounded f64 camera rays. Only
 //! frame-independent quantities are compared: hit or miss, scene-file primitive id, t (rays have unit
 //! directions in both), and occlusion. With secondary rays, each precision builds its own Whitted rays from
@@ -12,13 +12,13 @@
 //! like a primary ray.
 //!
 //! A disagreement is *explained* when rounding can account for it; the tolerances are multiples of
-//! ε32 = 2⁻²⁴ ([`EPS32`]) of the magnitudes involved, with the constants below:
+//! ε32 = 2⁻²⁴ (`EPS32`) of the magnitudes involved, with the constants below:
 //!
 //! - **graze** (`K_GRAZE`): the ray passes within tolerance of tangency with either primitive
 //!   (`Twin::grazing`: spheres, ellipsoids in object space, planes within k·ε32 of parallel, polygon
 //!   outlines, cones near tangency or with a hit near an end rim);
-//! - **tie** ([`K_TIE`]): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other, times
-//!   how fast a moved ray's hits move apart (1 head on, the inverse cosines at a slant: [`Twin::tie`]);
+//! - **tie** (`K_TIE`): both primitives are hit in f64 within `K_TIE·ε32·(|o| + t)` of each other, times
+//!   how fast a moved ray's hits move apart (1 head on, the inverse cosines at a slant: `Twin::tie`);
 //! - **start** (`K_START`, secondary rays): the ray starts within tolerance of either primitive's surface
 //!   (`Twin::near_surface`: contact points of touching spheres, a ray leaving one cone where another's
 //!   wall or rim is);
@@ -27,7 +27,7 @@
 //!   within `K_GRAZE·ε32` of its tangent plane (|cos| in f64);
 //! - **diverge** (secondary rays): none of the above at their own tolerances, but each holds once the
 //!   tolerances grow by how far the f32 ray actually strays from the f64 one (origins and directions differ
-//!   because each starts from its own hit point along its own normal, [`Slack`]): the primary hit's error
+//!   because each starts from its own hit point along its own normal, `Slack`): the primary hit's error
 //!   carried forward, not a fault of the secondary query.
 //!
 //! Anything else is *unexplained*. A *self-hit* is a secondary ray whose hit (or shadow blocker) in f32 is
@@ -39,11 +39,11 @@
 //! hits agree on the primitive; percentiles are nearest-rank: the p-th of n sorted values is the
 //! ⌈p·n⌉-th.
 
-pub mod bvh64;
+pub(crate) mod bvh64;
 mod hit64;
 mod report;
 mod secondary;
-pub mod twin;
+pub(crate) mod twin;
 
 use report::Reason;
 pub use report::{Example, Explained, HitStats, Percentiles, Report, ShadowStats};
@@ -59,18 +59,18 @@ use crate::math::V3;
 use crate::render::{thread_pool, trace_primary_lanes, PrimaryHits};
 use crate::scene::SceneDesc;
 
-pub use twin::{Hit64, Slack, Twin, EPS32, TWIN_BVH_MIN_SPHERES};
+pub(crate) use twin::{Hit64, Slack, Twin, EPS32};
 
 /// Tolerance of the "graze" and "facing" explanations, in ε32 of the magnitudes involved (tests/library/stress_f64_oracle.rs's).
 pub(crate) const K_GRAZE: f64 = 16.0;
 /// Tolerance of the "tie" explanation, in ε32 of `|o| + t` (tests/library/stress_f64_oracle.rs's).
-pub const K_TIE: f64 = 64.0;
+pub(crate) const K_TIE: f64 = 64.0;
 /// Tolerance of the "start" and "light" explanations, in ε32 of the magnitudes involved.
 pub(crate) const K_START: f64 = 16.0;
 /// Distance from the origin within which a secondary ray's hit counts as a self-hit, in ε32 of `|o|` (the
 /// origin's distance from the eye): the f32 origin's own rounding (at most half an ulp per coordinate,
 /// about `1.7·ε32·|o|`) with room. A hit farther away is a hit on something else, compared as such.
-pub const K_SELF: f64 = 4.0;
+pub(crate) const K_SELF: f64 = 4.0;
 
 /// What to measure.
 #[derive(Clone, Debug)]
@@ -94,7 +94,7 @@ impl Default for Options {
     }
 }
 
-/// Compiles `desc` for the f32 renderer and builds its f64 [`Twin`], then compares them ([`compare`]).
+/// Compiles `desc` for the f32 renderer and builds its f64 `Twin`, then compares them (`compare`).
 /// `name` labels the report. Fails only on a camera that cannot form an image (or a thread pool that cannot
 /// start).
 pub fn run(name: &str, desc: &SceneDesc, opts: &Options) -> Result<Report> {
@@ -111,7 +111,13 @@ pub fn run(name: &str, desc: &SceneDesc, opts: &Options) -> Result<Report> {
 /// Compares the compiled f32 `scene` with its `twin` (both from one [`SceneDesc`]) on `pool`: every pixel
 /// centre's primary ray, and with `opts.secondary` the shadow, mirror and refraction rays of every pixel
 /// whose two primary hits agree on the primitive.
-pub fn compare(name: &str, scene: &Scene, twin: &Twin, opts: &Options, pool: &rayon::ThreadPool) -> Report {
+pub(crate) fn compare(
+    name: &str,
+    scene: &Scene,
+    twin: &Twin,
+    opts: &Options,
+    pool: &rayon::ThreadPool,
+) -> Report {
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let mut hits = PrimaryHits::new(width, height);

@@ -9,13 +9,13 @@ use super::{EPS32, K_GRAZE, K_SELF, K_START, K_TIE};
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Percentiles {
     /// How many values.
-    pub count: u64,
+    pub(crate) count: u64,
     /// Median (NaN when there are no values).
     pub p50: f64,
     /// 99th percentile.
     pub p99: f64,
     /// 99.9th percentile.
-    pub p999: f64,
+    pub(crate) p999: f64,
     /// Largest value.
     pub max: f64,
 }
@@ -89,11 +89,11 @@ pub(super) enum Reason {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct HitStats {
     /// Rays traced in both precisions.
-    pub rays: u64,
+    pub(crate) rays: u64,
     /// Both hit the same primitive.
-    pub hits_agree: u64,
+    pub(crate) hits_agree: u64,
     /// Both missed.
-    pub misses_agree: u64,
+    pub(crate) misses_agree: u64,
     /// One hit, the other missed.
     pub(crate) hit_miss_disagree: u64,
     /// Both hit, different primitives.
@@ -104,16 +104,16 @@ pub struct HitStats {
     /// Disagreements explained, by reason.
     pub(crate) explained: Explained,
     /// Disagreements not explained.
-    pub unexplained: u64,
+    pub(crate) unexplained: u64,
     /// Self-hits (secondary rays only).
-    pub self_hits: u64,
+    pub(crate) self_hits: u64,
     /// Relative t error over the rays whose hits agree.
-    pub t_rel_err: Percentiles,
+    pub(crate) t_rel_err: Percentiles,
 }
 
 impl HitStats {
     /// All disagreements.
-    pub fn disagree(&self) -> u64 {
+    pub(crate) fn disagree(&self) -> u64 {
         self.hit_miss_disagree + self.id_disagree + self.tir_disagree
     }
 }
@@ -122,7 +122,7 @@ impl HitStats {
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct ShadowStats {
     /// Shadow rays traced in both precisions (lights in front of the surface in both).
-    pub rays: u64,
+    pub(crate) rays: u64,
     /// Lights in front of the surface in one precision only (a shadow ray in one only).
     pub(crate) lit_disagree: u64,
     /// Occluded in one precision only.
@@ -137,7 +137,7 @@ pub struct ShadowStats {
 
 impl ShadowStats {
     /// All disagreements.
-    pub fn disagree(&self) -> u64 {
+    pub(crate) fn disagree(&self) -> u64 {
         self.lit_disagree + self.occluded_disagree
     }
     pub(super) fn add(&mut self, o: &ShadowStats) {
@@ -174,25 +174,25 @@ pub struct Report {
     /// The scene's name (as given to [`super::run`]).
     pub(crate) scene: String,
     /// Image columns.
-    pub width: u32,
+    pub(crate) width: u32,
     /// Image rows.
-    pub height: u32,
+    pub(crate) height: u32,
     /// Packet width of the f32 primary pass.
-    pub lanes: usize,
+    pub(crate) lanes: usize,
     /// Whether the f32 pass ran on the scalar path (`lanes` is then 1; JSON writes `"lanes":"scalar"`).
     pub(crate) scalar: bool,
     /// Primitives in the scene.
-    pub primitives: usize,
+    pub(crate) primitives: usize,
     /// Whether the twin searched spheres through its BVH.
     pub(crate) twin_bvh: bool,
     /// Camera rays.
-    pub primary: HitStats,
+    pub(crate) primary: HitStats,
     /// Shadow rays (with secondary rays).
-    pub shadow: Option<ShadowStats>,
+    pub(crate) shadow: Option<ShadowStats>,
     /// Mirror rays (with secondary rays).
-    pub reflection: Option<HitStats>,
+    pub(crate) reflection: Option<HitStats>,
     /// Refraction rays (with secondary rays): from hits on transmitting materials.
-    pub refraction: Option<HitStats>,
+    pub(crate) refraction: Option<HitStats>,
     /// Some unexplained disagreements and self-hits.
     pub(crate) examples: Vec<Example>,
     /// Wall-clock seconds of the whole comparison (compile and twin build included).
@@ -201,7 +201,7 @@ pub struct Report {
 
 impl Report {
     /// Unexplained disagreements of every kind.
-    pub fn unexplained(&self) -> u64 {
+    pub(crate) fn unexplained(&self) -> u64 {
         self.primary.unexplained
             + self.shadow.map_or(0, |s| s.unexplained)
             + self.reflection.map_or(0, |r| r.unexplained)
@@ -209,7 +209,7 @@ impl Report {
     }
 
     /// Self-hits of every kind.
-    pub fn self_hits(&self) -> u64 {
+    pub(crate) fn self_hits(&self) -> u64 {
         self.shadow.map_or(0, |s| s.self_hits)
             + self.reflection.map_or(0, |r| r.self_hits)
             + self.refraction.map_or(0, |r| r.self_hits)

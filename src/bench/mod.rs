@@ -1,4 +1,4 @@
-//! Measuring renders, as `bareray bench` reports them: repeated timed runs of one setting ([`measure`]) and
+//! Measuring renders, as `bareray bench` reports them: repeated timed runs of one setting (`measure`) and
 //! the split of a render by ray kind ([`profile`]).
 //!
 //! Times come from runs with every probe off. The per-kind figures come from two extra runs: one with the
@@ -16,7 +16,7 @@ use crate::compile::Scene;
 use crate::film::Image;
 use crate::render::{fnv1a, render_lanes, trace_primary_lanes, PrimaryHits};
 
-/// What [`measure`] found for one setting.
+/// What `measure` found for one setting.
 #[derive(Clone, Debug)]
 pub struct Measured {
     /// Rays traced per run.
@@ -38,7 +38,7 @@ impl Measured {
     }
 }
 
-/// What [`measure`] traces.
+/// What `measure` traces.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Trace {
     /// The whole render: camera rays and everything their shading traces.
@@ -52,7 +52,7 @@ pub enum Trace {
 /// agree (every path is deterministic; an error says which run differed); the runs between skip it, since
 /// hashing a frame costs about as long as tracing a small field. The scalar path is `lanes` 1 on a scene
 /// whose geometry walks its binary trees ([`crate::accel::Geometry::set_scalar_walk`]).
-pub fn measure(
+pub(crate) fn measure(
     scene: &Scene,
     trace: Trace,
     lanes: usize,
@@ -110,7 +110,7 @@ pub struct Setting {
     pub kinds: Option<Profile>,
 }
 
-/// [`measure`]s `scene` at `lanes` rays per packet, on the scalar path when `scalar` (the geometry then
+/// `measure`s `scene` at `lanes` rays per packet, on the scalar path when `scalar` (the geometry then
 /// walks its binary trees, which the scene must have been compiled with), and with `split` also
 /// [`profile`]s it, checking that the probed runs traced the timed runs' bits.
 pub fn measure_setting(

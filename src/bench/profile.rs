@@ -27,7 +27,7 @@ pub struct KindProfile {
     /// Their box and primitive tests and the live rays those served (the counting run).
     pub work: Work,
     /// Thread-seconds inside their queries in the timed run, the probe's own ticks taken off.
-    pub seconds: f64,
+    pub(crate) seconds: f64,
 }
 
 impl KindProfile {
@@ -72,7 +72,7 @@ pub struct Profile {
     pub probe_ticks: u64,
     /// The image checksums of the counting run and of the timed runs (the first that differs from the
     /// others' if one does): the probes change no bits.
-    pub checksums: [u64; 2],
+    pub(crate) checksums: [u64; 2],
 }
 
 impl Profile {
@@ -96,7 +96,7 @@ impl Profile {
 }
 
 /// Renders `scene` at `lanes` rays per packet on `pool` (a scalar run walks the binary trees, as in
-/// [`super::measure`]) once counting work per ray kind and [`TIMED_RUNS`] times timing each kind's
+/// `super::measure`) once counting work per ray kind and [`TIMED_RUNS`] times timing each kind's
 /// geometry queries by the time-stamp counter.
 pub fn profile(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> Profile {
     let take_all = || -> [KindWork; KIND_SLOTS] {

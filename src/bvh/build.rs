@@ -20,7 +20,7 @@ use super::{binary, piles, sah, BuildStats, Bvh};
 
 /// Which builder makes the binary tree that is collapsed into the wide nodes.
 #[derive(Clone, Copy, Debug)]
-pub enum Builder {
+pub(crate) enum Builder {
     /// bareray's binned SAH (`sah.rs`): the least memory and the quickest build. A binary node costs
     /// `node_cost` tests of the kind's items: ranges of up to 8 items stay one leaf where testing them costs
     /// less than the split.
@@ -54,7 +54,7 @@ impl Builder {
 
 /// How to build a tree.
 #[derive(Clone, Copy, Debug)]
-pub struct BuildOptions {
+pub(crate) struct BuildOptions {
     /// The padding the item boxes carry ([`super::padding`]), kept for the packet walk's frustum test of single items.
     pub(crate) pad: f32,
     /// The binary tree's builder.
@@ -73,7 +73,7 @@ pub struct BuildOptions {
 /// Builds the tree over `n` items whose padded boxes `item_box` gives, and returns it with `permute(order)`
 /// (run in parallel with the collapse): `order[j]` is the item stored at position `j` of the leaf order, in
 /// which the owner must store its items, since leaves index them by position. Also the build statistics.
-pub fn build<T: Send>(
+pub(crate) fn build<T: Send>(
     n: usize,
     item_box: impl Fn(usize) -> Aabb + Sync + Send,
     options: BuildOptions,

@@ -11,7 +11,7 @@ use crate::simd::{IdLanes, Lanes};
 use super::{LeafQuery, SingleLeafQuery};
 
 /// How one kind tests its items.
-pub trait ItemTest: Copy {
+pub(crate) trait ItemTest: Copy {
     /// Item `j` against the rays in `[0, t_max)`: the lanes it is hit in, their t, and the item's primitive
     /// id (the same for every lane).
     fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32);
@@ -28,7 +28,7 @@ pub trait ItemTest: Copy {
 /// query does rather than copy them, or owned, as one lane's query is), each ray's exclusive end `t_max`, and
 /// the primitive each ray leaves (`skip`, never reported).
 #[derive(Clone, Copy)]
-pub struct ItemQuery<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy = Ray<F>> {
+pub(crate) struct ItemQuery<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy = Ray<F>> {
     /// The kind's items.
     pub(crate) items: T,
     /// The rays.

@@ -25,7 +25,7 @@ use crate::math::{Mask, Real, Vec3f};
 use crate::simd::{set_bits, Lanes};
 
 /// The most packets a large packet holds: a 16×16-pixel tile of 4×4-ray packets.
-pub const MAX_PACKETS: usize = 16;
+pub(crate) const MAX_PACKETS: usize = 16;
 
 /// A child waiting on the stack: its node (`count` 0) or its leaf's `count` items from `child`, which the
 /// members of `members` (bit p for member p) may reach, no nearer than `near` to the shared origin.

@@ -1,9 +1,9 @@
 //! A 4-wide BVH over boxes, built as a binary tree (bareray's binned SAH, or obvhs's PLOC) and collapsed into
-//! bareray's own node layout: each node holds the boxes of up to [`N`] children in SoA form (two 64-byte cache
+//! bareray's own node layout: each node holds the boxes of up to `N` children in SoA form (two 64-byte cache
 //! lines), so one node visit tests all its children — K rays against each child in the packet walk
 //! (`packet.rs`), one ray against all children at once in the single-ray walk (`single.rs`).
 //!
-//! The tree knows nothing of primitives. It is built over one box per item ([`build()`]), returns the leaf
+//! The tree knows nothing of primitives. It is built over one box per item (`build()`), returns the leaf
 //! order of the items (their owner stores them in that order, so leaves index the arrays directly), and its
 //! walks ask a `LeafQuery` to test the items of a leaf: spheres, triangles and the registered kinds each implement it, and
 //! each kind's walk is monomorphised over its own query.
@@ -14,32 +14,32 @@
 //! result equal, bit for bit, to brute force over the same items, whatever order the nodes are visited in and
 //! whichever walk runs.
 //!
-//! Files: [`node`] (the 4-wide node layout), [`wide_node`] (the 8-wide single-ray layout), [`mod@build`] (the
+//! Files: `node` (the 4-wide node layout), `wide_node` (the 8-wide single-ray layout), `mod@build` (the
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
 //! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
 //! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built).
 
 mod binary;
-pub mod build;
+pub(crate) mod build;
 mod collapse;
-pub mod item_query;
+pub(crate) mod item_query;
 mod large;
 mod median;
-pub mod node;
+pub(crate) mod node;
 mod packet;
 mod piles;
 mod sah;
 mod scalar;
 mod single;
 mod slab;
-pub mod wide_node;
-pub mod work;
+pub(crate) mod wide_node;
+pub(crate) mod work;
 
-pub use build::{build, BuildOptions, Builder};
-pub use large::MAX_PACKETS;
-pub use node::{Node, N};
-pub use scalar::{PairChild, PairNode};
-pub use wide_node::{WideNode, WIDE_N};
+pub(crate) use build::{build, BuildOptions, Builder};
+pub(crate) use large::MAX_PACKETS;
+pub(crate) use node::Node;
+pub(crate) use scalar::PairNode;
+pub(crate) use wide_node::WideNode;
 
 use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::Vec3f;
@@ -98,23 +98,23 @@ pub struct Bvh {
     pub(crate) nodes: Vec<Node>,
     /// Subtrees entered by at most this many live lanes of a packet are walked one ray at a time
     /// (`SINGLE_RAY_MAX_LANES` by default; 0 never switches).
-    pub single_ray_lanes: u32,
+    pub(crate) single_ray_lanes: u32,
     /// Test each node's children and each leaf's spheres against a shared-origin packet as a whole (its
     /// frustum) before their lanes. On by default (docs/perf-log/2026-11.md, "Frustum culling").
-    pub frustum_culling: bool,
+    pub(crate) frustum_culling: bool,
     /// The largest coordinate magnitude of any box: bounds the frustum test's rounding.
     pub(crate) extent: f32,
     /// The padding the spheres' boxes were built with ([`padding`]): the frustum's sphere test pads by it too.
     pub(crate) pad: f32,
     /// The same tree in 8-wide nodes for rays walked alone from the root ([`WideNode`]), when the scene traces
     /// secondary rays.
-    pub wide: Option<Vec<WideNode>>,
+    pub(crate) wide: Option<Vec<WideNode>>,
     /// The binary tree before the collapse, in nodes of the scalar walk ([`PairNode`]), when the build was
     /// asked for it (`BuildOptions::scalar_tree`).
-    pub scalar: Option<Vec<PairNode>>,
+    pub(crate) scalar: Option<Vec<PairNode>>,
     /// Single rays (K = 1) walk [`Bvh::scalar`], one box and one item at a time, instead of the wide nodes
     /// (`--lanes scalar`). Has no effect without that tree.
-    pub scalar_walk: bool,
+    pub(crate) scalar_walk: bool,
 }
 
 impl Bvh {

@@ -4,12 +4,12 @@
 use crate::simd::Lanes;
 
 /// Children per node (Embree's N).
-pub const N: usize = 4;
+pub(crate) const N: usize = 4;
 
 /// One node: the boxes of its children and where each child's content is. Occupied slots come first.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
-pub struct Node {
+pub(crate) struct Node {
     /// `bounds[0]` the lower corner, `bounds[1]` the upper, per axis (x, y, z), per child: indexed by side
     /// so a ray picks its near and far planes by the signs of its direction.
     pub(crate) bounds: [[[f32; N]; 3]; 2],

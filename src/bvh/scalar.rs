@@ -25,7 +25,7 @@ use crate::simd::{set_bits, IdLanes, Lanes};
 /// One child of a [`PairNode`]: its box and what it holds.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C)]
-pub struct PairChild {
+pub(crate) struct PairChild {
     /// The box's lower corner (x, y, z).
     pub(crate) lo: [f32; 3],
     /// The box's upper corner.
@@ -43,7 +43,7 @@ const EMPTY: PairChild = PairChild { lo: [f32::INFINITY; 3], hi: [f32::INFINITY;
 /// One node of the scalar walk's binary tree: the boxes of its two children, read in one cache line.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
-pub struct PairNode {
+pub(crate) struct PairNode {
     /// The two children.
     pub(crate) children: [PairChild; 2],
 }

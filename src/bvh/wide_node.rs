@@ -8,13 +8,13 @@ use wide::f32x8;
 use super::node::{leaf_bits, shift_inner, slot_access, slots, ChildRef, RayNode};
 
 /// Children per node of the single-ray tree (its N).
-pub const WIDE_N: usize = 8;
+pub(crate) const WIDE_N: usize = 8;
 
 /// One node of the single-ray tree: the boxes of up to [`WIDE_N`] children and where each one's content is.
 /// Occupied slots come first; empty ones hold a box at +inf, which no ray enters.
 #[derive(Clone, Copy, Debug, PartialEq)]
 #[repr(C, align(64))]
-pub struct WideNode {
+pub(crate) struct WideNode {
     /// `bounds[0]` the lower corner, `bounds[1]` the upper, per axis, per child.
     pub(crate) bounds: [[[f32; WIDE_N]; 3]; 2],
     /// Inner child: index of its node; leaf child: index of its first sphere.

@@ -13,42 +13,42 @@ use crate::scene::SceneDesc;
 
 /// The particle-file options.
 #[derive(Args, Debug, Clone, Default)]
-pub struct ParticleArgs {
+pub(crate) struct ParticleArgs {
     /// The frame of a particle file with several (XYZ frames, PDB models, GRO and LAMMPS timesteps in file
     /// order), from 0; default the first. A frame past the end is an error naming the file's frame count.
     #[arg(long, value_name = "N")]
-    pub frame: Option<usize>,
+    pub(crate) frame: Option<usize>,
     /// The side from which a file without a camera (.xyzr, .f32r, particle files) is seen: `+x`, `-x`,
     /// `+y`, `-y`, `+z`, `-z` or a direction `x,y,z`. The eye sits on that side of the particles' bounding
     /// sphere, looking back at its centre, far enough for the sphere to fit with a margin; up is +y (−z from
     /// +y, +z from −y). Default for particle files: +z; .xyzr and .f32r keep their benchmark camera.
     #[arg(long, value_name = "DIR", value_parser = parse_view, allow_hyphen_values = true)]
-    pub view: Option<DVec3>,
+    pub(crate) view: Option<DVec3>,
     /// The radius of a kind of particle, `TYPE=R` in the file's unit (Å; nm for .gro), TYPE an element
     /// symbol (any case) or a LAMMPS type number; beats the file's and the table's radius. Repeatable.
     #[arg(long, value_name = "TYPE=R", value_parser = parse_radius)]
-    pub radius: Vec<(String, f64)>,
+    pub(crate) radius: Vec<(String, f64)>,
     /// The colour of a kind of particle, `TYPE=R,G,B` with channels from 0 to 1; beats the file's and the
     /// table's colour. Repeatable.
     #[arg(long, value_name = "TYPE=R,G,B", value_parser = parse_color)]
-    pub color: Vec<(String, Rgb)>,
+    pub(crate) color: Vec<(String, Rgb)>,
     /// Multiplies every particle radius (after the overrides).
     #[arg(long, value_name = "S", value_parser = parse_scale)]
-    pub radius_scale: Option<f64>,
+    pub(crate) radius_scale: Option<f64>,
     /// A types sidecar: a TOML file of radii and colours by kind (`[C]`, `[1]`, each with `radius = R`
     /// and `color = [R, G, B]`), beaten by `--radius` and `--color`. Without it, `FILE.types.toml` beside
     /// the particle file is read when it exists.
     #[arg(long, value_name = "FILE.toml")]
-    pub types: Option<PathBuf>,
+    pub(crate) types: Option<PathBuf>,
     /// Draw the particle file's periodic box (GRO box line, LAMMPS box bounds, extended XYZ `Lattice=`,
     /// PDB `CRYST1`) as thin grey cylinders.
     #[arg(long = "box")]
-    pub draw_box: bool,
+    pub(crate) draw_box: bool,
 }
 
 impl ParticleArgs {
     /// The reader's options.
-    pub fn options(&self) -> LoadOptions {
+    pub(crate) fn options(&self) -> LoadOptions {
         LoadOptions {
             frame: self.frame,
             view: self.view,
@@ -62,21 +62,25 @@ impl ParticleArgs {
 }
 
 /// Reads a scene file with `options` on `pool`'s threads, printing the reader's warnings.
-pub fn load_scene_with(path: &Path, pool: &rayon::ThreadPool, options: &LoadOptions) -> Result<SceneDesc> {
+pub(crate) fn load_scene_with(
+    path: &Path,
+    pool: &rayon::ThreadPool,
+    options: &LoadOptions,
+) -> Result<SceneDesc> {
     let read = pool.install(|| crate::io::load_with(path, options))?;
     print_warnings(path, &read.warnings);
     Ok(read.desc)
 }
 
 /// Prints a reader's warnings to standard error.
-pub fn print_warnings(path: &Path, warnings: &[String]) {
+pub(crate) fn print_warnings(path: &Path, warnings: &[String]) {
     for warning in warnings {
         eprintln!("warning: {}: {warning}", path.display());
     }
 }
 
 /// Parses `--view`: an axis with its sign, or a non-zero direction `x,y,z`.
-pub fn parse_view(s: &str) -> Result<DVec3, String> {
+pub(crate) fn parse_view(s: &str) -> Result<DVec3, String> {
     let axis = match s.trim().to_ascii_lowercase().as_str() {
         "+x" | "x" => Some(DVec3::X),
         "-x" => Some(DVec3::NEG_X),
@@ -104,13 +108,13 @@ fn split_type(s: &str) -> Result<(String, &str), String> {
 }
 
 /// Parses `--radius TYPE=R`.
-pub fn parse_radius(s: &str) -> Result<(String, f64), String> {
+pub(crate) fn parse_radius(s: &str) -> Result<(String, f64), String> {
     let (kind, value) = split_type(s)?;
     Ok((kind, parse_scale(value).map_err(|_| format!("{s}: the radius must be a positive number"))?))
 }
 
 /// Parses `--color TYPE=R,G,B`, channels in [0, 1].
-pub fn parse_color(s: &str) -> Result<(String, Rgb), String> {
+pub(crate) fn parse_color(s: &str) -> Result<(String, Rgb), String> {
     let (kind, value) = split_type(s)?;
     let v: Vec<f32> = value.split(',').filter_map(|c| c.trim().parse().ok()).collect();
     match v[..] {
@@ -120,7 +124,7 @@ pub fn parse_color(s: &str) -> Result<(String, Rgb), String> {
 }
 
 /// Parses a positive finite number.
-pub fn parse_scale(s: &str) -> Result<f64, String> {
+pub(crate) fn parse_scale(s: &str) -> Result<f64, String> {
     match s.trim().parse::<f64>() {
         Ok(x) if x.is_finite() && x > 0.0 => Ok(x),
         _ => Err(format!("expected a positive number, got `{s}`")),

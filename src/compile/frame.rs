@@ -25,7 +25,7 @@ use crate::scene::desc::SceneDesc;
 /// The eye must be this many bounding radii from the geometry's centre for the frame to move there: the
 /// gain in resolution is about this over 3 (the origin's and the direction's roundings above), so the frame
 /// moves only where it gains more than an order of magnitude.
-pub const FAR_RATIO: f64 = 64.0;
+pub(crate) const FAR_RATIO: f64 = 64.0;
 
 /// Camera rays start this fraction of R short of the bounding sphere: more than the start point's f64
 /// rounding (about 2⁻⁵³·|eye − C|) wherever |eye − C| < 2⁴³·R.
@@ -33,7 +33,7 @@ const START_MARGIN: f64 = 1.0 / 1024.0;
 
 /// The rendering space of a compiled scene (module documentation).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct RenderingFrame {
+pub(crate) struct RenderingFrame {
     /// The rendering space's origin in world space: the eye, or the centre of a far scene's bounds.
     pub(crate) origin: DVec3,
     /// How far from the eye camera rays start: 0, or |eye − C| − R·(1 + 2⁻¹⁰) for a far scene.

@@ -7,7 +7,7 @@
 //! scene as finely as it can anywhere, however far from the world origin the scene sits, and camera rays
 //! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::geometry::eye_term`]).
 //! A scene far from the eye instead gets its origin at its own centre, and camera rays start just short of
-//! it ([`RenderingFrame`]). Directions, distances along rays and normals do not depend on the origin, so
+//! it (`RenderingFrame`). Directions, distances along rays and normals do not depend on the origin, so
 //! images and ids mean what they meant in world space; [`Scene::origin`] maps points back.
 
 pub mod features;
@@ -27,7 +27,7 @@ use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 
 use crate::scene::desc::{Ao, Falloff, Material, PolygonDesc, RenderDesc, SceneDesc, Shade};
-pub use frame::{RenderingFrame, FAR_RATIO};
+pub(crate) use frame::RenderingFrame;
 
 /// A point light ready for shading.
 #[derive(Clone, Copy, Debug)]
@@ -45,8 +45,8 @@ pub struct Light {
 pub struct Scene {
     /// The camera's frame rounded to f32 (resolution, and f32 points on the image plane).
     pub camera: Camera<f32>,
-    /// The camera in f64, in rendering space (its eye is the origin but in a far scene, [`RenderingFrame`]):
-    /// camera rays are computed from it and rounded once ([`Camera::rays`]).
+    /// The camera in f64, in rendering space (its eye is the origin but in a far scene, `RenderingFrame`):
+    /// camera rays are computed from it and rounded once (`Camera::rays`).
     pub camera_f64: Camera<f64>,
     /// Where the rendering space's origin (the eye, or a far scene's centre) is in the scene file's world
     /// space: a world point is `origin + p` for a rendering-space point `p`.
@@ -73,13 +73,13 @@ pub struct CompileOptions {
     /// obvhs's build preset.
     pub preset: BvhPreset,
     /// Packet walks first test nodes and leaf items against a shared-origin packet's frustum
-    /// ([`crate::bvh::Bvh::frustum_culling`]).
+    /// (`crate::bvh::Bvh::frustum_culling`).
     pub frustum_culling: bool,
     /// Subtrees entered by at most this many live lanes are walked one ray at a time
     /// (`crate::bvh::SINGLE_RAY_MAX_LANES` by default; 0 never switches).
     pub single_ray_lanes: u32,
     /// Keep each BVH's binary tree and have single rays (K = 1) walk it one box and one primitive at a time:
-    /// the scalar path (`--lanes scalar`, [`crate::accel::Geometry::set_scalar_walk`]). Off by default, so
+    /// the scalar path (`--lanes scalar`, `crate::accel::Geometry::set_scalar_walk`). Off by default, so
     /// other renders pay nothing for it.
     pub scalar: bool,
 }
@@ -106,7 +106,7 @@ pub enum Accel {
     Bvh,
     /// Always brute force.
     Brute,
-    /// Spheres in the particle tree ([`crate::accel::pkd`]: 5 bytes per sphere beside the spheres), other
+    /// Spheres in the particle tree (`crate::accel::pkd`: 5 bytes per sphere beside the spheres), other
     /// kinds as [`Accel::Auto`].
     Particles,
 }

@@ -1,8 +1,8 @@
 //! Run time against error: each sampling method at increasing sample counts, timed and compared with a
-//! high-sample reference ([`metrics`]), and the log-log picture of the result ([`plot`]). `bareray converge`
+//! high-sample reference (`metrics`), and the log-log picture of the result ([`plot`]). `bareray converge`
 //! is the command line over [`study`].
 
-pub mod metrics;
+pub(crate) mod metrics;
 pub mod plot;
 pub mod precision;
 

@@ -1,6 +1,6 @@
 //! Precision against time for primary hits: the f32 packet path, f32 single-ray SIMD (K = 1), the f32 scalar
 //! path (binary BVHs, one box and one primitive at a time; when the scene was compiled with
-//! [`crate::compile::CompileOptions::scalar`]) and the f64 twin ([`crate::accuracy::Twin`]), each timed over one camera ray per pixel centre, the f32 paths measured
+//! [`crate::compile::CompileOptions::scalar`]) and the f64 twin (`crate::accuracy::Twin`), each timed over one camera ray per pixel centre, the f32 paths measured
 //! against the f64 one: the fraction of pixels whose hit names another primitive (or hits where the other
 //! misses), and the relative t error over the pixels that agree.
 

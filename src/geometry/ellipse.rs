@@ -11,7 +11,7 @@
 
 /// The points `p` with `|N·(p − centre)| ≤ 1`: the image of the unit disc under `N⁻¹`, moved to `centre`.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Ellipse {
+pub(crate) struct Ellipse {
     /// The centre.
     pub(crate) centre: [f64; 2],
     /// The rows of `N`, which takes the ellipse (centred at the origin) onto the unit disc; invertible.
@@ -21,7 +21,7 @@ pub struct Ellipse {
 /// The part of a region inside a rectangle: its area and its centroid (the rectangle's centre when the area
 /// is 0).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Part {
+pub(crate) struct Part {
     /// Area, in the rectangle's units (0 ≤ area ≤ the rectangle's area).
     pub(crate) area: f64,
     /// Centroid of the part.

@@ -9,15 +9,15 @@ use crate::math::{Real, V3};
 /// An origin and a right-handed orthonormal basis `e1, e2, axis` (`e2 = axis × e1`): a shape's frame, scalar,
 /// splatted over lanes or widened.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Frame<F> {
+pub(crate) struct Frame<F> {
     /// The frame's origin in rendering space.
-    pub origin: V3<F>,
+    pub(crate) origin: V3<F>,
     /// First unit vector across the axis.
-    pub e1: V3<F>,
+    pub(crate) e1: V3<F>,
     /// Second unit vector across the axis.
-    pub e2: V3<F>,
+    pub(crate) e2: V3<F>,
     /// The unit axis.
-    pub axis: V3<F>,
+    pub(crate) axis: V3<F>,
 }
 
 impl Frame<f64> {
@@ -40,7 +40,8 @@ impl<F: Copy> Frame<F> {
 impl<F: Real> Frame<F> {
     /// A rendering-space point in the frame: `(x, y)` across the axis, `z` along it from the origin.
     #[inline(always)]
-    pub fn to_object(&self, p: V3<F>) -> V3<F> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_object(&self, p: V3<F>) -> V3<F> {
         let w = p - self.origin;
         V3::new(w.dot(self.e1), w.dot(self.e2), w.dot(self.axis))
     }

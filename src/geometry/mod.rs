@@ -5,21 +5,21 @@ mod ellipse;
 mod frame;
 mod packet;
 mod plane;
-pub mod polygon;
+pub(crate) mod polygon;
 mod ray;
 mod round;
 mod shape;
 mod sphere;
 mod spheres;
 
-pub use ellipse::{Ellipse, Part};
-pub use frame::Frame;
+pub(crate) use ellipse::Ellipse;
+pub(crate) use frame::Frame;
 pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
-pub use plane::intersect_plane;
-pub use polygon::{intersect_triangle, stays_off_plane};
+pub(crate) use plane::intersect_plane;
+pub(crate) use polygon::{intersect_triangle, stays_off_plane};
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub(crate) use round::{round_down, round_up};
-pub use shape::{Shape, ShapeKind};
+pub(crate) use shape::{Shape, ShapeKind};
 pub use sphere::{
     at_eye, far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,
     EyeLanes, Roots, SphereRay, CONTACT_ROUNDINGS,

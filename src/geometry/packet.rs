@@ -27,9 +27,9 @@ pub struct RayPacket<F: Lanes> {
     /// them (at K = 16 they are 384 bytes).
     pub(crate) ray: Ray<F>,
     /// Exclusive upper end of each ray's range `[0, t_max)`.
-    pub t_max: F,
+    pub(crate) t_max: F,
     /// Lanes that carry a ray; the others are ignored by every kernel and report misses.
-    pub active: F::Mask,
+    pub(crate) active: F::Mask,
     /// Planes enclosing every active ray, when the packet's maker knows them (camera blocks): the BVH culls
     /// a node's children for the whole packet by them. `None` leaves it to the BVH to find its own.
     pub(crate) pyramid: Option<Pyramid>,
@@ -42,30 +42,30 @@ pub struct RayPacket<F: Lanes> {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct Pyramid {
     /// The rays' shared origin.
-    pub apex: [f32; 3],
+    pub(crate) apex: [f32; 3],
     /// Inward normals of the four sides.
-    pub normals: [[f32; 3]; 4],
+    pub(crate) normals: [[f32; 3]; 4],
     /// A direction within 90° of every ray, with room far above rounding: the plane through the apex normal
     /// to it has every ray in front. The four sides are tested one by one against a box's corner farthest
     /// along each, so a large box behind the apex passes all four; this plane rules it out.
-    pub axis: [f32; 3],
+    pub(crate) axis: [f32; 3],
 }
 
 impl<F: Lanes> RayPacket<F> {
     /// Rays over `[0, t_max)` in the `active` lanes, with no known pyramid.
     #[inline(always)]
-    pub fn new(origin: V3<F>, dir: V3<F>, t_max: F, active: F::Mask) -> Self {
+    pub(crate) fn new(origin: V3<F>, dir: V3<F>, t_max: F, active: F::Mask) -> Self {
         Self { ray: Ray::new(origin, dir), t_max, active, pyramid: None }
     }
 
     /// The rays as a [`Ray`] of lanes, the form the generic kernels take.
     #[inline(always)]
-    pub fn ray(&self) -> &Ray<F> {
+    pub(crate) fn ray(&self) -> &Ray<F> {
         &self.ray
     }
 
     /// Lane `i` gets `f(i) = (ray, t_max, active)`.
-    pub fn from_fn(mut f: impl FnMut(usize) -> (Ray<f32>, f32, bool)) -> Self {
+    pub(crate) fn from_fn(mut f: impl FnMut(usize) -> (Ray<f32>, f32, bool)) -> Self {
         let lanes: Vec<_> = (0..F::K).map(&mut f).collect();
         let get = |g: fn(&(Ray<f32>, f32, bool)) -> f32| F::from_fn(|i| g(&lanes[i]));
         Self::new(
@@ -84,7 +84,7 @@ impl<F: Lanes> RayPacket<F> {
     }
 
     /// Lane `i` as a scalar ray, its `t_max` and whether it is active.
-    pub fn lane(&self, i: usize) -> (Ray<f32>, f32, bool) {
+    pub(crate) fn lane(&self, i: usize) -> (Ray<f32>, f32, bool) {
         let v = |p: V3<F>| V3::new(p.x.lane(i), p.y.lane(i), p.z.lane(i));
         (Ray::new(v(self.ray.origin), v(self.ray.dir)), self.t_max.lane(i), F::mask_lane(self.active, i))
     }
@@ -105,7 +105,7 @@ pub struct HitPacket<F: Lanes> {
 
 impl<F: Lanes> HitPacket<F> {
     /// No hits in any lane.
-    pub fn miss() -> Self {
+    pub(crate) fn miss() -> Self {
         Self { t: F::splat_f32(f32::INFINITY), prim: F::Ids::splat(NO_PRIM), key: F::Ids::splat(NO_PRIM) }
     }
 
@@ -138,9 +138,9 @@ impl<F: Lanes> HitPacket<F> {
 #[derive(Clone, Copy, Debug)]
 pub struct DeparturePacket<F: Lanes> {
     /// The primitive each ray leaves ([`NO_PRIM`] for camera rays).
-    pub prim: F::Ids,
+    pub(crate) prim: F::Ids,
     /// Lanes whose ray heads into its primitive's interior.
-    pub inward: F::Mask,
+    pub(crate) inward: F::Mask,
 }
 
 impl<F: Lanes> DeparturePacket<F> {

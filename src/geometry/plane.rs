@@ -9,7 +9,7 @@ use super::Ray;
 
 /// Hit of a ray with the plane z = 0 in `[0, t_max)`.
 #[inline(always)]
-pub fn intersect_plane<F: Real>(ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn intersect_plane<F: Real>(ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
     let t = -ray.origin.z / ray.dir.z;
     (t.ge(F::splat(0.0)) & t.lt(t_max), t)
 }

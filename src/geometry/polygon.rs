@@ -24,7 +24,13 @@ use super::Ray;
 /// Branch-free: every condition is a mask, so a lane instance evaluates the same IEEE operations as the
 /// scalar one. One reciprocal (a true division, not an approximation) is shared by u, v and t.
 #[inline(always)]
-pub fn intersect_triangle<F: Real>(v0: V3<F>, e1: V3<F>, e2: V3<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn intersect_triangle<F: Real>(
+    v0: V3<F>,
+    e1: V3<F>,
+    e2: V3<F>,
+    ray: &Ray<F>,
+    t_max: F,
+) -> (F::Mask, F) {
     let zero = F::splat(0.0);
     let p = ray.dir.cross(e2);
     let det = e1.dot(p);
@@ -50,7 +56,7 @@ const PLANE_ROUNDING: f64 = 16.0 * f32::EPSILON as f64;
 /// plane, so its triangle tests can be skipped; a lane that grazes the plane is never culled. The same
 /// operations at every width, so every width culls the same lanes.
 #[inline(always)]
-pub fn stays_off_plane<F: Real>(
+pub(crate) fn stays_off_plane<F: Real>(
     anchor: V3<F>,
     normal: V3<F>,
     thickness: F,
@@ -75,7 +81,7 @@ pub fn stays_off_plane<F: Real>(
 /// Why a list of vertices is not a usable polygon.
 /// Why a list of vertices is not a usable polygon.
 #[derive(Clone, Debug, PartialEq, Eq)]
-pub enum PolygonError {
+pub(crate) enum PolygonError {
     /// Fewer than three vertices.
     TooFew(usize),
     /// A coordinate is NaN or infinite.
@@ -115,7 +121,7 @@ pub(crate) fn newell_normal(vertices: &[DVec3]) -> DVec3 {
 /// Convex polygons become a fan from vertex 0. Non-convex simple polygons are ear-clipped in the plane of
 /// their Newell normal (O(n²), fine for the small polygons of NFF files). Planarity is checked with a
 /// tolerance of 1e-4 of the polygon's extent, because SPD prints coordinates to 6 significant digits.
-pub fn triangulate(vertices: &[DVec3]) -> Result<Vec<[u32; 3]>, PolygonError> {
+pub(crate) fn triangulate(vertices: &[DVec3]) -> Result<Vec<[u32; 3]>, PolygonError> {
     let n = vertices.len();
     if n < 3 {
         return Err(PolygonError::TooFew(n));

@@ -39,7 +39,7 @@ pub struct Hit {
 
 impl Hit {
     /// No hit yet.
-    pub const MISS: Hit = Hit { t: f32::INFINITY, prim: NO_PRIM };
+    pub(crate) const MISS: Hit = Hit { t: f32::INFINITY, prim: NO_PRIM };
 
     /// True when something was hit.
     pub fn is_hit(&self) -> bool {
@@ -53,9 +53,9 @@ impl Hit {
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Departure {
     /// The primitive the ray starts on, or [`NO_PRIM`] for camera rays.
-    pub prim: u32,
+    pub(crate) prim: u32,
     /// True when the ray heads into the primitive's interior (refraction in, reflection inside).
-    pub inward: bool,
+    pub(crate) inward: bool,
 }
 
 impl Departure {

@@ -9,7 +9,7 @@ use super::{at_eye, intersect_plane, sphere_approach, sphere_roots, Approach, Ra
 
 /// Which generic shape an instance places.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub enum ShapeKind {
+pub(crate) enum ShapeKind {
     /// The unit sphere at the origin.
     Sphere,
     /// The plane z = 0, normal +z.
@@ -25,26 +25,26 @@ impl ShapeKind {
 
 /// A generic shape under an affine map, ready to intersect.
 #[derive(Clone, Copy, Debug)]
-pub struct Shape<F> {
+pub(crate) struct Shape<F> {
     /// The generic shape.
-    pub kind: ShapeKind,
+    pub(crate) kind: ShapeKind,
     /// Where the object's origin is in the world (`world_from_object`'s translation).
-    pub center: V3<F>,
+    pub(crate) center: V3<F>,
     /// Carries world rays into object space (its linear part is applied to `origin − center`).
-    pub object_from_world: Affine<F>,
+    pub(crate) object_from_world: Affine<F>,
     /// Carries object-space normals to world space (inverse transpose of `world_from_object`).
-    pub normal_to_world: Affine<F>,
+    pub(crate) normal_to_world: Affine<F>,
     /// Index into the scene's materials.
-    pub material: u32,
+    pub(crate) material: u32,
     /// The eye term in object space, `|o_eye|² − 1` with `o_eye` the eye (the rendering space's origin)
     /// carried into object space, computed in f64 and rounded once: camera rays use it for the unit
     /// sphere's `c`, as spheres use theirs ([`super::Approach::roots_from_eye`]). Unused for planes.
-    pub c_eye: F,
+    pub(crate) c_eye: F,
 }
 
 impl Shape<f64> {
     /// A generic shape placed by `world_from_object` (in rendering space), in f64.
-    pub fn placed(kind: ShapeKind, world_from_object: &glam::DAffine3, material: u32) -> Self {
+    pub(crate) fn placed(kind: ShapeKind, world_from_object: &glam::DAffine3, material: u32) -> Self {
         let object_from_world = world_from_object.inverse();
         let d = object_from_world.translation.length();
         Shape {
@@ -58,7 +58,8 @@ impl Shape<f64> {
     }
 
     /// Every value rounded to f32 once.
-    pub fn to_f32(&self) -> Shape<f32> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_f32(&self) -> Shape<f32> {
         Shape {
             kind: self.kind,
             center: self.center.to_f32(),
@@ -75,7 +76,8 @@ impl<F: Real> Shape<F> {
     /// `L⁻¹·(o − c)` rather than `L⁻¹·o − L⁻¹·c`, whose two terms cancel for a small shape far from the
     /// world origin (measured on the stress suite: PERF.md, Register: "Transformed shapes").
     #[inline(always)]
-    pub fn to_object(&self, ray: &Ray<F>) -> Ray<F> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_object(&self, ray: &Ray<F>) -> Ray<F> {
         Ray::new(
             self.object_from_world.vector(ray.origin - self.center),
             self.object_from_world.vector(ray.dir),
@@ -88,7 +90,7 @@ impl<F: Real> Shape<F> {
     /// in object space) where that has the smaller rounding bound (`Approach::roots_with_eye_term` with
     /// the centre seen from the eye, `L⁻¹·centre`). Shapes are few; every lane computes both forms.
     #[inline(always)]
-    pub fn intersect(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+    pub(crate) fn intersect(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
         let local = self.to_object(ray);
         match self.kind {
             ShapeKind::Sphere => {
@@ -120,7 +122,7 @@ impl<F: Real> Shape<F> {
 
     /// Both roots with the unit sphere, for an object-space ray.
     #[inline(always)]
-    pub fn unit_sphere_roots(&self, local: &Ray<F>) -> Roots<F> {
+    pub(crate) fn unit_sphere_roots(&self, local: &Ray<F>) -> Roots<F> {
         sphere_roots(V3::all(F::splat(0.0)), F::splat(1.0), local)
     }
 }
@@ -136,7 +138,8 @@ impl Shape<f32> {
     }
 
     /// The same shape in every lane.
-    pub fn to_lanes<F: Lanes>(&self) -> Shape<F> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_lanes<F: Lanes>(&self) -> Shape<F> {
         Shape {
             kind: self.kind,
             center: F::splat_v3(self.center),

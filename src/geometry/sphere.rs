@@ -99,7 +99,8 @@ impl<F: Real> SphereRay<F> {
 
     /// The lanes whose ray starts exactly at the origin of the rendering space (the eye).
     #[inline(always)]
-    pub fn from_eye(&self) -> F::Mask {
+    #[allow(clippy::wrong_self_convention)] // asks whether the rays start at the eye: not a constructor
+    pub(crate) fn from_eye(&self) -> F::Mask {
         at_eye(self.ray.origin)
     }
 
@@ -157,11 +158,11 @@ impl<M: crate::math::Mask> EyeLanes<M> {
 pub struct Roots<F: Real> {
     /// The line meets the sphere (`l² ≤ r²`) and the contact rule does not rule it out; NaN inputs give
     /// false.
-    pub hit: F::Mask,
+    pub(crate) hit: F::Mask,
     /// The entry parameter.
-    pub near: F,
+    pub(crate) near: F,
     /// The exit parameter.
-    pub far: F,
+    pub(crate) far: F,
 }
 
 /// Where a ray's line passes a sphere: enough to know whether it meets it, before any square root.

@@ -57,7 +57,7 @@ impl Spheres {
     }
     /// Centre of sphere `i`.
     #[inline(always)]
-    pub fn center(&self, i: usize) -> Vec3f {
+    pub(crate) fn center(&self, i: usize) -> Vec3f {
         V3::new(self.cx[i], self.cy[i], self.cz[i])
     }
     /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.

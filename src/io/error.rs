@@ -7,13 +7,13 @@ use std::path::{Path, PathBuf};
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct SceneError {
     /// The file (or a name such as `<built-in demo>`).
-    pub path: PathBuf,
+    pub(crate) path: PathBuf,
     /// 1-based line, 0 when the error is about the whole file.
-    pub line: usize,
+    pub(crate) line: usize,
     /// 1-based column, 0 when unknown.
     pub(crate) column: usize,
     /// What was wrong and what was expected.
-    pub message: String,
+    pub(crate) message: String,
 }
 
 impl SceneError {

@@ -6,7 +6,7 @@
 //!
 //! | bytes        | what                                                                   |
 //! |--------------|------------------------------------------------------------------------|
-//! | 0..8         | magic [`MAGIC`]: `89 'F' '3' '2' 'R' 0D 0A 1A`                          |
+//! | 0..8         | magic `MAGIC`: `89 'F' '3' '2' 'R' 0D 0A 1A`                          |
 //! | 8..12        | version, u32: `VERSION` (1)                                          |
 //! | 12..16       | count, u32: the number of records (≥ 1)                                |
 //! | 16 + 16·i .. | record `i` (from 0): x, y, z, r as IEEE 754 binary32                    |
@@ -28,7 +28,7 @@ use super::error::SceneError;
 use crate::scene::desc::{SceneDesc, SphereDesc};
 
 /// The file's first 8 bytes.
-pub const MAGIC: [u8; 8] = *b"\x89F32R\r\n\x1a";
+pub(crate) const MAGIC: [u8; 8] = *b"\x89F32R\r\n\x1a";
 /// The layout version this reader reads and the writer writes.
 pub(crate) const VERSION: u32 = 1;
 /// Bytes before the first record: magic, version, count.
@@ -44,7 +44,7 @@ pub(crate) fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 }
 
 /// Parses `.f32r` bytes; `path` names them in errors.
-pub fn parse(path: &Path, bytes: &[u8]) -> Result<SceneDesc, SceneError> {
+pub(crate) fn parse(path: &Path, bytes: &[u8]) -> Result<SceneDesc, SceneError> {
     Ok(super::xyzr::scene_around(spheres(path, bytes)?))
 }
 
@@ -69,7 +69,7 @@ pub(crate) fn spheres(path: &Path, bytes: &[u8]) -> Result<Vec<SphereDesc>, Scen
 }
 
 /// An `.f32r` file mapped privately (copy-on-write): its records are read where they lie, with no copy, and
-/// writes to them (the particle tree reorders them in place, [`crate::accel::Particles`]) go to private
+/// writes to them (the particle tree reorders them in place, `crate::accel::Particles`) go to private
 /// pages of this process, never to the file. Records are checked as `spheres` checks them.
 ///
 /// The mapping assumes the file is not changed by another process while it is mapped.
@@ -247,7 +247,7 @@ fn hex(bytes: &[u8]) -> String {
     bytes.iter().map(|b| format!("{b:02x}")).collect::<Vec<_>>().join(" ")
 }
 
-/// Converts an `.xyzr` file into `.f32r` in bounded memory: each line is read, checked as [`parse`] checks
+/// Converts an `.xyzr` file into `.f32r` in bounded memory: each line is read, checked as `parse` checks
 /// it, rounded to f32 and written as it comes (a radius that rounds to 0 is an error: the file would be
 /// refused), and the header's count is written last. Returns the number of spheres. Errors name the file
 /// and line; an I/O error on `out` is reported as itself.

@@ -1,7 +1,7 @@
 //! Scene readers (TOML, NFF, xyzr, f32r, and the particle files of [`particles`]) and generators: files and parameters become a plain [`SceneDesc`], which
 //! [`crate::compile`] turns into the runtime scene.
 
-pub mod error;
+pub(crate) mod error;
 pub mod f32r;
 pub mod generate;
 pub mod nff;

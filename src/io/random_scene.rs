@@ -18,7 +18,8 @@ use glam::DVec3;
 use crate::math::SplitMix64;
 
 /// The materials every random scene defines (its `[materials.NAME]` tables), by name.
-pub const MATERIALS: [&str; 8] = ["matte", "mirror", "shiny", "checker", "glass", "water", "dense", "thin"];
+pub(crate) const MATERIALS: [&str; 8] =
+    ["matte", "mirror", "shiny", "checker", "glass", "water", "dense", "thin"];
 
 /// The TOML text of random scene `seed` at `width` × `height` pixels.
 pub fn random_scene_toml(seed: u64, width: u32, height: u32) -> String {

@@ -29,7 +29,7 @@ pub(crate) fn load(path: &Path) -> Result<SceneDesc, SceneError> {
 /// Parses `.xyzr` text; `path` names it in errors. Chunks of whole lines are parsed in parallel (a 1e7-sphere
 /// list is 460 MB of text) and joined in file order, so ids, and the first error reported, are those of a
 /// sequential read.
-pub fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
+pub(crate) fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> {
     parse_in_chunks(path, source, CHUNK_BYTES)
 }
 

@@ -1,10 +1,10 @@
 //! The primitive kinds of the registry: each kind lives in one folder that holds everything about it (its
 //! description and TOML form, its f32 store, its kernel generic over lanes, bounds, surface, departure rule
-//! and its f64 form for the accuracy twin), behind the [`Kind`] trait. One list, `registry!`, names the
+//! and its f64 form for the accuracy twin), behind the `Kind` trait. One list, `registry!`, names the
 //! kinds; the scene description ([`KindDescs`]), the TOML reader, compile, the queries over the geometry
 //! ([`KindStores`]) and the twin (`KindTwins`) are written once over it.
 //!
-//! Adding a kind: a folder here with a type implementing [`Kind`], and its name in `registry!`. Its
+//! Adding a kind: a folder here with a type implementing `Kind`, and its name in `registry!`. Its
 //! primitive ids follow the built-in kinds' (spheres, shapes, polygons) in the list's order.
 //!
 //! ```
@@ -27,9 +27,9 @@ use crate::geometry::Ray;
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
-pub mod cone;
+pub(crate) mod cone;
 pub(crate) mod placement;
-pub mod torus;
+pub(crate) mod torus;
 
 /// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in
 /// the description. Called with the name of a macro, it calls that macro with the list; the structures
@@ -44,7 +44,7 @@ pub(crate) use registry;
 /// A TOML or description error of one kind's entry: the byte range of the offending value in the file and
 /// the message (the reader adds the file, line and column).
 #[derive(Clone, Debug, PartialEq)]
-pub struct KindError {
+pub(crate) struct KindError {
     /// Byte range of the value in the file.
     pub(crate) span: Range<usize>,
     /// What is wrong and what was expected.
@@ -54,23 +54,23 @@ pub struct KindError {
 /// Where a primitive is measured from in the accuracy twin: the scale its f32 rounding is proportional to,
 /// and how far the f32 ray may stray from the f64 one (see `accuracy::twin::Slack`).
 #[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct Stray {
+pub(crate) struct Stray {
     /// Distance between the two rays' origins.
-    pub origin: f64,
+    pub(crate) origin: f64,
     /// Distance between the two unit directions.
-    pub dir: f64,
+    pub(crate) dir: f64,
 }
 
 impl Stray {
     /// How far apart the two rays can be at distance `s` along them.
-    pub fn at(&self, s: f64) -> f64 {
+    pub(crate) fn at(&self, s: f64) -> f64 {
         self.origin + self.dir * s.abs()
     }
 }
 
 /// What a primitive kind provides. Everything is per item `k` of the kind's store; ids, trees, the loops
 /// over items and the twin's bookkeeping are the registry's.
-pub trait Kind: Clone + Debug + Default + Send + Sync + 'static {
+pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     /// One item, in messages and statistics ("torus").
     const SINGULAR: &'static str;
     /// Several items ("tori"): also the TOML array's name.
@@ -92,8 +92,6 @@ pub trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     fn from_toml(toml: &Self::Toml, material: u32) -> Result<Self::Desc, KindError>;
     /// The material a TOML table names.
     fn toml_material(toml: &Self::Toml) -> Option<&::toml::Spanned<String>>;
-    /// The material index of a description.
-    fn material(desc: &Self::Desc) -> u32;
     /// A world box around the item, `[lo, hi]` (AO's default reach and the BVH's padding scale).
     fn world_box(desc: &Self::Desc) -> [DVec3; 2];
 
@@ -120,6 +118,7 @@ pub trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     fn twin(desc: &Self::Desc, origin: DVec3) -> Self::Twin;
     /// Item `k` as stored (f32, rendering space) widened exactly to f64: an oracle over the compiled scene
     /// measures the kernel's f32 arithmetic alone, not the rounding of the description.
+    #[cfg(test)]
     fn widen(store: &Self::Store, k: usize) -> Self::Twin;
     /// The closest hit in `[0, t_max)`, by a method independent of [`Kind::test`]'s where one exists (so
     /// that a miss of the f32 method shows).
@@ -228,7 +227,7 @@ macro_rules! per_kind {
         pub struct KindDescs {
             $(
                 #[doc = concat!("The `", stringify!($field), "` of the scene.")]
-                pub $field: Vec<<$kind as Kind>::Desc>,
+                pub(crate) $field: Vec<<$kind as Kind>::Desc>,
             )*
         }
 
@@ -243,7 +242,7 @@ macro_rules! per_kind {
 
         /// Every registered kind's items in f64, for the accuracy twin.
         #[derive(Clone, Debug, Default)]
-        pub struct KindTwins {
+        pub(crate) struct KindTwins {
             $(
                 #[doc = concat!("The `", stringify!($field), "` in f64.")]
                 pub(crate) $field: Vec<<$kind as Kind>::Twin>,
@@ -293,7 +292,8 @@ macro_rules! per_kind {
         #[allow(unused_variables, unused_mut)]
         impl KindStores {
             /// Every item as stored, widened exactly to f64 ([`Kind::widen`]), in id order.
-            pub fn widened(&self) -> KindTwins {
+            #[cfg(test)]
+            pub(crate) fn widened(&self) -> KindTwins {
                 KindTwins {
                     $($field: (0..<$kind as Kind>::len(&self.$field.store))
                         .map(|k| <$kind as Kind>::widen(&self.$field.store, k))
@@ -384,16 +384,12 @@ macro_rules! per_kind {
         #[allow(unused_variables, unused_mut)]
         impl KindTwins {
             /// The number of items of every kind.
-            pub fn len(&self) -> usize {
+            pub(crate) fn len(&self) -> usize {
                 0 $(+ self.$field.len())*
-            }
-            /// True when there are none.
-            pub fn is_empty(&self) -> bool {
-                self.len() == 0
             }
             /// The closest hit in `[0, t_max)` over every item but `skip` (ids from `base`), as `(id, t)`
             /// merged into `best` where nearer (ties to the lower id).
-            pub fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
+            pub(crate) fn intersect(&self, base: u32, skip: u32, ray: &Ray<f64>, t_max: f64, best: &mut (u32, f64)) {
                 #[allow(unused_mut)]
                 let mut id = base;
                 $(
@@ -422,7 +418,7 @@ macro_rules! per_kind {
                 }; $($field: $kind),*)
             }
             /// Item `id`'s hit along `ray` in `[0, inf)`.
-            pub fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
+            pub(crate) fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| K::intersect64(&items[k], ray, f64::INFINITY); $($field: $kind),*)
             }
             /// Item `id`'s outward unit normal at `point`.
@@ -430,15 +426,15 @@ macro_rules! per_kind {
                 dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], point)); $($field: $kind),*)
             }
             /// [`Kind::scale64`] of item `id`.
-            pub fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
+            pub(crate) fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::scale64(&items[k], origin)); $($field: $kind),*)
             }
             /// [`Kind::grazing64`] of item `id`.
-            pub fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
+            pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
                 dispatch!(self, id, None, |items, K, k| Some(K::grazing64(&items[k], ray, nudge, stray)); $($field: $kind),*)
             }
             /// [`Kind::distance64`] of item `id` from `p`.
-            pub fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
+            pub(crate) fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::distance64(&items[k], p)); $($field: $kind),*)
             }
         }

@@ -7,11 +7,11 @@ use super::vec3::V3;
 
 /// `p ↦ L·p + t`, with `L` stored by columns.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Affine<F> {
+pub(crate) struct Affine<F> {
     /// The columns of the linear part.
-    pub cols: [V3<F>; 3],
+    pub(crate) cols: [V3<F>; 3],
     /// The translation.
-    pub translation: V3<F>,
+    pub(crate) translation: V3<F>,
 }
 
 impl<F: Real> Affine<F> {
@@ -31,7 +31,8 @@ impl Affine<f64> {
         }
     }
     /// Rounds every entry to f32.
-    pub fn to_f32(&self) -> Affine<f32> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_f32(&self) -> Affine<f32> {
         Affine { cols: self.cols.map(V3::to_f32), translation: self.translation.to_f32() }
     }
 }

@@ -1,12 +1,12 @@
 //! Numbers, vectors, affine maps and the random generator, shared by every stage.
 
-pub mod affine;
-pub mod color;
-pub mod real;
-pub mod rng;
-pub mod vec3;
+pub(crate) mod affine;
+pub(crate) mod color;
+pub(crate) mod real;
+pub(crate) mod rng;
+pub(crate) mod vec3;
 
-pub use affine::Affine;
+pub(crate) use affine::Affine;
 pub use color::Rgb8;
 pub use real::{Mask, Real};
 pub use rng::SplitMix64;

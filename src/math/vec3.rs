@@ -49,18 +49,18 @@ impl<F: Real> V3<F> {
     }
     /// The cross product.
     #[inline(always)]
-    pub fn cross(self, o: Self) -> Self {
+    pub(crate) fn cross(self, o: Self) -> Self {
         Self::new(self.y * o.z - self.z * o.y, self.z * o.x - self.x * o.z, self.x * o.y - self.y * o.x)
     }
     /// The Euclidean length.
     #[inline(always)]
-    pub fn length(self) -> F {
+    pub(crate) fn length(self) -> F {
         self.dot(self).sqrt()
     }
     /// The unit vector along `self` (each component divided by the length, not multiplied by a reciprocal,
     /// so that the result is as accurate as one rounding per component allows).
     #[inline(always)]
-    pub fn normalize(self) -> Self {
+    pub(crate) fn normalize(self) -> Self {
         let len = self.length();
         Self::new(self.x / len, self.y / len, self.z / len)
     }
@@ -85,7 +85,7 @@ impl V3<f32> {
 
 impl V3<f64> {
     /// Rounds each component to the nearest f32.
-    pub fn to_f32(self) -> V3<f32> {
+    pub(crate) fn to_f32(self) -> V3<f32> {
         self.map(|v| v as f32)
     }
 }

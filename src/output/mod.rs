@@ -23,7 +23,7 @@ mod png;
 mod radiance;
 mod srgb;
 
-pub use netpbm::REGION_COMMENT as PPM_REGION_COMMENT;
+pub(crate) use netpbm::REGION_COMMENT as PPM_REGION_COMMENT;
 pub use srgb::{linear8, srgb8, srgb8_formula, to_rgb8, to_srgb8};
 
 /// An image file format bareray writes.

@@ -7,7 +7,7 @@ use std::io::Write;
 use super::{BoxError, Frame, Rows};
 
 /// The comment that places a PPM region in its full image.
-pub const REGION_COMMENT: &str = "# bareray region ";
+pub(crate) const REGION_COMMENT: &str = "# bareray region ";
 
 /// Writes a PPM of `frame` from `rows` (3 bytes per pixel).
 pub(super) fn write_ppm(out: &mut impl Write, frame: Frame, mut rows: Rows) -> Result<(), BoxError> {

@@ -70,12 +70,12 @@ const CLEARANCE: f64 = 2e-6;
 
 /// One ray of a pixel under the coverage pattern.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct CoveragePart {
+pub(crate) struct CoveragePart {
     /// The sphere whose part of the pixel the ray shades (storage order, as the BVH keeps the spheres), or
     /// `None` for the part no sphere covers.
-    pub sphere: Option<u32>,
+    pub(crate) sphere: Option<u32>,
     /// The part's share of the pixel: 0 to 1, the shares of a pixel summing to 1.
-    pub weight: f64,
+    pub(crate) weight: f64,
     /// Where the ray goes through, in pixel-space coordinates (column j's centre at j + ½).
     pub(crate) at: (f32, f32),
 }
@@ -671,8 +671,9 @@ fn remainder_point(px: &mut Pixel, view: &View, target: [f64; 2]) -> [f64; 2] {
 }
 
 /// The parts of pixel (x, y) of `scene` under the coverage pattern: the rays its value is the weighted sum
-/// of, whatever the scene's own pattern.
-pub fn coverage_parts(scene: &Scene, x: u32, y: u32) -> Vec<CoveragePart> {
+/// of, whatever the scene's own pattern (for the tests, which check the parts' weights).
+#[cfg(test)]
+pub(crate) fn coverage_parts(scene: &Scene, x: u32, y: u32) -> Vec<CoveragePart> {
     let mut out = Vec::new();
     let mut coverage = Coverage::new(scene);
     coverage.tile(Tile { x0: x, y0: y, w: 1, h: 1 });

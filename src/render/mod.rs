@@ -52,7 +52,10 @@ mod tile;
 pub(crate) use bands::render_window_lanes;
 use bands::trace_band;
 pub use bands::{band_rows, render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
-pub use coverage::{coverage_parts, CoveragePart};
+pub(crate) use coverage::CoveragePart;
+// Named by the tests (tests/library/) alone.
+#[cfg(test)]
+pub(crate) use coverage::coverage_parts;
 
 pub(crate) use primary::trace_primary_window_lanes;
 pub use primary::{
@@ -85,13 +88,13 @@ pub struct Rendered {
 #[derive(Clone, Copy, Debug)]
 pub struct Tile {
     /// Left column.
-    pub x0: u32,
+    pub(crate) x0: u32,
     /// Top row.
-    pub y0: u32,
+    pub(crate) y0: u32,
     /// Width.
-    pub w: u32,
+    pub(crate) w: u32,
     /// Height.
-    pub h: u32,
+    pub(crate) h: u32,
 }
 
 /// The image cut into tiles, row by row.
@@ -267,7 +270,7 @@ impl Block {
 /// Calls `visit` for each packet of pixel-space sample positions covering `tile`, each position offset by
 /// `(dx, dy)` from its pixel's corner: the camera rays and the block of pixels they sample. With `pyramids`
 /// (the scene culls by them, [`crate::accel::Geometry::culls_by_pyramid`]) each packet carries its block's
-/// [`Camera::pyramid`].
+/// `Camera::pyramid`.
 pub fn for_each_packet<F: Lanes>(
     camera: &Camera<f64>,
     tile: Tile,
@@ -281,7 +284,7 @@ pub fn for_each_packet<F: Lanes>(
 /// `tile` cut into the pieces one large packet covers ([`crate::bvh::MAX_PACKETS`] packets of
 /// `block``::<F>()` pixels: 16×16 pixels at K = 16, 16×8 at K = 8, 8×8 at K = 4), row by row, in image
 /// coordinates.
-pub fn large_packets<F: Lanes>(tile: Tile) -> impl Iterator<Item = Tile> {
+pub(crate) fn large_packets<F: Lanes>(tile: Tile) -> impl Iterator<Item = Tile> {
     let (bw, bh) = block::<F>();
     let (w, h) = (bw * 4, bh * crate::bvh::MAX_PACKETS as u32 / 4);
     (0..tile.h).step_by(h as usize).flat_map(move |y0| {
@@ -296,7 +299,7 @@ pub fn large_packets<F: Lanes>(tile: Tile) -> impl Iterator<Item = Tile> {
 
 /// The [`Camera::pyramid`] of every camera ray through `tile`'s pixels, each offset by `(dx, dy)` from its
 /// pixel's corner (the sums [`for_each_packet`] computes for its edge lanes).
-pub fn tile_pyramid(camera: &Camera<f64>, tile: Tile, (dx, dy): (f32, f32)) -> Option<Pyramid> {
+pub(crate) fn tile_pyramid(camera: &Camera<f64>, tile: Tile, (dx, dy): (f32, f32)) -> Option<Pyramid> {
     let edge = |first: u32, count: u32, d: f32| [first as f32 + d, (first + count - 1) as f32 + d];
     camera.pyramid(edge(tile.x0, tile.w, dx), edge(tile.y0, tile.h, dy))
 }

@@ -18,10 +18,10 @@ pub struct PrimaryHits {
     /// Rows.
     pub(crate) height: u32,
     /// Hit distance per pixel, row-major, `inf` on a miss.
-    pub t: Vec<f32>,
+    pub(crate) t: Vec<f32>,
     /// Primitive id per pixel in storage order ([`crate::accel::Geometry::file_id`] maps it to the scene
     /// file's numbering), [`crate::geometry::NO_PRIM`] on a miss.
-    pub prim: Vec<u32>,
+    pub(crate) prim: Vec<u32>,
     /// Wall-clock seconds of the tracing.
     pub(crate) seconds: f64,
 }

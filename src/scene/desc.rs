@@ -59,7 +59,7 @@ pub struct CameraDesc {
 impl CameraDesc {
     /// A camera at `eye` looking at `look` with `up` up, a horizontal field of view of `hfov` degrees and
     /// `width` × `height` pixels, rays through the pixel centres (image plane at distance 1).
-    pub fn looking_at(eye: DVec3, look: DVec3, up: DVec3, hfov: f64, width: u32, height: u32) -> Self {
+    pub(crate) fn looking_at(eye: DVec3, look: DVec3, up: DVec3, hfov: f64, width: u32, height: u32) -> Self {
         Self {
             eye,
             aim: Aim::LookAt(look),
@@ -380,7 +380,7 @@ pub struct Checker {
     /// The colour of the odd cells (the material's colour fills the even ones).
     pub(crate) color: Rgb,
     /// Edge length of a cell.
-    pub size: f32,
+    pub(crate) size: f32,
 }
 
 /// Whitted surface description.
@@ -461,23 +461,23 @@ pub struct SphereDesc {
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct ShapeDesc {
     /// Unit sphere or plane z = 0.
-    pub kind: crate::geometry::ShapeKind,
+    pub(crate) kind: crate::geometry::ShapeKind,
     /// Places the generic shape in the world (invertible).
-    pub world_from_object: DAffine3,
+    pub(crate) world_from_object: DAffine3,
     /// Index into `SceneDesc::materials`.
-    pub material: u32,
+    pub(crate) material: u32,
 }
 
 /// A planar polygon (NFF `p`, or `pp` with per-vertex normals).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PolygonDesc {
     /// Vertices in order around the outline; the geometric normal follows the right-hand rule.
-    pub vertices: Vec<DVec3>,
+    pub(crate) vertices: Vec<DVec3>,
     /// One normal per vertex, interpolated across the polygon for shading (any length; normalised by
     /// compile), or `None` for a flat polygon.
-    pub normals: Option<Vec<DVec3>>,
+    pub(crate) normals: Option<Vec<DVec3>>,
     /// Index into `SceneDesc::materials`.
-    pub material: u32,
+    pub(crate) material: u32,
 }
 
 /// A whole scene as data.

@@ -23,7 +23,7 @@
 //!   gives false, like scalar `<`/`<=`. The results are all-ones/all-zeros lanes (AVX-512 compares into a
 //!   k-register and wide expands it back to a vector), so `&`, `|`, `!` on masks are plain bit operations.
 //! - `select` blends on each lane's sign bit (`blendvps`, or `movepi32_mask` + masked blend on AVX-512). That
-//!   agrees with a scalar `if` only for true masks, which is why [`LaneMask`] keeps its vector private: every
+//!   agrees with a scalar `if` only for true masks, which is why `LaneMask` keeps its vector private: every
 //!   mask comes from a comparison, a logical operation on masks, or [`Lanes::mask_from_bits`].
 //!
 //! What would break bit-exactness and is therefore not used by the kernels:
@@ -42,8 +42,6 @@
 
 mod lanes;
 mod splat;
-
-pub use lanes::LaneMask;
 
 use std::fmt::Debug;
 use std::ops::Add;

@@ -10,7 +10,8 @@ use super::Lanes;
 
 impl Affine<f32> {
     /// The same map in every lane.
-    pub fn to_lanes<F: Lanes>(&self) -> Affine<F> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_lanes<F: Lanes>(&self) -> Affine<F> {
         Affine { cols: self.cols.map(F::splat_v3), translation: F::splat_v3(self.translation) }
     }
 }

@@ -2,10 +2,12 @@
 //! standard error as text and scene-file listing.
 
 // The suite and the MPI tests each compile this module and use only part of it.
-#![allow(dead_code)]
+#![allow(dead_code, unused_imports)]
 
 #[path = "../library/common/files.rs"]
 mod files;
+#[path = "../library/common/samples.rs"]
+pub mod samples;
 #[path = "../library/common/watchdog.rs"]
 pub mod watchdog;
 

@@ -16,6 +16,7 @@ mod far_scenes;
 mod fuzz_particles;
 mod fuzz_readers;
 mod packet_kernels;
+mod particle_files;
 mod particles;
 mod random_scenes;
 mod readers;

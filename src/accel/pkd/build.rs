@@ -9,7 +9,7 @@ use crate::math::Rgb8;
 
 /// Ranges of at most this many spheres are leaves, tested one after another without further boxes: fewer
 /// box tests per sphere than single-sphere nodes, at a few more sphere tests.
-pub const LEAF: usize = 8;
+pub(crate) const LEAF: usize = 8;
 
 /// Ranges at least this long build their halves on two rayon tasks.
 const PARALLEL: usize = 1 << 15;

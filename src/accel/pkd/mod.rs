@@ -28,7 +28,7 @@ use rayon::prelude::*;
 use crate::geometry::eye_term;
 use crate::math::{Rgb8, Vec3f, V3};
 
-pub use build::LEAF;
+pub(crate) use build::LEAF;
 
 /// Bits of a key holding the scene-file index; the two above hold a node's split axis.
 pub(crate) const INDEX_BITS: u32 = 30;
@@ -252,7 +252,7 @@ impl Particles {
     }
 
     /// Number of spheres.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.key.len()
     }
 

@@ -33,7 +33,7 @@ use crate::math::{Affine, V3};
 use crate::scene::desc::SceneDesc;
 
 use super::bvh64::Bvh64;
-pub use super::hit64::Hit64;
+pub(crate) use super::hit64::Hit64;
 
 mod tolerance;
 
@@ -42,15 +42,15 @@ mod tolerance;
 const CONTACT_C_ROUNDINGS: f64 = 8.0;
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
-pub const EPS32: f64 = f32::EPSILON as f64 / 2.0;
+pub(crate) const EPS32: f64 = f32::EPSILON as f64 / 2.0;
 
 /// From this many spheres on the twin searches them through its own BVH; below, brute force.
-pub const TWIN_BVH_MIN_SPHERES: usize = 16;
+pub(crate) const TWIN_BVH_MIN_SPHERES: usize = 16;
 
 /// How far the f32 ray under test may stray from the twin's f64 ray, measured per ray: the explanations
 /// widen their tolerances by it (a secondary ray starts from each precision's own hit point, along its own
 /// normal). Zero for camera rays.
-pub use crate::kinds::Stray as Slack;
+pub(crate) use crate::kinds::Stray as Slack;
 
 /// One triangle of a polygon, camera-relative.
 #[derive(Clone, Copy, Debug)]
@@ -77,13 +77,15 @@ struct Polygon64 {
 
 /// The f64 reference scene: see the module documentation.
 #[derive(Clone, Debug)]
-pub struct Twin {
+pub(crate) struct Twin {
     /// The camera in f64, in the twin's space.
     pub(crate) camera: Camera<f64>,
     /// The origin of the twin's space in world space: the f32 scene's ([`RenderingFrame`]).
-    pub origin: DVec3,
+    // Read by the tests (the twin's frame).
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) origin: DVec3,
     /// Light positions in the twin's space.
-    pub lights: Vec<V3<f64>>,
+    pub(crate) lights: Vec<V3<f64>>,
     spheres: Vec<(V3<f64>, f64)>,
     shapes: Vec<Shape<f64>>,
     tris: Vec<Tri64>,
@@ -109,13 +111,13 @@ fn norm_bound(a: &Affine<f64>) -> f64 {
 
 impl Twin {
     /// The twin of `desc`, with a sphere BVH from [`TWIN_BVH_MIN_SPHERES`] spheres on.
-    pub fn new(desc: &SceneDesc) -> Result<Self, CameraError> {
+    pub(crate) fn new(desc: &SceneDesc) -> Result<Self, CameraError> {
         Self::with_bvh(desc, desc.spheres.len() >= TWIN_BVH_MIN_SPHERES)
     }
 
     /// The twin of `desc`, searching spheres through its BVH when `bvh` is true (and every sphere is finite),
     /// else brute force: the two give the same hits bit for bit (tests/library/accuracy.rs).
-    pub fn with_bvh(desc: &SceneDesc, bvh: bool) -> Result<Self, CameraError> {
+    pub(crate) fn with_bvh(desc: &SceneDesc, bvh: bool) -> Result<Self, CameraError> {
         // The f32 scene's rendering space (compile's frame): tolerances then scale with the magnitudes f32
         // rounds at, and camera rays start where the f32 ones do.
         let frame = RenderingFrame::of(desc, None);
@@ -185,7 +187,7 @@ impl Twin {
     }
 
     /// Number of primitives.
-    pub fn len(&self) -> usize {
+    pub(crate) fn len(&self) -> usize {
         self.kinds_base() + self.kinds.len()
     }
 
@@ -206,24 +208,19 @@ impl Twin {
         (prim as usize).checked_sub(self.kinds_base()).filter(|&k| k < self.kinds.len())
     }
 
-    /// True when the scene has no primitives.
-    pub fn is_empty(&self) -> bool {
-        self.len() == 0
-    }
-
     /// Whether spheres are searched through the twin's BVH.
-    pub fn has_bvh(&self) -> bool {
+    pub(crate) fn has_bvh(&self) -> bool {
         self.bvh.is_some()
     }
 
     /// The camera ray through pixel-space point (sx, sy) (column j's centre is j + ½): [`Camera<f64>::ray`],
     /// not rounded (from the eye, or from where a far scene's camera rays start).
-    pub fn camera_ray(&self, sx: f64, sy: f64) -> Ray<f64> {
+    pub(crate) fn camera_ray(&self, sx: f64, sy: f64) -> Ray<f64> {
         self.camera.ray(sx, sy)
     }
 
     /// Closest hit of `ray` in `[0, t_max)`, never on the near side of its departure surface.
-    pub fn intersect(&self, ray: &Ray<f64>, from: Departure, t_max: f64) -> Hit64 {
+    pub(crate) fn intersect(&self, ray: &Ray<f64>, from: Departure, t_max: f64) -> Hit64 {
         let mut best = Hit64::MISS;
         match &self.bvh {
             Some(bvh) => bvh.closest(ray, from.prim, t_max, &mut best),
@@ -279,7 +276,8 @@ impl Twin {
     }
 
     /// Whether `ray` meets anything in `[0, t_max)` (its departure surface's near side excluded).
-    pub fn occluded(&self, ray: &Ray<f64>, from: Departure, t_max: f64) -> bool {
+    #[cfg(test)]
+    pub(crate) fn occluded(&self, ray: &Ray<f64>, from: Departure, t_max: f64) -> bool {
         self.intersect(ray, from, t_max).is_hit()
     }
 
@@ -300,7 +298,7 @@ impl Twin {
     }
 
     /// Where `ray` (leaving `from`) hits primitive `prim` alone, in `[0, inf)`.
-    pub fn hit_of(&self, prim: u32, ray: &Ray<f64>, from: Departure) -> Option<f64> {
+    pub(crate) fn hit_of(&self, prim: u32, ray: &Ray<f64>, from: Departure) -> Option<f64> {
         let i = prim as usize;
         if prim == NO_PRIM || i >= self.len() {
             return None;
@@ -332,7 +330,7 @@ impl Twin {
     /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere or an
     /// ellipsoid: the sign of its eye term in f64, when not zero); `None` otherwise. The f32 scene's
     /// `crate::accel::Geometry::eye_inside`.
-    pub fn eye_inside(&self, prim: u32) -> Option<bool> {
+    pub(crate) fn eye_inside(&self, prim: u32) -> Option<bool> {
         let i = prim as usize;
         let c_eye = match self.spheres.get(i) {
             Some(&(centre, radius)) => crate::geometry::eye_term(centre, radius),
@@ -349,7 +347,7 @@ impl Twin {
 
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated
     /// vertex normal when it has them, a cone's normal away from its axis), computed as [`crate::accel::Geometry::surface`] computes them in f32.
-    pub fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
+    pub(crate) fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
         let point = ray.at(t);
         let i = prim as usize;
         let ns = self.spheres.len();

@@ -120,7 +120,7 @@ impl Twin {
     /// `w = max(|g|, mean of 1/|cos_a| and 1/|cos_b|)`: 1 where both are met head on; at a slant on planes
     /// crossing near the hits `t` moves by many times the displacement (graze takes over where a cosine is
     /// within rounding of 0).
-    pub fn tie(&self, a: u32, b: u32, ray: &Ray<f64>, from: Departure, k: f64, slack: Slack) -> bool {
+    pub(crate) fn tie(&self, a: u32, b: u32, ray: &Ray<f64>, from: Departure, k: f64, slack: Slack) -> bool {
         let (Some(ta), Some(tb)) = (self.hit_of(a, ray, from), self.hit_of(b, ray, from)) else {
             return false;
         };
@@ -147,7 +147,7 @@ impl Twin {
     /// `oc`'s subtraction (`2ε32·|oc|²`), its square (`3ε32·|oc|²`) and `r²` (`3ε32·r²`): at most
     /// `7ε32·(bound + 2r·|o|∞)` near the surface. The heading, `oc·d ≥ 0` in f32, is allowed what the
     /// centre's rounding (`ε32·|C|`), `oc`'s and the dot product's (`4ε32·|oc|`) can move it by.
-    pub fn contact_entry(&self, hit: Hit64, ray: &Ray<f32>) -> bool {
+    pub(crate) fn contact_entry(&self, hit: Hit64, ray: &Ray<f32>) -> bool {
         let Some(&(centre, r)) = self.spheres.get(hit.prim as usize) else { return false };
         if hit.t != 0.0 {
             return false;

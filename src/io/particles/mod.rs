@@ -1,8 +1,8 @@
 //! Particle files as simulation codes write them: XYZ and extended XYZ (`xyz`), PDB and PQR (`pdb`),
 //! GROMACS `.gro` (`gro`) and LAMMPS dumps (`lammps`), each also gzip- or bzip2-compressed. A reader
-//! turns one frame of a file into a [`Frame`]: centres, a kind per particle (an element or a LAMMPS type)
+//! turns one frame of a file into a `Frame`: centres, a kind per particle (an element or a LAMMPS type)
 //! the radii or colours the file gives, and its periodic box (`Cell`) if it has one. `scene` then
-//! chooses radii and colours by kind (the tables in `elements`, a types sidecar ([`types`]) and the
+//! chooses radii and colours by kind (the tables in `elements`, a types sidecar (`types`) and the
 //! overrides of [`ParticleOptions`]), gives every particle one material and its own colour
 //! ([`crate::scene::SceneDesc::sphere_colors`]), draws the box if asked and frames the particles; [`arrays`]
 //! does the same for spheres given as arrays. Every error names the file and, where there is one, the line
@@ -15,7 +15,7 @@ pub(crate) mod lammps;
 pub(crate) mod pdb;
 pub(crate) mod scene;
 pub(crate) mod text;
-pub mod types;
+pub(crate) mod types;
 pub(crate) mod xyz;
 
 use std::io::Read;
@@ -71,7 +71,7 @@ pub struct ParticleOptions {
     pub color: Vec<(String, Rgb)>,
     /// Every radius is multiplied by this (1 when `None`).
     pub radius_scale: Option<f64>,
-    /// A types sidecar ([`types`]) to read radii and colours by kind from, beaten by `radius` and `color`;
+    /// A types sidecar (`types`) to read radii and colours by kind from, beaten by `radius` and `color`;
     /// when `None`, `load` reads the particle file's own sidecar if there is one (`types::sidecar_of`).
     pub types: Option<PathBuf>,
     /// Draw the file's periodic box as thin cylinders (`scene::box_radius`).
@@ -125,7 +125,7 @@ pub(crate) struct Particle {
 
 /// One frame of a particle file.
 #[derive(Clone, Debug, PartialEq)]
-pub struct Frame {
+pub(crate) struct Frame {
     /// The particles in file order.
     pub(crate) particles: Vec<Particle>,
     /// The distinct kinds, in order of first appearance.

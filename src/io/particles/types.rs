@@ -39,7 +39,7 @@ pub(crate) struct TypeEntry {
 
 /// A sidecar read: its kinds, in the order of their names.
 #[derive(Clone, Debug, Default, PartialEq)]
-pub struct Types {
+pub(crate) struct Types {
     /// The kinds.
     pub(crate) entries: Vec<TypeEntry>,
 }
@@ -82,7 +82,7 @@ pub(crate) fn read(path: &Path) -> Result<Types, SceneError> {
 }
 
 /// Parses a sidecar's text; `path` names it in errors.
-pub fn parse(path: &Path, source: &str) -> Result<Types, SceneError> {
+pub(crate) fn parse(path: &Path, source: &str) -> Result<Types, SceneError> {
     let at = |offset: usize, message: String| SceneError::at_offset(path, source, offset, message);
     let file: BTreeMap<String, Spanned<EntryToml>> = toml::from_str(source).map_err(|e| {
         let message =

@@ -58,21 +58,21 @@ use crate::math::{Real, Vec3f, V3};
 /// One cone's values, ready to intersect: a scalar cone, one splatted over lanes, or a widened one for the
 /// f64 oracle.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Cone<F> {
+pub(crate) struct Cone<F> {
     /// The frame: origin at the base point `B`, axis from the base towards the apex.
-    pub frame: Frame<F>,
+    pub(crate) frame: Frame<F>,
     /// Distance from base to apex, `h > 0`.
-    pub height: F,
+    pub(crate) height: F,
     /// Radius at the base, `r0 ≥ 0`.
-    pub base_radius: F,
+    pub(crate) base_radius: F,
     /// Radius change per unit of height, `(r1 − r0)/h`.
-    pub slope: F,
+    pub(crate) slope: F,
 }
 
 impl Cone<f64> {
     /// The cone from `base` (radius `base_radius`) to `apex` (radius `apex_radius`), in f64. `None` when the
     /// two points coincide, a radius is negative, both are zero, or a value is not finite.
-    pub fn new(base: DVec3, base_radius: f64, apex: DVec3, apex_radius: f64) -> Option<Self> {
+    pub(crate) fn new(base: DVec3, base_radius: f64, apex: DVec3, apex_radius: f64) -> Option<Self> {
         let axis = apex - base;
         let height = axis.length();
         let finite =
@@ -90,7 +90,8 @@ impl Cone<f64> {
     }
 
     /// Every value rounded to f32 once.
-    pub fn to_f32(&self) -> Cone<f32> {
+    #[allow(clippy::wrong_self_convention)] // &self: callers hold references, and the wide forms are large
+    pub(crate) fn to_f32(&self) -> Cone<f32> {
         self.map(|v| v as f32)
     }
 
@@ -112,7 +113,7 @@ impl<F: Copy> Cone<F> {
     /// The same cone with every value mapped by `f` (splatted over lanes, or widened): no arithmetic, so
     /// every instance starts from the same values.
     #[inline(always)]
-    pub fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> Cone<G> {
+    pub(crate) fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> Cone<G> {
         Cone {
             frame: self.frame.map(f),
             height: f(self.height),
@@ -129,7 +130,7 @@ impl<F: Real> Cone<F> {
     /// point a little off the surface too. On the axis (a pointed cone's tip) the normal is along the axis,
     /// on the side the cone opens away from.
     #[inline(always)]
-    pub fn object_normal(&self, p: V3<F>) -> V3<F> {
+    pub(crate) fn object_normal(&self, p: V3<F>) -> V3<F> {
         let zero = F::splat(0.0);
         let rho = (p.x * p.x + p.y * p.y).sqrt();
         let off_axis = rho.gt(zero);
@@ -183,7 +184,7 @@ fn kept<F: Real>(cone: &Cone<F>, t: F, z0: F, dz: F, t_max: F) -> F::Mask {
 /// checked against the height range (a ray may pass through an open end and hit the inside wall). Rays
 /// with a NaN, and zero directions, miss. The module documentation gives the formulation and its rounding.
 #[inline(always)]
-pub fn intersect_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn intersect_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
     let (t1, t2, meets, z0, dz) = cone_roots(cone, ray);
     let (k1, k2) = (meets & kept(cone, t1, z0, dz, t_max), meets & kept(cone, t2, z0, dz, t_max));
     let first = k1 & !(k2 & t2.lt(t1));
@@ -198,7 +199,7 @@ pub fn intersect_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Ma
 /// nearest 0, so the other hit is the root of larger magnitude, `t1`; a start rounded to a small negative
 /// or positive `t` leaves that choice unchanged.
 #[inline(always)]
-pub fn rehit_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn rehit_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
     let (t1, _, meets, z0, dz) = cone_roots(cone, ray);
     let hit = meets & kept(cone, t1, z0, dz, t_max);
     (hit, F::select(hit, t1, t_max))
@@ -207,7 +208,7 @@ pub fn rehit_cone<F: Real>(cone: &Cone<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, 
 /// Cones in structure-of-arrays layout: the values of [`Cone`] rounded once from f64, the material, and a
 /// box around each for the BVH.
 #[derive(Clone, Debug, Default)]
-pub struct Cones {
+pub(crate) struct Cones {
     /// Base points.
     pub(crate) bx: Vec<f32>,
     /// Base points, y.
@@ -240,7 +241,7 @@ pub(crate) const BOUNDS_ROUNDINGS: f64 = 64.0;
 impl Cones {
     /// Adds a cone given in f64 rendering-space values (rounded to f32 once) and returns its index, or
     /// `None` for a cone [`Cone::new`] rejects.
-    pub fn push(
+    pub(crate) fn push(
         &mut self,
         base: DVec3,
         base_radius: f64,
@@ -278,7 +279,7 @@ impl Cones {
 
     /// Cone `i`'s values.
     #[inline(always)]
-    pub fn cone(&self, i: usize) -> Cone<f32> {
+    pub(crate) fn cone(&self, i: usize) -> Cone<f32> {
         let f = &self.frame;
         Cone {
             frame: Frame {

@@ -3,14 +3,14 @@
 //! or across the axis ([`Kind::MEETS_AGAIN`]). The kernel, generic over lanes and precision: [`kernel`]; the
 //! twin runs it at f64, with its own grazing and distance rules (`twin`).
 
-pub mod kernel;
+pub(crate) mod kernel;
 pub(crate) mod twin;
 
 use glam::DVec3;
 use serde::Deserialize;
 use toml::Spanned;
 
-pub use kernel::{intersect_cone, rehit_cone, Cone, Cones};
+pub(crate) use kernel::{intersect_cone, rehit_cone, Cone, Cones};
 
 use super::{Kind, KindError, Stray};
 use crate::geometry::Ray;
@@ -19,28 +19,28 @@ use crate::simd::Lanes;
 
 /// The open-cone kind.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct OpenCone;
+pub(crate) struct OpenCone;
 
 /// An open truncated cone as described: the lateral surface between two end discs, no caps; a cylinder
 /// when the radii are equal, pointed when one is 0. World space, f64.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ConeDesc {
+pub(crate) struct ConeDesc {
     /// Centre of the base end.
-    pub base: DVec3,
+    pub(crate) base: DVec3,
     /// Radius at the base (≥ 0).
-    pub base_radius: f64,
+    pub(crate) base_radius: f64,
     /// Centre of the other end (≠ `base`).
-    pub apex: DVec3,
+    pub(crate) apex: DVec3,
     /// Radius at the apex end (≥ 0; not both radii 0).
-    pub apex_radius: f64,
+    pub(crate) apex_radius: f64,
     /// Index into `SceneDesc::materials`.
-    pub material: u32,
+    pub(crate) material: u32,
 }
 
 /// A `[[cones]]` table.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct ConeToml {
+pub(crate) struct ConeToml {
     base: Spanned<[f64; 3]>,
     base_radius: Spanned<f64>,
     apex: Spanned<[f64; 3]>,
@@ -51,7 +51,7 @@ pub struct ConeToml {
 impl ConeDesc {
     /// The cone in f64, moved by `−origin`. A cone the readers would have rejected (a description built by
     /// hand) becomes a needle no ray can see, so that ids never shift.
-    pub fn cone(&self, origin: DVec3) -> Cone<f64> {
+    pub(crate) fn cone(&self, origin: DVec3) -> Cone<f64> {
         let (base, apex) = (self.base - origin, self.apex - origin);
         Cone::new(base, self.base_radius, apex, self.apex_radius).unwrap_or_else(|| {
             Cone::new(base, 0.0, needle_tip(base), f64::MIN_POSITIVE).expect("a needle is a valid cone")
@@ -117,10 +117,6 @@ impl Kind for OpenCone {
         c.material.as_ref()
     }
 
-    fn material(d: &ConeDesc) -> u32 {
-        d.material
-    }
-
     /// The balls of the end discs' radii around the two end centres: they hold both discs, so the surface.
     /// For a cone [`Cone::new`] rejects, the box of the needle that stands for it.
     fn world_box(d: &ConeDesc) -> [DVec3; 2] {
@@ -171,6 +167,7 @@ impl Kind for OpenCone {
         d.cone(origin)
     }
 
+    #[cfg(test)]
     fn widen(store: &Cones, k: usize) -> Cone<f64> {
         store.cone(k).map(f64::from)
     }

@@ -37,19 +37,19 @@ use crate::math::{Real, V3};
 
 /// A torus's values, ready to intersect: a scalar torus, one splatted over lanes, or a widened one.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TorusShape<F> {
+pub(crate) struct TorusShape<F> {
     /// The frame: origin at the centre `C`, axis the unit axis `u`.
-    pub frame: Frame<F>,
+    pub(crate) frame: Frame<F>,
     /// The major radius `R`: the tube's centre circle.
-    pub major: F,
+    pub(crate) major: F,
     /// The minor radius `r < R`: the tube's.
-    pub minor: F,
+    pub(crate) minor: F,
 }
 
 impl<F: Copy> TorusShape<F> {
     /// The same torus with every value mapped by `f` (splatted over lanes, or widened).
     #[inline(always)]
-    pub fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> TorusShape<G> {
+    pub(crate) fn map<G: Copy>(&self, f: impl Fn(F) -> G + Copy) -> TorusShape<G> {
         TorusShape { frame: self.frame.map(f), major: f(self.major), minor: f(self.minor) }
     }
 }
@@ -82,7 +82,7 @@ impl<F: Real> TorusShape<F> {
 
     /// The outward unit normal at a world point on the surface.
     #[inline(always)]
-    pub fn normal(&self, p: V3<F>) -> V3<F> {
+    pub(crate) fn normal(&self, p: V3<F>) -> V3<F> {
         self.frame.vector_to_world(self.object_normal(self.frame.to_object(p))).normalize()
     }
 }
@@ -232,7 +232,7 @@ fn first_root<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F, skip_start
 /// The smallest `t` in `[0, t_max)` where `ray` meets the torus, and the lanes that meet it there (`t_max`
 /// in the others). Rays with a NaN, and zero directions, miss.
 #[inline(always)]
-pub fn intersect_torus<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn intersect_torus<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
     first_root(torus, ray, t_max, false)
 }
 
@@ -241,6 +241,6 @@ pub fn intersect_torus<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F) -
 /// monotone there, so it holds no other root), which is skipped; a torus is not convex, so a ray leaving it
 /// outward can meet it again across the hole, and one heading into the tube meets its far wall.
 #[inline(always)]
-pub fn rehit_torus<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn rehit_torus<F: Real>(torus: &TorusShape<F>, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
     first_root(torus, ray, t_max, true)
 }

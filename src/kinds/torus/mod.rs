@@ -3,14 +3,14 @@
 //! through the tube ([`Kind::MEETS_AGAIN`]). The kernel and its error: [`kernel`]; the twin's independent
 //! f64 method: [`twin`].
 
-pub mod kernel;
-pub mod twin;
+pub(crate) mod kernel;
+pub(crate) mod twin;
 
 use glam::{DAffine3, DVec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-pub use kernel::{intersect_torus, rehit_torus, TorusShape};
+pub(crate) use kernel::{intersect_torus, rehit_torus, TorusShape};
 
 use super::placement::{transform, TransformOp};
 use super::{Kind, KindError, Stray};
@@ -20,27 +20,27 @@ use crate::simd::Lanes;
 
 /// The torus kind.
 #[derive(Clone, Copy, Debug, Default)]
-pub struct Torus;
+pub(crate) struct Torus;
 
 /// A torus as described: world space, f64.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct TorusDesc {
+pub(crate) struct TorusDesc {
     /// The centre.
-    pub centre: DVec3,
+    pub(crate) centre: DVec3,
     /// The unit axis.
-    pub axis: DVec3,
+    pub(crate) axis: DVec3,
     /// The radius of the tube's centre circle.
-    pub major: f64,
+    pub(crate) major: f64,
     /// The tube's radius, `0 < minor < major`.
-    pub minor: f64,
+    pub(crate) minor: f64,
     /// Index into `SceneDesc::materials`.
-    pub material: u32,
+    pub(crate) material: u32,
 }
 
 /// A `[[tori]]` table.
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-pub struct TorusToml {
+pub(crate) struct TorusToml {
     center: Spanned<[f64; 3]>,
     #[serde(default)]
     axis: Option<Spanned<[f64; 3]>>,
@@ -52,7 +52,7 @@ pub struct TorusToml {
 
 /// The tori of a scene in rendering space, rounded once, with their boxes.
 #[derive(Clone, Debug, Default)]
-pub struct Tori {
+pub(crate) struct Tori {
     /// The tori.
     pub(crate) shapes: Vec<TorusShape<f32>>,
     /// Material indices.
@@ -69,7 +69,7 @@ pub(crate) const BOUNDS_ROUNDINGS: f64 = 64.0;
 impl TorusDesc {
     /// The torus in f64 with its frame, moved by `−origin`. A torus the readers would reject (a description
     /// built by hand) becomes a tiny one no ray is likely to see, so that ids never shift.
-    pub fn shape(&self, origin: DVec3) -> TorusShape<f64> {
+    pub(crate) fn shape(&self, origin: DVec3) -> TorusShape<f64> {
         let good = self.centre.is_finite()
             && self.axis.is_finite()
             && self.axis.length() > 0.0
@@ -163,10 +163,6 @@ impl Kind for Torus {
         t.material.as_ref()
     }
 
-    fn material(d: &TorusDesc) -> u32 {
-        d.material
-    }
-
     fn world_box(d: &TorusDesc) -> [DVec3; 2] {
         let (lo, hi) = exact_box(&d.shape(DVec3::ZERO));
         [lo, hi]
@@ -213,6 +209,7 @@ impl Kind for Torus {
         d.shape(origin)
     }
 
+    #[cfg(test)]
     fn widen(store: &Tori, k: usize) -> TorusShape<f64> {
         store.shapes[k].map(f64::from)
     }

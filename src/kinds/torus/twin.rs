@@ -110,7 +110,7 @@ fn polish_cubic(a: f64, b: f64, c: f64, m: f64) -> f64 {
 }
 
 /// Every real root `t` of the ray's line with the torus, ascending, each polished by Newton's method.
-pub fn roots(t: &TorusShape<f64>, ray: &Ray<f64>) -> Vec<f64> {
+pub(crate) fn roots(t: &TorusShape<f64>, ray: &Ray<f64>) -> Vec<f64> {
     let (shift, o, d) = line(t, ray);
     if d.dot(d).partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater)
         || !o.x.is_finite()
@@ -143,7 +143,7 @@ pub(crate) fn distance(t: &TorusShape<f64>, p: V3<f64>) -> f64 {
 /// Whether moving the line by `nudge` plus `stray` can change whether it meets the torus: at a critical
 /// point of the quartic along the line (where two roots merge or appear) the line is within that distance
 /// of the surface.
-pub fn grazing(t: &TorusShape<f64>, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool {
+pub(crate) fn grazing(t: &TorusShape<f64>, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool {
     let (shift, o, d) = line(t, ray);
     let len = d.dot(d).sqrt();
     if len.partial_cmp(&0.0) != Some(std::cmp::Ordering::Greater) {

@@ -9,6 +9,7 @@
 mod files;
 pub mod oracle;
 pub mod rng;
+pub mod samples;
 pub mod watchdog;
 pub mod wide;
 
