@@ -53,7 +53,7 @@ pub enum BitDepth {
     Sixteen,
 }
 
-/// How [`write_image_with`] writes: the transfer of integer formats, PNG's bit depth, and PNG text chunks.
+/// How `write_image_with` writes: the transfer of integer formats, PNG's bit depth, and PNG text chunks.
 #[derive(Clone, Debug, Default)]
 pub struct WriteOptions {
     /// Linear values to integers.
@@ -213,7 +213,7 @@ pub fn write_image(img: &Image, path: &Path, transfer: Transfer) -> Result<(), O
 }
 
 /// [`write_image`] with a PNG bit depth and text chunks.
-pub fn write_image_with(img: &Image, path: &Path, options: &WriteOptions) -> Result<(), OutputError> {
+pub(crate) fn write_image_with(img: &Image, path: &Path, options: &WriteOptions) -> Result<(), OutputError> {
     let format = Format::from_path(path)?;
     let frame = Frame::whole(img.width, img.height);
     let samples = to_samples(&img.pixels, img.width, format, options);
@@ -320,7 +320,7 @@ impl Frame {
 
 /// Bytes a file of `format` stores per pixel, as [`write_rows`] takes them: 3 for 8-bit PNG and PPM
 /// (R, G, B), 6 for 16-bit PNG (big-endian), 12 for EXR (R, G, B as little-endian f32), 4 for HDR (RGBE).
-pub fn pixel_bytes(format: Format, depth: BitDepth) -> usize {
+pub(crate) fn pixel_bytes(format: Format, depth: BitDepth) -> usize {
     match (format, depth) {
         (Format::Png | Format::Tiff, BitDepth::Sixteen) => 6,
         (Format::Png | Format::Ppm | Format::Tiff | Format::Jpeg, _) => 3,
@@ -360,7 +360,7 @@ pub(crate) fn to_samples(pixels: &[Rgb], width: u32, format: Format, options: &W
 /// row), top row first: each item of `rows` is one or more whole rows. Only the rows in hand are held, so an
 /// image of any height streams through a fixed amount of memory. The source must give exactly
 /// `frame.height` rows; if it ends early (its producer failed) the write fails and `path` is left as it was.
-pub fn write_rows(
+pub(crate) fn write_rows(
     path: &Path,
     format: Format,
     options: &WriteOptions,

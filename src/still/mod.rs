@@ -160,7 +160,7 @@ pub(crate) fn catch_interrupts() {}
 /// turned into the format's bytes, and are handed to a writer thread (one more for the AOVs) through a
 /// channel that holds one band, so tracing, encoding and writing overlap and at most a few bands are alive.
 /// Each file is written atomically: on any failure neither is left half-written and an existing file of
-/// the same name is kept. The bytes are those [`output::write_image_with`] writes for the whole image that
+/// the same name is kept. The bytes are those `output::write_image_with` writes for the whole image that
 /// [`crate::render::render`] makes (cropped to the region for a region).
 pub fn render(
     scene: &Scene,

@@ -22,6 +22,7 @@ mod random_scenes;
 mod readers;
 mod render;
 mod scene_toml;
+mod stills;
 mod stress_acne;
 mod stress_departure;
 mod stress_discriminant;
