@@ -14,7 +14,7 @@
 //! result equal, bit for bit, to brute force over the same items, whatever order the nodes are visited in and
 //! whichever walk runs.
 //!
-//! Files: `node` (the 4-wide node layout), `wide_node` (the 8-wide single-ray layout), `mod@build` (the
+//! Files: `node` (the 4-wide node layout), `wide_node` (the 8-wide single-ray layout), `build` (the
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
 //! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
 //! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built).
