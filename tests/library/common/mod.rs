@@ -1,10 +1,8 @@
-//! Helpers shared by the integration tests: scene builders, the one call of the renderer and of the binary,
-//! scene-file listing, seeded random numbers ([`rng`]), exact f32 → f64 widening ([`wide`]) and the f64
-//! oracle the stress tests measure the f32 kernels against ([`oracle`]) and the generated-input runs'
-//! hang watchdog ([`watchdog`]).
-
-// The test suite and the MPI tests each compile this module and use only part of it.
-#![allow(dead_code)]
+//! Helpers shared by the library's tests: scene builders, the one call of the renderer, scene-file listing,
+//! seeded random numbers ([`rng`]), small particle files ([`samples`]), exact f32 → f64 widening ([`wide`]),
+//! the f64 oracle the stress tests measure the f32 kernels against ([`oracle`]) and the generated-input
+//! runs' hang watchdog ([`watchdog`]). `files`, `samples` and `watchdog` serve the binary's tests too
+//! (`tests/common/`).
 
 mod files;
 pub mod oracle;
