@@ -2,7 +2,7 @@
 //!
 //! 1. A sphere straight ahead: the twin's t is the closed form, the report counts every pixel, and the
 //!    secondary rays of a lone convex sphere behave as they must.
-//! 2. The binary's `--json` output: one object with every documented key.
+//! 2. The binary's `--json` output: one object with every documented key (in `tests/accuracy.rs`).
 //! 3. Every stress scene (scenes/stress/) against the accuracy bounds: no unexplained disagreement, no
 //!    self-hit, primary relative t error p99 ≤ 2e-6. Expected to fail on kernels that lose accuracy (a huge
 //!    ground sphere seen from close by, scenes far from the origin) until they are fixed; the measured

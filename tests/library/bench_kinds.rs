@@ -1,7 +1,7 @@
 //! `bench`'s split by ray kind (`bareray::bench::profile`): live rays per test are exactly K where every
 //! lane of every packet is live, every query is tagged with its kind (the kinds' work sums to the render's
-//! own count), single-ray paths make one query per secondary ray, the probes change no bits, and the
-//! command line reports the split in its table and its JSON.
+//! own count), single-ray paths make one query per secondary ray and the probes change no bits; the
+//! command line's table and JSON are tested in `tests/bench_kinds.rs`.
 
 use std::path::Path;
 

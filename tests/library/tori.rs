@@ -1,7 +1,7 @@
 //! The torus kind: its f32 kernel against the twin's independent f64 method (closed-form quartic, Newton
 //! polish) on the same values, every packet width against the one-lane bits, the departure rule (re-hits
-//! through the tube and across the hole), the TOML reader's errors, and whole renders at every width and
-//! thread count.
+//! through the tube and across the hole) and the TOML reader's errors; whole renders at every width and
+//! thread count, through the binary, are in `tests/tori.rs`.
 
 use super::common::wide::wide_ray;
 use bareray::geometry::Ray;
