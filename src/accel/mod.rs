@@ -11,7 +11,6 @@ mod colors;
 mod departure;
 mod near_first;
 pub(crate) mod pkd;
-mod polygons;
 mod shape_query;
 mod sphere_query;
 mod triangle_query;
@@ -22,7 +21,6 @@ pub use crate::bvh::work::{
 };
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;
-pub(crate) use polygons::Polygons;
 pub(crate) use shape_query::{ShapeQuery, Shapes};
 pub(crate) use sphere_query::SphereQuery;
 pub(crate) use triangle_query::{TriangleQuery, Triangles};
@@ -31,7 +29,7 @@ use crate::bvh::{Bvh, LeafQuery};
 use crate::kinds::{Kind, KindItems, KindStores, VisitItems};
 
 use crate::geometry::{
-    Departure, DeparturePacket, Hit, HitPacket, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
+    Departure, DeparturePacket, Hit, HitPacket, Polygons, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
 };
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};

@@ -1,10 +1,9 @@
 //! Polygons' triangles as the items of BVH leaves and of brute force ([`ItemQuery`]): the triangle kernel,
 //! each hit reported under its polygon's id.
 
-use crate::geometry::{intersect_triangle, stays_off_plane, Ray};
+use crate::geometry::{intersect_triangle, stays_off_plane, Polygons, Ray};
 use crate::simd::Lanes;
 
-use super::Polygons;
 use crate::bvh::item_query::{ItemQuery, ItemTest};
 
 /// The triangles of [`Polygons`], polygon k being primitive `base + k`.

@@ -15,11 +15,11 @@ mod frame;
 pub mod load;
 pub mod memory;
 
-use crate::accel::{Geometry, Particles, Polygons};
+use crate::accel::{Geometry, Particles};
 use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
-use crate::geometry::Shape;
+use crate::geometry::{Polygons, Shape};
 use crate::io::f32r::MappedRecords;
 use crate::math::{Rgb, Vec3f, V3};
 use glam::{DAffine3, Vec3A};

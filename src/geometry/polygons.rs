@@ -123,7 +123,7 @@ impl Polygons {
 
     /// The shading normal of polygon `k` at `point`: interpolated over the triangle that contains the point
     /// (the one whose smallest barycentric is largest, robust to rounding at shared edges), else geometric.
-    pub(super) fn shading_normal(&self, k: usize, point: Vec3f) -> Vec3f {
+    pub(crate) fn shading_normal(&self, k: usize, point: Vec3f) -> Vec3f {
         let members = &self.members[self.first[k] as usize..self.first[k + 1] as usize];
         let best = members
             .iter()
