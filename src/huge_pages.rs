@@ -3,12 +3,42 @@
 //! one fault per page, and under a hypervisor those faults were a large share of the build's wall time
 //! (PERF.md, Register: "The binary's allocator"). Huge pages change only how the kernel backs memory, never
 //! its contents.
+//!
+//! Except under a hypervisor that takes freed memory back: a guest whose virtio balloon reports free pages
+//! hands free 2 MiB blocks to the host, and huge pages come from exactly those, so every huge-page fault
+//! becomes a fault on the host too. There the advice is left out ([`choose`]) and the blocks get 4 KiB
+//! pages (PERF.md, Register: "The binary's allocator").
 
 use std::alloc::{GlobalAlloc, Layout, System};
+use std::sync::atomic::{AtomicBool, Ordering};
+
+/// Whether mapped blocks are advised onto huge pages; [`choose`] decides once, before any large block.
+static ADVISE: AtomicBool = AtomicBool::new(true);
+
+/// Leaves huge pages out where a virtio balloon reports free pages to the host (Linux's sysfs lists each
+/// virtio device's id and feature bits). Called once at start-up, before any large allocation.
+pub(crate) fn choose() {
+    #[cfg(target_os = "linux")]
+    if let Ok(devices) = std::fs::read_dir("/sys/bus/virtio/devices") {
+        let read =
+            |dir: &std::path::Path, name: &str| std::fs::read_to_string(dir.join(name)).unwrap_or_default();
+        let reporting = devices
+            .flatten()
+            .any(|d| reports_free_pages(&read(&d.path(), "device"), &read(&d.path(), "features")));
+        ADVISE.store(!reporting, Ordering::Relaxed);
+    }
+}
+
+/// Whether a virtio device with sysfs `device` id and `features` bit string (bit 0 first) is a balloon
+/// (id 5) with free page reporting (feature bit 5, `VIRTIO_BALLOON_F_REPORTING`).
+#[cfg_attr(not(target_os = "linux"), allow(dead_code))]
+fn reports_free_pages(device: &str, features: &str) -> bool {
+    device.trim() == "0x0005" && features.as_bytes().get(5) == Some(&b'1')
+}
 
 /// [`System`] for small blocks; blocks of 2 MiB or more get a mapping of their own, aligned to a huge page,
-/// rounded up to whole huge pages and advised onto them (`madvise(MADV_HUGEPAGE)`), so that every page of
-/// the block comes from a huge-page fault. Blocks from `System` kept 4 KiB faults on their unaligned ends,
+/// rounded up to whole huge pages and advised onto them (`madvise(MADV_HUGEPAGE)`, unless [`choose`] left
+/// the advice out), so that every page of the block comes from a huge-page fault. Blocks from `System` kept 4 KiB faults on their unaligned ends,
 /// and those below its mmap threshold came from the heap in 4 KiB pages, a render's sRGB buffer among them
 /// (docs/perf-log/2026-11.md, "Kept": huge pages without partial ends). Fresh mappings are
 /// zero, so zeroed blocks cost no writes on the allocating thread. Installed in the `bareray` binary only
@@ -108,7 +138,9 @@ fn map(size: usize) -> *mut u8 {
         if at + HUGE_PAGE > start {
             libc::munmap(block.wrapping_add(len).cast(), at + HUGE_PAGE - start);
         }
-        libc::madvise(block.cast(), len, libc::MADV_HUGEPAGE);
+        if ADVISE.load(Ordering::Relaxed) {
+            libc::madvise(block.cast(), len, libc::MADV_HUGEPAGE);
+        }
         block
     }
 }
@@ -134,8 +166,10 @@ fn remap(block: *mut u8, old: usize, new: usize) -> *mut u8 {
     if moved == libc::MAP_FAILED {
         return std::ptr::null_mut();
     }
-    // SAFETY: the advice covers the new mapping only and changes no contents.
-    unsafe { libc::madvise(moved, new_len, libc::MADV_HUGEPAGE) };
+    if ADVISE.load(Ordering::Relaxed) {
+        // SAFETY: the advice covers the new mapping only and changes no contents.
+        unsafe { libc::madvise(moved, new_len, libc::MADV_HUGEPAGE) };
+    }
     moved.cast()
 }
 
@@ -170,6 +204,17 @@ mod tests {
         // SAFETY: as for `fill`.
         let bytes = unsafe { std::slice::from_raw_parts(p, n) };
         bytes.iter().enumerate().all(|(i, &b)| b == (i % 251) as u8 ^ seed)
+    }
+
+    #[test]
+    fn only_a_balloon_with_free_page_reporting_counts() {
+        // This host's balloon: bits 1, 2, 5 and 7.
+        let balloon = "0110010100000000000000000000000010000000";
+        assert!(reports_free_pages("0x0005\n", balloon));
+        assert!(!reports_free_pages("0x0005\n", "0110000100000000"), "a balloon without bit 5");
+        assert!(!reports_free_pages("0x0002\n", balloon), "a block device with the same bits");
+        assert!(!reports_free_pages("0x0005", "01100"), "too few bits");
+        assert!(!reports_free_pages("", ""));
     }
 
     #[test]

@@ -27,5 +27,6 @@ extern "C" fn cpu_check() {
 }
 
 fn main() -> std::process::ExitCode {
+    huge_pages::choose();
     cli::main()
 }
