@@ -4,10 +4,10 @@
 //! (PERF.md, Register: "The binary's allocator"). Huge pages change only how the kernel backs memory, never
 //! its contents.
 //!
-//! Except under a hypervisor that takes freed memory back: a guest whose virtio balloon reports free pages
-//! hands free 2 MiB blocks to the host, and huge pages come from exactly those, so every huge-page fault
-//! becomes a fault on the host too. There the advice is left out ([`choose`]) and the blocks get 4 KiB
-//! pages (PERF.md, Register: "The binary's allocator").
+//! The exception is a guest whose virtio balloon reports free pages: it hands free 2 MiB blocks back to the
+//! host, and huge pages come from exactly those, so each huge-page fault is paid on the host too. There the
+//! advice is left out ([`choose`]) and the blocks get 4 KiB pages (PERF.md, Register: "The binary's
+//! allocator").
 
 use std::alloc::{GlobalAlloc, Layout, System};
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -37,12 +37,12 @@ fn reports_free_pages(device: &str, features: &str) -> bool {
 }
 
 /// [`System`] for small blocks; blocks of 2 MiB or more get a mapping of their own, aligned to a huge page,
-/// rounded up to whole huge pages and advised onto them (`madvise(MADV_HUGEPAGE)`, unless [`choose`] left
-/// the advice out), so that every page of the block comes from a huge-page fault. Blocks from `System` kept 4 KiB faults on their unaligned ends,
-/// and those below its mmap threshold came from the heap in 4 KiB pages, a render's sRGB buffer among them
-/// (docs/perf-log/2026-11.md, "Kept": huge pages without partial ends). Fresh mappings are
-/// zero, so zeroed blocks cost no writes on the allocating thread. Installed in the `bareray` binary only
-/// (`main.rs`): tests and benchmarks use the plain system allocator.
+/// rounded up to whole huge pages and advised onto them (`madvise(MADV_HUGEPAGE)`), so that every page of
+/// the block comes from a huge-page fault, unless [`choose`] left the advice out. Blocks from `System` kept
+/// 4 KiB faults on their unaligned ends, and those below its mmap threshold came from the heap in 4 KiB
+/// pages, a render's sRGB buffer among them (docs/perf-log/2026-11.md, "Kept": huge pages without partial
+/// ends). Fresh mappings are zero, so zeroed blocks cost no writes on the allocating thread. Installed in
+/// the `bareray` binary only (`main.rs`): tests and benchmarks use the plain system allocator.
 pub(crate) struct HugePages;
 
 // SAFETY: small blocks are forwarded to `System` with the same arguments; large ones are whole private
