@@ -238,16 +238,19 @@ impl FileScene {
     }
 
     /// Times `reps` renders (after one untimed) of the compiled scene with `options` applied, as
-    /// `bareray bench` does for one setting.
-    pub fn bench(&self, options: &RenderOptions, reps: usize) -> Result<Bench, Error> {
+    /// `bareray bench` does for one setting; with `by_kind`, also four more runs that split the render by
+    /// ray kind, as its per-ray-kind report does ([`Bench::by_kind`]).
+    pub fn bench(&self, options: &RenderOptions, reps: usize, by_kind: bool) -> Result<Bench, Error> {
         let loaded = self.loaded(options)?;
         let pool = pool(options.threads)?;
         let clock = Instant::now();
-        let scene = pool.install(|| Scene::compile_loaded(loaded, options.compile_options()))?;
+        let mut scene = pool.install(|| Scene::compile_loaded(loaded, options.compile_options()))?;
         let build_seconds = clock.elapsed().as_secs_f64();
         let reps = u32::try_from(reps.max(1)).unwrap_or(u32::MAX);
-        let m = crate::bench::measure(&scene, crate::bench::Trace::Render, options.lanes, &pool, reps)
+        let (trace, width) = (crate::bench::Trace::Render, (options.lanes, options.scalar));
+        let setting = crate::bench::measure_setting(&mut scene, trace, width, &pool, reps, by_kind)
             .map_err(Error::Other)?;
+        let m = &setting.measured;
         Ok(Bench {
             build_seconds,
             min: m.min_s,
@@ -257,12 +260,13 @@ impl FileScene {
             mrays_per_s: m.mrays_per_s(),
             threads: pool.current_num_threads(),
             lanes: options.lanes,
+            by_kind: setting.kinds.map(|p| crate::bench::ByKind::of(&p, m.seconds)),
         })
     }
 }
 
 /// What [`FileScene::bench`] measured.
-#[derive(Clone, Copy, Debug, PartialEq)]
+#[derive(Clone, Debug)]
 pub struct Bench {
     /// Seconds to compile the scene (builds included).
     pub build_seconds: f64,
@@ -280,4 +284,6 @@ pub struct Bench {
     pub threads: usize,
     /// Rays per packet.
     pub lanes: usize,
+    /// The render split by ray kind, when asked for.
+    pub by_kind: Option<crate::bench::ByKind>,
 }

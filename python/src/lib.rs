@@ -331,8 +331,12 @@ impl PyScene {
     }
 
     /// Times `reps` renders after one untimed, as `bareray bench` does for one setting: a dict of the build
-    /// seconds, the min, median and max tracing seconds, rays per render and Mrays/s at the median.
-    #[pyo3(signature = (*, reps=3, width=None, height=None, threads=None, lanes=None))]
+    /// seconds, the min, median and max tracing seconds, rays per render and Mrays/s at the median. With
+    /// `by_kind`, four more runs split the render by ray kind: `by_kind` then holds what `bareray bench
+    /// --json` writes in its field of that name (per kind: rays, share of the time, Mrays/s, tests and live
+    /// rays per test).
+    #[pyo3(signature = (*, reps=3, width=None, height=None, threads=None, lanes=None, by_kind=false))]
+    #[allow(clippy::too_many_arguments)]
     fn bench<'py>(
         &self,
         py: Python<'py>,
@@ -341,11 +345,12 @@ impl PyScene {
         height: Option<u32>,
         threads: Option<usize>,
         lanes: Option<&Bound<'py, PyAny>>,
+        by_kind: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let sixteen = 16usize.into_pyobject(py)?.into_any();
         let options =
             options(width, height, None, None, None, None, None, None, threads, lanes.unwrap_or(&sixteen))?;
-        let b = py.detach(|| self.inner.bench(&options, reps)).map_err(api_error)?;
+        let b = py.detach(|| self.inner.bench(&options, reps, by_kind)).map_err(api_error)?;
         let d = PyDict::new(py);
         d.set_item("build_seconds", b.build_seconds)?;
         d.set_item("min", b.min)?;
@@ -354,7 +359,17 @@ impl PyScene {
         d.set_item("rays", b.rays)?;
         d.set_item("mrays_per_s", b.mrays_per_s)?;
         d.set_item("threads", b.threads)?;
-        d.set_item("lanes", b.lanes)?;
+        d.set_item(
+            "lanes",
+            if options.scalar {
+                "scalar".into_pyobject(py)?.into_any()
+            } else {
+                b.lanes.into_pyobject(py)?.into_any()
+            },
+        )?;
+        if let Some(split) = &b.by_kind {
+            d.set_item("by_kind", py.import("json")?.call_method1("loads", (split.to_json(),))?)?;
+        }
         Ok(d)
     }
 

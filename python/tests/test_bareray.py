@@ -190,6 +190,29 @@ def test_load_reads_a_particle_file_and_renders_it(tmp_path):
     assert timing["rays"] >= 48 * 27 and timing["median"] > 0
 
 
+def test_bench_splits_the_render_by_ray_kind_on_every_path(tmp_path):
+    # A 6×6×6 lattice of carbon atoms: enough spheres for a BVH, so every path has box tests to count.
+    atoms = [f"C {1.6 * x} {1.6 * y} {1.6 * z}" for x in range(6) for y in range(6) for z in range(6)]
+    path = tmp_path / "lattice.xyz"
+    path.write_text(f"{len(atoms)}\nlattice\n" + "\n".join(atoms) + "\n")
+    scene = bareray.load(str(path))
+    plain = scene.bench(reps=1, width=48, height=27, threads=1, lanes=8)
+    assert "by_kind" not in plain and plain["lanes"] == 8
+    for lanes in ["scalar", 1, 16]:
+        timing = scene.bench(reps=1, width=48, height=27, threads=1, lanes=lanes, by_kind=True)
+        assert timing["lanes"] == lanes
+        split = timing["by_kind"]
+        kinds = {k["kind"]: k for k in split["kinds"]}
+        # A particle file is shaded Whitted with a headlight: camera and shadow rays, every ray counted once.
+        assert set(kinds) == {"camera", "shadow"}, kinds
+        assert sum(k["rays"] for k in kinds.values()) == timing["rays"]
+        assert kinds["camera"]["rays"] == 48 * 27
+        assert all(k["mrays_per_s"] > 0 and 0 < k["share"] <= 1 for k in kinds.values())
+        # One ray per test on the single-ray paths; a packet's tests serve more where its lanes are live.
+        per_box = kinds["camera"]["rays_per_box_test"]
+        assert per_box == 1.0 if lanes in ["scalar", 1] else per_box > 1.0, (lanes, per_box)
+
+
 def test_load_errors_name_the_file_and_line(tmp_path):
     path = tmp_path / "bad.xyz"
     path.write_text("3\nwater\nO 0 0 0\nH 0.7 zero 0\nH -0.7 0.5 0\n")

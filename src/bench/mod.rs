@@ -8,9 +8,13 @@
 
 mod host;
 mod profile;
+mod report;
 
 pub use host::{cores, default_threads, Host};
-pub use profile::{profile, KindProfile, Profile, TIMED_RUNS};
+#[cfg(test)]
+pub(crate) use profile::KindProfile;
+pub use profile::{profile, Profile};
+pub use report::{write_kind_table, ByKind, KindRow};
 
 use crate::compile::Scene;
 use crate::film::Image;

@@ -13,19 +13,19 @@ use crate::shade::RayCounts;
 use super::image_checksum;
 
 /// The timed runs of [`profile`]; each kind's time is their median.
-pub const TIMED_RUNS: usize = 3;
+const TIMED_RUNS: usize = 3;
 
 /// One ray kind's part of a render.
 #[derive(Clone, Copy, Debug)]
-pub struct KindProfile {
+pub(crate) struct KindProfile {
     /// The kind.
-    pub kind: RayKind,
+    pub(crate) kind: RayKind,
     /// Rays of this kind the render traced (the render's own count).
-    pub rays: u64,
+    pub(crate) rays: u64,
     /// Geometry queries made for them: packets, or single rays where packets went lane by lane.
-    pub queries: u64,
+    pub(crate) queries: u64,
     /// Their box and primitive tests and the live rays those served (the counting run).
-    pub work: Work,
+    pub(crate) work: Work,
     /// Thread-seconds inside their queries in the timed run, the probe's own ticks taken off.
     pub(crate) seconds: f64,
 }
@@ -33,22 +33,22 @@ pub struct KindProfile {
 impl KindProfile {
     /// Mean live rays per box test: K when every lane of every packet is live, 1 for single rays; a large
     /// packet's test serves all its members. `None` without box tests.
-    pub fn rays_per_box_test(&self) -> Option<f64> {
+    pub(crate) fn rays_per_box_test(&self) -> Option<f64> {
         ratio(self.work.box_lanes, self.work.box_tests)
     }
 
     /// Mean live rays per primitive test, as [`KindProfile::rays_per_box_test`].
-    pub fn rays_per_prim_test(&self) -> Option<f64> {
+    pub(crate) fn rays_per_prim_test(&self) -> Option<f64> {
         ratio(self.work.prim_lanes, self.work.prim_tests)
     }
 
     /// Box tests per ray of this kind.
-    pub fn box_tests_per_ray(&self) -> Option<f64> {
+    pub(crate) fn box_tests_per_ray(&self) -> Option<f64> {
         ratio(self.work.box_tests, self.rays)
     }
 
     /// Primitive tests per ray of this kind.
-    pub fn prim_tests_per_ray(&self) -> Option<f64> {
+    pub(crate) fn prim_tests_per_ray(&self) -> Option<f64> {
         ratio(self.work.prim_tests, self.rays)
     }
 }
@@ -61,7 +61,7 @@ fn ratio(a: u64, b: u64) -> Option<f64> {
 #[derive(Clone, Debug)]
 pub struct Profile {
     /// Every kind the render traced, in [`RayKind::ALL`]'s order.
-    pub kinds: Vec<KindProfile>,
+    pub(crate) kinds: Vec<KindProfile>,
     /// Threads of the pool.
     pub(crate) threads: usize,
     /// Work done outside any tagged query (none in the renderer).
@@ -69,7 +69,7 @@ pub struct Profile {
     /// All the counting run's work, as the render itself summed it tile by tile.
     pub total: Work,
     /// Ticks one timed query of nothing reads: what each kind's time had taken off per query.
-    pub probe_ticks: u64,
+    pub(crate) probe_ticks: u64,
     /// The image checksums of the counting run and of the timed runs (the first that differs from the
     /// others' if one does): the probes change no bits.
     pub(crate) checksums: [u64; 2],
@@ -79,24 +79,24 @@ impl Profile {
     /// The share of a clean render's thread time (`seconds` × threads, `seconds` its median wall time) that
     /// `kind` spends in its queries: the timed run's time for the kind with the probe's ticks taken off, so
     /// what the probes add elsewhere (their calls, the counter reads) does not count.
-    pub fn share(&self, kind: &KindProfile, seconds: f64) -> f64 {
+    pub(crate) fn share(&self, kind: &KindProfile, seconds: f64) -> f64 {
         kind.seconds / (seconds * self.threads as f64)
     }
 
     /// The share of a clean render taking `seconds` outside every query: shading, sampling, the film, and
     /// threads waiting.
-    pub fn rest_share(&self, seconds: f64) -> f64 {
+    pub(crate) fn rest_share(&self, seconds: f64) -> f64 {
         1.0 - self.kinds.iter().map(|k| self.share(k, seconds)).sum::<f64>()
     }
 
     /// The kind's millions of rays per second on all the pool's threads: its rays over its time per thread.
-    pub fn mrays_per_s(&self, kind: &KindProfile) -> f64 {
+    pub(crate) fn mrays_per_s(&self, kind: &KindProfile) -> f64 {
         kind.rays as f64 * self.threads as f64 / kind.seconds / 1e6
     }
 }
 
 /// Renders `scene` at `lanes` rays per packet on `pool` (a scalar run walks the binary trees, as in
-/// `super::measure`) once counting work per ray kind and [`TIMED_RUNS`] times timing each kind's
+/// `super::measure`) once counting work per ray kind and `TIMED_RUNS` (3) times timing each kind's
 /// geometry queries by the time-stamp counter.
 pub fn profile(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> Profile {
     let take_all = || -> [KindWork; KIND_SLOTS] {

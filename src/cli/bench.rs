@@ -13,7 +13,7 @@ use super::bench_compare::{Compared, Old, Setting};
 use super::bench_print::{print_header, print_json, print_row, RunInfo};
 use super::camera_args::CameraArgs;
 use super::values::{parse_lanes, parse_threads, AccelArg, BvhPresetArg, LanesArg};
-use bareray::bench::{cores, default_threads, measure_setting, Host, Trace};
+use bareray::bench::{cores, default_threads, measure_setting, write_kind_table, Host, KindRow, Trace};
 use bareray::compile::{Accel, CompileOptions, Scene};
 use bareray::render::thread_pool;
 use bareray::scene::desc::{Pattern, Shade};
@@ -270,13 +270,18 @@ fn measure_rows(
                 print_row(out, lanes, t, row, base_mrays)?;
             }
             if let Some(profile) = setting.kinds {
-                let seconds = row.seconds;
-                split_rows.push(super::bench_kinds::Split { lanes, threads: t, seconds, profile });
+                split_rows.push(KindRow {
+                    lanes: lanes.to_string(),
+                    threads: t,
+                    seconds: row.seconds,
+                    profile,
+                });
             }
         }
     }
     if !args.json && !split_rows.is_empty() {
-        super::bench_kinds::print_table(out, &split_rows, base, threads[0])?;
+        let vs = if base.is_scalar() { "scalar" } else { "1 lane" };
+        write_kind_table(out, &split_rows, (&base.to_string(), threads[0]), vs)?;
     }
     Ok(compared)
 }

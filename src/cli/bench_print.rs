@@ -7,7 +7,7 @@ use serde::Serialize;
 
 use super::bench_compare::Old;
 use super::values::LanesArg;
-use bareray::bench::{Host, Measured, Profile};
+use bareray::bench::{ByKind, Host, Measured, Profile};
 
 /// A line for the table's header when this CPU has a wider SIMD instruction set than the kernels were
 /// compiled for (a default x86-64-v3 build on an AVX-512 machine): the numbers are not this CPU's best.
@@ -62,7 +62,7 @@ struct Record<'a> {
     host: &'a Host,
     /// The render split by ray kind (absent for primary-only runs and with `--by-kind false`).
     #[serde(skip_serializing_if = "Option::is_none")]
-    by_kind: Option<super::bench_kinds::ByKind>,
+    by_kind: Option<ByKind>,
     #[serde(skip_serializing_if = "Option::is_none")]
     compare: Option<CompareField>,
 }
@@ -150,7 +150,7 @@ pub(super) fn print_json(
         frustum_culling: run.frustum_culling,
         bvh_preset: run.bvh_preset.clone(),
         host: run.host,
-        by_kind: kinds.map(|p| super::bench_kinds::record(p, row.seconds)),
+        by_kind: kinds.map(|p| ByKind::of(p, row.seconds)),
         compare: run.old.map(|o| CompareField {
             file: o.path.display().to_string(),
             old_mrays_per_s: old_mrays.map(|(m, _)| m),
