@@ -330,12 +330,14 @@ impl PyScene {
         py.import("json")?.call_method1("loads", (report.to_json(),))
     }
 
-    /// Times `reps` renders after one untimed, as `bareray bench` does for one setting: a dict of the build
-    /// seconds, the min, median and max tracing seconds, rays per render and Mrays/s at the median. With
+    /// Times `reps` renders after one untimed, as `bareray bench` does for one setting (`shade` and `spp` as
+    /// `render` takes them): a dict of the build seconds, the min, median and max tracing seconds, rays per
+    /// render and Mrays/s at the median. With
     /// `by_kind`, four more runs split the render by ray kind: `by_kind` then holds what `bareray bench
     /// --json` writes in its field of that name (per kind: rays, share of the time, Mrays/s, tests and live
     /// rays per test).
-    #[pyo3(signature = (*, reps=3, width=None, height=None, threads=None, lanes=None, by_kind=false))]
+    #[pyo3(signature = (*, reps=3, width=None, height=None, shade=None, spp=None, threads=None, lanes=None,
+        by_kind=false))]
     #[allow(clippy::too_many_arguments)]
     fn bench<'py>(
         &self,
@@ -343,13 +345,15 @@ impl PyScene {
         reps: usize,
         width: Option<u32>,
         height: Option<u32>,
+        shade: Option<&str>,
+        spp: Option<u32>,
         threads: Option<usize>,
         lanes: Option<&Bound<'py, PyAny>>,
         by_kind: bool,
     ) -> PyResult<Bound<'py, PyDict>> {
         let sixteen = 16usize.into_pyobject(py)?.into_any();
         let options =
-            options(width, height, None, None, None, None, None, None, threads, lanes.unwrap_or(&sixteen))?;
+            options(width, height, None, None, None, None, shade, spp, threads, lanes.unwrap_or(&sixteen))?;
         let b = py.detach(|| self.inner.bench(&options, reps, by_kind)).map_err(api_error)?;
         let d = PyDict::new(py);
         d.set_item("build_seconds", b.build_seconds)?;

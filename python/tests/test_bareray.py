@@ -211,6 +211,11 @@ def test_bench_splits_the_render_by_ray_kind_on_every_path(tmp_path):
         # One ray per test on the single-ray paths; a packet's tests serve more where its lanes are live.
         per_box = kinds["camera"]["rays_per_box_test"]
         assert per_box == 1.0 if lanes in ["scalar", 1] else per_box > 1.0, (lanes, per_box)
+    # Ambient occlusion: camera rays and `ao` rays, 4 per hit.
+    ao = scene.bench(reps=1, width=48, height=27, threads=1, lanes=8, shade="ao:4,2", by_kind=True)
+    kinds = {k["kind"]: k["rays"] for k in ao["by_kind"]["kinds"]}
+    assert set(kinds) == {"camera", "ao"} and kinds["ao"] % 4 == 0 and kinds["ao"] > 0, kinds
+    assert sum(kinds.values()) == ao["rays"]
 
 
 def test_load_errors_name_the_file_and_line(tmp_path):
