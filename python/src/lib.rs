@@ -332,10 +332,9 @@ impl PyScene {
 
     /// Times `reps` renders after one untimed, as `bareray bench` does for one setting (`shade` and `spp` as
     /// `render` takes them): a dict of the build seconds, the min, median and max tracing seconds, rays per
-    /// render and Mrays/s at the median. With
-    /// `by_kind`, four more runs split the render by ray kind: `by_kind` then holds what `bareray bench
-    /// --json` writes in its field of that name (per kind: rays, share of the time, Mrays/s, tests and live
-    /// rays per test).
+    /// render, Mrays/s at the median, threads and lanes (`"scalar"` for the scalar path). With `by_kind`,
+    /// four more runs split the render by ray kind: `by_kind` then holds what `bareray bench --json` writes
+    /// in its field of that name (per kind: rays, share of the time, Mrays/s, tests and live rays per test).
     #[pyo3(signature = (*, reps=3, width=None, height=None, shade=None, spp=None, threads=None, lanes=None,
         by_kind=false))]
     #[allow(clippy::too_many_arguments)]
