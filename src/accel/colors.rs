@@ -17,7 +17,7 @@ impl Geometry {
     }
 
     /// How many spheres have a colour of their own, in the BVH's store and the particle tree.
-    pub fn sphere_colors(&self) -> usize {
+    pub(crate) fn sphere_colors(&self) -> usize {
         self.spheres.color.len() + self.particles.colors()
     }
 }

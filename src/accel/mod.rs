@@ -44,11 +44,11 @@ pub struct Geometry {
     /// The BVH over the spheres, or `None` for brute force.
     pub sphere_bvh: Option<Bvh>,
     /// Spheres in a particle tree (`--accel pkd`, for fields too large for a BVH) instead of `spheres`.
-    pub particles: Particles,
+    pub(crate) particles: Particles,
     /// Transformed generic shapes, in file order.
     pub(crate) shapes: Vec<Shape<f32>>,
     /// The BVH over the bounded shapes, or `None` when every shape is tested brute force.
-    pub shape_bvh: Option<Bvh>,
+    pub(crate) shape_bvh: Option<Bvh>,
     /// With a shape BVH: its items, the bounded shapes' indices in its leaf order.
     pub(crate) shape_order: Vec<u32>,
     /// With a shape BVH: the unbounded shapes (planes), tested brute force beside it.
@@ -56,9 +56,9 @@ pub struct Geometry {
     /// Planar polygons; their triangles in BVH leaf order when there is a BVH.
     pub(crate) polygons: Polygons,
     /// The BVH over the polygons' triangles, or `None` for brute force.
-    pub polygon_bvh: Option<Bvh>,
+    pub(crate) polygon_bvh: Option<Bvh>,
     /// The registered kinds' items and trees ([`crate::kinds`]), ids after the polygons.
-    pub kinds: KindStores,
+    pub(crate) kinds: KindStores,
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
     pub(crate) origin: Vec3f,

@@ -7,9 +7,8 @@ use indicatif::{ProgressBar, ProgressStyle};
 
 use super::render::RenderArgs;
 use bareray::compile::Scene;
-use bareray::render::{Traced, Window};
+use bareray::render::Traced;
 use bareray::scene::SceneDesc;
-use bareray::settings::{shade_name, PatternName};
 use bareray::still::Job;
 
 /// Wall-clock seconds of each stage.
@@ -93,76 +92,7 @@ fn summary(output: &Path, job: &Job, r: &Traced, time: &Timings) -> String {
 }
 
 fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Traced, time: &Timings) {
-    let g = &scene.geometry;
-    let features = bareray::compile::features::Features::of(scene);
-    let n = features.counts;
-    let _ = writeln!(
-        out,
-        "scene: {} ({}, {}, {}, {}{}), {}, {}{}",
-        plural(g.len(), "primitive"),
-        plural(n.spheres, "sphere"),
-        plural(n.ellipsoids, "ellipsoid"),
-        plural(n.planes, "plane"),
-        plural(n.polygons, "polygon"),
-        g.kinds.counted().iter().map(|c| format!(", {c}")).collect::<String>(),
-        plural(scene.lights.len(), "light"),
-        plural(scene.materials.len(), "material"),
-        match g.sphere_colors() {
-            0 => String::new(),
-            c => format!(", {} (3 bytes each)", plural(c, "sphere colour")),
-        }
-    );
-    let w = job.window;
-    let region = if w == Window::whole(scene.camera.width, scene.camera.height) {
-        String::new()
-    } else {
-        format!(
-            " (region {},{},{},{} of {}x{})",
-            w.x0, w.y0, w.x1, w.y1, scene.camera.width, scene.camera.height
-        )
-    };
-    let _ = writeln!(
-        out,
-        "image: {}x{}{region}, {}, {} shading, {} transfer, in bands of {} rows",
-        w.width(),
-        w.height(),
-        PatternName::of(scene.render.pattern).long,
-        shade_name(scene.render.shade),
-        scene.render.transfer.name(),
-        job.band_rows()
-    );
-    let _ = writeln!(out, "features: {features}");
-    if scene.camera_f64.start != 0.0 {
-        let o = scene.origin;
-        let _ = writeln!(
-            out,
-            "far scene: rendering space centred on the geometry at ({}, {}, {}), camera rays start {} from the eye",
-            o.x, o.y, o.z, scene.camera_f64.start
-        );
-    }
-    let search = |bvh: &Option<bareray::bvh::Bvh>| if bvh.is_some() { "BVH" } else { "brute force" };
-    let spheres = match (&scene.accel_note, g.particles.is_empty()) {
-        (_, true) => {
-            format!("{} ({:.1} bytes/sphere with the nodes)", search(&g.sphere_bvh), scene.bytes_per_sphere())
-        }
-        (why, false) => format!(
-            "the particle tree{} ({:.1} bytes/sphere with the keys{}{})",
-            if g.particles.is_mapped() { " over the mapped file" } else { "" },
-            scene.bytes_per_sphere(),
-            if why.is_some() { "; chosen by auto: " } else { "" },
-            why.as_deref().unwrap_or_default()
-        ),
-    };
-    let _ = writeln!(
-        out,
-        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}{}",
-        search(&g.polygon_bvh),
-        search(&g.shape_bvh),
-        (bareray::kinds::NAMES.iter().zip(g.kinds.trees()).zip(g.kinds.counts()))
-            .filter(|(_, n)| *n > 0)
-            .map(|((name, tree), _)| format!(", {name} by {}", if tree { "BVH" } else { "brute force" }))
-            .collect::<String>(),
-    );
+    let _ = write!(out, "{}", bareray::still::describe(scene, job));
     let c = r.counts;
     let _ = writeln!(
         out,
@@ -185,15 +115,6 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
         time.parse, time.build, time.render, r.seconds
     );
     let _ = writeln!(out, "throughput: {:.2} Mrays/s", c.total() as f64 / r.seconds / 1e6);
-}
-
-/// `n thing` or `n things`.
-fn plural(n: usize, thing: &str) -> String {
-    if n == 1 {
-        format!("1 {thing}")
-    } else {
-        format!("{n} {thing}s")
-    }
 }
 
 /// What a scene lacks that makes its image surely not what was meant: no primitives at all, or no lights

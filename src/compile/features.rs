@@ -8,24 +8,24 @@ use crate::scene::desc::{Material, Pattern, PostFilter, Shade};
 
 /// How many primitives of each kind a scene has.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Counts {
+pub(crate) struct Counts {
     /// Plain spheres.
-    pub spheres: usize,
+    pub(crate) spheres: usize,
     /// Transformed spheres (ellipsoids).
-    pub ellipsoids: usize,
+    pub(crate) ellipsoids: usize,
     /// Planes.
-    pub planes: usize,
+    pub(crate) planes: usize,
     /// Polygons.
-    pub polygons: usize,
+    pub(crate) polygons: usize,
     /// The registered kinds' items ([`crate::kinds`]: open cones, tori), in the registry's order.
     pub(crate) kinds: [usize; crate::kinds::COUNT],
 }
 
 /// The parts of the tracer a scene needs.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Features {
+pub(crate) struct Features {
     /// Primitives by kind: a kind with none is skipped.
-    pub counts: Counts,
+    pub(crate) counts: Counts,
     /// Some kind is searched through a BVH (else all brute force).
     pub(crate) bvh: bool,
     /// Lights that shade something: Lambert or Phong terms and shadow rays.
@@ -42,7 +42,7 @@ pub struct Features {
 
 impl Features {
     /// Detects the features of a compiled scene.
-    pub fn of(scene: &Scene) -> Features {
+    pub(crate) fn of(scene: &Scene) -> Features {
         let g = &scene.geometry;
         let kind = |k: ShapeKind| g.shapes.iter().filter(|s| s.kind == k).count();
         let m = &scene.materials;

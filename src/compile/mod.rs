@@ -62,7 +62,7 @@ pub struct Scene {
     /// What building the BVH (and the particle tree) cost (zero without one).
     pub build: BuildStats,
     /// Why the spheres are in the particle tree, when `--accel auto` put them there for lack of memory.
-    pub accel_note: Option<String>,
+    pub(crate) accel_note: Option<String>,
 }
 
 /// How a scene is compiled: the search structures and how their walks run.

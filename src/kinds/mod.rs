@@ -314,18 +314,18 @@ macro_rules! per_kind {
                 self.len() == 0
             }
             /// Each kind's number of items, in id order.
-            pub fn counts(&self) -> [usize; COUNT] {
+            pub(crate) fn counts(&self) -> [usize; COUNT] {
                 [$(self.$field.len()),*]
             }
             /// The number of items of each kind that has some, in words ("1 torus", "2 tori"), in id order.
-            pub fn counted(&self) -> Vec<String> {
+            pub(crate) fn counted(&self) -> Vec<String> {
                 let word = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
                 let all: [(usize, &str, &str); COUNT] =
                     [$((self.$field.len(), <$kind as Kind>::SINGULAR, <$kind as Kind>::PLURAL)),*];
                 all.iter().filter(|(n, _, _)| *n > 0).map(|&(n, one, many)| word(n, one, many)).collect()
             }
             /// Whether each kind has a tree, in id order.
-            pub fn trees(&self) -> [bool; COUNT] {
+            pub(crate) fn trees(&self) -> [bool; COUNT] {
                 [$(self.$field.bvh.is_some()),*]
             }
             /// The kinds' trees.

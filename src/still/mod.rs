@@ -18,12 +18,14 @@ use crate::output::{self, Format, Frame, OutputError, WriteOptions};
 use crate::render::{render_window_lanes, Progress, Traced, Window};
 
 mod check;
+mod describe;
 pub mod merge;
 #[cfg(feature = "mpi")]
 pub mod mpi;
 pub(crate) mod resume;
 
 pub use check::{check, Estimate, Limit, MAX_SIDE};
+pub use describe::describe;
 use resume::Resume;
 
 /// Bytes of linear RGB a band may hold by default: at 32768 columns, 80 rows.

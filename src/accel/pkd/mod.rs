@@ -262,7 +262,7 @@ impl Particles {
     }
 
     /// Whether the records are a mapped file's.
-    pub fn is_mapped(&self) -> bool {
+    pub(crate) fn is_mapped(&self) -> bool {
         matches!(self.records, Records::Mapped(_))
     }
 
