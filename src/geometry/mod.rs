@@ -27,3 +27,10 @@ pub use sphere::{
     EyeLanes, Roots, SphereRay, CONTACT_ROUNDINGS,
 };
 pub use spheres::{eye_side, eye_term, Spheres};
+
+/// `v` in a new order, `order[j]` being the old index of new item `j`: how the kinds' stores follow their
+/// BVH's leaf order. Large stores are gathered on the thread pool.
+fn gathered<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
+    use rayon::prelude::*;
+    order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
+}

@@ -90,19 +90,17 @@ impl Polygons {
     /// The triangles in a new order (`order[j]` is the old index of new triangle `j`), each polygon's list of
     /// triangles following them; polygon ids do not change.
     pub(crate) fn permuted(&self, order: &[u32]) -> Polygons {
-        fn pick<T: Copy>(v: &[T], order: &[u32]) -> Vec<T> {
-            order.iter().map(|&i| v[i as usize]).collect()
-        }
+        use super::gathered;
         let mut moved_to = vec![0u32; order.len()];
         for (new, &old) in order.iter().enumerate() {
             moved_to[old as usize] = new as u32;
         }
         Polygons {
-            v0: pick(&self.v0, order),
-            e1: pick(&self.e1, order),
-            e2: pick(&self.e2, order),
-            polygon: pick(&self.polygon, order),
-            vertex_normals: pick(&self.vertex_normals, order),
+            v0: gathered(&self.v0, order),
+            e1: gathered(&self.e1, order),
+            e2: gathered(&self.e2, order),
+            polygon: gathered(&self.polygon, order),
+            vertex_normals: gathered(&self.vertex_normals, order),
             members: self.members.iter().map(|&j| moved_to[j as usize]).collect(),
             first: self.first.clone(),
             normal: self.normal.clone(),

@@ -62,19 +62,16 @@ impl Spheres {
     }
     /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.
     pub(crate) fn permuted(&self, order: &[u32]) -> Spheres {
-        use rayon::prelude::*;
-        fn pick<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
-            order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
-        }
+        use super::gathered;
         Spheres {
-            cx: pick(&self.cx, order),
-            cy: pick(&self.cy, order),
-            cz: pick(&self.cz, order),
-            r: pick(&self.r, order),
-            c_eye: pick(&self.c_eye, order),
-            material: pick(&self.material, order),
-            color: if self.color.is_empty() { Vec::new() } else { pick(&self.color, order) },
-            key: pick(&self.key, order),
+            cx: gathered(&self.cx, order),
+            cy: gathered(&self.cy, order),
+            cz: gathered(&self.cz, order),
+            r: gathered(&self.r, order),
+            c_eye: gathered(&self.c_eye, order),
+            material: gathered(&self.material, order),
+            color: if self.color.is_empty() { Vec::new() } else { gathered(&self.color, order) },
+            key: gathered(&self.key, order),
             eye_terms_help: self.eye_terms_help,
         }
     }
