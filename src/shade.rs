@@ -270,15 +270,15 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     /// hit's side from the eye term.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask, camera: bool) -> Surface<F> {
         self.sphere_surface(rays, hit, found, camera)
-            .or_else(|| self.shape_surface(rays, hit, found, camera))
+            .or_else(|| self.kind_surface(rays, hit, found, camera))
             .unwrap_or_else(|| self.surface_by_lane(rays, hit, found, camera))
     }
 
-    /// [`Tracer::surface`] for packets whose found lanes all hit one transformed shape (a ground plane,
-    /// most often): object point and normal in lanes by [`crate::accel::Geometry::surface`]'s operations in
-    /// its order (a plane's normal is the same in every lane), the checker's colour lane by lane. `None`
-    /// for any other packet.
-    fn shape_surface(
+    /// [`Tracer::surface`] for packets whose found lanes all hit one item of a registered kind that has a
+    /// lane form of its surface ([`crate::kinds::Kind::surface_k`]: a ground plane, most often, or an
+    /// ellipsoid): object point and normal in lanes, the checker's colour lane by lane. `None` for any
+    /// other packet.
+    fn kind_surface(
         &self,
         rays: &RayPacket<F>,
         hit: &HitPacket<F>,
@@ -288,23 +288,16 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let geometry = &self.scene.geometry;
         let bits = F::move_mask(found);
         let prim = hit.prim.lane(set_bits(bits).next()?);
-        let (PrimRef::Shape(shape), true) =
+        let (PrimRef::Kind(k), true) =
             (geometry.prim(prim), set_bits(bits).all(|i| hit.prim.lane(i) == prim))
         else {
             return None;
         };
-        let m = &self.scene.materials[shape.material as usize];
-        let lanes = shape.to_lanes::<F>();
-        let zero = V3::all(F::splat_f32(0.0));
         let ray = rays.ray();
+        let (normal, object_point, material) = geometry.kinds.surface_k(k, ray, hit.t)?;
+        let m = &self.scene.materials[material as usize];
+        let zero = V3::all(F::splat_f32(0.0));
         let point = V3::select(found, ray.at(hit.t), zero);
-        let mut object_point = lanes.to_object(ray).at(hit.t);
-        let normal = if shape.kind.is_solid() {
-            lanes.normal_to_world.vector(object_point).normalize()
-        } else {
-            object_point.z = F::splat_f32(0.0);
-            F::splat_v3(shape.world_normal(V3::all(0.0)))
-        };
         let normal = V3::select(found, normal, zero);
         // The eye's side, for camera rays from the eye, where the eye term tells it (`Geometry::eye_inside`).
         let (known, eye_inside) = match geometry.eye_inside(prim) {
@@ -642,7 +635,7 @@ mod tests {
     fn grazing_camera_hits_on_a_distant_sphere_are_outside() {
         use crate::geometry::ShapeKind;
         use crate::math::SplitMix64;
-        use crate::scene::desc::{SceneDesc, ShapeDesc, SphereDesc};
+        use crate::scene::desc::{SceneDesc, SphereDesc};
         use wide::f32x8;
         let centre = glam::DVec3::new(0.0, 0.0, 1e6);
         // Semi-axes: 1 and 1 for the sphere, 1 and 1.5 across the view for the ellipsoid.
@@ -656,12 +649,12 @@ mod tests {
                     glam::DQuat::IDENTITY,
                     centre,
                 );
-                desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
+                desc.kinds.push_shape(ShapeKind::Sphere, world_from_object);
             }
             // A plane behind the eye keeps the eye's frame (alone, the far shape would be compiled around its
             // own centre, `crate::compile::RenderingFrame`): camera rays from the eye are what this checks.
             let behind = glam::DAffine3::from_translation(glam::DVec3::new(0.0, 0.0, -10.0));
-            desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: behind, material: 0 });
+            desc.kinds.push_shape(ShapeKind::Plane, behind);
             let scene = Scene::compile(&desc).expect("scene");
             assert_eq!(scene.camera_f64.start, 0.0, "the eye's frame");
             let tracer = Tracer::<f32x8>::new(&scene);

@@ -18,9 +18,9 @@ impl Geometry {
         from: &DeparturePacket<F>,
     ) -> (F::Mask, F) {
         let inward = F::move_mask(from.inward & rays.active);
-        let again = match self.kinds.is_empty() {
-            true => 0,
-            false => set_bits(F::move_mask(rays.active))
+        let again = match self.kinds.any_meets_again() {
+            false => 0,
+            true => set_bits(F::move_mask(rays.active))
                 .filter(|&i| self.meets_again(from.prim.lane(i)))
                 .fold(0u32, |bits, i| bits | 1 << i),
         };
@@ -47,9 +47,10 @@ impl Geometry {
     }
 
     /// For a ray that leaves a solid primitive toward its inside: where it leaves the primitive again.
-    /// Planar primitives (planes, polygons) have no inside, so nothing. For a registered kind: its
-    /// [`crate::kinds::Kind::rehit`], whichever side the shading took the ray to be on (an open cone is seen
-    /// from inside through its ends, so the side a ray heads to is decided by the kernel).
+    /// Polygons have no inside, so nothing. For a registered kind: its [`crate::kinds::Kind::rehit`] (an
+    /// ellipsoid's exit; for a kind that meets again, whichever side the shading took the ray to be on: an
+    /// open cone is seen from inside through its ends, so the side a ray heads to is decided by the
+    /// kernel; a plane's: nothing).
     fn exit_of_departure(&self, ray: &Ray<f32>, prim: u32, t_max: f32) -> Option<f32> {
         let roots = match self.prim(prim) {
             PrimRef::Sphere(i) => sphere_roots(self.spheres.center(i), self.spheres.r[i], ray),
@@ -57,9 +58,8 @@ impl Geometry {
                 let (centre, r) = self.particles.sphere(i);
                 sphere_roots(centre, r, ray)
             }
-            PrimRef::Shape(shape) if shape.kind.is_solid() => shape.unit_sphere_roots(&shape.to_object(ray)),
             PrimRef::Kind(k) => return self.kinds.rehit(k, ray, t_max),
-            PrimRef::Shape(_) | PrimRef::Polygon(_) => return None,
+            PrimRef::Polygon(_) => return None,
         };
         let (hit, t) = far_root(&roots, t_max);
         hit.then_some(t)

@@ -1,17 +1,16 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
-//! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's `crate::bvh::LeafQuery`):
-//! spheres (`SphereQuery`), polygons' triangles (`TriangleQuery`), bounded transformed shapes
-//! (`ShapeQuery`) and each registered kind ([`crate::kinds`]: open cones, tori); a kind with few items is tested
-//! brute force by the same query, and so are unbounded shapes (planes). One kind per tree keeps each leaf loop free of a per-item dispatch and leaves the sphere
-//! walk exactly as it is without other kinds.
+//! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's
+//! `crate::bvh::LeafQuery`): spheres (`SphereQuery`), polygons' triangles (`TriangleQuery`) and each
+//! registered kind ([`crate::kinds`]: ellipsoids, open cones, tori); a kind with few items is tested brute
+//! force by the same query, and so is an unbounded kind (planes). One kind per tree keeps each leaf loop
+//! free of a per-item dispatch and leaves the sphere walk exactly as it is without other kinds.
 
 mod colors;
 mod departure;
 mod near_first;
 pub(crate) mod pkd;
-mod shape_query;
 mod sphere_query;
 mod triangle_query;
 pub(crate) use crate::bvh::item_query::{ItemQuery, ItemTest};
@@ -21,7 +20,6 @@ pub use crate::bvh::work::{
 };
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;
-pub(crate) use shape_query::{ShapeQuery, Shapes};
 pub(crate) use sphere_query::SphereQuery;
 pub(crate) use triangle_query::{TriangleQuery, Triangles};
 
@@ -29,14 +27,14 @@ use crate::bvh::{Bvh, LeafQuery};
 use crate::kinds::{Kind, KindItems, KindStores, VisitItems};
 
 use crate::geometry::{
-    Departure, DeparturePacket, Hit, HitPacket, Polygons, Pyramid, Ray, RayPacket, Shape, Spheres, NO_PRIM,
+    Departure, DeparturePacket, Hit, HitPacket, Polygons, Pyramid, Ray, RayPacket, Spheres, NO_PRIM,
 };
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the spheres of the particle tree (a scene has
-/// one or the other), then the shapes, then the polygons, then the registered kinds' items
-/// ([`crate::kinds`]) kind by kind.
+/// one or the other), then the polygons, then the registered kinds' items ([`crate::kinds`]: ellipsoids,
+/// planes, cones, tori) kind by kind.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
     /// Plain spheres, in BVH leaf order when there is a BVH.
@@ -45,14 +43,6 @@ pub struct Geometry {
     pub sphere_bvh: Option<Bvh>,
     /// Spheres in a particle tree (`--accel pkd`, for fields too large for a BVH) instead of `spheres`.
     pub(crate) particles: Particles,
-    /// Transformed generic shapes, in file order.
-    pub(crate) shapes: Vec<Shape<f32>>,
-    /// The BVH over the bounded shapes, or `None` when every shape is tested brute force.
-    pub(crate) shape_bvh: Option<Bvh>,
-    /// With a shape BVH: its items, the bounded shapes' indices in its leaf order.
-    pub(crate) shape_order: Vec<u32>,
-    /// With a shape BVH: the unbounded shapes (planes), tested brute force beside it.
-    pub(crate) loose_shapes: Vec<u32>,
     /// Planar polygons; their triangles in BVH leaf order when there is a BVH.
     pub(crate) polygons: Polygons,
     /// The BVH over the polygons' triangles, or `None` for brute force.
@@ -108,13 +98,11 @@ fn occluded_items<F: Lanes, Q: LeafQuery<F>>(
 
 /// What a primitive id refers to.
 #[derive(Clone, Copy, Debug)]
-pub(crate) enum PrimRef<'a> {
+pub(crate) enum PrimRef {
     /// Index into [`Geometry::spheres`].
     Sphere(usize),
     /// Position in [`Geometry::particles`].
     Particle(usize),
-    /// A transformed shape.
-    Shape(&'a Shape<f32>),
     /// Index into [`Geometry::polygons`].
     Polygon(usize),
     /// Index over the registered kinds' items in id order ([`Geometry::kinds`]).
@@ -222,7 +210,7 @@ impl Geometry {
 
     /// Whether the scene has primitives other than spheres and particles.
     fn has_other_kinds(&self) -> bool {
-        !(self.polygons.is_empty() && self.shapes.is_empty() && self.kinds.is_empty())
+        !(self.polygons.is_empty() && self.kinds.is_empty())
     }
 
     /// The closest hits of every kind but spheres (and particles unless `particles`), merged into `best`.
@@ -239,15 +227,6 @@ impl Geometry {
         if !self.polygons.is_empty() {
             let q = self.triangle_query(rays, from);
             intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, best);
-        }
-        if !self.shapes.is_empty() {
-            if let Some(bvh) = &self.shape_bvh {
-                bvh.intersect_k(&self.shape_query(rays, from, Some(&self.shape_order)), rays.active, best);
-            }
-            let (loose, n) = self.loose_shapes();
-            if n > 0 {
-                intersect_items(None, &self.shape_query(rays, from, loose), n, rays.active, best);
-            }
         }
         if !self.kinds.is_empty() {
             let base = self.kinds_base() as u32;
@@ -310,19 +289,6 @@ impl Geometry {
                 return blocked;
             }
         }
-        if !self.shapes.is_empty() {
-            let mut shape = 0;
-            let (loose, n) = self.loose_shapes();
-            if n > 0 {
-                let q = self.shape_query(rays, from, loose);
-                blocked = blocked | occluded_items(None, &q, n, live & !blocked, &mut shape);
-            }
-            if self.shape_bvh.is_some() && !(blocked | !live).all() {
-                let q = self.shape_query(rays, from, Some(&self.shape_order));
-                blocked =
-                    blocked | occluded_items(self.shape_bvh.as_ref(), &q, 0, live & !blocked, &mut shape);
-            }
-        }
         if !self.kinds.is_empty() && !(blocked | !live).all() {
             let base = self.kinds_base() as u32;
             let mut visit = OccludedKinds { rays, from, live, blocked, base };
@@ -363,38 +329,14 @@ impl Geometry {
         Self::item_query(triangles, rays, from)
     }
 
-    /// The shape part of a packet query over the shapes `order` lists (file positions), or over every shape.
-    /// Built where it is used, only when it is: the query holds the rays, and moving it costs a copy.
-    #[inline(always)]
-    fn shape_query<'a, F: Lanes>(
-        &'a self,
-        rays: &'a RayPacket<F>,
-        from: &DeparturePacket<F>,
-        order: Option<&'a [u32]>,
-    ) -> ShapeQuery<'a, F> {
-        Self::item_query(Shapes { shapes: &self.shapes, order, base: self.shape_base() as u32 }, rays, from)
-    }
-
-    /// The shapes tested brute force, as the `order` of [`Geometry::shape_query`] (every shape without a
-    /// shape BVH), and how many they are.
-    fn loose_shapes(&self) -> (Option<&[u32]>, usize) {
-        match self.shape_bvh {
-            Some(_) => (Some(&self.loose_shapes), self.loose_shapes.len()),
-            None => (None, self.shapes.len()),
-        }
-    }
-
     /// The BVHs the scene has.
     pub(crate) fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
-        [&self.sphere_bvh, &self.polygon_bvh, &self.shape_bvh].into_iter().flatten().chain(self.kinds.bvhs())
+        [&self.sphere_bvh, &self.polygon_bvh].into_iter().flatten().chain(self.kinds.bvhs())
     }
 
     /// The BVHs the scene has, to change their walk settings.
     pub(crate) fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
-        [&mut self.sphere_bvh, &mut self.polygon_bvh, &mut self.shape_bvh]
-            .into_iter()
-            .flatten()
-            .chain(self.kinds.bvhs_mut())
+        [&mut self.sphere_bvh, &mut self.polygon_bvh].into_iter().flatten().chain(self.kinds.bvhs_mut())
     }
 
     /// Sets whether single rays (K = 1: [`Geometry::intersect`], [`Geometry::occluded`] and the `_k` queries
@@ -472,7 +414,7 @@ impl Geometry {
         let (i, spheres) = (prim as usize, self.spheres.len());
         match self.spheres.key.get(i) {
             Some(&id) => id,
-            None if (spheres..self.shape_base()).contains(&i) => {
+            None if (spheres..self.polygon_base()).contains(&i) => {
                 (spheres + self.particles.key(i - spheres) as usize) as u32
             }
             None => prim,
@@ -488,14 +430,9 @@ impl Geometry {
         self.len() == 0
     }
 
-    /// The id of the first shape (shape k has id `shape_base() + k`).
-    pub(crate) fn shape_base(&self) -> usize {
-        self.spheres.len() + self.particles.len()
-    }
-
     /// The id of the first polygon (polygon k has id `polygon_base() + k`).
     pub(crate) fn polygon_base(&self) -> usize {
-        self.shape_base() + self.shapes.len()
+        self.spheres.len() + self.particles.len()
     }
 
     /// The id of the registered kinds' first item (their items are numbered on from it in the registry's
@@ -505,14 +442,12 @@ impl Geometry {
     }
 
     /// What primitive id `prim` (< `len()`) refers to.
-    pub(crate) fn prim(&self, prim: u32) -> PrimRef<'_> {
+    pub(crate) fn prim(&self, prim: u32) -> PrimRef {
         let i = prim as usize;
         if i < self.spheres.len() {
             PrimRef::Sphere(i)
-        } else if i < self.shape_base() {
-            PrimRef::Particle(i - self.spheres.len())
         } else if i < self.polygon_base() {
-            PrimRef::Shape(&self.shapes[i - self.shape_base()])
+            PrimRef::Particle(i - self.spheres.len())
         } else if i < self.kinds_base() {
             PrimRef::Polygon(i - self.polygon_base())
         } else {
@@ -521,8 +456,9 @@ impl Geometry {
     }
 
     /// Whether a camera ray (from the eye, the rendering space's origin) meets primitive `prim` from inside,
-    /// where that is known exactly: for a sphere or an ellipsoid, the sign of its exact eye term (`|C|² − r²`,
-    /// or `|o_eye|² − 1` in object space: negative when the eye is in it). `None` where the eye term is zero
+    /// where that is known exactly: for a sphere or a kind with an eye term (an ellipsoid), the sign of its
+    /// exact eye term (`|C|² − r²`, or `|o_eye|² − 1` in object space: negative when the eye is in it,
+    /// [`crate::kinds::Kind::eye_term`]). `None` where the eye term is zero
     /// (the eye on the surface: rays leave it or enter it there, and the normal tells which) and for the
     /// other kinds, whose side is read from the normal. Why:
     /// at a grazing hit the rounded hit point can put the normal's side wrong (a unit sphere 1e6 away, `t`
@@ -532,8 +468,8 @@ impl Geometry {
         let c_eye = match self.prim(prim) {
             PrimRef::Sphere(i) => self.spheres.c_eye[i],
             PrimRef::Particle(i) => self.particles.c_eye(i),
-            PrimRef::Shape(shape) if shape.kind.is_solid() => shape.c_eye,
-            _ => return None,
+            PrimRef::Kind(k) => self.kinds.eye_term(k)?,
+            PrimRef::Polygon(_) => return None,
         };
         crate::geometry::eye_side(f64::from(c_eye))
     }
@@ -565,20 +501,8 @@ impl Geometry {
             }
             PrimRef::Kind(k) => {
                 let (normal, object_point, material) =
-                    self.kinds.surface(k, point).expect("an id below len() is an item");
+                    self.kinds.surface(k, ray, t, point).expect("an id below len() is an item");
                 SurfacePoint { point, normal, object_point, material }
-            }
-            PrimRef::Shape(shape) => {
-                let mut object_point = shape.to_object(ray).at(t);
-                if !shape.kind.is_solid() {
-                    object_point.z = 0.0;
-                }
-                SurfacePoint {
-                    point,
-                    normal: shape.world_normal(object_point),
-                    object_point,
-                    material: shape.material,
-                }
             }
         }
     }

@@ -1,6 +1,7 @@
 //! The leaf query of every kind whose items are tested one at a time against all lanes, with nothing
-//! shared between items: triangles, transformed shapes, cones. Each kind says only how to test item `j`
-//! ([`ItemTest`]); the loops, the departure rule and the one-ray form are written once, here.
+//! shared between items: triangles and the registered kinds' items (ellipsoids, planes, cones, tori). Each
+//! kind says only how to test item `j` ([`ItemTest`]); the loops, the departure rule and the one-ray form
+//! are written once, here.
 
 use std::borrow::Borrow;
 

@@ -52,8 +52,8 @@ pub const UNTAGGED: usize = 5;
 /// live rays they served.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub struct Work {
-    /// Packet–primitive tests: spheres in visited BVH leaves (or all spheres without a BVH), shapes and
-    /// triangles.
+    /// Packet–primitive tests: spheres in visited BVH leaves (or all spheres without a BVH), triangles and
+    /// the other kinds' items.
     pub prim_tests: u64,
     /// Packet–box slab tests in BVH traversal (one per visited node and occupied child, fewer where frustum
     /// culling rules children out; for single rays each node's 4-wide test counts as N).

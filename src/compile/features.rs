@@ -3,7 +3,6 @@
 use std::fmt;
 
 use super::Scene;
-use crate::geometry::ShapeKind;
 use crate::scene::desc::{Material, Pattern, PostFilter, Shade};
 
 /// How many primitives of each kind a scene has.
@@ -11,13 +10,10 @@ use crate::scene::desc::{Material, Pattern, PostFilter, Shade};
 pub(crate) struct Counts {
     /// Plain spheres.
     pub(crate) spheres: usize,
-    /// Transformed spheres (ellipsoids).
-    pub(crate) ellipsoids: usize,
-    /// Planes.
-    pub(crate) planes: usize,
     /// Polygons.
     pub(crate) polygons: usize,
-    /// The registered kinds' items ([`crate::kinds`]: open cones, tori), in the registry's order.
+    /// The registered kinds' items ([`crate::kinds`]: ellipsoids, planes, open cones, tori), in the
+    /// registry's order.
     pub(crate) kinds: [usize; crate::kinds::COUNT],
 }
 
@@ -44,15 +40,12 @@ impl Features {
     /// Detects the features of a compiled scene.
     pub(crate) fn of(scene: &Scene) -> Features {
         let g = &scene.geometry;
-        let kind = |k: ShapeKind| g.shapes.iter().filter(|s| s.kind == k).count();
         let m = &scene.materials;
         let ao = matches!(scene.render.shade, Shade::Ao(_));
         let deep = scene.render.max_depth > 0 && !ao;
         Features {
             counts: Counts {
                 spheres: g.spheres.len() + g.particles.len(),
-                ellipsoids: kind(ShapeKind::Sphere),
-                planes: kind(ShapeKind::Plane),
                 polygons: g.polygons.len(),
                 kinds: g.kinds.counts(),
             },
@@ -71,8 +64,6 @@ impl Features {
         let mut list = vec![
             ("spheres", self.counts.spheres > 0),
             ("bvh", self.bvh),
-            ("ellipsoids", self.counts.ellipsoids > 0),
-            ("planes", self.counts.planes > 0),
             ("polygons", self.counts.polygons > 0),
             ("direct light + shadow rays", self.direct),
             ("reflection", self.reflection),
@@ -80,7 +71,7 @@ impl Features {
             ("antialiasing", self.antialiasing),
             ("ambient occlusion rays", self.ao),
         ];
-        list.splice(5..5, kinds);
+        list.splice(3..3, kinds);
         list
     }
 }

@@ -45,7 +45,7 @@ impl RenderingFrame {
     pub(crate) fn of(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Self {
         let eye = desc.camera.eye;
         let at_eye = Self { origin: eye, start: 0.0 };
-        let unbounded = desc.shapes.iter().any(|s| !s.kind.is_solid());
+        let unbounded = desc.kinds.has_unbounded();
         let Some((lo, hi)) = bounded_box(desc, extra).filter(|_| !unbounded) else {
             return at_eye;
         };
@@ -66,42 +66,25 @@ impl RenderingFrame {
 }
 
 /// The box around every bounded primitive and the box `extra`, in f64 world space (`None` without any):
-/// spheres, ellipsoids (the unit sphere's box under their map), polygons and the registered kinds.
+/// spheres, polygons and the registered kinds' bounded items (ellipsoids, cones, tori; not planes).
 pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
     let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
     let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
     let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
-    let shapes = desc.shapes.iter().filter(|s| s.kind.is_solid()).flat_map(|s| {
-        let (c, half) = shape_extent(&s.world_from_object);
-        [c - half, c + half]
-    });
     let kinds = desc.kinds.world_boxes().into_iter().flatten();
     let (lo, hi) = spheres
         .chain(kinds)
         .chain(extra.into_iter().flatten())
         .chain(vertices)
-        .chain(shapes)
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
     lo.cmple(hi).all().then_some((lo, hi))
-}
-
-/// A bounded shape's box as centre and half extent per axis in world space: the unit sphere's box under
-/// `world_from_object`, `centre ± Σ|column entries|` per axis.
-pub(crate) fn shape_extent(world_from_object: &glam::DAffine3) -> (DVec3, DVec3) {
-    let m = world_from_object.matrix3;
-    let half = DVec3::new(
-        m.x_axis.x.abs() + m.y_axis.x.abs() + m.z_axis.x.abs(),
-        m.x_axis.y.abs() + m.y_axis.y.abs() + m.z_axis.y.abs(),
-        m.x_axis.z.abs() + m.y_axis.z.abs() + m.z_axis.z.abs(),
-    );
-    (world_from_object.translation, half)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::geometry::ShapeKind;
-    use crate::scene::desc::{ShapeDesc, SphereDesc};
+    use crate::scene::desc::SphereDesc;
 
     /// Two touching unit spheres at `centre ± (1, 0, 0)` seen from `eye`.
     fn pair(eye: DVec3, centre: DVec3) -> SceneDesc {
@@ -143,7 +126,7 @@ mod tests {
         let mut desc = pair(eye, DVec3::new(0.0, 0.0, 1e6));
         assert!(RenderingFrame::of(&desc, None).is_far());
         let plane = glam::DAffine3::from_translation(DVec3::new(0.0, 0.0, 1e6));
-        desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: plane, material: 0 });
+        desc.kinds.push_shape(ShapeKind::Plane, plane);
         assert_eq!(RenderingFrame::of(&desc, None), RenderingFrame { origin: eye, start: 0.0 });
     }
 

@@ -19,10 +19,10 @@ use crate::accel::{Geometry, Particles};
 use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
-use crate::geometry::{Polygons, Shape};
+use crate::geometry::Polygons;
 use crate::io::f32r::MappedRecords;
 use crate::math::{Rgb, Vec3f, V3};
-use glam::{DAffine3, Vec3A};
+use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 
@@ -171,10 +171,8 @@ fn reach(
     let starts = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)].map(corner);
     let lights = desc.lights.iter().map(|l| mag(l.position)).chain(starts);
     let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| mag(*v));
-    let shapes =
-        shape_boxes(desc, origin).into_iter().map(|(_, b)| b.min.abs().max(b.max.abs()).max_element() as f64);
     let kinds = desc.kinds.world_boxes().into_iter().flatten().map(mag);
-    spheres.chain(lights).chain(vertices).chain(shapes).chain(kinds).fold(0.0, f64::max) as f32
+    spheres.chain(lights).chain(vertices).chain(kinds).fold(0.0, f64::max) as f32
 }
 
 impl Scene {
@@ -304,12 +302,6 @@ impl Scene {
             }
             geometry.spheres.color = colors;
         }
-        let to_rendering = DAffine3::from_translation(-origin);
-        geometry.shapes = desc
-            .shapes
-            .iter()
-            .map(|s| Shape::placed(s.kind, &(to_rendering * s.world_from_object), s.material).to_f32())
-            .collect();
         for p in &desc.polygons {
             push_polygon(&mut geometry.polygons, p, origin);
         }
@@ -327,10 +319,8 @@ impl Scene {
         if materials.is_empty() {
             materials.push(Material::default());
         }
-        let bounded = shape_boxes(desc, origin);
         let job = BvhJob {
             accel,
-            shapes: wants(bounded.len()).then_some(bounded),
             spheres: finite && wants(geometry.spheres.len()),
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
             options: BuildOptions {
@@ -395,17 +385,6 @@ impl Scene {
             (g.polygons, g.polygon_bvh) = (polygons, Some(tree));
             self.build += stats;
         }
-        if let Some(bounded) = job.shapes {
-            let pad = Vec3A::splat(job.options.pad);
-            let item_box = |j: usize| Aabb { min: bounded[j].1.min - pad, max: bounded[j].1.max + pad };
-            let permute = |order: &[u32]| order.iter().map(|&j| bounded[j as usize].0).collect::<Vec<u32>>();
-            let (tree, order, stats) = bvh::build(bounded.len(), item_box, dearer, permute);
-            // The shapes without a box: the planes.
-            g.loose_shapes =
-                (0..g.shapes.len() as u32).filter(|&k| !g.shapes[k as usize].kind.is_solid()).collect();
-            (g.shape_order, g.shape_bvh) = (order, Some(tree));
-            self.build += stats;
-        }
         let build = &mut self.build;
         g.kinds.build_trees(
             |n| wants_tree(job.accel, n),
@@ -444,20 +423,6 @@ fn padded((lo, hi): (Vec3f, Vec3f), pad: f32) -> Aabb {
     Aabb { min: Vec3A::new(lo.x, lo.y, lo.z) - pad, max: Vec3A::new(hi.x, hi.y, hi.z) + pad }
 }
 
-/// The bounded shapes (ellipsoids) and their boxes in rendering space: the unit sphere's box under the shape's
-/// map, `centre ± Σ|column entries|` per axis, in f64 and rounded to f32 (the BVH's padding covers the
-/// rounding). Planes are unbounded and have none.
-fn shape_boxes(desc: &SceneDesc, origin: glam::DVec3) -> Vec<(u32, Aabb)> {
-    let bounded = desc.shapes.iter().enumerate().filter(|(_, s)| s.kind.is_solid());
-    bounded
-        .map(|(k, s)| {
-            let (c, half) = frame::shape_extent(&s.world_from_object);
-            let c = c - origin;
-            (k as u32, Aabb { min: (c - half).as_vec3a(), max: (c + half).as_vec3a() })
-        })
-        .collect()
-}
-
 /// Whether a kind with `items` items gets a BVH under `accel`.
 fn wants_tree(accel: Accel, items: usize) -> bool {
     match accel {
@@ -471,8 +436,6 @@ fn wants_tree(accel: Accel, items: usize) -> bool {
 struct BvhJob {
     /// The acceleration asked for: the registered kinds' trees follow it.
     accel: Accel,
-    /// The bounded shapes' indices and boxes, when they get a BVH.
-    shapes: Option<Vec<(u32, Aabb)>>,
     /// Whether to build the spheres' BVH.
     spheres: bool,
     /// Whether to build the polygons' triangle BVH.

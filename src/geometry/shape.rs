@@ -16,13 +16,6 @@ pub(crate) enum ShapeKind {
     Plane,
 }
 
-impl ShapeKind {
-    /// Planar shapes cannot be hit twice by one ray; convex solids can (entry and exit).
-    pub(crate) fn is_solid(self) -> bool {
-        self == ShapeKind::Sphere
-    }
-}
-
 /// A generic shape under an affine map, ready to intersect.
 #[derive(Clone, Copy, Debug)]
 pub(crate) struct Shape<F> {
@@ -84,40 +77,52 @@ impl<F: Real> Shape<F> {
         )
     }
 
-    /// Closest hit in `[0, t_max)`. The unit sphere's `c = |o'|² − 1` cancels for a large ellipsoid seen
-    /// from close by, so it comes from the exact eye term as for spheres: lanes whose ray starts at the eye
-    /// take it as it is, the others as `c_eye + 2·o_eye·v + |v|²` (`v = L⁻¹·o`, the origin seen from the eye
-    /// in object space) where that has the smaller rounding bound (`Approach::roots_with_eye_term` with
-    /// the centre seen from the eye, `L⁻¹·centre`). Shapes are few; every lane computes both forms.
+    /// Closest hit in `[0, t_max)`: [`Shape::intersect_unit_sphere`] or [`Shape::intersect_plane`] by the
+    /// shape's kind.
     #[inline(always)]
     pub(crate) fn intersect(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
-        let local = self.to_object(ray);
         match self.kind {
-            ShapeKind::Sphere => {
-                let terms = SphereRay::new(local);
-                let line = sphere_approach(V3::all(F::splat(0.0)), F::splat(1.0), &terms);
-                if !line.meets().any() {
-                    return (line.meets(), t_max);
-                }
-                let others = || {
-                    let seen_from_eye = terms.with_origin(self.object_from_world.vector(ray.origin));
-                    let centre = self.object_from_world.vector(self.center);
-                    line.roots_with_eye_term(centre, self.c_eye, &seen_from_eye)
-                };
-                let eye = at_eye(ray.origin);
-                let roots = if eye.all() {
-                    line.roots_from_eye(self.c_eye, true)
-                } else if eye.any() {
-                    Approach::select_eye_lanes(eye, line.roots_from_eye(self.c_eye, true), others())
-                } else {
-                    others()
-                };
-                // Misses report `t_max` whichever way they were found (the early return above).
-                let (hit, t) = super::first_root(&roots, t_max);
-                (hit, F::select(hit, t, t_max))
-            }
-            ShapeKind::Plane => intersect_plane(&local, t_max),
+            ShapeKind::Sphere => self.intersect_unit_sphere(ray, t_max),
+            ShapeKind::Plane => self.intersect_plane(ray, t_max),
         }
+    }
+
+    /// Closest hit in `[0, t_max)` of the placed unit sphere (an ellipsoid). Its `c = |o'|² − 1` cancels
+    /// for a large ellipsoid seen from close by, so it comes from the exact eye term as for spheres: lanes
+    /// whose ray starts at the eye take it as it is, the others as `c_eye + 2·o_eye·v + |v|²` (`v = L⁻¹·o`,
+    /// the origin seen from the eye in object space) where that has the smaller rounding bound
+    /// (`Approach::roots_with_eye_term` with the centre seen from the eye, `L⁻¹·centre`). Shapes are few;
+    /// every lane computes both forms.
+    #[inline(always)]
+    pub(crate) fn intersect_unit_sphere(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+        let local = self.to_object(ray);
+        let terms = SphereRay::new(local);
+        let line = sphere_approach(V3::all(F::splat(0.0)), F::splat(1.0), &terms);
+        if !line.meets().any() {
+            return (line.meets(), t_max);
+        }
+        let others = || {
+            let seen_from_eye = terms.with_origin(self.object_from_world.vector(ray.origin));
+            let centre = self.object_from_world.vector(self.center);
+            line.roots_with_eye_term(centre, self.c_eye, &seen_from_eye)
+        };
+        let eye = at_eye(ray.origin);
+        let roots = if eye.all() {
+            line.roots_from_eye(self.c_eye, true)
+        } else if eye.any() {
+            Approach::select_eye_lanes(eye, line.roots_from_eye(self.c_eye, true), others())
+        } else {
+            others()
+        };
+        // Misses report `t_max` whichever way they were found (the early return above).
+        let (hit, t) = super::first_root(&roots, t_max);
+        (hit, F::select(hit, t, t_max))
+    }
+
+    /// Closest hit in `[0, t_max)` of the placed plane z = 0.
+    #[inline(always)]
+    pub(crate) fn intersect_plane(&self, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+        intersect_plane(&self.to_object(ray), t_max)
     }
 
     /// Both roots with the unit sphere, for an object-space ray.
@@ -135,6 +140,21 @@ impl Shape<f32> {
             ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
         };
         self.normal_to_world.vector(n).normalize()
+    }
+
+    /// Every value widened exactly to f64 (an oracle over the compiled scene).
+    #[cfg(test)]
+    pub(crate) fn widen(&self) -> Shape<f64> {
+        let wide =
+            |a: &Affine<f32>| Affine { cols: a.cols.map(V3::to_f64), translation: a.translation.to_f64() };
+        Shape {
+            kind: self.kind,
+            center: self.center.to_f64(),
+            object_from_world: wide(&self.object_from_world),
+            normal_to_world: wide(&self.normal_to_world),
+            material: self.material,
+            c_eye: f64::from(self.c_eye),
+        }
     }
 
     /// The same shape in every lane.

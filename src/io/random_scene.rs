@@ -2,9 +2,9 @@
 //! seed always gives the same text.
 //!
 //! A scene is a cluster of 3 to 14 primitives of every kind the TOML format has: spheres over three decades
-//! of radius (some touching a neighbour, some nested in another), ellipsoids (scaled and turned spheres),
-//! planes, open cones and cylinders, convex polygons (some with vertex normals) and tori (some given by a
-//! transform); matte, mirror, checkered and glass materials (ior 0.75 to 2.4, some with Fresnel weights);
+//! of radius (some touching a neighbour, some nested in another), ellipsoids (`[[ellipsoids]]`, and
+//! `[[spheres]]` with a stretching transform), planes, open cones and cylinders, convex polygons (some with
+//! vertex normals) and tori (some given by a transform); matte, mirror, checkered and glass materials (ior 0.75 to 2.4, some with Fresnel weights);
 //! one to three point lights. The whole scene is drawn at a random scale (1e-3 to 1e3) and moved by a random
 //! offset (up to 1e6 from the origin). The camera looks at the cluster from outside (near or up to 2000
 //! cluster sizes away), from among the primitives, or from inside one (a sphere, an ellipsoid, a torus's
@@ -343,22 +343,22 @@ impl Gen {
         cluster.spheres.push((c, r));
     }
 
-    /// A unit sphere scaled by `size`, stretched on each axis by 0.2 to 2, and turned.
+    /// A unit sphere scaled by `size`, stretched on each axis by 0.2 to 2, and turned: half of them (by
+    /// the angle, so that the choice draws nothing) as an `[[ellipsoids]]` table with its radii, the rest as
+    /// a `[[spheres]]` table with a transform.
     fn ellipsoid(&mut self, cluster: &mut Cluster, c: DVec3, size: f64) {
         let s = [self.log(0.2, 2.0), self.log(0.2, 2.0), self.log(0.2, 2.0)];
         let (axis, deg) = (self.dir(), self.range(0.0, 180.0));
         let material = self.material();
-        let transform = format!(
-            "[{{ scale = {} }}, {{ rotate = {{ axis = {}, degrees = {} }} }}]",
-            vec3(DVec3::from(s)),
-            vec3(axis),
-            num(deg)
-        );
-        self.line(format!(
-            "\n[[spheres]]\ncenter = {}\nradius = {}\nmaterial = \"{material}\"\ntransform = {transform}",
-            vec3(c),
-            num(size)
-        ));
+        let rotate = format!("{{ rotate = {{ axis = {}, degrees = {} }} }}", vec3(axis), num(deg));
+        let table = if deg < 90.0 {
+            let radii = vec3(DVec3::from(s) * size);
+            format!("[[ellipsoids]]\ncenter = {}\nradii = {radii}\ntransform = [{rotate}]", vec3(c))
+        } else {
+            let transform = format!("[{{ scale = {} }}, {rotate}]", vec3(DVec3::from(s)));
+            format!("[[spheres]]\ncenter = {}\nradius = {}\ntransform = {transform}", vec3(c), num(size))
+        };
+        self.line(format!("\n{table}\nmaterial = \"{material}\""));
         self.hold(cluster, c);
     }
 

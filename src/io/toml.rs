@@ -6,11 +6,10 @@ use std::ops::Range;
 use std::path::Path;
 
 use ::toml::Spanned;
-use glam::{DAffine3, DQuat, DVec3};
+use glam::{DAffine3, DVec3};
 use serde::Deserialize;
 
 use crate::camera::Camera;
-use crate::geometry::ShapeKind;
 use crate::kinds::placement::{self, TransformOp};
 #[allow(unused_imports)] // used per registered kind
 use crate::kinds::{Kind, KindDescs, KindError};
@@ -36,8 +35,6 @@ macro_rules! file_with_kinds {
             lights: Vec<LightToml>,
             #[serde(default)]
             spheres: Vec<SphereToml>,
-            #[serde(default)]
-            planes: Vec<PlaneToml>,
             #[serde(default)]
             polygons: Vec<PolygonToml>,
             $(
@@ -190,15 +187,6 @@ struct SphereToml {
 
 #[derive(Deserialize)]
 #[serde(deny_unknown_fields)]
-struct PlaneToml {
-    point: Option<Vec3>,
-    normal: Option<Spanned<Vec3>>,
-    material: Option<Spanned<String>>,
-    transform: Option<Vec<Spanned<TransformOp>>>,
-}
-
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
 struct PolygonToml {
     vertices: Spanned<Vec<Vec3>>,
     normals: Option<Spanned<Vec<Vec3>>>,
@@ -298,7 +286,7 @@ impl Reader<'_> {
                 }),
             }
         };
-        let kinds = self.kinds(&file, material)?;
+        let mut kinds = self.kinds(&file, material)?;
         let mut desc = SceneDesc {
             camera: self.camera(file.camera)?,
             render: self.render(file.render)?,
@@ -323,36 +311,10 @@ impl Reader<'_> {
                 None => desc.spheres.push(SphereDesc { center, radius: *s.radius.get_ref(), material: mat }),
                 Some(ops) => {
                     let user = self.transform(ops)?;
-                    let world_from_object = DAffine3::from_translation(center)
-                        * user
-                        * DAffine3::from_scale(DVec3::splat(f64::from(radius)));
-                    desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: mat });
+                    let radii = DVec3::splat(f64::from(radius));
+                    kinds.ellipsoids.push(crate::kinds::ellipsoid::placed(center, user, radii, mat));
                 }
             }
-        }
-        for p in &file.planes {
-            let normal = match &p.normal {
-                None => DVec3::Z,
-                Some(n) => {
-                    let v = DVec3::from(*n.get_ref());
-                    if !(v.length() > 0.0 && v.is_finite()) {
-                        return Err(self.err(n.span(), "normal must be a non-zero vector"));
-                    }
-                    v.normalize()
-                }
-            };
-            let user = match &p.transform {
-                None => DAffine3::IDENTITY,
-                Some(ops) => self.transform(ops)?,
-            };
-            let world_from_object = DAffine3::from_translation(DVec3::from(p.point.unwrap_or([0.0; 3])))
-                * DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Z, normal))
-                * user;
-            desc.shapes.push(ShapeDesc {
-                kind: ShapeKind::Plane,
-                world_from_object,
-                material: material(p.material.as_ref())?,
-            });
         }
         for p in &file.polygons {
             desc.polygons.push(self.polygon(p, material(p.material.as_ref())?)?);

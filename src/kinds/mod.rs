@@ -5,7 +5,7 @@
 //! ([`KindStores`]) and the twin (`KindTwins`) are written once over it.
 //!
 //! Adding a kind: a folder here with a type implementing `Kind`, and its name in `registry!`. Its
-//! primitive ids follow the built-in kinds' (spheres, shapes, polygons) in the list's order.
+//! primitive ids follow the built-in kinds' (spheres, polygons) in the list's order.
 //!
 //! ```
 //! use bareray::kinds::{KindDescs, COUNT, NAMES};
@@ -28,7 +28,10 @@ use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
 
 pub(crate) mod cone;
+pub(crate) mod ellipsoid;
+pub(crate) mod placed;
 pub(crate) mod placement;
+pub(crate) mod plane;
 pub(crate) mod torus;
 
 /// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in
@@ -36,7 +39,12 @@ pub(crate) mod torus;
 /// below and the TOML reader are generated that way, so this line is the only place a kind is registered.
 macro_rules! registry {
     ($then:ident) => {
-        $then! { cones: $crate::kinds::cone::OpenCone, tori: $crate::kinds::torus::Torus }
+        $then! {
+            ellipsoids: $crate::kinds::ellipsoid::Ellipsoid,
+            planes: $crate::kinds::plane::Plane,
+            cones: $crate::kinds::cone::OpenCone,
+            tori: $crate::kinds::torus::Torus,
+        }
     };
 }
 pub(crate) use registry;
@@ -92,25 +100,44 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     fn from_toml(toml: &Self::Toml, material: u32) -> Result<Self::Desc, KindError>;
     /// The material a TOML table names.
     fn toml_material(toml: &Self::Toml) -> Option<&::toml::Spanned<String>>;
-    /// A world box around the item, `[lo, hi]` (AO's default reach and the BVH's padding scale).
-    fn world_box(desc: &Self::Desc) -> [DVec3; 2];
+    /// A world box around the item, `[lo, hi]` (framing, AO's default reach and the BVH's padding scale);
+    /// `None` for an unbounded item (a plane).
+    fn world_box(desc: &Self::Desc) -> Option<[DVec3; 2]>;
 
     /// Appends the item, moved to rendering space by `−origin` in f64 and rounded once. A description the
     /// reader would have rejected still gets an item (one no ray can see), so that ids never shift.
     fn push(store: &mut Self::Store, desc: &Self::Desc, origin: DVec3);
     /// The number of items.
     fn len(store: &Self::Store) -> usize;
-    /// A box `(lo, hi)` around item `k` covering every hit the f32 kernel can report.
+    /// A box `(lo, hi)` around item `k` covering every hit the f32 kernel can report; infinite corners for
+    /// an unbounded item (the kind is then tested brute force).
     fn bounds(store: &Self::Store, k: usize) -> (Vec3f, Vec3f);
     /// Item `k` against the rays in `[0, t_max)`: the lanes it is hit in and their t (`t_max` elsewhere).
     /// Lane `i` of the result must be the bits of the one-lane call with lane `i`'s ray.
     fn test<F: Lanes>(store: &Self::Store, k: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F);
     /// For a ray that starts on item `k` (the departure primitive, which [`Kind::test`] is not asked
-    /// about): where it meets the item again in `[0, t_max)`. Only asked when [`Kind::MEETS_AGAIN`].
-    fn rehit(store: &Self::Store, k: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32>;
-    /// The outward unit normal at a point of item `k` (rendering space), and the point in the item's own
-    /// frame (for solid textures).
-    fn surface(store: &Self::Store, k: usize, point: Vec3f) -> (Vec3f, Vec3f);
+    /// about): where it meets the item again in `[0, t_max)`. Asked for every departing ray when
+    /// [`Kind::MEETS_AGAIN`], else for rays heading into the item (a solid's exit). None by default.
+    fn rehit(store: &Self::Store, k: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32> {
+        let _ = (store, k, ray, t_max);
+        None
+    }
+    /// The outward unit normal at hit `t` (at `point`) of `ray` on item `k` (rendering space), and the
+    /// point in the item's own frame (for solid textures).
+    fn surface(store: &Self::Store, k: usize, ray: &Ray<f32>, t: f32, point: Vec3f) -> (Vec3f, Vec3f);
+    /// [`Kind::surface`] for the lanes of a packet that all hit item `k`, in lane arithmetic with the
+    /// same operations in the same order (every lane the bits of the scalar call); `None` (the default)
+    /// where the kind has no such form, and shading then asks lane by lane.
+    fn surface_k<F: Lanes>(store: &Self::Store, k: usize, ray: &Ray<F>, t: F) -> Option<(V3<F>, V3<F>)> {
+        let _ = (store, k, ray, t);
+        None
+    }
+    /// The exact eye term of a solid item whose side a camera ray's hit takes from it (negative when the
+    /// eye is inside, [`crate::geometry::eye_side`]); `None` (the default) for the rest.
+    fn eye_term(store: &Self::Store, k: usize) -> Option<f32> {
+        let _ = (store, k);
+        None
+    }
     /// Item `k`'s material index.
     fn item_material(store: &Self::Store, k: usize) -> u32;
 
@@ -124,18 +151,33 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     /// that a miss of the f32 method shows).
     fn intersect64(item: &Self::Twin, ray: &Ray<f64>, t_max: f64) -> Option<f64>;
     /// [`Kind::rehit`] in f64.
-    fn rehit64(item: &Self::Twin, ray: &Ray<f64>, t_max: f64) -> Option<f64>;
-    /// The outward unit normal at a point on the item.
-    fn normal64(item: &Self::Twin, point: V3<f64>) -> V3<f64>;
+    fn rehit64(item: &Self::Twin, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
+        let _ = (item, ray, t_max);
+        None
+    }
+    /// The outward unit normal at hit `t` (at `point`) of `ray` on the item.
+    fn normal64(item: &Self::Twin, ray: &Ray<f64>, t: f64, point: V3<f64>) -> V3<f64>;
+    /// [`Kind::eye_term`] in f64.
+    fn eye_term64(item: &Self::Twin) -> Option<f64> {
+        let _ = item;
+        None
+    }
     /// The scale the f32 values of the item and of a ray's coordinates relative to it are rounded at, for
     /// a ray from `origin` (without `|origin|` itself, which the twin adds).
     fn scale64(item: &Self::Twin, origin: V3<f64>) -> f64;
-    /// Whether moving `ray`'s line by `nudge` plus `stray` can change whether (or where, across a
-    /// boundary) it hits the item: where an f32 and an f64 kernel may disagree on hit or miss.
-    fn grazing64(item: &Self::Twin, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool;
-    /// The distance from point `p` to the item's surface (exact up to f64 rounding, or a bound on it from
-    /// above that is tight near the surface).
-    fn distance64(item: &Self::Twin, p: V3<f64>) -> f64;
+    /// Whether moving `ray`'s line by `tol` (a multiple of ε32) of the item's rounding scale plus `stray`
+    /// can change whether (or where, across a boundary) it hits the item: where an f32 and an f64 kernel
+    /// may disagree on hit or miss.
+    fn grazing64(item: &Self::Twin, ray: &Ray<f64>, tol: f64, stray: Stray) -> bool;
+    /// Whether point `p` lies within `tol` (a multiple of ε32) of the item's rounding scale, plus `slack`,
+    /// of its surface: where a ray starting or ending at `p` can find or miss the item by rounding.
+    fn near64(item: &Self::Twin, p: V3<f64>, tol: f64, slack: f64) -> bool;
+}
+
+/// `tol` of the rounding scale of `item` for a ray from (or a point at) `origin`: `tol·(|origin| +
+/// scale64)`, the nudge the registered kinds' twin rules take.
+pub(crate) fn nudge<K: Kind>(item: &K::Twin, origin: V3<f64>, tol: f64) -> f64 {
+    tol * (origin.dot(origin).sqrt() + K::scale64(item, origin))
 }
 
 /// One kind's compiled items, the tree over them (`None`: brute force) and, with a tree, its leaf order.
@@ -279,12 +321,16 @@ macro_rules! per_kind {
                     $($field: self.$field.iter().map(|d| <$kind as Kind>::twin(d, origin)).collect(),)*
                 }
             }
-            /// Every item's world box.
+            /// Every bounded item's world box.
             pub(crate) fn world_boxes(&self) -> Vec<[DVec3; 2]> {
                 #[allow(unused_mut)]
                 let mut boxes = Vec::new();
-                $(boxes.extend(self.$field.iter().map(<$kind as Kind>::world_box));)*
+                $(boxes.extend(self.$field.iter().filter_map(<$kind as Kind>::world_box));)*
                 boxes
+            }
+            /// Whether some item is unbounded (a plane).
+            pub(crate) fn has_unbounded(&self) -> bool {
+                false $(|| self.$field.iter().any(|d| <$kind as Kind>::world_box(d).is_none()))*
             }
         }
 
@@ -359,24 +405,50 @@ macro_rules! per_kind {
                 )*
                 let _ = (wants, &mut build);
             }
+            /// Whether some kind that a departing ray can meet again ([`Kind::MEETS_AGAIN`]) has items: else
+            /// no departing ray needs asking.
+            pub(crate) fn any_meets_again(&self) -> bool {
+                false $(|| (<$kind as Kind>::MEETS_AGAIN && self.$field.len() > 0))*
+            }
             /// Whether a ray leaving item `id` (numbered over every kind's items in id order) can meet it
             /// again ([`Kind::MEETS_AGAIN`]).
             pub(crate) fn meets_again(&self, id: usize) -> bool {
                 dispatch!(self, id, false, |_items, K, _k| K::MEETS_AGAIN; $($field: $kind),*)
             }
-            /// [`Kind::rehit`] of item `id`, for a kind whose items a ray can meet again.
+            /// [`Kind::rehit`] of item `id`: where a ray leaving it meets it again (a solid's exit, for a
+            /// ray heading in).
             pub(crate) fn rehit(&self, id: usize, ray: &Ray<f32>, t_max: f32) -> Option<f32> {
-                dispatch!(self, id, None, |items, K, k| match K::MEETS_AGAIN {
-                    true => K::rehit(&items.store, k, ray, t_max),
-                    false => None,
-                }; $($field: $kind),*)
+                dispatch!(self, id, None, |items, K, k| K::rehit(&items.store, k, ray, t_max); $($field: $kind),*)
             }
-            /// Item `id`'s outward unit normal at `point`, the point in its frame, and its material.
-            pub(crate) fn surface(&self, id: usize, point: Vec3f) -> Option<(Vec3f, Vec3f, u32)> {
+            /// Item `id`'s outward unit normal at hit `t` (at `point`) of `ray`, the point in its frame,
+            /// and its material.
+            pub(crate) fn surface(
+                &self,
+                id: usize,
+                ray: &Ray<f32>,
+                t: f32,
+                point: Vec3f,
+            ) -> Option<(Vec3f, Vec3f, u32)> {
                 dispatch!(self, id, None, |items, K, k| {
-                    let (normal, object) = K::surface(&items.store, k, point);
+                    let (normal, object) = K::surface(&items.store, k, ray, t, point);
                     Some((normal, object, K::item_material(&items.store, k)))
                 }; $($field: $kind),*)
+            }
+            /// [`Kind::surface_k`] of item `id`, with its material.
+            pub(crate) fn surface_k<F: Lanes>(
+                &self,
+                id: usize,
+                ray: &Ray<F>,
+                t: F,
+            ) -> Option<(V3<F>, V3<F>, u32)> {
+                dispatch!(self, id, None, |items, K, k| {
+                    let material = K::item_material(&items.store, k);
+                    K::surface_k(&items.store, k, ray, t).map(|(n, o)| (n, o, material))
+                }; $($field: $kind),*)
+            }
+            /// [`Kind::eye_term`] of item `id`.
+            pub(crate) fn eye_term(&self, id: usize) -> Option<f32> {
+                dispatch!(self, id, None, |items, K, k| K::eye_term(&items.store, k); $($field: $kind),*)
             }
         }
 
@@ -412,30 +484,31 @@ macro_rules! per_kind {
             }
             /// [`Kind::rehit64`] of item `id`.
             pub(crate) fn rehit(&self, id: usize, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
-                dispatch!(self, id, None, |items, K, k| match K::MEETS_AGAIN {
-                    true => K::rehit64(&items[k], ray, t_max),
-                    false => None,
-                }; $($field: $kind),*)
+                dispatch!(self, id, None, |items, K, k| K::rehit64(&items[k], ray, t_max); $($field: $kind),*)
+            }
+            /// [`Kind::eye_term64`] of item `id`.
+            pub(crate) fn eye_term(&self, id: usize) -> Option<f64> {
+                dispatch!(self, id, None, |items, K, k| K::eye_term64(&items[k]); $($field: $kind),*)
             }
             /// Item `id`'s hit along `ray` in `[0, inf)`.
             pub(crate) fn hit_of(&self, id: usize, ray: &Ray<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| K::intersect64(&items[k], ray, f64::INFINITY); $($field: $kind),*)
             }
-            /// Item `id`'s outward unit normal at `point`.
-            pub(crate) fn normal(&self, id: usize, point: V3<f64>) -> Option<V3<f64>> {
-                dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], point)); $($field: $kind),*)
+            /// Item `id`'s outward unit normal at hit `t` (at `point`) of `ray`.
+            pub(crate) fn normal(&self, id: usize, ray: &Ray<f64>, t: f64, point: V3<f64>) -> Option<V3<f64>> {
+                dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], ray, t, point)); $($field: $kind),*)
             }
             /// [`Kind::scale64`] of item `id`.
             pub(crate) fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
                 dispatch!(self, id, None, |items, K, k| Some(K::scale64(&items[k], origin)); $($field: $kind),*)
             }
             /// [`Kind::grazing64`] of item `id`.
-            pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, nudge: f64, stray: Stray) -> Option<bool> {
-                dispatch!(self, id, None, |items, K, k| Some(K::grazing64(&items[k], ray, nudge, stray)); $($field: $kind),*)
+            pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, tol: f64, stray: Stray) -> Option<bool> {
+                dispatch!(self, id, None, |items, K, k| Some(K::grazing64(&items[k], ray, tol, stray)); $($field: $kind),*)
             }
-            /// [`Kind::distance64`] of item `id` from `p`.
-            pub(crate) fn distance(&self, id: usize, p: V3<f64>) -> Option<f64> {
-                dispatch!(self, id, None, |items, K, k| Some(K::distance64(&items[k], p)); $($field: $kind),*)
+            /// [`Kind::near64`] of item `id` and point `p`.
+            pub(crate) fn near(&self, id: usize, p: V3<f64>, tol: f64, slack: f64) -> Option<bool> {
+                dispatch!(self, id, None, |items, K, k| Some(K::near64(&items[k], p, tol, slack)); $($field: $kind),*)
             }
         }
     };

@@ -1,7 +1,7 @@
 //! `SceneDesc`: a scene as plain, validated data in f64, whatever file format it came from.
 //! Compile (`crate::compile`) turns it into the immutable [`crate::compile::Scene`] the renderer reads.
 
-use glam::{DAffine3, DVec3};
+use glam::DVec3;
 
 use crate::kinds::KindDescs;
 use crate::math::{Rgb, Rgb8};
@@ -457,17 +457,6 @@ pub struct SphereDesc {
     pub material: u32,
 }
 
-/// A transformed generic shape.
-#[derive(Clone, Copy, Debug, PartialEq)]
-pub struct ShapeDesc {
-    /// Unit sphere or plane z = 0.
-    pub(crate) kind: crate::geometry::ShapeKind,
-    /// Places the generic shape in the world (invertible).
-    pub(crate) world_from_object: DAffine3,
-    /// Index into `SceneDesc::materials`.
-    pub(crate) material: u32,
-}
-
 /// A planar polygon (NFF `p`, or `pp` with per-vertex normals).
 #[derive(Clone, Debug, PartialEq)]
 pub struct PolygonDesc {
@@ -487,7 +476,7 @@ pub struct SceneDesc {
     pub camera: CameraDesc,
     /// Sampling, depth, background.
     pub render: RenderDesc,
-    /// Materials; shapes refer to them by index.
+    /// Materials; primitives refer to them by index.
     pub materials: Vec<Material>,
     /// Point lights.
     pub lights: Vec<LightDesc>,
@@ -499,11 +488,9 @@ pub struct SceneDesc {
     /// than a material per colour. Compile ignores a list of another length (a description built by hand),
     /// as it degrades other inconsistent hand-built input: the spheres keep their materials' colours.
     pub sphere_colors: Vec<Rgb8>,
-    /// Transformed shapes: ids after the spheres.
-    pub shapes: Vec<ShapeDesc>,
-    /// Planar polygons: ids after the shapes, one per polygon however it is triangulated.
+    /// Planar polygons: ids after the spheres, one per polygon however it is triangulated.
     pub polygons: Vec<PolygonDesc>,
-    /// The registered kinds' items ([`crate::kinds`]: open cones, tori): ids after the polygons, kind by
-    /// kind in the registry's order.
+    /// The registered kinds' items ([`crate::kinds`]: ellipsoids, planes, open cones, tori): ids after the
+    /// polygons, kind by kind in the registry's order.
     pub kinds: KindDescs,
 }

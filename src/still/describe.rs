@@ -20,11 +20,9 @@ pub fn describe(scene: &Scene, job: &Job) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "scene: {} ({}, {}, {}, {}{}), {}, {}{}",
+        "scene: {} ({}, {}{}), {}, {}{}",
         plural(g.len(), "primitive"),
         plural(n.spheres, "sphere"),
-        plural(n.ellipsoids, "ellipsoid"),
-        plural(n.planes, "plane"),
         plural(n.polygons, "polygon"),
         g.kinds.counted().iter().map(|c| format!(", {c}")).collect::<String>(),
         plural(scene.lights.len(), "light"),
@@ -77,9 +75,8 @@ pub fn describe(scene: &Scene, job: &Job) -> String {
     };
     let _ = writeln!(
         out,
-        "accel: spheres by {spheres}, polygons by {}, ellipsoids by {}{}",
+        "accel: spheres by {spheres}, polygons by {}{}",
         search(&g.polygon_bvh),
-        search(&g.shape_bvh),
         (crate::kinds::NAMES.iter().zip(g.kinds.trees()).zip(g.kinds.counts()))
             .filter(|(_, n)| *n > 0)
             .map(|((name, tree), _)| format!(", {name} by {}", if tree { "BVH" } else { "brute force" }))

@@ -349,7 +349,7 @@ fn tie_explains_order_flips_of_a_strayed_ray_at_a_slant() {
         let at = rng.dir() * rng.range(500.0, 1500.0);
         let desc = SceneDesc {
             camera: camera(eye, eye + DVec3::Z, DVec3::Y, 40.0, 4, 4),
-            shapes: vec![plane(at, na), plane(at, nb)],
+            kinds: common::shapes([plane(at, na), plane(at, nb)]),
             ..SceneDesc::default()
         };
         let twin = Twin::new(&desc).expect("twin");

@@ -91,7 +91,7 @@ fn add_floor(desc: &mut SceneDesc) {
         glam::DQuat::from_rotation_arc(glam::DVec3::Z, glam::DVec3::Y),
         glam::DVec3::new(0.0, -1.0, 0.0),
     );
-    desc.shapes.push(common::shape(ShapeKind::Plane, floor));
+    desc.kinds.push_shape(ShapeKind::Plane, floor);
 }
 
 fn check_lanes<F: Lanes>(scene: &Scene, seed: u64, spread: f32) {

@@ -495,7 +495,6 @@ fn check_kind<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
 /// `n` random ellipsoids and a floor plane beside three spheres (and their two duplicates).
 fn shape_field(n: usize, seed: u64) -> SceneDesc {
     use bareray::geometry::ShapeKind;
-    use bareray::scene::desc::ShapeDesc;
     use glam::{DAffine3, DQuat};
     let mut desc = field(3, seed);
     let mut rng = Rng::new(seed);
@@ -505,24 +504,25 @@ fn shape_field(n: usize, seed: u64) -> SceneDesc {
         let scale = DVec3::new(rng.range(0.01, size), rng.range(0.01, size), rng.range(0.01, size));
         let turn = DQuat::from_euler(glam::EulerRot::XYZ, rng.range(0.0, 3.0), rng.range(0.0, 3.0), 0.0);
         let world_from_object = DAffine3::from_scale_rotation_translation(scale, turn, c);
-        desc.shapes.push(ShapeDesc { kind: ShapeKind::Sphere, world_from_object, material: 0 });
+        desc.kinds.push_shape(ShapeKind::Sphere, world_from_object);
     }
     let floor = DAffine3::from_translation(DVec3::new(0.0, -1.3, 0.0))
         * DAffine3::from_rotation_x(-std::f64::consts::FRAC_PI_2);
-    desc.shapes.push(ShapeDesc { kind: ShapeKind::Plane, world_from_object: floor, material: 0 });
+    desc.kinds.push_shape(ShapeKind::Plane, floor);
     desc
 }
 
 /// Bounded shapes (ellipsoids) live in a BVH, planes beside it: closest hits and occlusion equal brute force
 /// at every width.
 #[test]
-fn shape_bvh_equals_brute_force_at_every_width() {
+fn ellipsoid_bvh_equals_brute_force_at_every_width() {
     for (n, seed) in [(5, 21), (200, 22)] {
         let desc = shape_field(n, seed);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.shape_bvh.is_some() && brute.geometry.shape_bvh.is_none());
-        assert_eq!((bvh.geometry.shape_order.len(), bvh.geometry.loose_shapes.len()), (n, 1));
+        let (tree, brute_tree) = (&bvh.geometry.kinds, &brute.geometry.kinds);
+        assert!(tree.ellipsoids.bvh.is_some() && brute_tree.ellipsoids.bvh.is_none());
+        assert_eq!((tree.ellipsoids.order.len(), tree.planes.len(), tree.planes.bvh.is_none()), (n, 1, true));
         let rays = rays(&desc, 3000, seed + 100);
         let base = brute.geometry.spheres.len() as u32;
         let ellipsoid_hits = rays.iter().filter(|r| {
@@ -566,7 +566,7 @@ fn cone_bvh_equals_brute_force_at_every_width() {
         let desc = cone_field(n, seed);
         let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.kinds.trees()[0] && !brute.geometry.kinds.trees()[0]);
+        assert!(bvh.geometry.kinds.cones.bvh.is_some() && brute.geometry.kinds.cones.bvh.is_none());
         let rays = rays(&desc, 3000, seed + 100);
         let base = brute.geometry.kinds_base() as u32;
         let cone_hits = rays.iter().filter(|r| {

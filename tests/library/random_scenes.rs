@@ -197,7 +197,7 @@ fn generator_covers_every_kind_and_is_deterministic() {
         for (k, m) in MATERIALS.iter().enumerate() {
             materials[k] += usize::from(text.contains(&format!("material = \"{m}\"")));
         }
-        ellipsoids += usize::from(desc.shapes.iter().any(|s| s.kind == bareray::geometry::ShapeKind::Sphere));
+        ellipsoids += usize::from(!desc.kinds.ellipsoids.is_empty());
         normals += usize::from(desc.polygons.iter().any(|p| p.normals.is_some()));
         far += usize::from(desc.camera.eye.length() > 1e4);
         inside += usize::from(text.contains("InsideOne") || text.contains("InsideAll"));
@@ -323,8 +323,9 @@ fn torus_left_at_a_grazing_slant_is_met_again_near_its_start() {
     // The torus in the twin's space: its prim is the registered kinds' first id plus k.
     let k = hit.prim as usize
         - desc.spheres.len()
-        - desc.shapes.len()
         - desc.polygons.len()
+        - desc.kinds.ellipsoids.len()
+        - desc.kinds.planes.len()
         - desc.kinds.cones.len();
     let torus = &desc.kinds.tori[k];
     let (centre, axis) = (torus.centre - twin.origin, torus.axis.normalize());

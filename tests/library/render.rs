@@ -301,7 +301,8 @@ fn filters_are_deterministic_and_normalised() {
     // Nothing in view: every sample is the background colour.
     let mut empty = desc.clone();
     empty.spheres.clear();
-    empty.shapes.clear();
+    empty.kinds.ellipsoids.clear();
+    empty.kinds.planes.clear();
     empty.render.background = bareray::math::V3::new(0.25, 0.5, 0.75);
     for kind in kinds {
         empty.render.filter = Some(Filter { kind, radius: 2.0 });
@@ -378,7 +379,8 @@ fn adaptive_sampling_traces_corners_once_and_splits_at_edges() {
     let adaptive = Pattern::Adaptive { threshold: 0.1, depth: 2 };
     let mut empty = desc.clone();
     empty.spheres.clear();
-    empty.shapes.clear();
+    empty.kinds.ellipsoids.clear();
+    empty.kinds.planes.clear();
     let corners = 73 * 49;
     assert_eq!(run(&empty, adaptive).counts.primary, corners, "nothing in view: each corner once");
     // Splitting every pixel to depth 2 would trace the whole lattice of quarter-pixel points.

@@ -2,7 +2,6 @@
 
 use std::path::Path;
 
-use bareray::geometry::ShapeKind;
 use bareray::io::{toml, SceneError};
 use bareray::scene::desc::{Falloff, Pattern, PostFilter};
 use bareray::scene::SceneDesc;
@@ -24,7 +23,7 @@ fn empty_file_gives_defaults() {
     let d = parse("").unwrap();
     assert_eq!(d.camera.width, 640);
     assert_eq!(d.materials.len(), 1);
-    assert!(d.spheres.is_empty() && d.shapes.is_empty());
+    assert!(d.spheres.is_empty() && d.kinds.is_empty());
 }
 
 #[test]
@@ -63,13 +62,11 @@ fn full_scene_is_read() {
     assert_eq!(d.lights[0].falloff, Falloff::InverseSquare);
     assert_eq!(d.spheres.len(), 1);
     assert_eq!(d.materials[d.spheres[0].material as usize].transmit, 0.5);
-    assert_eq!(d.shapes.len(), 2);
-    assert_eq!(d.shapes[0].kind, ShapeKind::Sphere);
+    assert_eq!((d.kinds.ellipsoids.len(), d.kinds.planes.len()), (1, 1));
     // Scaled 2× along x, then turned 90° about z: the long axis now lies along y.
-    let long = d.shapes[0].world_from_object.transform_vector3(glam::DVec3::X);
+    let long = d.kinds.ellipsoids[0].world_from_object.transform_vector3(glam::DVec3::X);
     assert!((long - glam::DVec3::new(0.0, 2.0, 0.0)).length() < 1e-12, "{long}");
-    assert_eq!(d.shapes[1].kind, ShapeKind::Plane);
-    let n = d.shapes[1].world_from_object.transform_vector3(glam::DVec3::Z);
+    let n = d.kinds.planes[0].world_from_object.transform_vector3(glam::DVec3::Z);
     assert!((n - glam::DVec3::Y).length() < 1e-12);
 }
 
@@ -119,11 +116,46 @@ fn bad_values_name_their_line() {
     error_at("[materials.x]\nior = 0\n", 2, "ior must be positive");
     error_at("[render]\npattern = \"jitter\"\n", 2, "grid");
     error_at("[[planes]]\nnormal = [0, 0, 0]\n", 2, "non-zero");
+    error_at("[[ellipsoids]]\ncenter = [0,0,0]\nradii = [1, 0, 2]\n", 3, "radii must be positive");
+    error_at("[[ellipsoids]]\ncenter = [0,0,1e39]\nradii = [1, 1, 1]\n", 2, "center must be finite");
+    error_at(
+        "[[ellipsoids]]\ncenter = [0,0,0]\nradii = [1, 1, 1]\ntransform = [{ rotate = { axis = [0, 0, 0], degrees = 9 } }]\n",
+        4,
+        "non-zero",
+    );
     error_at(
         "[[spheres]]\ncenter = [0,0,0]\nradius = 1\ntransform = [{ scale = [1, 0, 1] }]\n",
         4,
         "singular",
     );
+}
+
+/// `[[ellipsoids]]`: the unit sphere stretched by `radii`, then transformed about its centre, then moved to
+/// `center`; listed before the transformed `[[spheres]]`, and the same ellipsoid either way.
+#[test]
+fn ellipsoids_are_read_and_equal_a_stretched_sphere() {
+    let d = parse(
+        r#"
+        [[spheres]]
+        center = [1, 2, 3]
+        radius = 2
+        transform = [{ scale = [1, 0.5, 1.5] }, { rotate = { axis = [0, 0, 1], degrees = 90 } }]
+        [[ellipsoids]]
+        center = [1, 2, 3]
+        radii = [2, 1, 3]
+        transform = [{ rotate = { axis = [0, 0, 1], degrees = 90 } }]
+    "#,
+    )
+    .unwrap();
+    let e = &d.kinds.ellipsoids;
+    assert_eq!(e.len(), 2);
+    // The table's own ellipsoid first: its long axis (3 along z) stays on z; its x semi-axis 2 turns onto y.
+    let m = e[0].world_from_object;
+    assert!((m.transform_vector3(glam::DVec3::X) - glam::DVec3::new(0.0, 2.0, 0.0)).length() < 1e-12);
+    assert!((m.transform_point3(glam::DVec3::Z) - glam::DVec3::new(1.0, 2.0, 6.0)).length() < 1e-12);
+    let (a, b) = (e[0].world_from_object, e[1].world_from_object);
+    assert!((a.matrix3 - b.matrix3).abs().to_cols_array().iter().all(|x| *x < 1e-12), "{a:?} {b:?}");
+    assert_eq!(a.translation, b.translation);
 }
 
 #[test]

@@ -36,7 +36,7 @@ fn scaled(desc: &SceneDesc, s: f64, offset: DVec3) -> SceneDesc {
         sp.center = a.transform_point3(sp.center);
         sp.radius *= s;
     }
-    for sh in &mut out.shapes {
+    for sh in out.kinds.ellipsoids.iter_mut().chain(&mut out.kinds.planes) {
         sh.world_from_object = a * sh.world_from_object;
     }
     for p in &mut out.polygons {

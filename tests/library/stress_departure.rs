@@ -18,7 +18,7 @@ use bareray::scene::desc::{PolygonDesc, SceneDesc, SphereDesc};
 use common::oracle::Oracle;
 use common::rng::Rng;
 use common::wide::{dv, f32v, wide, wide_ray, wide_shape};
-use common::{compile, measuring, shape, sphere, EPS32};
+use common::{compile, measuring, shape, shapes, sphere, EPS32};
 use glam::{DAffine3, DQuat, DVec3};
 
 /// What the departure checks on one solid found.
@@ -182,9 +182,9 @@ fn departure_random_ellipsoids() {
         } else {
             c + rng.dir() * size * rng.log(0.05, 2.0)
         };
-        let desc = SceneDesc { shapes: vec![shape(ShapeKind::Sphere, m)], ..SceneDesc::default() };
+        let desc = SceneDesc { kinds: shapes([shape(ShapeKind::Sphere, m)]), ..SceneDesc::default() };
         let scene = compile(&desc);
-        let s64 = wide_shape(&scene.geometry.shapes[0]);
+        let s64 = wide_shape(&scene.geometry.kinds.ellipsoids.store.shapes[0]);
         let far = |ray: &Ray<f64>| {
             let roots = s64.unit_sphere_roots(&s64.to_object(ray));
             roots.hit.then_some(roots.far)
@@ -228,7 +228,7 @@ fn departure_planes_and_polygons_never_rehit() {
         let desc = if k % 2 == 0 {
             let m =
                 DAffine3::from_translation(p0) * DAffine3::from_quat(DQuat::from_rotation_arc(DVec3::Z, n));
-            SceneDesc { shapes: vec![shape(ShapeKind::Plane, m)], ..SceneDesc::default() }
+            SceneDesc { kinds: shapes([shape(ShapeKind::Plane, m)]), ..SceneDesc::default() }
         } else {
             let w = n.cross(v).normalize();
             let quad = [v * size, w * size * 0.7, -v * size * 1.3, -w * size].map(|q| p0 + q).to_vec();
@@ -375,7 +375,7 @@ fn departure_grazing_shadow_rays() {
             let m = DAffine3::from_translation(c)
                 * DAffine3::from_quat(DQuat::from_axis_angle(rng.dir(), 1.0))
                 * DAffine3::from_scale(DVec3::new(r, r * 0.3, r * 2.0));
-            SceneDesc { shapes: vec![shape(ShapeKind::Sphere, m)], ..SceneDesc::default() }
+            SceneDesc { kinds: shapes([shape(ShapeKind::Sphere, m)]), ..SceneDesc::default() }
         };
         let scene = compile(&desc);
         let g = &scene.geometry;
@@ -407,7 +407,7 @@ fn departure_grazing_shadow_rays() {
                 let roots = if k % 2 == 0 {
                     sphere_roots(wide(g.spheres.center(0)), f64::from(g.spheres.r[0]), &r64)
                 } else {
-                    let s64 = wide_shape(&g.shapes[0]);
+                    let s64 = wide_shape(&g.kinds.ellipsoids.store.shapes[0]);
                     s64.unit_sphere_roots(&s64.to_object(&r64))
                 };
                 let (h, far) = far_root(&roots, f64::INFINITY);

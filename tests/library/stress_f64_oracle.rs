@@ -18,7 +18,7 @@ use bareray::scene::desc::{PolygonDesc, SceneDesc};
 use common::oracle::Oracle;
 use common::rng::Rng;
 use common::wide::{dv, wide_ray};
-use common::{camera, compile, measuring, shape, sphere, EPS32};
+use common::{camera, compile, measuring, shape, shapes, sphere, EPS32};
 use glam::{DAffine3, DQuat, DVec3};
 
 /// What one primary-ray comparison found.
@@ -212,7 +212,7 @@ fn oracle_extreme_ellipsoids() {
     };
     let desc = SceneDesc {
         camera: camera(DVec3::new(0.2, 1.0, -4.0), DVec3::new(0.0, 0.0, 0.0), DVec3::Y, 60.0, 240, 160),
-        shapes: vec![
+        kinds: shapes([
             // Pancake: 1e3 × 1e-3 × 1e3, its top at y = −0.5.
             shape(
                 ShapeKind::Sphere,
@@ -240,7 +240,7 @@ fn oracle_extreme_ellipsoids() {
                     * tilt(10.0, DVec3::Z)
                     * DAffine3::from_scale(DVec3::new(1e3, 0.3, 0.3)),
             ),
-        ],
+        ]),
         ..SceneDesc::default()
     };
     check_agreement("ellipsoids", &compile(&desc), 3e-4, 1e-4, 1e-3);
@@ -263,11 +263,11 @@ fn oracle_grazing_tilted_planes() {
     let desc = SceneDesc {
         camera: camera(DVec3::new(0.3, 0.01, 0.2), DVec3::new(0.0, 0.0, 100.0), DVec3::Y, 40.0, 240, 120),
         spheres: vec![sphere(DVec3::new(0.5, 0.2, 5.0), 0.2)],
-        shapes: vec![
+        kinds: shapes([
             plane(DVec3::ZERO, DVec3::new(0.0, 1.0, 0.0).normalize() + DVec3::new(0.017, 0.0, 0.0)),
             plane(DVec3::new(0.0, 3.0, 0.0), DVec3::new(0.001, -1.0, 0.0003)),
             plane(DVec3::new(4.0, 0.0, 0.0), DVec3::new(-1.0, 0.001, 0.01)),
-        ],
+        ]),
         ..SceneDesc::default()
     };
     check_agreement("planes", &compile(&desc), 1e-5, 1e-5, 1e-3);

@@ -3,33 +3,32 @@
 //!
 //! It reads the [`SceneDesc`] (already f64) and never the compiled f32 scene, and works in the renderer's
 //! rendering space ([`RenderingFrame`]: origin at the eye, or at a far scene's centre): every position `p`
-//! is stored as `p − origin`, computed in f64 (sphere centres, shape translations, polygon vertices, the
-//! registered kinds' items, lights), and camera rays start where the renderer's do (at exactly 0, or a far
+//! is stored as `p − origin`, computed in f64 (sphere centres, polygon vertices, the registered kinds'
+//! items, lights), and camera rays start where the renderer's do (at exactly 0, or a far
 //! scene's start distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to
 //! f32. Intersections run the generic kernels of [`crate::geometry`] instantiated at f64
-//! ([`intersect_sphere`], [`Shape::intersect`], [`intersect_triangle`]) and each registered kind's f64 form
+//! ([`intersect_sphere`], [`intersect_triangle`]) and each registered kind's f64 form
 //! ([`crate::kinds::Kind::intersect64`]), with the renderer's rules: closest hit by the total order (smaller
 //! t, then lower id), and a ray that leaves a primitive ([`Departure`]) never hits it again except, for a
 //! solid left toward its inside, at its exit root, and for a kind that says so (an open cone, a torus),
 //! wherever it meets that item again ([`crate::kinds::Kind::rehit64`], as `accel/departure.rs` rules).
 //!
-//! Ids are scene-file ids: spheres `0..` in file order, then shapes, then polygons (one id per polygon), then
-//! the registered kinds' items. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from
+//! Ids are scene-file ids: spheres `0..` in file order, then polygons (one id per polygon), then the
+//! registered kinds' items. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from
 //! [`TWIN_BVH_MIN_SPHERES`] on; the rest brute force (planes are unbounded).
 
 use std::ops::Range;
 
-use glam::{DAffine3, DVec3};
+use glam::DVec3;
 
 use crate::camera::{Camera, CameraError};
 use crate::compile::RenderingFrame;
 use crate::geometry::polygon::{newell_normal, triangulate};
 use crate::geometry::{
-    far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, Shape,
-    ShapeKind, NO_PRIM,
+    far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, NO_PRIM,
 };
 use crate::kinds::KindTwins;
-use crate::math::{Affine, V3};
+use crate::math::V3;
 use crate::scene::desc::SceneDesc;
 
 use super::bvh64::Bvh64;
@@ -87,7 +86,6 @@ pub(crate) struct Twin {
     /// Light positions in the twin's space.
     pub(crate) lights: Vec<V3<f64>>,
     spheres: Vec<(V3<f64>, f64)>,
-    shapes: Vec<Shape<f64>>,
     tris: Vec<Tri64>,
     polygons: Vec<Polygon64>,
     /// The registered kinds' items, ids after the polygons.
@@ -101,12 +99,6 @@ fn v(p: DVec3) -> V3<f64> {
 
 fn len(p: V3<f64>) -> f64 {
     p.dot(p).sqrt()
-}
-
-/// Sum of the column lengths of a linear map: a bound on how much it stretches any vector (‖L·x‖ ≤ this ·
-/// ‖x‖).
-fn norm_bound(a: &Affine<f64>) -> f64 {
-    a.cols.iter().map(|c| len(*c)).sum()
 }
 
 impl Twin {
@@ -126,19 +118,7 @@ impl Twin {
         (camera.eye, camera.start) = (v(desc.camera.eye - origin), frame.start);
         let spheres: Vec<(V3<f64>, f64)> =
             desc.spheres.iter().map(|s| (v(s.center - origin), s.radius)).collect();
-        let shapes = desc
-            .shapes
-            .iter()
-            .map(|s| {
-                // The placement moved by −origin: the translation is the only part that changes.
-                let m = DAffine3 {
-                    matrix3: s.world_from_object.matrix3,
-                    translation: s.world_from_object.translation - origin,
-                };
-                Shape::placed(s.kind, &m, s.material)
-            })
-            .collect::<Vec<_>>();
-        let base = (spheres.len() + shapes.len()) as u32;
+        let base = spheres.len() as u32;
         let (mut tris, mut polygons) = (Vec::new(), Vec::new());
         for (k, p) in desc.polygons.iter().enumerate() {
             let vertices: Vec<DVec3> = p.vertices.iter().map(|&x| x - origin).collect();
@@ -178,7 +158,6 @@ impl Twin {
             origin,
             lights: desc.lights.iter().map(|l| v(l.position - origin)).collect(),
             spheres,
-            shapes,
             tris,
             polygons,
             kinds: desc.kinds.twins(origin),
@@ -200,7 +179,7 @@ impl Twin {
 
     /// The id of the registered kinds' first item.
     fn kinds_base(&self) -> usize {
-        self.spheres.len() + self.shapes.len() + self.polygons.len()
+        self.spheres.len() + self.polygons.len()
     }
 
     /// Primitive `prim`'s index over the registered kinds' items, when it is one.
@@ -235,16 +214,6 @@ impl Twin {
                 }
             }
         }
-        let ns = self.spheres.len() as u32;
-        for (k, s) in self.shapes.iter().enumerate() {
-            let id = ns + k as u32;
-            if id != from.prim {
-                let (hit, t) = s.intersect(ray, t_max);
-                if hit {
-                    best.update(id, t);
-                }
-            }
-        }
         for tri in &self.tris {
             if tri.id != from.prim {
                 let (hit, t) = intersect_triangle(tri.v0, tri.e1, tri.e2, ray, t_max);
@@ -263,15 +232,14 @@ impl Twin {
     }
 
     /// Where `ray` meets the primitive it leaves again, in `[0, t_max)`: for a solid left toward its inside,
-    /// its exit root; for a registered kind left to either side (an open cone, a torus), where it meets the
-    /// item again ([`crate::kinds::Kind::rehit64`]).
+    /// its exit root (a registered kind's [`crate::kinds::Kind::rehit64`]: an ellipsoid's); for a registered
+    /// kind that meets again (an open cone, a torus) left to either side, where it meets the item again.
     fn departure_hit(&self, from: Departure, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
-        if let Some(k) = self.kind(from.prim) {
-            return self.kinds.rehit(k, ray, t_max);
-        }
-        match from.inward {
-            true => self.exit(from.prim, ray, t_max),
-            false => None,
+        match self.kind(from.prim) {
+            Some(k) if from.inward || self.kinds.meets_again(k) => self.kinds.rehit(k, ray, t_max),
+            Some(_) => None,
+            None if from.inward => self.exit(from.prim, ray, t_max),
+            None => None,
         }
     }
 
@@ -281,19 +249,10 @@ impl Twin {
         self.intersect(ray, from, t_max).is_hit()
     }
 
-    /// The exit root in `[0, t_max)` of a ray leaving solid `prim` toward its inside.
+    /// The exit root in `[0, t_max)` of a ray leaving sphere `prim` toward its inside.
     fn exit(&self, prim: u32, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        let roots = if i < ns {
-            sphere_roots(self.spheres[i].0, self.spheres[i].1, ray)
-        } else if i < ns + self.shapes.len() && self.shapes[i - ns].kind.is_solid() {
-            let s = &self.shapes[i - ns];
-            s.unit_sphere_roots(&s.to_object(ray))
-        } else {
-            return None;
-        };
-        let (hit, t) = far_root(&roots, t_max);
+        let &(centre, radius) = self.spheres.get(prim as usize)?;
+        let (hit, t) = far_root(&sphere_roots(centre, radius, ray), t_max);
         hit.then_some(t)
     }
 
@@ -312,11 +271,9 @@ impl Twin {
         let ns = self.spheres.len();
         let (hit, t) = if i < ns {
             first_root(&sphere_roots(self.spheres[i].0, self.spheres[i].1, ray), f64::INFINITY)
-        } else if i < ns + self.shapes.len() {
-            self.shapes[i - ns].intersect(ray, f64::INFINITY)
         } else {
             let mut best = Hit64::MISS;
-            for tri in &self.tris[self.polygons[i - ns - self.shapes.len()].tris.clone()] {
+            for tri in &self.tris[self.polygons[i - ns].tris.clone()] {
                 let (hit, t) = intersect_triangle(tri.v0, tri.e1, tri.e2, ray, f64::INFINITY);
                 if hit {
                     best.update(tri.id, t);
@@ -327,20 +284,13 @@ impl Twin {
         hit.then_some(t)
     }
 
-    /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere or an
-    /// ellipsoid: the sign of its eye term in f64, when not zero); `None` otherwise. The f32 scene's
-    /// `crate::accel::Geometry::eye_inside`.
+    /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere or a
+    /// kind with an eye term, an ellipsoid: the sign of its eye term in f64, when not zero); `None`
+    /// otherwise. The f32 scene's `crate::accel::Geometry::eye_inside`.
     pub(crate) fn eye_inside(&self, prim: u32) -> Option<bool> {
-        let i = prim as usize;
-        let c_eye = match self.spheres.get(i) {
+        let c_eye = match self.spheres.get(prim as usize) {
             Some(&(centre, radius)) => crate::geometry::eye_term(centre, radius),
-            None => {
-                let shape = self.shapes.get(i - self.spheres.len())?;
-                if !shape.kind.is_solid() {
-                    return None;
-                }
-                shape.c_eye
-            }
+            None => self.kinds.eye_term(self.kind(prim)?)?,
         };
         crate::geometry::eye_side(c_eye)
     }
@@ -353,17 +303,10 @@ impl Twin {
         let ns = self.spheres.len();
         let normal = if i < ns {
             (point - self.spheres[i].0).normalize()
-        } else if i < ns + self.shapes.len() {
-            let s = &self.shapes[i - ns];
-            let n = match s.kind {
-                ShapeKind::Sphere => s.to_object(ray).at(t),
-                ShapeKind::Plane => V3::new(0.0, 0.0, 1.0),
-            };
-            s.normal_to_world.vector(n).normalize()
-        } else if let Some(n) = self.kind(prim).and_then(|k| self.kinds.normal(k, point)) {
+        } else if let Some(n) = self.kind(prim).and_then(|k| self.kinds.normal(k, ray, t, point)) {
             n
         } else {
-            self.polygon_normal(i - ns - self.shapes.len(), point)
+            self.polygon_normal(i - ns, point)
         };
         (point, normal)
     }

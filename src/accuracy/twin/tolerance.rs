@@ -1,8 +1,8 @@
 //! The twin's tolerances: how far f32 rounding can move a ray near a primitive, and the rules that
 //! explain an f32/f64 disagreement by it (grazing, ties in t, contact entries, starts near a surface).
 
-use super::{len, norm_bound, Hit64, Slack, Twin, CONTACT_C_ROUNDINGS, EPS32};
-use crate::geometry::{Departure, Ray, ShapeKind, CONTACT_ROUNDINGS, NO_PRIM};
+use super::{len, Hit64, Slack, Twin, CONTACT_C_ROUNDINGS, EPS32};
+use crate::geometry::{Departure, Ray, CONTACT_ROUNDINGS, NO_PRIM};
 use crate::math::V3;
 
 impl Twin {
@@ -17,8 +17,6 @@ impl Twin {
         if i < ns {
             let (c, r) = self.spheres[i];
             o + len(c - origin) + r
-        } else if i < ns + self.shapes.len() {
-            o + len(self.shapes[i - ns].center - origin)
         } else if let Some(scale) = self.kind(prim).and_then(|k| self.kinds.scale(k, origin)) {
             o + scale
         } else {
@@ -31,16 +29,17 @@ impl Twin {
     ///
     /// - spheres: the line's closest approach l to the centre satisfies `|l − r| ≤ k·ε32·(|c − o| + r)` plus
     ///   `slack` at that distance;
-    /// - ellipsoids: the same test in object space, with the scale `Σ|L_i|·(|o_i| + |c_i|) + 1` (L the
-    ///   object-from-world map, whose f32 rounding the object-space ray carries), as tests/library/stress_*.rs does;
-    /// - planes: the object-space direction is within `k·ε32` (plus the direction slack) of parallel;
     /// - polygons: the direction is within that of parallel to the plane, or the line meets the plane within
     ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline;
     /// - cones: a nudge of the line by `δ = k·ε32·(|o| + |B − o| + h + max(r0, r1))` plus slack can change
     ///   hit or miss, in one of two ways (`cone_grazing`): the line is within `δ` of tangency with the
     ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets the
     ///   quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
-    ///   crosses the rim, as a polygon's hit crosses an edge).
+    ///   crosses the rim, as a polygon's hit crosses an edge);
+    /// - the other registered kinds: their own rules ([`crate::kinds::Kind::grazing64`]; ellipsoids: the
+    ///   sphere's test in object space, with the scale `Σ|L_i|·(|o_i| + |c_i|) + 1`, L the object-from-world
+    ///   map, whose f32 rounding the object-space ray carries; planes: the object-space direction is within
+    ///   `k·ε32`, plus the direction slack, of parallel).
     pub(crate) fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64, slack: Slack) -> bool {
         if prim == NO_PRIM || prim as usize >= self.len() {
             return false;
@@ -60,29 +59,10 @@ impl Twin {
             let dist = len(c - ray.origin);
             return near_tangent(c, r, ray, dist + r, slack.at(dist));
         }
-        if i < ns + self.shapes.len() {
-            let s = &self.shapes[i - ns];
-            let local = s.to_object(ray);
-            let m = &s.object_from_world;
-            let stretch = norm_bound(m);
-            let (o, c) = (ray.origin, s.center);
-            let spread = len(m.cols[0]) * (o.x.abs() + c.x.abs())
-                + len(m.cols[1]) * (o.y.abs() + c.y.abs())
-                + len(m.cols[2]) * (o.z.abs() + c.z.abs());
-            let d = local.dir;
-            return match s.kind {
-                ShapeKind::Sphere => {
-                    let dist = len(c - o);
-                    near_tangent(V3::all(0.0), 1.0, &local, spread + 1.0, stretch * slack.at(dist))
-                }
-                ShapeKind::Plane => d.z.abs() <= (tol + stretch * slack.dir) * len(d),
-            };
-        }
         if let Some(k) = self.kind(prim) {
-            let nudge = tol * self.magnitude(prim, ray.origin);
-            return self.kinds.grazing(k, ray, nudge, slack).unwrap_or(false);
+            return self.kinds.grazing(k, ray, tol, slack).unwrap_or(false);
         }
-        let poly = &self.polygons[i - ns - self.shapes.len()];
+        let poly = &self.polygons[i - ns];
         let (n, d) = (poly.normal, ray.dir);
         let cos = n.dot(d).abs() / len(d);
         if cos <= tol + slack.dir {
@@ -101,7 +81,7 @@ impl Twin {
     /// The unit geometric normal of `prim` at `ray`'s point `t`: [`Twin::surface`]'s, but a polygon's plane
     /// normal rather than its interpolated vertex normals (the surface the hit's `t` is measured on).
     fn geometric_normal(&self, ray: &Ray<f64>, t: f64, prim: u32) -> V3<f64> {
-        let first = self.spheres.len() + self.shapes.len();
+        let first = self.spheres.len();
         match (prim as usize).checked_sub(first).and_then(|k| self.polygons.get(k)) {
             Some(poly) => poly.normal,
             None => self.surface(ray, t, prim).1,
@@ -162,9 +142,9 @@ impl Twin {
     }
 
     /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
-    /// `slack` for spheres, the object-space equivalent for shapes (unit sphere or plane z = 0), the distance
-    /// to the plane for polygons, for cones the distance to the lateral surface (to the infinite cone between
-    /// the end planes, to the nearer rim circle beyond them) within `k·ε32` of `Twin::magnitude`'s scale. This is where a ray that starts at `p` (a secondary ray's origin on another
+    /// `slack` for spheres, the distance to the plane for polygons, and each registered kind's own rule
+    /// ([`crate::kinds::Kind::near64`]: the object-space equivalent for ellipsoids and planes; for cones the
+    /// distance to the lateral surface within `k·ε32` of their scale). This is where a ray that starts at `p` (a secondary ray's origin on another
     /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
     /// find or miss `prim` by rounding.
     pub(crate) fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
@@ -178,24 +158,10 @@ impl Twin {
             let (c, r) = self.spheres[i];
             return (len(p - c) - r).abs() <= tol * self.magnitude(prim, p) + slack;
         }
-        if i < ns + self.shapes.len() {
-            let s = &self.shapes[i - ns];
-            let m = &s.object_from_world;
-            let q = m.vector(p - s.center);
-            let c = s.center;
-            let spread = len(m.cols[0]) * (p.x.abs() + c.x.abs())
-                + len(m.cols[1]) * (p.y.abs() + c.y.abs())
-                + len(m.cols[2]) * (p.z.abs() + c.z.abs());
-            let off = match s.kind {
-                ShapeKind::Sphere => (len(q) - 1.0).abs(),
-                ShapeKind::Plane => q.z.abs(),
-            };
-            return off <= tol * (spread + 1.0) + norm_bound(m) * slack;
+        if let Some(near) = self.kind(prim).and_then(|k| self.kinds.near(k, p, tol, slack)) {
+            return near;
         }
-        if let Some(off) = self.kind(prim).and_then(|k| self.kinds.distance(k, p)) {
-            return off <= tol * self.magnitude(prim, p) + slack;
-        }
-        let poly = &self.polygons[i - ns - self.shapes.len()];
+        let poly = &self.polygons[i - ns];
         let Some(&anchor) = poly.outline.first() else { return false };
         let extent = poly.outline.iter().map(|&x| len(x - anchor)).fold(0.0, f64::max);
         poly.normal.dot(p - anchor).abs() <= tol * (len(p) + len(anchor) + extent) + slack

@@ -12,7 +12,7 @@ use toml::Spanned;
 
 pub(crate) use kernel::{intersect_cone, rehit_cone, Cone, Cones};
 
-use super::{Kind, KindError, Stray};
+use super::{nudge, Kind, KindError, Stray};
 use crate::geometry::Ray;
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
@@ -119,14 +119,14 @@ impl Kind for OpenCone {
 
     /// The balls of the end discs' radii around the two end centres: they hold both discs, so the surface.
     /// For a cone [`Cone::new`] rejects, the box of the needle that stands for it.
-    fn world_box(d: &ConeDesc) -> [DVec3; 2] {
+    fn world_box(d: &ConeDesc) -> Option<[DVec3; 2]> {
         if Cone::new(d.base, d.base_radius, d.apex, d.apex_radius).is_none() {
             let tip = needle_tip(d.base);
-            return [d.base.min(tip), d.base.max(tip)];
+            return Some([d.base.min(tip), d.base.max(tip)]);
         }
         let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
         let ([a, b], [c, e]) = (ball(d.base, d.base_radius), ball(d.apex, d.apex_radius));
-        [a.min(c), b.max(e)]
+        Some([a.min(c), b.max(e)])
     }
 
     fn push(store: &mut Cones, d: &ConeDesc, origin: DVec3) {
@@ -154,7 +154,7 @@ impl Kind for OpenCone {
         hit.then_some(t)
     }
 
-    fn surface(store: &Cones, k: usize, point: Vec3f) -> (Vec3f, Vec3f) {
+    fn surface(store: &Cones, k: usize, _ray: &Ray<f32>, _t: f32, point: Vec3f) -> (Vec3f, Vec3f) {
         let cone = store.cone(k);
         (cone.normal(point), cone.frame.to_object(point))
     }
@@ -182,7 +182,7 @@ impl Kind for OpenCone {
         hit.then_some(t)
     }
 
-    fn normal64(cone: &Cone<f64>, point: V3<f64>) -> V3<f64> {
+    fn normal64(cone: &Cone<f64>, _ray: &Ray<f64>, _t: f64, point: V3<f64>) -> V3<f64> {
         cone.normal(point)
     }
 
@@ -193,11 +193,11 @@ impl Kind for OpenCone {
         (cone.frame.origin - origin).length() + cone.height + cone.base_radius.max(apex_radius)
     }
 
-    fn grazing64(cone: &Cone<f64>, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool {
-        twin::grazing(cone, ray, nudge, stray)
+    fn grazing64(cone: &Cone<f64>, ray: &Ray<f64>, tol: f64, stray: Stray) -> bool {
+        twin::grazing(cone, ray, nudge::<Self>(cone, ray.origin, tol), stray)
     }
 
-    fn distance64(cone: &Cone<f64>, p: V3<f64>) -> f64 {
-        twin::distance(cone, p)
+    fn near64(cone: &Cone<f64>, p: V3<f64>, tol: f64, slack: f64) -> bool {
+        twin::distance(cone, p) <= nudge::<Self>(cone, p, tol) + slack
     }
 }

@@ -13,7 +13,7 @@ use toml::Spanned;
 pub(crate) use kernel::{intersect_torus, rehit_torus, TorusShape};
 
 use super::placement::{transform, TransformOp};
-use super::{Kind, KindError, Stray};
+use super::{nudge, Kind, KindError, Stray};
 use crate::geometry::{round_down, round_up, Frame, Ray};
 use crate::math::{Vec3f, V3};
 use crate::simd::Lanes;
@@ -163,9 +163,9 @@ impl Kind for Torus {
         t.material.as_ref()
     }
 
-    fn world_box(d: &TorusDesc) -> [DVec3; 2] {
+    fn world_box(d: &TorusDesc) -> Option<[DVec3; 2]> {
         let (lo, hi) = exact_box(&d.shape(DVec3::ZERO));
-        [lo, hi]
+        Some([lo, hi])
     }
 
     fn push(store: &mut Tori, d: &TorusDesc, origin: DVec3) {
@@ -196,7 +196,7 @@ impl Kind for Torus {
         hit.then_some(t)
     }
 
-    fn surface(store: &Tori, k: usize, point: Vec3f) -> (Vec3f, Vec3f) {
+    fn surface(store: &Tori, k: usize, _ray: &Ray<f32>, _t: f32, point: Vec3f) -> (Vec3f, Vec3f) {
         let torus = &store.shapes[k];
         (torus.normal(point), torus.frame.to_object(point))
     }
@@ -222,7 +222,7 @@ impl Kind for Torus {
         twin::rehit(t, ray, t_max)
     }
 
-    fn normal64(t: &TorusShape<f64>, point: V3<f64>) -> V3<f64> {
+    fn normal64(t: &TorusShape<f64>, _ray: &Ray<f64>, _at: f64, point: V3<f64>) -> V3<f64> {
         t.normal(point)
     }
 
@@ -230,11 +230,11 @@ impl Kind for Torus {
         (t.frame.origin - origin).length() + t.major + t.minor
     }
 
-    fn grazing64(t: &TorusShape<f64>, ray: &Ray<f64>, nudge: f64, stray: Stray) -> bool {
-        twin::grazing(t, ray, nudge, stray)
+    fn grazing64(t: &TorusShape<f64>, ray: &Ray<f64>, tol: f64, stray: Stray) -> bool {
+        twin::grazing(t, ray, nudge::<Self>(t, ray.origin, tol), stray)
     }
 
-    fn distance64(t: &TorusShape<f64>, p: V3<f64>) -> f64 {
-        twin::distance(t, p)
+    fn near64(t: &TorusShape<f64>, p: V3<f64>, tol: f64, slack: f64) -> bool {
+        twin::distance(t, p) <= nudge::<Self>(t, p, tol) + slack
     }
 }

@@ -19,8 +19,9 @@ use bareray::compile::Scene;
 use bareray::film::Image;
 use bareray::geometry::ShapeKind;
 use bareray::io::toml;
+use bareray::kinds::KindDescs;
 use bareray::render::{render_lanes, thread_pool};
-use bareray::scene::desc::{CameraDesc, SceneDesc, ShapeDesc, SphereDesc};
+use bareray::scene::desc::{CameraDesc, SceneDesc, SphereDesc};
 use glam::{DAffine3, DVec3};
 
 /// f32 unit roundoff (half an ulp of 1).
@@ -43,9 +44,16 @@ pub fn sphere(c: DVec3, r: f64) -> SphereDesc {
     SphereDesc { center: c, radius: r, material: 0 }
 }
 
-/// A transformed shape of material 0.
-pub fn shape(kind: ShapeKind, world_from_object: DAffine3) -> ShapeDesc {
-    ShapeDesc { kind, world_from_object, material: 0 }
+/// A generic shape placed by an affine map (an ellipsoid or a plane, material 0), for [`shapes`].
+pub fn shape(kind: ShapeKind, world_from_object: DAffine3) -> (ShapeKind, DAffine3) {
+    (kind, world_from_object)
+}
+
+/// The registered kinds' descriptions holding these shapes (ellipsoids and planes) alone.
+pub fn shapes(list: impl IntoIterator<Item = (ShapeKind, DAffine3)>) -> KindDescs {
+    let mut kinds = KindDescs::default();
+    list.into_iter().for_each(|(kind, m)| kinds.push_shape(kind, m));
+    kinds
 }
 
 pub fn compile(desc: &SceneDesc) -> Scene {

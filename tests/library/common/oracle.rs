@@ -1,24 +1,23 @@
 //! The f64 oracle: a scene's f32 geometry (centres, radii, the f32 inverse transforms, triangle edges)
 //! widened exactly to f64 and intersected by the f64 instances of the same kernels, brute force. What it
 //! measures against the f32 path is the f32 arithmetic of the kernels, not the rounding of the scene
-//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, shapes, polygons,
-//! then the registered kinds' items: cones, tori), as `Geometry::intersect` reports them. The registered
+//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, polygons, then the
+//! registered kinds' items: ellipsoids, planes, cones, tori), as `Geometry::intersect` reports them. The registered
 //! kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a kind
 //! is covered here as soon as it is registered.
 
 use bareray::accel::Geometry;
-use bareray::geometry::{intersect_sphere, intersect_triangle, sphere_roots, Ray, Shape, ShapeKind, NO_PRIM};
+use bareray::geometry::{intersect_sphere, intersect_triangle, sphere_roots, Ray, NO_PRIM};
 use bareray::kinds::{KindTwins, Stray};
 use bareray::math::V3;
 
-use super::wide::{dv, wide, wide_shape};
+use super::wide::{dv, wide};
 use super::EPS32;
 
 /// The scene's f32 geometry widened exactly to f64, intersected by the f64 instances of the same kernels,
 /// brute force, ties to the lower id (the renderer's rule).
 pub struct Oracle {
     spheres: Vec<(V3<f64>, f64)>,
-    shapes: Vec<Shape<f64>>,
     tris: Vec<Tri>,
     /// The registered kinds' items, widened, with ids from `kinds_base`.
     kinds: KindTwins,
@@ -35,7 +34,6 @@ impl Oracle {
         let base = g.polygon_base() as u32;
         Self {
             spheres: (0..s.len()).map(|i| (wide(s.center(i)), f64::from(s.r[i]))).collect(),
-            shapes: g.shapes.iter().map(wide_shape).collect(),
             tris: (0..p.triangles())
                 .map(|j| (wide(p.v0[j]), wide(p.e1[j]), wide(p.e2[j]), base + p.polygon[j]))
                 .collect(),
@@ -50,12 +48,6 @@ impl Oracle {
         (k < self.kinds.len()).then_some(k)
     }
 
-    /// The scale a kind's item and a ray's coordinates relative to it are rounded at (`|o|` plus the item's
-    /// own, [`bareray::kinds::Kind::scale64`]).
-    fn kind_scale(&self, k: usize, origin: V3<f64>) -> f64 {
-        dv(origin).length() + self.kinds.scale(k, origin).unwrap_or(0.0)
-    }
-
     /// The hit of `ray` with primitive `prim` alone, in `[0, inf)`.
     pub fn hit_of(&self, prim: u32, ray: &Ray<f64>) -> Option<f64> {
         let i = prim as usize;
@@ -65,8 +57,6 @@ impl Oracle {
         let ns = self.spheres.len();
         let (hit, t) = if i < ns {
             intersect_sphere(self.spheres[i].0, self.spheres[i].1, ray, f64::INFINITY)
-        } else if i < ns + self.shapes.len() {
-            self.shapes[i - ns].intersect(ray, f64::INFINITY)
         } else {
             let mut best = (false, f64::INFINITY);
             for &(v0, e1, e2, id) in &self.tris {
@@ -91,13 +81,6 @@ impl Oracle {
                 best = (i as u32, t);
             }
         }
-        let ns = self.spheres.len() as u32;
-        for (k, s) in self.shapes.iter().enumerate() {
-            let (h, t) = s.intersect(ray, best.1);
-            if h && ns + k as u32 != skip {
-                best = (ns + k as u32, t);
-            }
-        }
         for &(v0, e1, e2, id) in &self.tris {
             let (h, t) = intersect_triangle(v0, e1, e2, ray, best.1);
             if h && id != skip {
@@ -114,8 +97,7 @@ impl Oracle {
     /// For a registered kind's item: the origin lies within `k` roundings of its scale of the surface.
     pub fn starts_on(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
         if let Some(item) = self.kind(prim) {
-            let off = self.kinds.distance(item, ray.origin).unwrap_or(f64::INFINITY);
-            return off <= k * EPS32 * self.kind_scale(item, ray.origin);
+            return self.kinds.near(item, ray.origin, k * EPS32, 0.0).unwrap_or(false);
         }
         let i = prim as usize;
         if prim == NO_PRIM || i >= self.spheres.len() {
@@ -128,50 +110,22 @@ impl Oracle {
     }
 
     /// True when `ray` passes within `k` f32 roundings (of the coordinates involved) of tangency with `prim`:
-    /// the line's distance l from the centre differs from the radius by at most `k·ε·(|c| + r)`, in object
-    /// space for ellipsoids (with the transform's magnitudes in the scale). Planes: the direction is within
-    /// `k·ε` of parallel. A registered kind's item: its own rule ([`bareray::kinds::Kind::grazing64`]) for a
-    /// nudge of `k` roundings of its scale. That is where the f32 and f64 kernels may legitimately disagree on
-    /// hit or miss.
+    /// for a sphere, the line's distance l from the centre differs from the radius by at most `k·ε·(|c| +
+    /// r)`; a registered kind's item (ellipsoids and planes among them): its own rule
+    /// ([`bareray::kinds::Kind::grazing64`]) for `k` roundings. That is where the f32 and f64 kernels may
+    /// legitimately disagree on hit or miss.
     pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
         if prim == NO_PRIM {
             return false;
         }
         if let Some(item) = self.kind(prim) {
-            let nudge = k * EPS32 * self.kind_scale(item, ray.origin);
-            return self.kinds.grazing(item, ray, nudge, Stray::default()).unwrap_or(false);
+            return self.kinds.grazing(item, ray, k * EPS32, Stray::default()).unwrap_or(false);
         }
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        let near_tangent = |c: V3<f64>, r: f64, ray: &Ray<f64>, scale: f64| {
-            let c = dv(c) - dv(ray.origin);
-            let d = dv(ray.dir);
-            let proj = c.dot(d) / d.dot(d);
-            let l = (c - d * proj).length();
-            (l - r).abs() <= k * EPS32 * scale
-        };
-        if i < ns {
-            let (c, r) = self.spheres[i];
-            let scale = (dv(c) - dv(ray.origin)).length() + r;
-            near_tangent(c, r, ray, scale)
-        } else if i < ns + self.shapes.len() {
-            let s = &self.shapes[i - ns];
-            let local = s.to_object(ray);
-            let m = &s.object_from_world;
-            let o = dv(ray.origin);
-            let spread = dv(m.cols[0]).length() * o.x.abs()
-                + dv(m.cols[1]).length() * o.y.abs()
-                + dv(m.cols[2]).length() * o.z.abs()
-                + dv(m.translation).length();
-            match s.kind {
-                ShapeKind::Sphere => near_tangent(V3::all(0.0), 1.0, &local, spread + 1.0),
-                ShapeKind::Plane => {
-                    let d = dv(local.dir);
-                    d.z.abs() <= k * EPS32 * d.length()
-                }
-            }
-        } else {
-            false
-        }
+        let Some(&(c, r)) = self.spheres.get(prim as usize) else { return false };
+        let cc = dv(c) - dv(ray.origin);
+        let d = dv(ray.dir);
+        let proj = cc.dot(d) / d.dot(d);
+        let l = (cc - d * proj).length();
+        (l - r).abs() <= k * EPS32 * (cc.length() + r)
     }
 }
