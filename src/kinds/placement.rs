@@ -1,5 +1,6 @@
 //! The TOML `transform` list (translate, scale, rotate steps, applied in order) as an affine map: read by
-//! the scene reader for spheres and planes, and by kinds whose tables take a transform.
+//! the scene reader for spheres (a transformed sphere is an ellipsoid), and by the kinds whose tables take a
+//! transform (ellipsoids, planes, tori).
 
 use glam::{DAffine3, DVec3};
 use serde::Deserialize;

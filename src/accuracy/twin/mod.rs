@@ -4,14 +4,14 @@
 //! It reads the [`SceneDesc`] (already f64) and never the compiled f32 scene, and works in the renderer's
 //! rendering space ([`RenderingFrame`]: origin at the eye, or at a far scene's centre): every position `p`
 //! is stored as `p − origin`, computed in f64 (sphere centres, polygon vertices, the registered kinds'
-//! items, lights), and camera rays start where the renderer's do (at exactly 0, or a far
-//! scene's start distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to
-//! f32. Intersections run the generic kernels of [`crate::geometry`] instantiated at f64
-//! ([`intersect_sphere`], [`intersect_triangle`]) and each registered kind's f64 form
-//! ([`crate::kinds::Kind::intersect64`]), with the renderer's rules: closest hit by the total order (smaller
-//! t, then lower id), and a ray that leaves a primitive ([`Departure`]) never hits it again except, for a
-//! solid left toward its inside, at its exit root, and for a kind that says so (an open cone, a torus),
-//! wherever it meets that item again ([`crate::kinds::Kind::rehit64`], as `accel/departure.rs` rules).
+//! items, lights), and camera rays start where the renderer's do (at exactly 0, or a far scene's start
+//! distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to f32.
+//! Intersections run the generic kernels of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`],
+//! [`intersect_triangle`]) and each registered kind's f64 form ([`crate::kinds::Kind::intersect64`]), with
+//! the renderer's rules: closest hit by the total order (smaller t, then lower id), and a ray that leaves a
+//! primitive ([`Departure`]) never hits it again except, for a solid left toward its inside, at its exit
+//! root, and for a kind that says so (an open cone, a torus), wherever it meets that item again
+//! ([`crate::kinds::Kind::rehit64`], as `accel/departure.rs` rules).
 //!
 //! Ids are scene-file ids: spheres `0..` in file order, then polygons (one id per polygon), then the
 //! registered kinds' items. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from
