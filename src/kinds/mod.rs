@@ -162,9 +162,6 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
         let _ = item;
         None
     }
-    /// The scale the f32 values of the item and of a ray's coordinates relative to it are rounded at, for
-    /// a ray from `origin` (without `|origin|` itself, which the twin adds).
-    fn scale64(item: &Self::Twin, origin: V3<f64>) -> f64;
     /// Whether moving `ray`'s line by `tol` (a multiple of ε32) of the item's rounding scale plus `stray`
     /// can change whether (or where, across a boundary) it hits the item: where an f32 and an f64 kernel
     /// may disagree on hit or miss.
@@ -174,10 +171,11 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     fn near64(item: &Self::Twin, p: V3<f64>, tol: f64, slack: f64) -> bool;
 }
 
-/// `tol` of the rounding scale of `item` for a ray from (or a point at) `origin`: `tol·(|origin| +
-/// scale64)`, the nudge the registered kinds' twin rules take.
-pub(crate) fn nudge<K: Kind>(item: &K::Twin, origin: V3<f64>, tol: f64) -> f64 {
-    tol * (origin.dot(origin).sqrt() + K::scale64(item, origin))
+/// `tol` of the rounding scale for a ray from (or a point at) `origin` near an item whose f32 values, and
+/// a ray's coordinates relative to it, are rounded at `scale`: `tol·(|origin| + scale)`, the nudge the
+/// cone's and the torus's twin rules take.
+pub(crate) fn nudge(origin: V3<f64>, scale: f64, tol: f64) -> f64 {
+    tol * (origin.length() + scale)
 }
 
 /// One kind's compiled items, the tree over them (`None`: brute force) and, with a tree, its leaf order.
@@ -497,10 +495,6 @@ macro_rules! per_kind {
             /// Item `id`'s outward unit normal at hit `t` (at `point`) of `ray`.
             pub(crate) fn normal(&self, id: usize, ray: &Ray<f64>, t: f64, point: V3<f64>) -> Option<V3<f64>> {
                 dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], ray, t, point)); $($field: $kind),*)
-            }
-            /// [`Kind::scale64`] of item `id`.
-            pub(crate) fn scale(&self, id: usize, origin: V3<f64>) -> Option<f64> {
-                dispatch!(self, id, None, |items, K, k| Some(K::scale64(&items[k], origin)); $($field: $kind),*)
             }
             /// [`Kind::grazing64`] of item `id`.
             pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, tol: f64, stray: Stray) -> Option<bool> {

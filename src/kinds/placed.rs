@@ -44,24 +44,19 @@ impl Placed {
     }
 }
 
-/// The length of `p`.
-pub(crate) fn len(p: V3<f64>) -> f64 {
-    p.dot(p).sqrt()
-}
-
 /// Sum of the column lengths of a shape's object-from-world map: a bound on how much it stretches any
 /// vector (‖L⁻¹·x‖ ≤ this · ‖x‖), so on how far a world-space stray moves the object-space ray.
 pub(crate) fn stretch(s: &Shape<f64>) -> f64 {
-    s.object_from_world.cols.iter().map(|c| len(*c)).sum()
+    s.object_from_world.cols.iter().map(|c| c.length()).sum()
 }
 
 /// The scale the object-space coordinates of point `p` are rounded at: `Σ|L⁻¹_i|·(|p_i| + |c_i|)`, the f32
 /// map's columns applied to `p − c` (tests/library/stress_*.rs measures it).
 pub(crate) fn spread(s: &Shape<f64>, p: V3<f64>) -> f64 {
     let (m, c) = (&s.object_from_world, s.center);
-    len(m.cols[0]) * (p.x.abs() + c.x.abs())
-        + len(m.cols[1]) * (p.y.abs() + c.y.abs())
-        + len(m.cols[2]) * (p.z.abs() + c.z.abs())
+    m.cols[0].length() * (p.x.abs() + c.x.abs())
+        + m.cols[1].length() * (p.y.abs() + c.y.abs())
+        + m.cols[2].length() * (p.z.abs() + c.z.abs())
 }
 
 #[cfg(test)]

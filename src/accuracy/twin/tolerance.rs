@@ -6,24 +6,6 @@ use crate::geometry::{Departure, Ray, CONTACT_ROUNDINGS, NO_PRIM};
 use crate::math::V3;
 
 impl Twin {
-    /// How big the f32 rounding of a ray near `prim` can be, per ε32, for a ray from `origin`: |origin|
-    /// plus the primitive's centre distance and radius (the magnitudes the kernel's f32 operations round);
-    /// for a cone, the base point's distance, the height and the larger end radius (the scale its stored f32
-    /// values and its frame coordinates `origin − B` are rounded at).
-    fn magnitude(&self, prim: u32, origin: V3<f64>) -> f64 {
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        let o = len(origin);
-        if i < ns {
-            let (c, r) = self.spheres[i];
-            o + len(c - origin) + r
-        } else if let Some(scale) = self.kind(prim).and_then(|k| self.kinds.scale(k, origin)) {
-            o + scale
-        } else {
-            o
-        }
-    }
-
     /// True when `ray` passes within tolerance of tangency with `prim` — where an f32 and an f64 kernel may
     /// legitimately disagree on hit or miss (explanation "graze"):
     ///
@@ -156,7 +138,8 @@ impl Twin {
         let ns = self.spheres.len();
         if i < ns {
             let (c, r) = self.spheres[i];
-            return (len(p - c) - r).abs() <= tol * self.magnitude(prim, p) + slack;
+            // The magnitudes the kernel's f32 operations round: |p|, the centre's distance and the radius.
+            return (len(p - c) - r).abs() <= tol * (len(p) + len(c - p) + r) + slack;
         }
         if let Some(near) = self.kind(prim).and_then(|k| self.kinds.near(k, p, tol, slack)) {
             return near;

@@ -88,6 +88,13 @@ fn radius(v: &Spanned<f64>, key: &str) -> Result<f64, KindError> {
     }
 }
 
+/// The base point's distance, the height and the larger end radius: the scale a cone's stored f32 values
+/// and its frame coordinates `origin − B` are rounded at, for a ray from `origin`.
+fn scale(cone: &Cone<f64>, origin: V3<f64>) -> f64 {
+    let apex_radius = cone.base_radius + cone.slope * cone.height;
+    (cone.frame.origin - origin).length() + cone.height + cone.base_radius.max(apex_radius)
+}
+
 impl Kind for OpenCone {
     const SINGULAR: &'static str = "cone";
     const PLURAL: &'static str = "cones";
@@ -186,18 +193,11 @@ impl Kind for OpenCone {
         cone.normal(point)
     }
 
-    /// The base point's distance, the height and the larger end radius: the scale its stored f32 values
-    /// and its frame coordinates `origin − B` are rounded at.
-    fn scale64(cone: &Cone<f64>, origin: V3<f64>) -> f64 {
-        let apex_radius = cone.base_radius + cone.slope * cone.height;
-        (cone.frame.origin - origin).length() + cone.height + cone.base_radius.max(apex_radius)
-    }
-
     fn grazing64(cone: &Cone<f64>, ray: &Ray<f64>, tol: f64, stray: Stray) -> bool {
-        twin::grazing(cone, ray, nudge::<Self>(cone, ray.origin, tol), stray)
+        twin::grazing(cone, ray, nudge(ray.origin, scale(cone, ray.origin), tol), stray)
     }
 
     fn near64(cone: &Cone<f64>, p: V3<f64>, tol: f64, slack: f64) -> bool {
-        twin::distance(cone, p) <= nudge::<Self>(cone, p, tol) + slack
+        twin::distance(cone, p) <= nudge(p, scale(cone, p), tol) + slack
     }
 }

@@ -7,7 +7,7 @@ use glam::{DAffine3, DVec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::placed::{len, spread, stretch, Placed, PlacedDesc};
+use super::placed::{spread, stretch, Placed, PlacedDesc};
 use super::placement::{transform, TransformOp};
 use super::{Kind, KindError, Stray};
 use crate::geometry::{far_root, Ray, Shape, ShapeKind};
@@ -160,10 +160,6 @@ impl Kind for Ellipsoid {
         Some(s.c_eye)
     }
 
-    fn scale64(s: &Shape<f64>, origin: V3<f64>) -> f64 {
-        len(s.center - origin)
-    }
-
     /// The sphere's rule in object space: the line's closest approach to the centre is within
     /// `tol·(spread + 1)` of 1, `spread` the scale the object-space ray is rounded at
     /// ([`super::placed::spread`]), plus the stray stretched by the map.
@@ -171,13 +167,13 @@ impl Kind for Ellipsoid {
         let local = s.to_object(ray);
         let (centre, d) = (V3::all(0.0) - local.origin, local.dir);
         let proj = centre.dot(d) / d.dot(d);
-        let l = len(centre - d * proj);
-        let slack = stretch(s) * stray.at(len(s.center - ray.origin));
+        let l = (centre - d * proj).length();
+        let slack = stretch(s) * stray.at((s.center - ray.origin).length());
         (l - 1.0).abs() <= tol * (spread(s, ray.origin) + 1.0) + slack
     }
 
     fn near64(s: &Shape<f64>, p: V3<f64>, tol: f64, slack: f64) -> bool {
         let q = s.object_from_world.vector(p - s.center);
-        (len(q) - 1.0).abs() <= tol * (spread(s, p) + 1.0) + stretch(s) * slack
+        (q.length() - 1.0).abs() <= tol * (spread(s, p) + 1.0) + stretch(s) * slack
     }
 }

@@ -6,7 +6,7 @@ use glam::{DAffine3, DQuat, DVec3};
 use serde::Deserialize;
 use toml::Spanned;
 
-use super::placed::{len, spread, stretch, Placed, PlacedDesc};
+use super::placed::{spread, stretch, Placed, PlacedDesc};
 use super::placement::{transform, TransformOp};
 use super::{Kind, KindError, Stray};
 use crate::geometry::{Ray, Shape, ShapeKind};
@@ -124,15 +124,11 @@ impl Kind for Plane {
         s.normal_to_world.vector(V3::new(0.0, 0.0, 1.0)).normalize()
     }
 
-    fn scale64(s: &Shape<f64>, origin: V3<f64>) -> f64 {
-        len(s.center - origin)
-    }
-
     /// The object-space direction is within `tol` (plus the stray's direction, stretched by the map) of
     /// parallel to the plane.
     fn grazing64(s: &Shape<f64>, ray: &Ray<f64>, tol: f64, stray: Stray) -> bool {
         let d = s.to_object(ray).dir;
-        d.z.abs() <= (tol + stretch(s) * stray.dir) * len(d)
+        d.z.abs() <= (tol + stretch(s) * stray.dir) * d.length()
     }
 
     fn near64(s: &Shape<f64>, p: V3<f64>, tol: f64, slack: f64) -> bool {

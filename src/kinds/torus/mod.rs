@@ -114,6 +114,12 @@ fn placed(
     similar.then(|| (moved, m.transform_vector3(axis).normalize(), major * scale, minor * scale))
 }
 
+/// The centre's distance and both radii: the scale a torus's stored f32 values and a ray's coordinates in
+/// its frame are rounded at, for a ray from `origin`.
+fn scale(t: &TorusShape<f64>, origin: V3<f64>) -> f64 {
+    (t.frame.origin - origin).length() + t.major + t.minor
+}
+
 impl Kind for Torus {
     const SINGULAR: &'static str = "torus";
     const PLURAL: &'static str = "tori";
@@ -226,15 +232,11 @@ impl Kind for Torus {
         t.normal(point)
     }
 
-    fn scale64(t: &TorusShape<f64>, origin: V3<f64>) -> f64 {
-        (t.frame.origin - origin).length() + t.major + t.minor
-    }
-
     fn grazing64(t: &TorusShape<f64>, ray: &Ray<f64>, tol: f64, stray: Stray) -> bool {
-        twin::grazing(t, ray, nudge::<Self>(t, ray.origin, tol), stray)
+        twin::grazing(t, ray, nudge(ray.origin, scale(t, ray.origin), tol), stray)
     }
 
     fn near64(t: &TorusShape<f64>, p: V3<f64>, tol: f64, slack: f64) -> bool {
-        twin::distance(t, p) <= nudge::<Self>(t, p, tol) + slack
+        twin::distance(t, p) <= nudge(p, scale(t, p), tol) + slack
     }
 }
