@@ -460,7 +460,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             let shadow = RayPacket::new(s.point, l, dist, lit);
             let hint = &mut self.shadow_hints[k];
             let geometry = &self.scene.geometry;
-            let visible = lit & !traced(RayKind::Shadow, || geometry.occluded_hinted_k(&shadow, from, hint));
+            let visible = lit & !traced(RayKind::Shadow, || geometry.shadowed_k(&shadow, from, hint, k));
             let intensity = match light.falloff {
                 Falloff::None => splat_rgb::<F>(light.color),
                 Falloff::InverseSquare => splat_rgb::<F>(light.color) * (F::splat_f32(1.0) / dist2),

@@ -9,6 +9,7 @@
 
 mod colors;
 mod departure;
+mod light_buffer;
 mod near_first;
 pub(crate) mod pkd;
 mod sphere_query;
@@ -18,6 +19,7 @@ pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
 pub use crate::bvh::work::{
     probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
 };
+pub(crate) use light_buffer::LightBuffer;
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;
 pub(crate) use sphere_query::SphereQuery;
@@ -52,6 +54,10 @@ pub struct Geometry {
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
     pub(crate) origin: Vec3f,
+    /// Per point light (in the scene's order), the sphere leaves each direction from it may meet, for its
+    /// shadow rays ([`LightBuffer`]); empty where shading casts no shadow rays or the spheres have no tree,
+    /// `None` for a light its buffer would not serve well.
+    pub(crate) light_buffers: Vec<Option<LightBuffer>>,
 }
 
 /// Closest hits of the `n` items of one kind for the lanes of `live`, merged into `best`: through the kind's
@@ -251,6 +257,31 @@ impl Geometry {
         from: &DeparturePacket<F>,
         hint: &mut u32,
     ) -> F::Mask {
+        self.occluded_through(rays, from, hint, None)
+    }
+
+    /// [`Geometry::occluded_hinted_k`] for shadow rays toward point light `light` (rays from their hit
+    /// points, `t_max` the distance to the light): the spheres are found through the light's buffer when it
+    /// has one ([`LightBuffer`]), with the same answer.
+    pub(crate) fn shadowed_k<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+        hint: &mut u32,
+        light: usize,
+    ) -> F::Mask {
+        self.occluded_through(rays, from, hint, self.light_buffers.get(light).and_then(Option::as_ref))
+    }
+
+    /// [`Geometry::occluded_hinted_k`], the spheres through `buffer` when given.
+    #[inline(always)]
+    fn occluded_through<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+        hint: &mut u32,
+        buffer: Option<&LightBuffer>,
+    ) -> F::Mask {
         let live = rays.active;
         if !live.any() {
             return live;
@@ -266,8 +297,12 @@ impl Geometry {
                     return blocked;
                 }
             }
+            let open = live & !blocked;
             blocked = blocked
-                | occluded_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), live & !blocked, hint);
+                | match (buffer, self.sphere_bvh.as_ref()) {
+                    (Some(buffer), Some(bvh)) => buffer.occluded(&q, open, bvh.walks_scalar(), hint),
+                    (_, bvh) => occluded_items(bvh, &q, self.spheres.len(), open, hint),
+                };
             if (blocked | !live).all() {
                 return blocked;
             }

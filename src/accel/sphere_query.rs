@@ -174,6 +174,53 @@ impl SingleLeafQuery for SphereQuery<'_, f32> {
     }
 }
 
+impl SphereQuery<'_, f32> {
+    /// Whether one of the spheres `ids` (any order) blocks the one ray, `LeafLanes` spheres at a time,
+    /// gathered: each lane computes [`SphereQuery::sphere`]'s bits. `blocker` is set to the first blocking
+    /// sphere in `ids`' order.
+    #[inline(always)]
+    pub(crate) fn occluded_gathered(&self, ids: &[u32], blocker: &mut u32) -> bool {
+        for chunk in ids.chunks(LeafLanes::K) {
+            if let Some((bits, _)) = self.gathered_chunk::<LeafLanes>(chunk) {
+                if bits != 0 {
+                    *blocker = chunk[bits.trailing_zeros() as usize];
+                    return true;
+                }
+            }
+        }
+        false
+    }
+
+    /// [`SphereQuery::leaf_chunk`] over the spheres `ids` (at most `L::K` of them) instead of a range.
+    #[inline(always)]
+    fn gathered_chunk<L: Lanes>(&self, ids: &[u32]) -> Option<(u32, L)> {
+        let s = self.spheres;
+        // Lanes past `ids` read a zero sphere at the origin; `valid` drops them.
+        let load = |v: &[f32]| L::from_fn(|j| ids.get(j).map_or(0.0, |&i| v[i as usize]));
+        let centre = crate::math::V3::new(load(&s.cx), load(&s.cy), load(&s.cz));
+        let ray = self.terms.map(L::splat_f32);
+        let line = sphere_approach(centre, load(&s.r), &ray);
+        let valid = L::lanes_below(ids.len());
+        if !(line.meets() & valid).any() {
+            return None;
+        }
+        let eye = match self.eye {
+            EyeLanes::None => EyeLanes::None,
+            _ => EyeLanes::All,
+        };
+        // The eye term is read only where the roots use it.
+        let c_eye = match s.eye_terms_help || !matches!(eye, EyeLanes::None) {
+            true => load(&s.c_eye),
+            false => L::splat_f32(0.0),
+        };
+        let roots = crate::geometry::sphere_roots_of(s.eye_terms_help, &line, || centre, c_eye, &ray, eye);
+        let (hit, t) = first_root(&roots, L::splat_f32(self.t_max));
+        let lane_ids = L::Ids::from_fn(|j| ids.get(j).copied().unwrap_or(crate::geometry::NO_PRIM));
+        let hit = hit & valid & !L::ids_eq(lane_ids, L::Ids::splat(self.skip));
+        Some((L::move_mask(hit), t))
+    }
+}
+
 /// The lane type of a single ray's leaf test, one sphere per lane: leaves hold at most 8 spheres (the SAH
 /// builder's `MAX_LEAF`, obvhs's `max_prims_per_leaf` in every preset bareray uses), so one pass covers a leaf.
 pub(crate) type LeafLanes = wide::f32x8;

@@ -125,6 +125,11 @@ impl Bvh {
         self.nodes.len() * size_of::<Node>() + wide + scalar
     }
 
+    /// Whether single rays walk the scalar tree ([`Bvh::scalar_walk`]): one item at a time.
+    pub(crate) fn walks_scalar(&self) -> bool {
+        self.scalar_nodes().is_some()
+    }
+
     /// The scalar tree, when single rays walk it ([`Bvh::scalar_walk`]).
     fn scalar_nodes(&self) -> Option<&[PairNode]> {
         self.scalar.as_deref().filter(|_| self.scalar_walk)

@@ -15,7 +15,7 @@ mod frame;
 pub mod load;
 pub mod memory;
 
-use crate::accel::{Geometry, Particles};
+use crate::accel::{Geometry, LightBuffer, Particles};
 use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
 use crate::geometry::polygon::{newell_normal, triangulate};
@@ -25,6 +25,7 @@ use crate::math::{Rgb, Vec3f, V3};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
+use rayon::prelude::*;
 
 use crate::scene::desc::{Ao, Falloff, Material, PolygonDesc, RenderDesc, SceneDesc, Shade};
 pub(crate) use frame::RenderingFrame;
@@ -323,6 +324,7 @@ impl Scene {
             accel,
             spheres: finite && wants(geometry.spheres.len()),
             polygons: finite_polygons && wants(geometry.polygons.triangles()),
+            shadows: light_buffers_pay(desc, &materials),
             options: BuildOptions {
                 pad,
                 builder: preset.builder(),
@@ -374,6 +376,14 @@ impl Scene {
                 bvh::build(s.len(), item_box, job.options, |order| s.permuted(order));
             (g.spheres, g.sphere_bvh) = (spheres, Some(tree));
             self.build += stats;
+            if job.shadows {
+                let clock = std::time::Instant::now();
+                let spheres = &g.spheres;
+                g.light_buffers =
+                    self.lights.par_iter().map(|l| LightBuffer::new(l.position, spheres, pad)).collect();
+                let bytes = g.light_buffers.iter().flatten().map(LightBuffer::bytes).sum();
+                self.build += BuildStats { seconds: clock.elapsed().as_secs_f64(), node_bytes: bytes };
+            }
         }
         // Triangles, ellipsoids and the registered kinds' items cost more to test than a sphere: their trees split smaller ranges.
         let dearer = BuildOptions { builder: job.options.builder.for_dearer_items(), ..job.options };
@@ -396,6 +406,17 @@ impl Scene {
             },
         );
     }
+}
+
+/// Whether the spheres get a light buffer per point light ([`LightBuffer`]): when shading casts shadow rays
+/// toward lights, and the camera rays are at least 16 times the spheres: near that ratio building a light's
+/// buffer costs what its shadow rays save (PERF.md, "Register", light buffers).
+fn light_buffers_pay(desc: &SceneDesc, materials: &[Material]) -> bool {
+    let camera_rays =
+        f64::from(desc.camera.width) * f64::from(desc.camera.height) * desc.render.pattern.rays_per_pixel();
+    features::lights_shade(!desc.lights.is_empty(), materials)
+        && !matches!(desc.render.shade, Shade::Ao(_))
+        && desc.spheres.len() as f64 * 16.0 <= camera_rays
 }
 
 /// The scene's shading mode with ambient occlusion's default distance filled in: [`Ao::DEFAULT_REACH`] times
@@ -442,6 +463,9 @@ struct BvhJob {
     polygons: bool,
     /// Padding, obvhs preset and single-ray tree, alike for both.
     options: BuildOptions,
+    /// Whether shading casts shadow rays toward point lights: the spheres' tree then gets a light buffer
+    /// per light.
+    shadows: bool,
 }
 
 /// Triangulates one polygon into `out` (in f64, moved to rendering space by `−origin`, then rounded). A polygon
