@@ -241,16 +241,19 @@ impl Geometry {
     }
 
     /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side
-    /// excluded); inactive lanes are false.
+    /// excluded); inactive lanes are false. The renderer asks through [`Geometry::occluded_hinted_k`] and
+    /// [`Geometry::shadowed_k`]; the tests ask here.
+    #[cfg(test)]
     pub(crate) fn occluded_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> F::Mask {
         let mut hint = NO_PRIM;
         self.occluded_hinted_k(rays, from, &mut hint)
     }
 
-    /// [`Geometry::occluded_k`] that first tests the sphere `hint` (a blocker of an earlier, nearby packet:
-    /// neighbouring shadow rays tend to be blocked by the same sphere), and leaves in `hint` a sphere that
-    /// blocked some lane this time. The answer is the same whatever the hint: it only decides what is
-    /// tested first.
+    /// Lanes of the packet whose ray meets anything in its `[0, t_max)` (the departure surface's near side
+    /// excluded; inactive lanes are false). The sphere `hint` is tested first (a blocker of an earlier, nearby
+    /// packet: neighbouring shadow rays tend to be blocked by the same sphere), and `hint` is left holding a
+    /// sphere that blocked some lane this time. The answer is the same whatever the hint: it only decides
+    /// what is tested first.
     pub(crate) fn occluded_hinted_k<F: Lanes>(
         &self,
         rays: &RayPacket<F>,
@@ -374,7 +377,7 @@ impl Geometry {
         [&mut self.sphere_bvh, &mut self.polygon_bvh].into_iter().flatten().chain(self.kinds.bvhs_mut())
     }
 
-    /// Sets whether single rays (K = 1: [`Geometry::intersect`], [`Geometry::occluded`] and the `_k` queries
+    /// Sets whether single rays (K = 1: [`Geometry::intersect`], the any-hit queries and the `_k` queries
     /// at `f32`) walk each BVH's binary tree one box and one primitive at a time (the scalar path), or the
     /// wide nodes with SIMD over a node's children and a leaf's spheres (single-ray SIMD). Both give the same
     /// bits. Turning it on needs the trees, kept by compiling with
@@ -430,9 +433,18 @@ impl Geometry {
     }
 
     /// Whether one ray meets anything in `[0, t_max)`: the K = 1 instance of [`Geometry::occluded_k`].
+    #[cfg(test)]
     pub(crate) fn occluded(&self, ray: &Ray<f32>, from: Departure, t_max: f32) -> bool {
         let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
         self.occluded_k(&rays, &DeparturePacket { prim: from.prim, inward: from.inward })
+    }
+
+    /// Whether one shadow ray toward point light `light` (from its hit point, `t_max` the distance to the
+    /// light) is blocked: the K = 1 instance of [`Geometry::shadowed_k`], through the light's buffer.
+    pub(crate) fn shadowed(&self, ray: &Ray<f32>, from: Departure, t_max: f32, light: usize) -> bool {
+        let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
+        let from = DeparturePacket { prim: from.prim, inward: from.inward };
+        self.shadowed_k(&rays, &from, &mut NO_PRIM.clone(), light)
     }
 
     /// The scene-file ids of the lanes' primitives in `lanes` (the others: [`NO_PRIM`]).

@@ -100,7 +100,8 @@ impl Comparer<'_> {
                 continue;
             }
             acc.shadow.rays += 1;
-            let blocked32 = g.occluded(&s32, s.from32, dist32);
+            // As shading asks: through the light's buffer, where it has one.
+            let blocked32 = g.shadowed(&s32, s.from32, dist32, k);
             let b32 = g.intersect(&s32, s.from32, dist32);
             let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
             let b64 = self.twin.intersect(&s64, s.from64, dist64);
