@@ -92,6 +92,21 @@ impl LightBuffer {
             let (lo, hi) = raw(i);
             (lo - grow, hi + grow)
         };
+        let faces = windows(n, grown);
+        let cells = faces.iter().map(|f| (f.columns * f.rows) as usize).sum::<usize>();
+        // A light whose lists would be long gets no buffer: known from every 16th sphere before the work.
+        let sample: usize = (0..n)
+            .step_by(16)
+            .map(|i| {
+                let (lo, hi) = grown(i);
+                let mut count = 0;
+                for_cells(lo, hi, &faces, |_| count += 1);
+                count
+            })
+            .sum();
+        if sample * 16 > MAX_ENTRIES_PER_SPHERE * n + cells {
+            return None;
+        }
         // The spheres nearest the light first, so each cell's list comes out in that order.
         let mut order: Vec<(f32, u32)> = (0..n)
             .into_par_iter()
@@ -107,8 +122,6 @@ impl LightBuffer {
             })
             .collect();
         order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        let faces = windows(n, grown);
-        let cells = faces.iter().map(|f| (f.columns * f.rows) as usize).sum::<usize>();
         // Two passes over the spheres' cell rectangles: count, then place.
         let mut start = vec![0u32; cells + 1];
         for i in 0..n {
