@@ -54,7 +54,7 @@ pub struct Geometry {
     /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
     /// coordinates.
     pub(crate) origin: Vec3f,
-    /// Per point light (in the scene's order), the sphere leaves each direction from it may meet, for its
+    /// Per point light (in the scene's order), the spheres each direction from it may meet, for its
     /// shadow rays ([`LightBuffer`]); empty where shading casts no shadow rays or the spheres have no tree,
     /// `None` for a light its buffer would not serve well.
     pub(crate) light_buffers: Vec<Option<LightBuffer>>,
@@ -443,8 +443,8 @@ impl Geometry {
     /// light) is blocked: the K = 1 instance of [`Geometry::shadowed_k`], through the light's buffer.
     pub(crate) fn shadowed(&self, ray: &Ray<f32>, from: Departure, t_max: f32, light: usize) -> bool {
         let rays = RayPacket::<f32>::new(ray.origin, ray.dir, t_max, true);
-        let from = DeparturePacket { prim: from.prim, inward: from.inward };
-        self.shadowed_k(&rays, &from, &mut NO_PRIM.clone(), light)
+        let (from, mut hint) = (DeparturePacket { prim: from.prim, inward: from.inward }, NO_PRIM);
+        self.shadowed_k(&rays, &from, &mut hint, light)
     }
 
     /// The scene-file ids of the lanes' primitives in `lanes` (the others: [`NO_PRIM`]).

@@ -409,15 +409,21 @@ impl Scene {
 }
 
 /// Whether the spheres get a light buffer per point light ([`LightBuffer`]): when shading casts shadow rays
-/// toward lights, and the camera rays are at least 16 times the spheres: near that ratio building a light's
-/// buffer costs what its shadow rays save (PERF.md, "Register", light buffers).
+/// toward lights, the camera rays are at least 16 times the spheres (near that ratio building a light's
+/// buffer costs what its shadow rays save: PERF.md, "Register", light buffers), and there are at most
+/// [`LIGHT_BUFFER_MAX_SPHERES`].
 fn light_buffers_pay(desc: &SceneDesc, materials: &[Material]) -> bool {
     let camera_rays =
         f64::from(desc.camera.width) * f64::from(desc.camera.height) * desc.render.pattern.rays_per_pixel();
     features::lights_shade(!desc.lights.is_empty(), materials)
         && !matches!(desc.render.shade, Shade::Ao(_))
+        && desc.spheres.len() <= LIGHT_BUFFER_MAX_SPHERES
         && desc.spheres.len() as f64 * 16.0 <= camera_rays
 }
+
+/// Light buffers hold up to 8 entries (64 bytes) a sphere a light: past this many spheres (a supersampled
+/// still of a large field) they could outweigh the spheres' tree, which serves shadow rays without them.
+const LIGHT_BUFFER_MAX_SPHERES: usize = 1 << 20;
 
 /// The scene's shading mode with ambient occlusion's default distance filled in: [`Ao::DEFAULT_REACH`] times
 /// the diagonal of the box around every bounded primitive (spheres, ellipsoids, polygons, cones; planes
@@ -463,8 +469,7 @@ struct BvhJob {
     polygons: bool,
     /// Padding, obvhs preset and single-ray tree, alike for both.
     options: BuildOptions,
-    /// Whether shading casts shadow rays toward point lights: the spheres' tree then gets a light buffer
-    /// per light.
+    /// Whether the spheres' tree gets a light buffer per point light ([`light_buffers_pay`]).
     shadows: bool,
 }
 
