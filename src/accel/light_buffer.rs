@@ -85,7 +85,10 @@ impl LightBuffer {
         let n = spheres.len();
         let span = (0..n)
             .into_par_iter()
-            .map(|i| raw(i).0.abs().max(raw(i).1.abs()).length())
+            .map(|i| {
+                let (lo, hi) = raw(i);
+                lo.abs().max(hi.abs()).length()
+            })
             .reduce(|| 0.0, f64::max);
         let grow = DVec3::splat(span * STRAY + pad);
         let grown = |i: usize| {

@@ -194,30 +194,10 @@ impl SphereQuery<'_, f32> {
     /// [`SphereQuery::leaf_chunk`] over the spheres `ids` (at most `L::K` of them) instead of a range.
     #[inline(always)]
     fn gathered_chunk<L: Lanes>(&self, ids: &[u32]) -> Option<(u32, L)> {
-        let s = self.spheres;
         // Lanes past `ids` read a zero sphere at the origin; `valid` drops them.
         let load = |v: &[f32]| L::from_fn(|j| ids.get(j).map_or(0.0, |&i| v[i as usize]));
-        let centre = crate::math::V3::new(load(&s.cx), load(&s.cy), load(&s.cz));
-        let ray = self.terms.map(L::splat_f32);
-        let line = sphere_approach(centre, load(&s.r), &ray);
-        let valid = L::lanes_below(ids.len());
-        if !(line.meets() & valid).any() {
-            return None;
-        }
-        let eye = match self.eye {
-            EyeLanes::None => EyeLanes::None,
-            _ => EyeLanes::All,
-        };
-        // The eye term is read only where the roots use it.
-        let c_eye = match s.eye_terms_help || !matches!(eye, EyeLanes::None) {
-            true => load(&s.c_eye),
-            false => L::splat_f32(0.0),
-        };
-        let roots = crate::geometry::sphere_roots_of(s.eye_terms_help, &line, || centre, c_eye, &ray, eye);
-        let (hit, t) = first_root(&roots, L::splat_f32(self.t_max));
         let lane_ids = L::Ids::from_fn(|j| ids.get(j).copied().unwrap_or(crate::geometry::NO_PRIM));
-        let hit = hit & valid & !L::ids_eq(lane_ids, L::Ids::splat(self.skip));
-        Some((L::move_mask(hit), t))
+        self.chunk(load, lane_ids, L::lanes_below(ids.len()))
     }
 }
 
@@ -232,12 +212,19 @@ impl SphereQuery<'_, f32> {
     /// none of them, which skips the roots' division and square root for the whole chunk.
     #[inline(always)]
     fn leaf_chunk<L: Lanes>(&self, at: usize, count: usize) -> Option<(u32, L)> {
+        // Lanes past the array's end read a zero sphere at the origin; `valid` drops them.
+        let load = |v: &[f32]| L::load_partial(v, at, 0.0);
+        self.chunk(load, L::Ids::splat(at as u32) + L::lane_ids(), L::lanes_below(count))
+    }
+
+    /// The chunk kernel of [`SphereQuery::leaf_chunk`] and [`SphereQuery::gathered_chunk`]: the spheres
+    /// `load` reads from each array (one a lane), their ids `ids`, the lanes of `valid` taken.
+    #[inline(always)]
+    fn chunk<L: Lanes>(&self, load: impl Fn(&[f32]) -> L, ids: L::Ids, valid: L::Mask) -> Option<(u32, L)> {
         let s = self.spheres;
         let ray = self.terms.map(L::splat_f32);
-        // Lanes past the array's end read a zero sphere at the origin; `valid` drops them.
-        let centre = L::load_v3(&s.cx, &s.cy, &s.cz, at, 0.0);
-        let line = sphere_approach(centre, L::load_partial(&s.r, at, 0.0), &ray);
-        let valid = L::lanes_below(count);
+        let centre = crate::math::V3::new(load(&s.cx), load(&s.cy), load(&s.cz));
+        let line = sphere_approach(centre, load(&s.r), &ray);
         if !(line.meets() & valid).any() {
             return None;
         }
@@ -245,10 +232,13 @@ impl SphereQuery<'_, f32> {
             EyeLanes::None => EyeLanes::None,
             _ => EyeLanes::All,
         };
-        let c_eye = L::load_partial(&s.c_eye, at, 0.0);
+        // The eye term is read only where the roots use it.
+        let c_eye = match s.eye_terms_help || !matches!(eye, EyeLanes::None) {
+            true => load(&s.c_eye),
+            false => L::splat_f32(0.0),
+        };
         let roots = crate::geometry::sphere_roots_of(s.eye_terms_help, &line, || centre, c_eye, &ray, eye);
         let (hit, t) = first_root(&roots, L::splat_f32(self.t_max));
-        let ids = L::Ids::splat(at as u32) + L::lane_ids();
         let hit = hit & valid & !L::ids_eq(ids, L::Ids::splat(self.skip));
         Some((L::move_mask(hit), t))
     }
