@@ -18,6 +18,7 @@ use crate::math::{Mask, Vec3f};
 use crate::simd::{set_bits, Lanes};
 use glam::DVec3;
 use rayon::prelude::*;
+use std::sync::atomic::{AtomicU32, AtomicU64, Ordering};
 
 /// Cells per sphere over a light's windows: fewer make long lists, more make the offsets fall out of the cache
 /// (PERF.md, "Register", light buffers).
@@ -110,43 +111,7 @@ impl LightBuffer {
         if sample * 16 > MAX_ENTRIES_PER_SPHERE * n + cells {
             return None;
         }
-        // The spheres nearest the light first, so each cell's list comes out in that order.
-        let mut order: Vec<(f32, u32)> = (0..n)
-            .into_par_iter()
-            .map(|i| {
-                let (lo, hi) = grown(i);
-                let gap = lo.max(-hi).max(DVec3::ZERO).length();
-                // Rounded down, so the f32 bound never exceeds the exact distance.
-                let near = match gap as f32 {
-                    g if g as f64 > gap => g.next_down(),
-                    g => g,
-                };
-                (near, i as u32)
-            })
-            .collect();
-        order.par_sort_unstable_by(|a, b| a.0.total_cmp(&b.0).then(a.1.cmp(&b.1)));
-        // Two passes over the spheres' cell rectangles: count, then place.
-        let mut start = vec![0u32; cells + 1];
-        for i in 0..n {
-            let (lo, hi) = grown(i);
-            for_cells(lo, hi, &faces, |c| start[c + 1] += 1);
-        }
-        for c in 0..cells {
-            start[c + 1] += start[c];
-        }
-        let total = start[cells] as usize;
-        if total > MAX_ENTRIES_PER_SPHERE * n + cells {
-            return None;
-        }
-        let mut fill = start.clone();
-        let (mut sphere, mut near) = (vec![0u32; total], vec![0f32; total]);
-        for &(gap, i) in &order {
-            let (lo, hi) = grown(i as usize);
-            for_cells(lo, hi, &faces, |c| {
-                (sphere[fill[c] as usize], near[fill[c] as usize]) = (i, gap);
-                fill[c] += 1;
-            });
-        }
+        let (start, sphere, near) = lists(n, &faces, cells, grown)?;
         Some(Self { light, faces, start, sphere, near })
     }
 
@@ -271,6 +236,66 @@ impl LightBuffer {
         }
         F::move_mask(blocked)
     }
+}
+
+/// The cells' lists over the `n` boxes `grown(i)` (relative to the light): each cell's start, its spheres
+/// nearest the light first (ties by index), and a lower bound on each entry's distance from the light; `None`
+/// past [`MAX_ENTRIES_PER_SPHERE`].
+fn lists(
+    n: usize,
+    faces: &[Face; 6],
+    cells: usize,
+    grown: impl Fn(usize) -> (DVec3, DVec3) + Sync,
+) -> Option<(Vec<u32>, Vec<u32>, Vec<f32>)> {
+    // A lower bound on each sphere's distance from the light, rounded down so the f32 bound never exceeds
+    // the exact distance.
+    let near_of = |lo: DVec3, hi: DVec3| {
+        let gap = lo.max(-hi).max(DVec3::ZERO).length();
+        match gap as f32 {
+            g if g as f64 > gap => g.next_down(),
+            g => g,
+        }
+    };
+    // Three parallel passes over the spheres' cell rectangles: count, place (in any order), then sort
+    // each cell's entries nearest the light first (ties by index), which fixes the lists whatever the
+    // threads did.
+    let counts: Vec<AtomicU32> = (0..=cells).map(|_| AtomicU32::new(0)).collect();
+    (0..n).into_par_iter().for_each(|i| {
+        let (lo, hi) = grown(i);
+        for_cells(lo, hi, faces, |c| {
+            counts[c + 1].fetch_add(1, Ordering::Relaxed);
+        });
+    });
+    let mut start: Vec<u32> = counts.into_iter().map(AtomicU32::into_inner).collect();
+    for c in 0..cells {
+        start[c + 1] += start[c];
+    }
+    let total = start[cells] as usize;
+    if total > MAX_ENTRIES_PER_SPHERE * n + cells {
+        return None;
+    }
+    let fill: Vec<AtomicU32> = start[..cells].iter().map(|&s| AtomicU32::new(s)).collect();
+    let placed: Vec<AtomicU64> = (0..total).map(|_| AtomicU64::new(0)).collect();
+    (0..n).into_par_iter().for_each(|i| {
+        let (lo, hi) = grown(i);
+        // Distances are not negative, so their bits order as they do; the index breaks ties.
+        let key = u64::from(near_of(lo, hi).to_bits()) << 32 | i as u64;
+        for_cells(lo, hi, faces, |c| {
+            placed[fill[c].fetch_add(1, Ordering::Relaxed) as usize].store(key, Ordering::Relaxed);
+        });
+    });
+    let mut keys: Vec<u64> = placed.into_iter().map(AtomicU64::into_inner).collect();
+    let mut lists = Vec::with_capacity(cells);
+    let mut rest = keys.as_mut_slice();
+    for c in 0..cells {
+        let (list, tail) = rest.split_at_mut((start[c + 1] - start[c]) as usize);
+        lists.push(list);
+        rest = tail;
+    }
+    lists.into_par_iter().with_min_len(256).for_each(|list| list.sort_unstable());
+    let sphere = keys.iter().map(|&k| k as u32).collect();
+    let near = keys.iter().map(|&k| f32::from_bits((k >> 32) as u32)).collect();
+    Some((start, sphere, near))
 }
 
 /// The farthest distance from the light a shadow ray of length `t_max` reaches, with room for its rounding.
