@@ -409,17 +409,20 @@ impl Scene {
 }
 
 /// Whether the spheres get a light buffer per point light ([`LightBuffer`]): when shading casts shadow rays
-/// toward lights, the camera rays are at least 16 times the spheres (near that ratio building a light's
-/// buffer costs what its shadow rays save: PERF.md, "Register", light buffers), and there are at most
-/// [`LIGHT_BUFFER_MAX_SPHERES`].
+/// toward lights, the camera rays are at least [`LIGHT_BUFFER_MIN_RAYS_PER_SPHERE`] times the spheres, and
+/// there are at most [`LIGHT_BUFFER_MAX_SPHERES`].
 fn light_buffers_pay(desc: &SceneDesc, materials: &[Material]) -> bool {
     let camera_rays =
         f64::from(desc.camera.width) * f64::from(desc.camera.height) * desc.render.pattern.rays_per_pixel();
     features::lights_shade(!desc.lights.is_empty(), materials)
         && !matches!(desc.render.shade, Shade::Ao(_))
         && desc.spheres.len() <= LIGHT_BUFFER_MAX_SPHERES
-        && desc.spheres.len() as f64 * 16.0 <= camera_rays
+        && desc.spheres.len() as f64 * LIGHT_BUFFER_MIN_RAYS_PER_SPHERE <= camera_rays
 }
+
+/// Below this many camera rays a sphere, building a light's buffer costs more than its shadow rays save
+/// (balls5, 2 threads: 15.8 rays a sphere gains 4%, 8.9 loses 2%: PERF.md, "Register", light buffers).
+const LIGHT_BUFFER_MIN_RAYS_PER_SPHERE: f64 = 12.0;
 
 /// Light buffers hold up to 8 entries (64 bytes) a sphere a light: past this many spheres (a supersampled
 /// still of a large field) they could outweigh the spheres' tree, which serves shadow rays without them.
