@@ -14,7 +14,7 @@
 use super::{count_work, SphereQuery, Work};
 use crate::bvh::LeafQuery;
 use crate::geometry::Spheres;
-use crate::math::{Mask, Vec3f};
+use crate::math::{Mask, Vec3f, V3};
 use crate::simd::{set_bits, Lanes};
 use glam::DVec3;
 use rayon::prelude::*;
@@ -133,8 +133,38 @@ impl LightBuffer {
             2
         };
         let [a, b, c] = AXES[axis].map(|k| w[k]);
-        let f = &self.faces[2 * axis + usize::from(a < 0.0)];
+        self.face_cell(2 * axis + usize::from(a < 0.0), b / a.abs(), c / a.abs())
+    }
+
+    /// [`LightBuffer::cell`] for each lane of `bits` of `points`, the divisions done for all lanes at once
+    /// (the same operations on each lane's values, so the same cells).
+    #[inline(always)]
+    fn cells<F: Lanes>(&self, points: &V3<F>, bits: u32) -> [Option<usize>; 16] {
+        let light = F::splat_v3(self.light);
+        let w = V3::new(points.x - light.x, points.y - light.y, points.z - light.z);
+        let (ax, ay, az) = (w.x.abs(), w.y.abs(), w.z.abs());
+        let x_axis = ax.ge(ay) & ax.ge(az);
+        let y_axis = !x_axis & ay.ge(az);
+        let pick = |x: F, y: F, z: F| F::select(x_axis, x, F::select(y_axis, y, z));
+        // The face's axis, then the axes of its column and its row ([`AXES`]).
+        let (a, b, c) = (pick(w.x, w.y, w.z), pick(w.y, w.z, w.x), pick(w.z, w.x, w.y));
         let (u, v) = (b / a.abs(), c / a.abs());
+        let mut out = [None; 16];
+        for i in set_bits(bits) {
+            let axis = match (F::mask_lane(x_axis, i), F::mask_lane(y_axis, i)) {
+                (true, _) => 0,
+                (false, true) => 1,
+                _ => 2,
+            };
+            out[i] = self.face_cell(2 * axis + usize::from(a.lane(i) < 0.0), u.lane(i), v.lane(i));
+        }
+        out
+    }
+
+    /// The cell at face coordinates `(u, v)` of face `face`, or `None` outside its window.
+    #[inline(always)]
+    fn face_cell(&self, face: usize, u: f32, v: f32) -> Option<usize> {
+        let f = &self.faces[face];
         // Negative and NaN (a point at the light) give 0 here, and are caught by the comparisons.
         let (column, row) = (((u - f.u0) * f.inv) as u32, ((v - f.v0) * f.inv) as u32);
         let inside = u >= f.u0 && v >= f.v0 && column < f.columns && row < f.rows;
@@ -165,7 +195,8 @@ impl LightBuffer {
     ) -> F::Mask {
         let bits = F::move_mask(live);
         if F::K == 1 {
-            return match bits != 0 && self.occluded_lane(q, 0, scalar, blocker) {
+            let cell = || self.cell(q.ray().origin.map(|v| v.lane(0)));
+            return match bits != 0 && self.occluded_lane(q, 0, cell(), scalar, blocker) {
                 true => live,
                 false => F::mask_from_bits(0),
             };
@@ -173,10 +204,7 @@ impl LightBuffer {
         let origin = q.ray().origin;
         let t_max = q.t_max();
         debug_assert!(F::K <= 16);
-        let cells: [Option<usize>; 16] = std::array::from_fn(|i| match bits >> i & 1 {
-            1 => self.cell(origin.map(|v| v.lane(i))),
-            _ => None,
-        });
+        let cells = self.cells(&origin, bits);
         let mut blocked = 0u32;
         let mut left = bits;
         while left != 0 {
@@ -185,7 +213,7 @@ impl LightBuffer {
             left &= !group;
             if group.count_ones() <= crate::bvh::SINGLE_RAY_MAX_LANES {
                 for i in set_bits(group) {
-                    if self.occluded_lane(q, i, scalar, blocker) {
+                    if self.occluded_lane(q, i, c, scalar, blocker) {
                         blocked |= 1 << i;
                     }
                 }
@@ -197,18 +225,19 @@ impl LightBuffer {
         F::mask_from_bits(blocked)
     }
 
-    /// Whether lane `i` is blocked, tested alone: its cell's spheres across the lanes (one at a time for
-    /// the scalar path).
+    /// Whether lane `i`, in cell `c`, is blocked, tested alone: the cell's spheres across the lanes (one at a
+    /// time for the scalar path).
     #[inline(always)]
     fn occluded_lane<F: Lanes>(
         &self,
         q: &SphereQuery<'_, F>,
         i: usize,
+        c: Option<usize>,
         scalar: bool,
         blocker: &mut u32,
     ) -> bool {
         let one = q.lane(i);
-        let ids = self.spheres(self.cell(one.ray().origin), one.t_max());
+        let ids = self.spheres(c, one.t_max());
         count_work(|| Work::lanes(ids.len(), ids.len(), 0, 0));
         match scalar {
             true => ids.iter().any(|&s| one.occluded(s as usize..s as usize + 1, true, blocker)),
