@@ -427,3 +427,58 @@ fn for_cells(lo: DVec3, hi: DVec3, faces: &[Face; 6], mut f: impl FnMut(usize)) 
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::SplitMix64;
+    use wide::{f32x16, f32x4, f32x8};
+
+    /// A packet's cells ([`LightBuffer::cells`], the divisions in lanes) are the single-ray lookup's, lane
+    /// by lane: for points anywhere around a light (inside and outside its windows), on the cube's edges and
+    /// diagonals where faces meet, on the axes, and at the light itself.
+    #[test]
+    fn packet_cells_are_the_single_ray_cells() {
+        let mut rng = SplitMix64::new(11);
+        let mut unit = move || rng.unit() as f32 * 2.0 - 1.0;
+        let mut spheres = Spheres::default();
+        for _ in 0..400 {
+            spheres.push(V3::new(unit() * 3.0, unit() * 3.0, unit()), 0.05 + 0.1 * unit().abs(), 0);
+        }
+        let light = V3::new(0.25, -0.5, 4.0);
+        let buffer = LightBuffer::new(light, &spheres, 1e-4).expect("a buffer");
+        let mut points: Vec<Vec3f> =
+            (0..4000).map(|_| V3::new(unit() * 6.0, unit() * 6.0, unit() * 6.0)).collect();
+        for k in 0..64 {
+            let d = [unit(), unit(), unit()];
+            let s = if k % 2 == 0 { 1.0 } else { -1.0 };
+            // Ties between axes (edges, diagonals), points on an axis, and the light itself.
+            points.push(light + V3::new(d[0], d[0] * s, d[1]));
+            points.push(light + V3::new(d[0], d[0], d[0] * s));
+            points.push(light + V3::new(0.0, 0.0, d[2]));
+            points.push(light + V3::new(d[2], 0.0, 0.0));
+        }
+        points.push(light);
+        assert!(
+            points.iter().any(|&p| buffer.cell(p).is_some())
+                && points.iter().any(|&p| buffer.cell(p).is_none())
+        );
+        same_cells::<f32x4>(&buffer, &points);
+        same_cells::<f32x8>(&buffer, &points);
+        same_cells::<f32x16>(&buffer, &points);
+    }
+
+    fn same_cells<F: Lanes>(buffer: &LightBuffer, points: &[Vec3f]) {
+        for (n, chunk) in points.chunks(F::K).enumerate() {
+            let at = |i: usize| chunk[i.min(chunk.len() - 1)];
+            let lanes = V3::new(F::from_fn(|i| at(i).x), F::from_fn(|i| at(i).y), F::from_fn(|i| at(i).z));
+            // Every other packet leaves its odd lanes out.
+            let bits = ((1u32 << chunk.len()) - 1) & if n % 2 == 0 { u32::MAX } else { 0x5555_5555 };
+            let cells = buffer.cells(&lanes, bits);
+            for (i, &cell) in cells.iter().enumerate().take(F::K) {
+                let want = if bits >> i & 1 == 1 { buffer.cell(at(i)) } else { None };
+                assert_eq!(cell, want, "K = {}, point {:?}", F::K, at(i));
+            }
+        }
+    }
+}
