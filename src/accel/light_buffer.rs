@@ -171,15 +171,23 @@ impl LightBuffer {
         inside.then(|| (f.base + row * f.columns + column) as usize)
     }
 
-    /// The spheres of cell `c` a ray reaching `reach` from the light may meet.
+    /// Cell `c`'s spheres, nearest the light first, with a lower bound on each one's distance from the light
+    /// (empty outside every window). A ray reaching `reach` from the light may meet the prefix whose bounds
+    /// are at most [`limit`]`(reach)`; the callers find that prefix's end as they test, a chunk of bounds at a
+    /// time, instead of a binary search whose compares and loads form one chain of dependent steps.
     #[inline(always)]
-    fn spheres(&self, c: Option<usize>, reach: f32) -> &[u32] {
-        let Some(c) = c else { return &[] };
+    fn listed(&self, c: Option<usize>) -> (&[u32], &[f32]) {
+        let Some(c) = c else { return (&[], &[]) };
         let (first, end) = (self.start[c] as usize, self.start[c + 1] as usize);
+        (&self.sphere[first..end], &self.near[first..end])
+    }
+
+    /// The spheres of cell `c` a ray reaching `reach` from the light may meet (the prefix of
+    /// [`LightBuffer::listed`]), found by a binary search: for the work counters and tests.
+    fn spheres(&self, c: Option<usize>, reach: f32) -> &[u32] {
+        let (ids, near) = self.listed(c);
         let reach = limit(reach);
-        let near = &self.near[first..end];
-        let count = near.partition_point(|&n| n <= reach);
-        &self.sphere[first..first + count]
+        &ids[..near.partition_point(|&n| n <= reach)]
     }
 
     /// The lanes of `live` blocked by a sphere: the query's rays must start at their hit points and end at
@@ -220,7 +228,7 @@ impl LightBuffer {
                 continue;
             }
             let reach = set_bits(group).map(|i| t_max.lane(i)).fold(0.0, f32::max);
-            blocked |= self.occluded_group(q, self.spheres(c, reach), F::mask_from_bits(group), blocker);
+            blocked |= self.occluded_group(q, c, reach, F::mask_from_bits(group), blocker);
         }
         F::mask_from_bits(blocked)
     }
@@ -237,27 +245,41 @@ impl LightBuffer {
         blocker: &mut u32,
     ) -> bool {
         let one = q.lane(i);
-        let ids = self.spheres(c, one.t_max());
-        count_work(|| Work::lanes(ids.len(), ids.len(), 0, 0));
+        let (ids, near) = self.listed(c);
+        let reach = limit(one.t_max());
+        count_work(|| {
+            let n = self.spheres(c, one.t_max()).len();
+            Work::lanes(n, n, 0, 0)
+        });
         match scalar {
-            true => ids.iter().any(|&s| one.occluded(s as usize..s as usize + 1, true, blocker)),
-            false => one.occluded_gathered(ids, blocker),
+            true => {
+                let within = ids.iter().zip(near).take_while(|&(_, &n)| n <= reach);
+                within.into_iter().any(|(&s, _)| one.occluded(s as usize..s as usize + 1, true, blocker))
+            }
+            false => one.occluded_listed(ids, near, reach, blocker),
         }
     }
 
-    /// The lanes of `group` blocked by one of the spheres `ids`, tested together.
+    /// The lanes of `group` blocked by one of cell `c`'s spheres that a ray reaching `reach` may meet, tested
+    /// together.
     #[inline(always)]
     fn occluded_group<F: Lanes>(
         &self,
         q: &SphereQuery<'_, F>,
-        ids: &[u32],
+        c: Option<usize>,
+        reach: f32,
         group: F::Mask,
         blocker: &mut u32,
     ) -> u32 {
         let lanes = F::move_mask(group).count_ones() as usize;
-        count_work(|| Work::lanes(ids.len(), ids.len() * lanes, 0, 0));
+        count_work(|| {
+            let n = self.spheres(c, reach).len();
+            Work::lanes(n, n * lanes, 0, 0)
+        });
+        let (ids, near) = self.listed(c);
+        let reach = limit(reach);
         let mut blocked = F::mask_from_bits(0);
-        for &s in ids {
+        for (&s, _) in ids.iter().zip(near).take_while(|&(_, &n)| n <= reach) {
             blocked = blocked | q.occluded(s as usize..s as usize + 1, group & !blocked, blocker);
             if (blocked | !group).all() {
                 break;

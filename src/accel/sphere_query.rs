@@ -175,17 +175,31 @@ impl SingleLeafQuery for SphereQuery<'_, f32> {
 }
 
 impl SphereQuery<'_, f32> {
-    /// Whether one of the spheres `ids` (any order) blocks the one ray, `LeafLanes` spheres at a time,
-    /// gathered: each lane computes [`SphereQuery::sphere`]'s bits. `blocker` is set to the first blocking
-    /// sphere in `ids`' order.
+    /// Whether one of the spheres `ids` whose bound in `near` (non-decreasing, one per id) is at most `reach`
+    /// blocks the one ray, `LeafLanes` spheres at a time, gathered: each lane computes
+    /// [`SphereQuery::sphere`]'s bits. Each chunk's bounds are compared in lanes, so finding where the
+    /// prefix ends adds no chain of dependent loads. `blocker` is set to the first blocking sphere in `ids`'
+    /// order.
     #[inline(always)]
-    pub(crate) fn occluded_gathered(&self, ids: &[u32], blocker: &mut u32) -> bool {
-        for chunk in ids.chunks(LeafLanes::K) {
-            if let Some((bits, _)) = self.gathered_chunk::<LeafLanes>(chunk) {
+    pub(crate) fn occluded_listed(&self, ids: &[u32], near: &[f32], reach: f32, blocker: &mut u32) -> bool {
+        debug_assert_eq!(ids.len(), near.len());
+        let reach = LeafLanes::splat_f32(reach);
+        for (k, chunk) in ids.chunks(LeafLanes::K).enumerate() {
+            let bounds = LeafLanes::load_partial(near, k * LeafLanes::K, f32::INFINITY);
+            let within = (LeafLanes::move_mask(crate::math::Real::le(bounds, reach)).trailing_ones()
+                as usize)
+                .min(chunk.len());
+            if within == 0 {
+                return false;
+            }
+            if let Some((bits, _)) = self.gathered_chunk::<LeafLanes>(&chunk[..within]) {
                 if bits != 0 {
                     *blocker = chunk[bits.trailing_zeros() as usize];
                     return true;
                 }
+            }
+            if within < chunk.len() {
+                return false;
             }
         }
         false
