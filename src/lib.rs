@@ -65,7 +65,7 @@ pub mod accuracy;
 pub mod aov;
 pub mod api;
 pub mod bench;
-pub mod bvh;
+pub(crate) mod bvh;
 pub mod camera;
 pub mod compile;
 pub mod converge;

@@ -1,7 +1,7 @@
 //! The scene's geometry laid out for intersection, and the queries over it: `intersect` (closest hit) and
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
-//! Each bounded kind has its own BVH ([`crate::bvh`], one tree type monomorphised over the kind's
+//! Each bounded kind has its own BVH (`crate::bvh`, one tree type monomorphised over the kind's
 //! `crate::bvh::LeafQuery`): spheres (`SphereQuery`), polygons' triangles (`TriangleQuery`) and each
 //! registered kind ([`crate::kinds`]: ellipsoids, open cones, tori); a kind with few items is tested brute
 //! force by the same query, and so is an unbounded kind (planes). One kind per tree keeps each leaf loop
@@ -16,9 +16,10 @@ mod sphere_query;
 mod triangle_query;
 pub(crate) use crate::bvh::item_query::{ItemQuery, ItemTest};
 pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
-pub use crate::bvh::work::{
-    probe_overhead, take_kind_work, take_work, ticks, KindWork, Probe, RayKind, Work, KIND_SLOTS, UNTAGGED,
+pub(crate) use crate::bvh::work::{
+    probe_overhead, take_kind_work, take_work, ticks, KindWork, Work, KIND_SLOTS, UNTAGGED,
 };
+pub use crate::bvh::work::{Probe, RayKind};
 pub(crate) use light_buffer::LightBuffer;
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;
@@ -392,7 +393,7 @@ impl Geometry {
         all
     }
 
-    /// Whether packet queries cull by a [`crate::geometry::Pyramid`]: only then is it worth a packet maker's
+    /// Whether packet queries cull by a `crate::geometry::Pyramid`: only then is it worth a packet maker's
     /// while to compute one.
     pub fn culls_by_pyramid(&self) -> bool {
         self.bvhs().any(|bvh| bvh.frustum_culling)

@@ -44,9 +44,9 @@ impl RayKind {
 
 /// The slots of the per-kind sums: one per [`RayKind`], then one for work done outside any `traced` query
 /// (none in the renderer: a test checks it).
-pub const KIND_SLOTS: usize = 6;
+pub(crate) const KIND_SLOTS: usize = 6;
 /// The slot of work done outside any `traced` query.
-pub const UNTAGGED: usize = 5;
+pub(crate) const UNTAGGED: usize = 5;
 
 /// Intersection tests done, each on a whole packet (K lanes at once; K = 1 counts single rays), and the
 /// live rays they served.
@@ -60,10 +60,10 @@ pub struct Work {
     pub box_tests: u64,
     /// Live rays summed over the primitive tests: `prim_lanes / prim_tests` is the mean number of rays a
     /// test served (K when every lane of every packet is live, 1 for single rays).
-    pub prim_lanes: u64,
+    pub(crate) prim_lanes: u64,
     /// Live rays summed over the box tests. A large packet's box test serves every member that tests the
     /// box, so its mean may exceed K.
-    pub box_lanes: u64,
+    pub(crate) box_lanes: u64,
 }
 
 impl Work {
@@ -94,7 +94,7 @@ impl std::ops::AddAssign for Work {
 
 /// One kind's sums on one thread: its work, its queries and the time-stamp counter ticks spent in them.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct KindWork {
+pub(crate) struct KindWork {
     /// Tests made for this kind (counting on).
     pub(crate) work: Work,
     /// `traced` queries made for this kind (counting or timing on).
@@ -135,7 +135,7 @@ thread_local! {
 pub struct Probe(u32);
 
 impl Probe {
-    /// Counts the walks' tests ([`take_work`], [`take_kind_work`]).
+    /// Counts the walks' tests (`take_work`, `take_kind_work`).
     pub fn counting() -> Probe {
         PROBES.fetch_add(COUNTING, Relaxed);
         Probe(COUNTING)
@@ -162,12 +162,12 @@ pub(crate) fn counting() -> bool {
 }
 
 /// Returns and resets this thread's work counters.
-pub fn take_work() -> Work {
+pub(crate) fn take_work() -> Work {
     WORK.with(|w| w.replace(Work::default()))
 }
 
 /// Returns and resets this thread's per-kind sums, indexed by `RayKind as usize` (and [`UNTAGGED`]).
-pub fn take_kind_work() -> [KindWork; KIND_SLOTS] {
+pub(crate) fn take_kind_work() -> [KindWork; KIND_SLOTS] {
     KINDS.with_borrow_mut(|k| std::mem::replace(k, [KindWork::default(); KIND_SLOTS]))
 }
 
@@ -223,7 +223,7 @@ fn probed<R>(kind: RayKind, query: impl FnOnce() -> R) -> R {
 /// A monotonic tick count: the time-stamp counter on x86-64 (constant-rate on the CPUs the default build
 /// runs on), nanoseconds since the first call elsewhere. Callers convert ticks to seconds by timing a span
 /// both ways.
-pub fn ticks() -> u64 {
+pub(crate) fn ticks() -> u64 {
     #[cfg(target_arch = "x86_64")]
     {
         // SAFETY: RDTSC exists on every x86-64 CPU and has no memory effects.
@@ -238,7 +238,7 @@ pub fn ticks() -> u64 {
 
 /// The ticks a `traced` query of nothing reads with timing on: the probe's own share of each timed query,
 /// which the per-kind times subtract: the median of `samples` tries.
-pub fn probe_overhead(samples: usize) -> u64 {
+pub(crate) fn probe_overhead(samples: usize) -> u64 {
     let _timing = Probe::timing();
     let mut spent: Vec<u64> = (0..samples.max(1))
         .map(|_| {

@@ -10,7 +10,7 @@
 //! it (`RenderingFrame`). Directions, distances along rays and normals do not depend on the origin, so
 //! images and ids mean what they meant in world space; [`Scene::origin`] maps points back.
 
-pub mod features;
+pub(crate) mod features;
 mod frame;
 pub mod load;
 pub mod memory;

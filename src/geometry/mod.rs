@@ -15,7 +15,8 @@ mod spheres;
 
 pub(crate) use ellipse::Ellipse;
 pub(crate) use frame::Frame;
-pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, Pyramid, RayPacket};
+pub(crate) use packet::Pyramid;
+pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, RayPacket};
 pub(crate) use plane::intersect_plane;
 pub(crate) use polygon::{intersect_triangle, stays_off_plane};
 pub(crate) use polygons::Polygons;

@@ -40,7 +40,7 @@ pub struct RayPacket<F: Lanes> {
 /// `axis · d > 0`, evaluated exactly on the stored f32 values (whoever builds one widens it past the rounding
 /// of the rays and of the normals).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct Pyramid {
+pub(crate) struct Pyramid {
     /// The rays' shared origin.
     pub(crate) apex: [f32; 3],
     /// Inward normals of the four sides.

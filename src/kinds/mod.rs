@@ -2,7 +2,7 @@
 //! description and TOML form, its f32 store, its kernel generic over lanes, bounds, surface, departure rule
 //! and its f64 form for the accuracy twin), behind the `Kind` trait. One list, `registry!`, names the
 //! kinds; the scene description ([`KindDescs`]), the TOML reader, compile, the queries over the geometry
-//! ([`KindStores`]) and the twin (`KindTwins`) are written once over it.
+//! (`KindStores`) and the twin (`KindTwins`) are written once over it.
 //!
 //! Adding a kind: a folder here with a type implementing `Kind`, and its name in `registry!`. Its
 //! primitive ids follow the built-in kinds' (spheres, polygons) in the list's order.
@@ -273,7 +273,7 @@ macro_rules! per_kind {
 
         /// Every registered kind's compiled items and trees.
         #[derive(Clone, Debug, Default)]
-        pub struct KindStores {
+        pub(crate) struct KindStores {
             $(
                 #[doc = concat!("The compiled `", stringify!($field), "`.")]
                 pub(crate) $field: KindItems<$kind>,

@@ -10,4 +10,5 @@ pub(crate) use affine::Affine;
 pub use color::Rgb8;
 pub use real::{Mask, Real};
 pub use rng::SplitMix64;
-pub use vec3::{Rgb, Vec3f, V3};
+pub(crate) use vec3::Vec3f;
+pub use vec3::{Rgb, V3};

@@ -19,7 +19,7 @@ pub struct V3<F> {
 }
 
 /// A 32-bit vector, the renderer's working type.
-pub type Vec3f = V3<f32>;
+pub(crate) type Vec3f = V3<f32>;
 /// A linear RGB colour.
 pub type Rgb = V3<f32>;
 

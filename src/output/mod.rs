@@ -284,7 +284,7 @@ pub struct Frame {
 
 impl Frame {
     /// A whole image of `width × height`.
-    pub fn whole(width: u32, height: u32) -> Self {
+    pub(crate) fn whole(width: u32, height: u32) -> Self {
         Self { width, height, x0: 0, y0: 0, full_width: width, full_height: height }
     }
 

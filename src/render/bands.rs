@@ -123,7 +123,7 @@ pub(super) fn trace_band<F: Lanes>(
 
 /// Rows per band for an image `width` pixels wide when a band may take about `budget` bytes of linear
 /// RGB: whole tile rows, at least one.
-pub fn band_rows(width: u32, budget: usize) -> u32 {
+pub(crate) fn band_rows(width: u32, budget: usize) -> u32 {
     let row = width.max(1) as usize * std::mem::size_of::<Rgb>();
     let tile_rows = (budget / row / TILE as usize).clamp(1, u32::MAX as usize / TILE as usize) as u32;
     tile_rows * TILE

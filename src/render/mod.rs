@@ -49,9 +49,9 @@ mod coverage;
 mod primary;
 mod tile;
 
-pub(crate) use bands::render_window_lanes;
 use bands::trace_band;
-pub use bands::{band_rows, render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
+pub(crate) use bands::{band_rows, render_window_lanes};
+pub use bands::{render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
 pub(crate) use coverage::CoveragePart;
 // Named by the tests (tests/library/) alone.
 #[cfg(test)]

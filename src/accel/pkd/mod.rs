@@ -139,7 +139,7 @@ pub(crate) use with_records;
 
 /// Spheres in a particle tree (see the module documentation), with what the walk and shading need.
 #[derive(Clone, Debug, Default)]
-pub struct Particles {
+pub(crate) struct Particles {
     /// The spheres in tree order.
     records: Records,
     /// Scene-file index of the sphere at each position (breaks ties in t and names it), and a node's split
