@@ -17,9 +17,9 @@ mod triangle_query;
 pub(crate) use crate::bvh::item_query::{ItemQuery, ItemTest};
 pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
 pub(crate) use crate::bvh::work::{
-    probe_overhead, take_kind_work, take_work, ticks, KindWork, Work, KIND_SLOTS, UNTAGGED,
+    probe_overhead, take_kind_work, take_work, ticks, KindWork, KIND_SLOTS, UNTAGGED,
 };
-pub use crate::bvh::work::{Probe, RayKind};
+pub use crate::bvh::work::{Probe, RayKind, Work};
 pub(crate) use light_buffer::LightBuffer;
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;

@@ -1,7 +1,7 @@
 //! `bareray accuracy`: the f32 renderer against an f64 twin of the same scene, ray by ray.
 //!
 //! Every primary ray (one per pixel centre) is traced by the renderer's own primary-hit pass
-//! ([`crate::render::trace_primary_lanes`], packets of K) and by the `Twin`, an independent f64 tracer
+//! (`crate::render::trace_primary_lanes`, packets of K) and by the `Twin`, an independent f64 tracer
 //! over the exact [`SceneDesc`] in camera-relative space with unrounded f64 camera rays. Only
 //! frame-independent quantities are compared: hit or miss, scene-file primitive id, t (rays have unit
 //! directions in both), and occlusion. With secondary rays, each precision builds its own Whitted rays from
@@ -46,7 +46,8 @@ mod secondary;
 pub(crate) mod twin;
 
 use report::Reason;
-pub use report::{Example, Explained, HitStats, Percentiles, Report, ShadowStats};
+pub use report::{Example, Percentiles, Report};
+pub(crate) use report::{Explained, HitStats, ShadowStats};
 
 use std::time::Instant;
 

@@ -34,7 +34,7 @@ impl Percentiles {
 /// How many disagreements each explanation accounted for (each counted once, under the first that holds,
 /// in this order).
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct Explained {
+pub(crate) struct Explained {
     /// Tangency with either primitive.
     pub(crate) graze: u64,
     /// Both primitives hit at nearly the same t.
@@ -87,7 +87,7 @@ pub(super) enum Reason {
 
 /// Closest-hit rays of one kind (primary, mirror or refraction) compared.
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub struct HitStats {
+pub(crate) struct HitStats {
     /// Rays traced in both precisions.
     pub(crate) rays: u64,
     /// Both hit the same primitive.
@@ -120,7 +120,7 @@ impl HitStats {
 
 /// Shadow rays compared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub struct ShadowStats {
+pub(crate) struct ShadowStats {
     /// Shadow rays traced in both precisions (lights in front of the surface in both).
     pub(crate) rays: u64,
     /// Lights in front of the surface in one precision only (a shadow ray in one only).

@@ -5,7 +5,7 @@
 //! "camera-world" space, without its rotation): every position is `p − eye` computed in f64 from the scene
 //! file's values and rounded once to f32. Near the eye, where the image is made, f32 then resolves the
 //! scene as finely as it can anywhere, however far from the world origin the scene sits, and camera rays
-//! start at exactly zero, which lets each sphere carry an exact eye term ([`crate::geometry::eye_term`]).
+//! start at exactly zero, which lets each sphere carry an exact eye term (`crate::geometry::eye_term`).
 //! A scene far from the eye instead gets its origin at its own centre, and camera rays start just short of
 //! it (`RenderingFrame`). Directions, distances along rays and normals do not depend on the origin, so
 //! images and ids mean what they meant in world space; [`Scene::origin`] maps points back.

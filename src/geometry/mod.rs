@@ -15,19 +15,19 @@ mod spheres;
 
 pub(crate) use ellipse::Ellipse;
 pub(crate) use frame::Frame;
+pub(crate) use packet::HitPacket;
 pub(crate) use packet::Pyramid;
-pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, HitPacket, RayPacket};
+pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, RayPacket};
 pub(crate) use plane::intersect_plane;
 pub(crate) use polygon::{intersect_triangle, stays_off_plane};
 pub(crate) use polygons::Polygons;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub(crate) use round::{round_down, round_up};
 pub(crate) use shape::{Shape, ShapeKind};
-pub use sphere::{
-    at_eye, far_root, first_root, intersect_sphere, sphere_approach, sphere_roots, sphere_roots_of, Approach,
-    EyeLanes, Roots, SphereRay, CONTACT_ROUNDINGS,
-};
-pub use spheres::{eye_side, eye_term, Spheres};
+pub(crate) use sphere::{at_eye, far_root, sphere_roots, sphere_roots_of, EyeLanes, CONTACT_ROUNDINGS};
+pub use sphere::{first_root, intersect_sphere, sphere_approach, Approach, Roots, SphereRay};
+pub use spheres::Spheres;
+pub(crate) use spheres::{eye_side, eye_term};
 
 /// `v` in a new order, `order[j]` being the old index of new item `j`: how the kinds' stores follow their
 /// BVH's leaf order. Large stores are gathered on the thread pool.

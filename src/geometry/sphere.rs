@@ -44,7 +44,7 @@ use super::Ray;
 /// about 5 roundings of its bound; a hit point used as the origin (`o + t·d` in f32) is off by a few
 /// roundings of its own size, which moves `c` by up to `2·r` per unit near the surface. 8 covers both with
 /// room to spare and keeps the band at a contact point a few ulps wide.
-pub const CONTACT_ROUNDINGS: f64 = 8.0;
+pub(crate) const CONTACT_ROUNDINGS: f64 = 8.0;
 
 /// A ray with the per-ray terms every sphere test shares, computed once per query.
 #[derive(Clone, Copy, Debug)]
@@ -121,7 +121,7 @@ impl<F: Real> SphereRay<F> {
 
 /// The lanes where `origin` is exactly the origin of the rendering space (the eye).
 #[inline(always)]
-pub fn at_eye<F: Real>(origin: V3<F>) -> F::Mask {
+pub(crate) fn at_eye<F: Real>(origin: V3<F>) -> F::Mask {
     let zero = F::splat(0.0);
     let at_zero = |v: F| v.le(zero) & v.ge(zero);
     at_zero(origin.x) & at_zero(origin.y) & at_zero(origin.z)
@@ -129,7 +129,7 @@ pub fn at_eye<F: Real>(origin: V3<F>) -> F::Mask {
 
 /// Which lanes of a query start at the eye and take [`Approach::roots_from_eye`].
 #[derive(Clone, Copy, Debug)]
-pub enum EyeLanes<M> {
+pub(crate) enum EyeLanes<M> {
     /// No lane.
     None,
     /// Every live lane (camera rays).
@@ -315,7 +315,7 @@ pub fn sphere_approach<F: Real>(centre: V3<F>, radius: F, ray: &SphereRay<F>) ->
 /// `Spheres::eye_terms_help`, says a sphere is near the eye), the others `Approach::roots_with_eye_term`
 /// in such scenes and `Approach::roots` elsewhere. `centre` is only evaluated where it is needed.
 #[inline(always)]
-pub fn sphere_roots_of<F: Real>(
+pub(crate) fn sphere_roots_of<F: Real>(
     help: bool,
     line: &Approach<F>,
     centre: impl Fn() -> V3<F>,
@@ -334,7 +334,7 @@ pub fn sphere_roots_of<F: Real>(
 /// The roots of `|origin + t·dir − centre|² = radius²` for a ray from anywhere, with no eye term
 /// (`Approach::roots`).
 #[inline(always)]
-pub fn sphere_roots<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Roots<F> {
+pub(crate) fn sphere_roots<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>) -> Roots<F> {
     sphere_approach(centre, radius, &SphereRay::new(*ray)).roots()
 }
 
@@ -349,7 +349,7 @@ pub fn first_root<F: Real>(roots: &Roots<F>, t_max: F) -> (F::Mask, F) {
 /// The exit root in `[0, t_max)`: for a ray that starts on the sphere and heads inside, whose entry root is
 /// its own origin.
 #[inline(always)]
-pub fn far_root<F: Real>(roots: &Roots<F>, t_max: F) -> (F::Mask, F) {
+pub(crate) fn far_root<F: Real>(roots: &Roots<F>, t_max: F) -> (F::Mask, F) {
     let zero = F::splat(0.0);
     (roots.hit & roots.far.ge(zero) & roots.far.lt(t_max), roots.far)
 }

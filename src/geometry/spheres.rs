@@ -111,14 +111,14 @@ impl Spheres {
 
 /// `|centre|² − r²` for a sphere in rendering space (the eye at the origin), as `(|centre| − r)(|centre| + r)`
 /// in f64: no cancellation between two large squares when the eye is close to a large sphere.
-pub fn eye_term(center: V3<f64>, radius: f64) -> f64 {
+pub(crate) fn eye_term(center: V3<f64>, radius: f64) -> f64 {
     let d = center.length();
     (d - radius) * (d + radius)
 }
 
 /// Whether the eye is inside a solid by the sign of its eye term: `Some(true)` below 0, `Some(false)` above,
 /// `None` at 0 (the eye on the surface) and for NaN, as the shader's lanes decide it.
-pub fn eye_side(c_eye: f64) -> Option<bool> {
+pub(crate) fn eye_side(c_eye: f64) -> Option<bool> {
     match c_eye.partial_cmp(&0.0)? {
         std::cmp::Ordering::Less => Some(true),
         std::cmp::Ordering::Greater => Some(false),

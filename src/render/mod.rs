@@ -58,9 +58,8 @@ pub(crate) use coverage::CoveragePart;
 pub(crate) use coverage::coverage_parts;
 
 pub(crate) use primary::trace_primary_window_lanes;
-pub use primary::{
-    fnv1a, primary_hits_lanes, trace_primary, trace_primary_lanes, trace_primary_window, PrimaryHits,
-};
+pub use primary::{fnv1a, trace_primary, trace_primary_window, PrimaryHits};
+pub(crate) use primary::{primary_hits_lanes, trace_primary_lanes};
 use tile::trace_tile;
 
 /// Tile edge in pixels: small enough to balance two threads on small images, large enough to amortise.

@@ -73,14 +73,19 @@ fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
 
 /// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on the threads
 /// of `pool` ([`trace_primary`]).
-pub fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> PrimaryHits {
+pub(crate) fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> PrimaryHits {
     let mut hits = PrimaryHits::new(scene.camera.width, scene.camera.height);
     trace_primary_lanes(scene, lanes, pool, &mut hits);
     hits
 }
 
 /// [`trace_primary`] at a packet width chosen at run time.
-pub fn trace_primary_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
+pub(crate) fn trace_primary_lanes(
+    scene: &Scene,
+    lanes: usize,
+    pool: &rayon::ThreadPool,
+    hits: &mut PrimaryHits,
+) {
     with_lanes!(lanes, F => trace_primary::<F>(scene, pool, hits))
 }
 
