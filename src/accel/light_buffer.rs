@@ -183,7 +183,7 @@ impl LightBuffer {
     }
 
     /// The spheres of cell `c` a ray reaching `reach` from the light may meet (the prefix of
-    /// [`LightBuffer::listed`]), found by a binary search: for the work counters and tests.
+    /// [`LightBuffer::listed`]), found by a binary search: for the work counters.
     fn spheres(&self, c: Option<usize>, reach: f32) -> &[u32] {
         let (ids, near) = self.listed(c);
         let reach = limit(reach);
@@ -252,10 +252,11 @@ impl LightBuffer {
             Work::lanes(n, n, 0, 0)
         });
         match scalar {
-            true => {
-                let within = ids.iter().zip(near).take_while(|&(_, &n)| n <= reach);
-                within.into_iter().any(|(&s, _)| one.occluded(s as usize..s as usize + 1, true, blocker))
-            }
+            true => ids
+                .iter()
+                .zip(near)
+                .take_while(|&(_, &n)| n <= reach)
+                .any(|(&s, _)| one.occluded(s as usize..s as usize + 1, true, blocker)),
             false => one.occluded_listed(ids, near, reach, blocker),
         }
     }
