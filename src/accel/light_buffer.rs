@@ -173,8 +173,9 @@ impl LightBuffer {
 
     /// Cell `c`'s spheres, nearest the light first, with a lower bound on each one's distance from the light
     /// (empty outside every window). A ray reaching `reach` from the light may meet the prefix whose bounds
-    /// are at most [`limit`]`(reach)`; the callers find that prefix's end as they test, a chunk of bounds at a
-    /// time, instead of a binary search whose compares and loads form one chain of dependent steps.
+    /// are at most [`limit`]`(reach)`; the callers find that prefix's end as they test ([`LightBuffer::reachable`],
+    /// or a chunk of bounds at a time), instead of a binary search whose compares and loads form one chain of
+    /// dependent steps.
     #[inline(always)]
     fn listed(&self, c: Option<usize>) -> (&[u32], &[f32]) {
         let Some(c) = c else { return (&[], &[]) };
@@ -182,12 +183,13 @@ impl LightBuffer {
         (&self.sphere[first..end], &self.near[first..end])
     }
 
-    /// The spheres of cell `c` a ray reaching `reach` from the light may meet (the prefix of
-    /// [`LightBuffer::listed`]), found by a binary search: for the work counters.
-    fn spheres(&self, c: Option<usize>, reach: f32) -> &[u32] {
+    /// The spheres of cell `c` a ray reaching `reach` from the light may meet, one at a time (nearest the
+    /// light first), stopping at the first bound past the reach.
+    #[inline(always)]
+    fn reachable(&self, c: Option<usize>, reach: f32) -> impl Iterator<Item = u32> + '_ {
         let (ids, near) = self.listed(c);
         let reach = limit(reach);
-        &ids[..near.partition_point(|&n| n <= reach)]
+        ids.iter().zip(near).take_while(move |&(_, &n)| n <= reach).map(|(&s, _)| s)
     }
 
     /// The lanes of `live` blocked by a sphere: the query's rays must start at their hit points and end at
@@ -245,19 +247,18 @@ impl LightBuffer {
         blocker: &mut u32,
     ) -> bool {
         let one = q.lane(i);
-        let (ids, near) = self.listed(c);
-        let reach = limit(one.t_max());
         count_work(|| {
-            let n = self.spheres(c, one.t_max()).len();
+            let n = self.reachable(c, one.t_max()).count();
             Work::lanes(n, n, 0, 0)
         });
         match scalar {
-            true => ids
-                .iter()
-                .zip(near)
-                .take_while(|&(_, &n)| n <= reach)
-                .any(|(&s, _)| one.occluded(s as usize..s as usize + 1, true, blocker)),
-            false => one.occluded_listed(ids, near, reach, blocker),
+            true => self
+                .reachable(c, one.t_max())
+                .any(|s| one.occluded(s as usize..s as usize + 1, true, blocker)),
+            false => {
+                let (ids, near) = self.listed(c);
+                one.occluded_listed(ids, near, limit(one.t_max()), blocker)
+            }
         }
     }
 
@@ -274,13 +275,11 @@ impl LightBuffer {
     ) -> u32 {
         let lanes = F::move_mask(group).count_ones() as usize;
         count_work(|| {
-            let n = self.spheres(c, reach).len();
+            let n = self.reachable(c, reach).count();
             Work::lanes(n, n * lanes, 0, 0)
         });
-        let (ids, near) = self.listed(c);
-        let reach = limit(reach);
         let mut blocked = F::mask_from_bits(0);
-        for (&s, _) in ids.iter().zip(near).take_while(|&(_, &n)| n <= reach) {
+        for s in self.reachable(c, reach) {
             blocked = blocked | q.occluded(s as usize..s as usize + 1, group & !blocked, blocker);
             if (blocked | !group).all() {
                 break;
