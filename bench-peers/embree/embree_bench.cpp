@@ -5,7 +5,9 @@
 //   * a user geometry whose intersect/occluded callbacks are an exact ray/sphere test written here
 //     (the perpendicular-distance form of the contract; f32 by default, f64 with --user-precision f64),
 // through rtcIntersect1/4/8/16, on 1 and 2 threads (std::thread over tiles), and prints one JSON line per
-// configuration. Written from the Embree API headers only.
+// configuration. With --ao S[,D] each camera hit also traces S cosine-weighted ambient-occlusion rays of
+// length D (rtcOccluded1, or rtcOccluded4/8/16 with one hit's directions per packet), as bareray's
+// `--shade ao:S,D` does. Written from the Embree API headers only.
 
 #include <embree3/rtcore.h>
 #include <pmmintrin.h>
@@ -365,8 +367,51 @@ void user_intersect(const RTCIntersectFunctionNArguments* a) {
   }
 }
 
+// Packet version of user_occluded for N = 4, 8, 16 and f32 (the same test as user_intersect_f32_packet, any
+// hit: tfar = -inf), branch-free over the lanes so that GCC vectorises it. Same formula and operation order as
+// sphere_hit<float>, so the answers are the scalar loop's (checked: same ao_open with --user-kernel scalar).
+template <unsigned N>
+void user_occluded_f32_packet(const RTCOccludedFunctionNArguments* a) {
+  const UserData* ud = static_cast<const UserData*>(a->geometryUserPtr);
+  const Spheres& s = *ud->sp;
+  const unsigned i = a->primID;
+  const float cx = s.x[i], cy = s.y[i], cz = s.z[i], rad = s.r[i];
+  const float r2 = rad * rad;
+  float* rp = reinterpret_cast<float*>(a->ray);
+  const float* ox = rp + 0 * N; const float* oy = rp + 1 * N; const float* oz = rp + 2 * N;
+  const float* tn = rp + 3 * N;
+  const float* dx = rp + 4 * N; const float* dy = rp + 5 * N; const float* dz = rp + 6 * N;
+  float* tf = rp + 8 * N;
+  const int* valid = a->valid;
+#pragma GCC ivdep
+  for (unsigned k = 0; k < N; ++k) {
+    float ccx = cx - ox[k], ccy = cy - oy[k], ccz = cz - oz[k];
+    float dd = dx[k] * dx[k] + dy[k] * dy[k] + dz[k] * dz[k];
+    float proj = (ccx * dx[k] + ccy * dy[k] + ccz * dz[k]) / dd;
+    float px = ccx - proj * dx[k], py = ccy - proj * dy[k], pz = ccz - proj * dz[k];
+    float l2 = px * px + py * py + pz * pz;
+    bool inr = l2 <= r2;
+    float td = std::sqrt(inr ? (r2 - l2) / dd : 0.0f);
+    float t0 = proj - td, t1 = proj + td;
+    float tfar = tf[k], tnear = tn[k];
+    bool ok0 = (t0 >= tnear) & (t0 <= tfar), ok1 = (t1 >= tnear) & (t1 <= tfar);
+    // sphere_hit's tie rule (t == tfar and prim >= cur_prim) with cur_prim = 0xFFFFFFFF, as user_occluded.
+    float t = ok0 ? t0 : t1;
+    bool hit = (valid[k] == -1) & inr & (ok0 | ok1) & !((t == tfar) & (i == 0xFFFFFFFFu));
+    tf[k] = hit ? -INFINITY : tfar;
+  }
+}
+
 void user_occluded(const RTCOccludedFunctionNArguments* a) {
   const UserData* ud = static_cast<const UserData*>(a->geometryUserPtr);
+  if (ud->packet_kernel && !ud->f64) {
+    switch (a->N) {
+      case 4: return user_occluded_f32_packet<4>(a);
+      case 8: return user_occluded_f32_packet<8>(a);
+      case 16: return user_occluded_f32_packet<16>(a);
+      default: break;
+    }
+  }
   const Spheres& s = *ud->sp;
   const unsigned i = a->primID, N = a->N;
   for (unsigned k = 0; k < N; ++k) {
@@ -425,7 +470,133 @@ RTCScene make_scene(RTCDevice dev, const Spheres& sp, bool user, UserData* ud, R
 struct Frame {
   std::vector<float> t;    // per pixel, inf on miss
   std::vector<int32_t> id; // per pixel, -1 on miss
+  std::vector<int32_t> ao; // --ao: per pixel, how many of its S occlusion rays are open (0 on a miss);
+                           // the pixel's value is ao / S
 };
+
+// ---------------------------------------------------------------------------------------------- ambient occlusion
+
+// --ao S[,D]: at each camera hit, S cosine-weighted directions over the hemisphere around the sphere's outward
+// normal, each an occlusion ray of length D (inf: unbounded).
+struct AoParams {
+  int samples = 0;  // 0: off (camera rays only)
+  float distance = INFINITY;
+  const Spheres* sp = nullptr;
+};
+
+// Departure (tnear stays 0): the origin is put on the hit sphere, c + (r + e) n with n = normalize(p - c) and
+// p = o + t d the camera hit, i.e. moved out along the normal by e = max(AO_EPS * r, AO_EPS_ABS * m), m the
+// largest of |cx|, |cy|, |cz| and r. In exact arithmetic no direction with d.n >= 0 from there meets the
+// departure sphere; e must beat the f32 rounding of the origin (~1e-7 absolute on the [-1, 1] field). Measured
+// on the contract field (160x90, S = 16), counting occlusion rays that meet their own sphere in f64: origin
+// p + 1e-4 r n (p not put back on the sphere, so the camera t's rounding stays in): 64 rays at 1e5 and 4608
+// at 1e6; c + (r + e) n: none at 1e5, 1e6 and 1e7 with 1e-4 r (with 1e-5 r: 3360 at 1e6; with 3e-5 r: 480
+// at 1e7). The absolute floor (4 f32 ulps at 1) is for larger coordinates and smaller spheres than those.
+// e is far below the distances between spheres that matter (open counts with 1e-3 r differ by a few rays in
+// 1e5). bareray instead skips the departure sphere by its id and starts at the hit point.
+constexpr float AO_EPS = 1e-4f;
+constexpr float AO_EPS_ABS = 0x1p-21f;
+
+inline uint64_t mix64(uint64_t z) {
+  z = (z ^ (z >> 30)) * 0xBF58476D1CE4E5B9ull;
+  z = (z ^ (z >> 27)) * 0x94D049BB133111EBull;
+  return z ^ (z >> 31);
+}
+
+// One hit's departure: origin c + (r + e) n and the frame around n (Duff et al. 2017, "Building an orthonormal
+// basis, revisited"; the same as bareray's `around`).
+struct AoHit {
+  float org[3];
+  float n[3], tx[3], bt[3];
+  SplitMix64 rng;  // the pixel's stream: sample k uses its k-th output, whatever the api or thread
+};
+
+inline void ao_hit(const AoParams& ao, const float o[3], const float d[3], float t, unsigned prim, size_t pixel,
+                   AoHit& h) {
+  const Spheres& s = *ao.sp;
+  const float p[3] = {o[0] + t * d[0], o[1] + t * d[1], o[2] + t * d[2]};
+  float nx = p[0] - s.x[prim], ny = p[1] - s.y[prim], nz = p[2] - s.z[prim];
+  const float inv = 1.0f / std::sqrt(nx * nx + ny * ny + nz * nz);
+  nx *= inv; ny *= inv; nz *= inv;
+  h.n[0] = nx; h.n[1] = ny; h.n[2] = nz;
+  const float m = std::max(std::max(std::fabs(s.x[prim]), std::fabs(s.y[prim])), std::max(std::fabs(s.z[prim]), s.r[prim]));
+  const float re = s.r[prim] + std::max(AO_EPS * s.r[prim], AO_EPS_ABS * m);
+  h.org[0] = s.x[prim] + re * nx; h.org[1] = s.y[prim] + re * ny; h.org[2] = s.z[prim] + re * nz;
+  const float sign = nz < 0.0f ? -1.0f : 1.0f;
+  const float a = -1.0f / (sign + nz), b = nx * ny * a;
+  h.tx[0] = 1.0f + sign * nx * nx * a; h.tx[1] = sign * b; h.tx[2] = -(sign * nx);
+  h.bt[0] = b; h.bt[1] = sign + ny * ny * a; h.bt[2] = -ny;
+  h.rng.state = mix64(uint64_t(pixel) + 0x243F6A8885A308D3ull);
+}
+
+// The next sample direction of the hit (Malley's method: a uniform point on the unit disc, r = sqrt(u1),
+// phi = 2 pi u2, lifted to the hemisphere, z = sqrt(1 - u1); density cos(theta)/pi), u1 and u2 the top two
+// 24-bit fields of one splitmix64 output; normalised in f32.
+inline void ao_dir(AoHit& h, float& dx, float& dy, float& dz) {
+  const uint64_t bits = h.rng.next();
+  const float u1 = float(bits >> 40) * 0x1p-24f, u2 = float((bits >> 16) & 0xFFFFFFu) * 0x1p-24f;
+  const float r = std::sqrt(u1), z = std::sqrt(1.0f - u1);
+  float sn, cs;
+  sincosf(6.283185307179586f * u2, &sn, &cs);
+  const float x = r * cs, y = r * sn;
+  float wx = h.tx[0] * x + h.bt[0] * y + h.n[0] * z;
+  float wy = h.tx[1] * x + h.bt[1] * y + h.n[1] * z;
+  float wz = h.tx[2] * x + h.bt[2] * y + h.n[2] * z;
+  const float inv = 1.0f / std::sqrt(wx * wx + wy * wy + wz * wz);
+  dx = wx * inv; dy = wy * inv; dz = wz * inv;
+}
+
+// S occlusion rays of one hit, one rtcOccluded1 each; returns how many are open.
+inline int ao_trace_1(RTCScene scene, RTCIntersectContext* ctx, const AoParams& ao, AoHit& h) {
+  int open = 0;
+  for (int k = 0; k < ao.samples; ++k) {
+    RTCRay r;
+    r.org_x = h.org[0]; r.org_y = h.org[1]; r.org_z = h.org[2];
+    ao_dir(h, r.dir_x, r.dir_y, r.dir_z);
+    r.tnear = 0.0f; r.tfar = ao.distance; r.time = 0.0f;
+    r.mask = 0xFFFFFFFFu; r.id = 0; r.flags = 0;
+    rtcOccluded1(scene, ctx, &r);
+    open += r.tfar != -INFINITY;
+  }
+  return open;
+}
+
+template <int K> struct OccPacket;
+template <> struct OccPacket<4> {
+  using R = RTCRay4;
+  static void occ(const int* v, RTCScene s, RTCIntersectContext* c, R* r) { rtcOccluded4(v, s, c, r); }
+};
+template <> struct OccPacket<8> {
+  using R = RTCRay8;
+  static void occ(const int* v, RTCScene s, RTCIntersectContext* c, R* r) { rtcOccluded8(v, s, c, r); }
+};
+template <> struct OccPacket<16> {
+  using R = RTCRay16;
+  static void occ(const int* v, RTCScene s, RTCIntersectContext* c, R* r) { rtcOccluded16(v, s, c, r); }
+};
+
+// S occlusion rays of one hit in packets of K directions (one origin): ceil(S/K) rtcOccludedK calls, the last
+// one's lanes past S inactive (valid = 0). Returns how many are open.
+template <int K>
+inline int ao_trace_k(RTCScene scene, RTCIntersectContext* ctx, const AoParams& ao, AoHit& h) {
+  alignas(64) typename OccPacket<K>::R r;
+  alignas(64) int valid[K];
+  int open = 0;
+  for (int k0 = 0; k0 < ao.samples; k0 += K) {
+    const int count = std::min(K, ao.samples - k0);
+    for (int l = 0; l < K; ++l) {
+      valid[l] = l < count ? -1 : 0;
+      r.org_x[l] = h.org[0]; r.org_y[l] = h.org[1]; r.org_z[l] = h.org[2];
+      if (l < count) ao_dir(h, r.dir_x[l], r.dir_y[l], r.dir_z[l]);
+      else { r.dir_x[l] = h.n[0]; r.dir_y[l] = h.n[1]; r.dir_z[l] = h.n[2]; }
+      r.tnear[l] = 0.0f; r.tfar[l] = ao.distance; r.time[l] = 0.0f;
+      r.mask[l] = 0xFFFFFFFFu; r.id[l] = 0; r.flags[l] = 0;
+    }
+    OccPacket<K>::occ(valid, scene, ctx, &r);
+    for (int l = 0; l < count; ++l) open += r.tfar[l] != -INFINITY;
+  }
+  return open;
+}
 
 constexpr int TILE_W = 32, TILE_H = 32;
 
@@ -449,10 +620,12 @@ inline void store(Frame& fr, int W, int i, int j, unsigned geom, unsigned prim, 
   else { fr.t[p] = tfar; fr.id[p] = int32_t(prim); }
 }
 
-void tile_1(RTCScene scene, const Camera& cam, Frame& fr, int x0, int y0, int x1, int y1) {
+void tile_1(RTCScene scene, const Camera& cam, Frame& fr, const AoParams& ao, int x0, int y0, int x1, int y1) {
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  RTCIntersectContext actx;  // occlusion rays: the default (incoherent) context
+  rtcInitIntersectContext(&actx);
   for (int j = y0; j < y1; ++j)
     for (int i = x0; i < x1; ++i) {
       RTCRayHit rh;
@@ -464,15 +637,29 @@ void tile_1(RTCScene scene, const Camera& cam, Frame& fr, int x0, int y0, int x1
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
       rtcIntersect1(scene, &ctx, &rh);
       store(fr, cam.W, i, j, rh.hit.geomID, rh.hit.primID, rh.ray.tfar);
+      if (ao.samples) {
+        const size_t p = size_t(j) * cam.W + i;
+        int open = 0;
+        if (rh.hit.geomID != RTC_INVALID_GEOMETRY_ID) {
+          const float o[3] = {rh.ray.org_x, rh.ray.org_y, rh.ray.org_z};
+          const float d[3] = {rh.ray.dir_x, rh.ray.dir_y, rh.ray.dir_z};
+          AoHit h;
+          ao_hit(ao, o, d, rh.ray.tfar, rh.hit.primID, p, h);
+          open = ao_trace_1(scene, &actx, ao, h);
+        }
+        fr.ao[p] = open;
+      }
     }
 }
 
 template <int K>
-void tile_k(RTCScene scene, const Camera& cam, Frame& fr, int x0, int y0, int x1, int y1) {
+void tile_k(RTCScene scene, const Camera& cam, Frame& fr, const AoParams& ao, int x0, int y0, int x1, int y1) {
   using P = Packet<K>;
   RTCIntersectContext ctx;
   rtcInitIntersectContext(&ctx);
   ctx.flags = RTC_INTERSECT_CONTEXT_FLAG_COHERENT;
+  RTCIntersectContext actx;  // occlusion rays: the default (incoherent) context
+  rtcInitIntersectContext(&actx);
   alignas(64) typename P::RH rh;
   alignas(64) int valid[K];
   for (int by = y0; by < y1; by += P::BH)
@@ -492,10 +679,24 @@ void tile_k(RTCScene scene, const Camera& cam, Frame& fr, int x0, int y0, int x1
       P::isect(valid, scene, &ctx, &rh);
       for (int l = 0; l < K; ++l)
         if (valid[l]) store(fr, cam.W, bx + l % P::BW, by + l / P::BW, rh.hit.geomID[l], rh.hit.primID[l], rh.ray.tfar[l]);
+      if (ao.samples)
+        for (int l = 0; l < K; ++l) {
+          if (!valid[l]) continue;
+          const size_t p = size_t(by + l / P::BW) * cam.W + (bx + l % P::BW);
+          int open = 0;
+          if (rh.hit.geomID[l] != RTC_INVALID_GEOMETRY_ID) {
+            const float o[3] = {rh.ray.org_x[l], rh.ray.org_y[l], rh.ray.org_z[l]};
+            const float d[3] = {rh.ray.dir_x[l], rh.ray.dir_y[l], rh.ray.dir_z[l]};
+            AoHit h;
+            ao_hit(ao, o, d, rh.ray.tfar[l], rh.hit.primID[l], p, h);
+            open = ao_trace_k<K>(scene, &actx, ao, h);
+          }
+          fr.ao[p] = open;
+        }
     }
 }
 
-void render(RTCScene scene, const Camera& cam, Frame& fr, int api, int threads) {
+void render(RTCScene scene, const Camera& cam, Frame& fr, const AoParams& ao, int api, int threads) {
   const int tx = (cam.W + TILE_W - 1) / TILE_W, ty = (cam.H + TILE_H - 1) / TILE_H;
   const int ntiles = tx * ty;
   std::atomic<int> next{0};
@@ -509,10 +710,10 @@ void render(RTCScene scene, const Camera& cam, Frame& fr, int api, int threads) 
       int x0 = (k % tx) * TILE_W, y0 = (k / tx) * TILE_H;
       int x1 = std::min(x0 + TILE_W, cam.W), y1 = std::min(y0 + TILE_H, cam.H);
       switch (api) {
-        case 1: tile_1(scene, cam, fr, x0, y0, x1, y1); break;
-        case 4: tile_k<4>(scene, cam, fr, x0, y0, x1, y1); break;
-        case 8: tile_k<8>(scene, cam, fr, x0, y0, x1, y1); break;
-        case 16: tile_k<16>(scene, cam, fr, x0, y0, x1, y1); break;
+        case 1: tile_1(scene, cam, fr, ao, x0, y0, x1, y1); break;
+        case 4: tile_k<4>(scene, cam, fr, ao, x0, y0, x1, y1); break;
+        case 8: tile_k<8>(scene, cam, fr, ao, x0, y0, x1, y1); break;
+        case 16: tile_k<16>(scene, cam, fr, ao, x0, y0, x1, y1); break;
       }
     }
   };
@@ -556,7 +757,12 @@ void usage() {
       "matrix: --geometry points,user (both)  --api 1,4,8,16 (all)  --threads 1,2 (1,2)\n"
       "        --reps R (5 render repetitions; median reported)  --build-reps B (3; median)\n"
       "        --quality low|medium|high (medium)  --user-precision f32|f64 (f32)\n"
-      "        --user-kernel packet|scalar (packet: branch-free SIMD callback for packets, f32 only)\n"
+      "        --user-kernel packet|scalar (packet: branch-free SIMD callbacks for packets, f32 only)\n"
+      "ambient occlusion: --ao S[,D]  at each camera hit, S cosine-weighted occlusion rays of length D\n"
+      "        (default inf) from the hit sphere's surface (origin c + (r + e) n, e = max(1e-4 r,\n"
+      "        2^-21 max(|c|, r)), tnear 0),\n"
+      "        rtcOccluded1 for api 1, else rtcOccluded4/8/16 with one hit's directions per packet; timed\n"
+      "        with the camera rays, mrays_per_s counts both\n"
       "output: --dump FILE   per-pixel t and id of the FIRST configuration run (see README)\n"
       "        --write-xyzr FILE  write the spheres ('%.9g', round-trips f32) and continue\n"
       "        --verbose     Embree device verbose=1 (prints the ISA chosen)\n"
@@ -579,6 +785,7 @@ int main(int argc, char** argv) {
   bool user_f64 = false, verbose = false, pregen = false;
   std::string isa;
   std::string user_kernel = "packet";
+  AoParams ao;
 
   for (int a = 1; a < argc; ++a) {
     std::string k = argv[a];
@@ -629,6 +836,20 @@ int main(int argc, char** argv) {
     else if (k == "--verbose") verbose = true;
     else if (k == "--isa") isa = val();
     else if (k == "--pregen") pregen = true;
+    else if (k == "--ao") {
+      std::string v = val();
+      auto parts = split(v);
+      if (parts.size() > 2) die("--ao takes S or S,D");
+      char* end = nullptr;
+      long n = std::strtol(parts[0].c_str(), &end, 10);
+      if (parts[0].empty() || *end != '\0' || n < 1 || n > 1000000) die("--ao: S must be a positive integer, got " + parts[0]);
+      ao.samples = int(n);
+      if (parts.size() == 2) {
+        double d = std::strtod(parts[1].c_str(), &end);
+        if (parts[1].empty() || *end != '\0' || !(d > 0)) die("--ao: D must be a positive number (or inf), got " + parts[1]);
+        ao.distance = float(d);
+      }
+    }
     else if (k == "-h" || k == "--help") { usage(); return 0; }
     else die("unknown option " + k + " (try --help)");
   }
@@ -657,6 +878,7 @@ int main(int argc, char** argv) {
     points[4 * i] = sp.x[i]; points[4 * i + 1] = sp.y[i]; points[4 * i + 2] = sp.z[i]; points[4 * i + 3] = sp.r[i];
   }
   UserData ud{&sp, user_f64, user_kernel == "packet"};
+  ao.sp = &sp;
   Camera cam(cp);
   if (pregen) cam.pregenerate();
   const double nrays = double(cam.W) * cam.H;
@@ -691,11 +913,12 @@ int main(int argc, char** argv) {
         Frame fr;
         fr.t.assign(size_t(cam.W) * cam.H, NAN);
         fr.id.assign(size_t(cam.W) * cam.H, -2);
-        render(scene, cam, fr, api, threads);  // warm-up (not timed)
+        if (ao.samples) fr.ao.assign(size_t(cam.W) * cam.H, -1);
+        render(scene, cam, fr, ao, api, threads);  // warm-up (not timed)
         std::vector<double> times, cpus;
         for (int r = 0; r < reps; ++r) {
           double c0 = cpu_s(), t0 = now_s();
-          render(scene, cam, fr, api, threads);
+          render(scene, cam, fr, ao, api, threads);
           times.push_back(now_s() - t0);
           cpus.push_back(cpu_s() - c0);
         }
@@ -705,15 +928,32 @@ int main(int argc, char** argv) {
         for (size_t p = 0; p < fr.id.size(); ++p)
           if (fr.id[p] >= 0) { ++hits; tsum += fr.t[p]; }
         uint64_t ck = checksum_ids(fr.id);
+        // --ao: every hit traces exactly S occlusion rays; the open ones are summed from the per-pixel counts.
+        const uint64_t ao_rays = hits * uint64_t(ao.samples);
+        uint64_t ao_open = 0;
+        for (int32_t v : fr.ao) ao_open += uint64_t(v);
+        const double all_rays = nrays + double(ao_rays);
         std::printf(
             "{\"tracer\":\"embree\",\"geometry\":\"%s\",\"api\":\"%d\",\"threads\":%d,\"spheres\":%zu,"
             "\"build_s\":%.6f,\"build_cpu_s\":%.6f,\"seconds\":%.6f,\"mrays_per_s\":%.3f,\"checksum\":\"%016" PRIx64 "\","
             "\"hits\":%" PRIu64 ",\"t_sum\":%.9g,\"width\":%d,\"height\":%d,\"reps\":%d,\"seconds_min\":%.6f,"
             "\"seconds_max\":%.6f,\"cpu_s\":%.6f,\"build_s_all\":[",
-            geom.c_str(), api, threads, sp.size(), build_s, median(build_cpus), sec, nrays / sec / 1e6, ck, hits, tsum, cam.W, cam.H,
+            geom.c_str(), api, threads, sp.size(), build_s, median(build_cpus), sec, all_rays / sec / 1e6, ck, hits, tsum, cam.W, cam.H,
             reps, *std::min_element(times.begin(), times.end()), *std::max_element(times.begin(), times.end()), median(cpus));
         for (size_t b = 0; b < builds.size(); ++b) std::printf("%s%.6f", b ? "," : "", builds[b]);
-        std::printf("],\"embree_bytes\":%" PRId64 ",\"quality\":\"%s\",\"raygen\":\"%s\"%s,\"embree\":\"%s\"}\n", bytes,
+        std::printf("]");
+        if (ao.samples) {
+          // ao_distance null = infinity (JSON has no inf). ao_checksum: FNV-1a 64 over the per-pixel open counts
+          // (int32, as "checksum" over the ids): equal across apis when every occlusion ray gets the same answer.
+          std::printf(",\"camera_rays\":%.0f,\"rays\":%.0f,\"ao_samples\":%d,", nrays, all_rays, ao.samples);
+          if (std::isinf(ao.distance)) std::printf("\"ao_distance\":null,");
+          else std::printf("\"ao_distance\":%.9g,", double(ao.distance));
+          std::printf("\"ao_rays\":%" PRIu64 ",\"ao_open\":%" PRIu64 ",\"ao_open_share\":%.6f,"
+                      "\"ao_mrays_per_s\":%.3f,\"ao_checksum\":\"%016" PRIx64 "\",\"ao_origin\":\"c+(r+max(%g*r,%g*max(|c|,r)))*n\"",
+                      ao_rays, ao_open, ao_rays ? double(ao_open) / double(ao_rays) : 0.0, double(ao_rays) / sec / 1e6,
+                      checksum_ids(fr.ao), double(AO_EPS), double(AO_EPS_ABS));
+        }
+        std::printf(",\"embree_bytes\":%" PRId64 ",\"quality\":\"%s\",\"raygen\":\"%s\"%s,\"embree\":\"%s\"}\n", bytes,
                     quality_name.c_str(), pregen ? "pregen" : "inline", user ? (user_f64 ? ",\"user_precision\":\"f64\",\"user_kernel\":\"scalar\"" : (ud.packet_kernel ? ",\"user_precision\":\"f32\",\"user_kernel\":\"packet\"" : ",\"user_precision\":\"f32\",\"user_kernel\":\"scalar\"")) : "",
                     RTC_VERSION_STRING);
         std::fflush(stdout);
