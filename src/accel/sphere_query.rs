@@ -112,6 +112,17 @@ impl<'a, F: Lanes> LeafQuery<F> for SphereQuery<'a, F> {
         }
     }
 
+    /// The first and last entry of each array the sphere test reads.
+    #[inline(always)]
+    fn prefetch(&self, first: usize, count: usize) {
+        let s = self.spheres;
+        let last = first + count.max(1) - 1;
+        for v in [&s.cx, &s.cy, &s.cz, &s.r, &s.c_eye] {
+            crate::simd::prefetch(v, first);
+            crate::simd::prefetch(v, last);
+        }
+    }
+
     /// Closest hits of `spheres` (indices) for the lanes of `live`, merged into `best`.
     #[inline(always)]
     fn intersect(&self, spheres: impl Iterator<Item = usize>, live: F::Mask, best: &mut HitPacket<F>) {

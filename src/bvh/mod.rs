@@ -74,6 +74,9 @@ pub(crate) trait LeafQuery<F: Lanes> {
     /// Lanes of `live` blocked by an item of `items`; `blocker` is set to an item that blocked some lane, if
     /// any did. May stop as soon as every live lane is blocked.
     fn occluded(&self, items: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask;
+    /// Asks for items `first..first + count` to be brought into cache ahead of their tests (a hint).
+    #[inline(always)]
+    fn prefetch(&self, _first: usize, _count: usize) {}
 }
 
 /// The one-ray leaf tests of the single-ray walk: a leaf's items against one ray, which a kind may run with
