@@ -159,8 +159,8 @@ impl Bvh {
     /// (`packets[p]`, merged into `best[p]`), walking the tree once for all of them; `pyramid` encloses every
     /// active ray of the tile. The directions must be unit length (camera rays are): the walk culls boxes
     /// by their distance from the origin against the rays' t. `query(p)` makes packet p's leaf query,
-    /// called only for packets that reach a leaf. Each lane gets the bits [`Bvh::intersect_k`] gives it
-    /// with that query.
+    /// called only for packets that reach a leaf's box. Each lane gets the bits [`Bvh::intersect_k`] gives
+    /// it with that query.
     pub(crate) fn intersect_large<F: Lanes, Q: LeafQuery<F>>(
         &self,
         packets: &[RayPacket<F>],

@@ -164,6 +164,7 @@ pub(crate) fn set_bits(mut bits: u32) -> impl Iterator<Item = usize> {
 /// Asks the memory system to bring the cache line holding `v[i]` close to the core (a hint: no effect on
 /// any result, nothing when `i` is out of range or the target has no prefetch instruction).
 #[inline(always)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
 pub(crate) fn prefetch<T>(v: &[T], i: usize) {
     #[cfg(target_arch = "x86_64")]
     if let Some(x) = v.get(i) {
@@ -179,6 +180,7 @@ pub(crate) fn prefetch<T>(v: &[T], i: usize) {
 
 /// [`prefetch`] of every cache line of `v[i]` (a node of several lines).
 #[inline(always)]
+#[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
 pub(crate) fn prefetch_item<T>(v: &[T], i: usize) {
     #[cfg(target_arch = "x86_64")]
     if let Some(x) = v.get(i) {
