@@ -355,7 +355,7 @@ impl<F: Lanes, Q: LeafQuery<F>, M: Fn(usize) -> Q> Walk<'_, F, Q, M> {
             if self.prefetch && reach != 0 {
                 let (child, count) = (n.child[c] as usize, usize::from(n.count[c]));
                 if count == 0 {
-                    crate::simd::prefetch_item(&bvh.nodes, child);
+                    crate::simd::prefetch(&bvh.nodes, child);
                 } else {
                     made(self.made, &self.query, reach.trailing_zeros() as usize).prefetch(child, count);
                 }

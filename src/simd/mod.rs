@@ -161,32 +161,17 @@ pub(crate) fn set_bits(mut bits: u32) -> impl Iterator<Item = usize> {
     })
 }
 
-/// Asks the memory system to bring the cache line holding `v[i]` close to the core (a hint: no effect on
-/// any result, nothing when `i` is out of range or the target has no prefetch instruction).
+/// Asks the memory system to bring every cache line of `v[i]` close to the core: one line for a number, each
+/// of a node's lines. A hint: no effect on any result, nothing when `i` is out of range or the target has no
+/// prefetch instruction.
 #[inline(always)]
 #[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
 pub(crate) fn prefetch<T>(v: &[T], i: usize) {
     #[cfg(target_arch = "x86_64")]
     if let Some(x) = v.get(i) {
-        // SAFETY: a prefetch reads nothing architecturally and cannot fault; the address is in `v`.
-        unsafe {
-            std::arch::x86_64::_mm_prefetch(
-                std::ptr::from_ref(x).cast::<i8>(),
-                std::arch::x86_64::_MM_HINT_T0,
-            )
-        }
-    }
-}
-
-/// [`prefetch`] of every cache line of `v[i]` (a node of several lines).
-#[inline(always)]
-#[cfg_attr(not(target_arch = "x86_64"), allow(unused_variables))]
-pub(crate) fn prefetch_item<T>(v: &[T], i: usize) {
-    #[cfg(target_arch = "x86_64")]
-    if let Some(x) = v.get(i) {
         let p = std::ptr::from_ref(x).cast::<i8>();
         for line in (0..size_of::<T>()).step_by(64) {
-            // SAFETY: as in `prefetch`; `p + line` lies within `v[i]`.
+            // SAFETY: a prefetch reads nothing architecturally and cannot fault; `p + line` lies within `v[i]`.
             unsafe { std::arch::x86_64::_mm_prefetch(p.add(line), std::arch::x86_64::_MM_HINT_T0) }
         }
     }
