@@ -234,10 +234,11 @@ pub enum Shade {
     /// Whitted: ambient, Lambert and Phong from the point lights with hard shadows, mirror and refraction.
     #[default]
     Whitted,
-    /// Ambient occlusion (Tachyon's and aobench's): at each camera ray's hit, `samples` cosine-weighted
-    /// directions over the hemisphere around the shading normal, each an occlusion ray of length `distance`;
-    /// the pixel is the surface's colour times the share of them that nothing blocks. No lights, no
-    /// secondary rays; rays that hit nothing show the background.
+    /// Ambient occlusion (Tachyon's and aobench's estimate, with rays of a chosen length where theirs are
+    /// unlimited): at each camera ray's hit, `samples` cosine-weighted directions over the hemisphere
+    /// around the shading normal, each an occlusion ray of length `distance`; the pixel is the surface's
+    /// colour times the share of them that nothing blocks. No lights, no secondary rays; rays that hit
+    /// nothing show the background.
     Ao(Ao),
 }
 
