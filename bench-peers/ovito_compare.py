@@ -21,7 +21,8 @@ cosine-weighted.
 
 OVITO's time is that of `Viewport.render_image` (its scene preparation, Tachyon's or OSPRay's build and the
 trace); bareray's is the wall time of the whole `bareray render` process (reading the list, the BVH build, the
-trace and writing the PNG), with the build and trace seconds of its `--stats` beside it. Each is the median of
+trace and writing the PNG), with the parse, build and render (tracing with the PNG) seconds of its summary
+line beside it. Each is the median of
 --reps runs, the renders taken in turn in each round. The object mask of each image (bareray: a pixel not the
 black background; OVITO: alpha > 0, the image rendered with a transparent background) is compared with OVITO
 Tachyon's without AO, as intersection over union; not bareray's AO image, which is black where a hit is fully
@@ -119,18 +120,17 @@ def run_bareray(binary, xyzr, out, cam, shade):
     # every visible hit traces a shadow ray, as under Tachyon's direct light; without it the list's light
     # would sit behind the spheres and most hits would trace none.
     cmd = [binary, "render", xyzr, "-o", out, "--view", "+z", "--width", str(WIDTH), "--height", str(HEIGHT),
-           "--eye", vec(eye), "--look", vec(look), "--up", vec(up), "--hfov", repr(hfov), "--shade", shade,
-           "--stats"]
+           "--eye", vec(eye), "--look", vec(look), "--up", vec(up), "--hfov", repr(hfov), "--shade", shade]
     start = time.perf_counter()
     done = subprocess.run(cmd, capture_output=True, text=True)
     wall = time.perf_counter() - start
     if done.returncode != 0:
         sys.exit(f"bareray failed: {' '.join(cmd)}\n{done.stderr}")
     text = done.stdout + done.stderr
-    # --stats' time line: "time: parse 0.036 s, build 0.064 s (scene and BVH), render and write 0.244 s
-    # (tracing 0.212 s)".
-    stats = {k: float(m.group(1)) for k in ("parse", "build", "tracing")
-             for m in [re.search(rf"{k} ([0-9.]+) s", text)] if m}
+    # The summary line (not `--stats`, whose work counters would be timed too): "FILE: WxH in 0.244 s (parse
+    # 0.036 s, build 0.064 s); ..."; its first time is the tracing with the streamed PNG.
+    patterns = {"render": r" in ([0-9.]+) s \(", "parse": r"parse ([0-9.]+) s", "build": r"build ([0-9.]+) s"}
+    stats = {k: float(m.group(1)) for k, p in patterns.items() for m in [re.search(p, text)] if m}
     return wall, stats, " ".join(cmd), text
 
 
