@@ -20,7 +20,25 @@ done
 if [ -n "${RUSTFLAGS:-}" ]; then
   echo "note: RUSTFLAGS ('$RUSTFLAGS') is ignored here: it would replace each level's -C target-cpu" >&2
 fi
+# The /proc/cpuinfo flags each level's code needs ("abm" is lzcnt). A level this CPU lacks is skipped: its
+# build scripts are compiled for the level too, so they would stop at an illegal instruction, and
+# `bench --isa` skips that level on this CPU anyway.
+needs() {
+  case "$1" in
+    v2) echo "ssse3 sse4_1 sse4_2 popcnt cx16" ;;
+    v3) echo "avx avx2 fma bmi1 bmi2 abm movbe f16c" ;;
+    v4) echo "avx512f avx512bw avx512cd avx512dq avx512vl" ;;
+  esac
+}
 for level in "${levels[@]}"; do
+  if [ -r /proc/cpuinfo ]; then
+    flags=" $(grep -m1 '^flags' /proc/cpuinfo | cut -d: -f2) "
+    lacks=$(for f in $(needs "$level"); do [[ "$flags" == *" $f "* ]] || printf ' %s' "$f"; done)
+    if [ -n "$lacks" ]; then
+      echo "note: x86-64-$level skipped: this CPU lacks$lacks, so the level's build scripts would not run here" >&2
+      continue
+    fi
+  fi
   echo "== cargo build-$level -> target/isa/$level/release/bareray" >&2
   # shellcheck disable=SC2086
   env -u RUSTFLAGS cargo "build-$level" ${CARGO_FLAGS:-}
