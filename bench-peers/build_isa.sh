@@ -20,14 +20,18 @@ done
 if [ -n "${RUSTFLAGS:-}" ]; then
   echo "note: RUSTFLAGS ('$RUSTFLAGS') is ignored here: it would replace each level's -C target-cpu" >&2
 fi
-# The /proc/cpuinfo flags each level's code needs ("abm" is lzcnt). A level this CPU lacks is skipped: its
-# build scripts are compiled for the level too, so they would stop at an illegal instruction, and
-# `bench --isa` skips that level on this CPU anyway.
+# The features each level needs, as `bench --isa` checks them (src/cpu.rs, X86_64_V2/V3/V4, each level
+# including the ones below it), in /proc/cpuinfo's names (pni is sse3, cx16 cmpxchg16b, abm lzcnt). A level
+# this CPU lacks is skipped: its build scripts are compiled for the level too, so they would stop at an
+# illegal instruction, and `bench --isa` skips that level on this CPU anyway.
+v2_needs="pni ssse3 sse4_1 sse4_2 popcnt cx16"
+v3_needs="$v2_needs avx avx2 fma bmi1 bmi2 abm movbe f16c"
+v4_needs="$v3_needs avx512f avx512bw avx512cd avx512dq avx512vl"
 needs() {
   case "$1" in
-    v2) echo "ssse3 sse4_1 sse4_2 popcnt cx16" ;;
-    v3) echo "avx avx2 fma bmi1 bmi2 abm movbe f16c" ;;
-    v4) echo "avx512f avx512bw avx512cd avx512dq avx512vl" ;;
+    v2) echo "$v2_needs" ;;
+    v3) echo "$v3_needs" ;;
+    v4) echo "$v4_needs" ;;
   esac
 }
 for level in "${levels[@]}"; do

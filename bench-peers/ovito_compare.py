@@ -22,11 +22,10 @@ cosine-weighted.
 OVITO's time is that of `Viewport.render_image` (its scene preparation, Tachyon's or OSPRay's build and the
 trace); bareray's is the wall time of the whole `bareray render` process (reading the list, the BVH build, the
 trace and writing the PNG), with the parse, build and render (tracing with the PNG) seconds of its summary
-line beside it. Each is the median of
---reps runs, the renders taken in turn in each round. The object mask of each image (bareray: a pixel not the
-black background; OVITO: alpha > 0, the image rendered with a transparent background) is compared with OVITO
-Tachyon's without AO, as intersection over union; not bareray's AO image, which is black where a hit is fully
-occluded.
+line beside it. Each is the median of --reps runs, the renders taken in turn in each round. The object mask of
+each image (bareray: a pixel not the black background; OVITO: alpha > 0, the image rendered with a transparent
+background) is compared with OVITO Tachyon's without AO, as intersection over union; not bareray's AO image,
+which is black where a hit is fully occluded.
 
 The camera: OVITO's `Viewport.fov` is the vertical angle of a perspective view (its documentation; for an image
 wider than tall), bareray's `--hfov` the horizontal angle across the outer pixel edges, so the script passes
@@ -88,11 +87,15 @@ def random_spheres(n, seed=1):
     return rng.uniform(-1.0, 1.0, (n, 3)), rng.uniform(0.005, 0.015, n)
 
 
+def bounds(centers, radii):
+    """The corners of the box around the spheres."""
+    return (centers - radii[:, None]).min(axis=0), (centers + radii[:, None]).max(axis=0)
+
+
 def camera(centers, radii, shift=0.0):
     """bareray's particle framing from +z: eye, look, up, hfov (degrees) and OVITO's vertical fov (radians);
     and bareray's look point turned by `shift` pixels right and up (see the module's documentation)."""
-    lo = (centers - radii[:, None]).min(axis=0)
-    hi = (centers + radii[:, None]).max(axis=0)
+    lo, hi = bounds(centers, radii)
     centre = (lo + hi) / 2
     radius = np.linalg.norm((hi - lo) / 2)
     tan_w = math.tan(math.radians(HFOV) / 2)
@@ -248,7 +251,7 @@ def main():
         print(f"== {name}: {len(radii)} spheres, eye {vec(cam[0])}, look {vec(cam[1])}", flush=True)
         pipeline = ovito_scene(centers, radii)
         jobs = {}
-        lo, hi = (centers - radii[:, None]).min(axis=0), (centers + radii[:, None]).max(axis=0)
+        lo, hi = bounds(centers, radii)
         reach = float(np.linalg.norm(hi - lo))
         res["ao_reach"] = reach
         for shade in ("whitted", f"ao:{args.ao}", f"ao:{args.ao},{reach:.9g}"):
