@@ -31,7 +31,7 @@ use std::path::Path;
 use std::time::Instant;
 
 use bareray::accuracy::Percentiles;
-use bareray::compile::{Accel, Scene};
+use bareray::compile::{Accel, CompileOptions, Scene};
 use bareray::geometry::{
     first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, Spheres, NO_PRIM,
 };
@@ -176,7 +176,10 @@ fn main() -> anyhow::Result<()> {
     };
     for path in &paths {
         let desc = io::load(Path::new(path))?;
-        let scene = Scene::compile_with(&desc, Accel::Brute)?;
+        let scene = Scene::compile_with_options(
+            &desc,
+            CompileOptions { accel: Accel::Brute, ..CompileOptions::default() },
+        )?;
         let s = &scene.geometry.spheres;
         assert!(s.key.iter().enumerate().all(|(i, &k)| k as usize == i), "storage order is not file order");
         let mut name = Path::new(path).file_name().unwrap().to_string_lossy().into_owned();

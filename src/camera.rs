@@ -341,8 +341,10 @@ impl<F: Real> Camera<F> {
         Ray::new(self.eye + dir * self.start, dir)
     }
 
-    /// The point on the image plane (distance d) that pixel-space point (sx, sy) looks through: P_j,k.
-    pub fn image_plane_point(&self, sx: F, sy: F) -> V3<F> {
+    /// The point on the image plane (distance d) that pixel-space point (sx, sy) looks through: P_j,k
+    /// (the lecture's formula, which the tests check the rays against).
+    #[cfg(test)]
+    pub(crate) fn image_plane_point(&self, sx: F, sy: F) -> V3<F> {
         self.eye + self.toward(sx, sy) * self.distance
     }
 }

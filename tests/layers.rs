@@ -588,3 +588,35 @@ fn the_circle_checker_finds_circles_and_only_circles() {
     let circles = import_circles(&toy("pub struct A;\n"));
     assert_eq!(circles, vec!["m::c:1 → n:1 → m::c".to_owned()], "{circles:?}");
 }
+
+/// Lines of `src/` (crate roots included) that declare a `pub` item, as `grep -rE '^\s*pub ' src` counts
+/// them: `pub(crate)` and narrower do not count.
+fn pub_lines() -> usize {
+    let mut paths = Vec::new();
+    rust_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src"), &mut paths);
+    let source = paths.iter().map(|p| fs::read_to_string(p).expect("read source")).collect::<Vec<_>>();
+    source.iter().flat_map(|s| s.lines()).filter(|l| l.trim_start().starts_with("pub ")).count()
+}
+
+/// The library's public surface is what a library user needs (the README's "Use it as a library", the
+/// rustdoc); everything else is `pub(crate)`. The bound keeps it at under half the 1125 lines it once had.
+#[test]
+fn the_public_surface_stays_small() {
+    let lines = pub_lines();
+    assert!(
+        lines <= 562,
+        "{lines} lines of src/ declare `pub` items (at most 562): make new items pub(crate)"
+    );
+}
+
+/// The command's files parse, call the library and print: none grows past 300 lines.
+#[test]
+fn no_cli_file_is_long() {
+    let mut paths = Vec::new();
+    rust_files(&Path::new(env!("CARGO_MANIFEST_DIR")).join("src/cli"), &mut paths);
+    assert!(!paths.is_empty(), "no files under src/cli");
+    for path in paths {
+        let lines = fs::read_to_string(&path).expect("read source").lines().count();
+        assert!(lines <= 300, "{}: {lines} lines (at most 300)", path.display());
+    }
+}

@@ -43,7 +43,7 @@ pub struct Geometry {
     /// Plain spheres, in BVH leaf order when there is a BVH.
     pub spheres: Spheres,
     /// The BVH over the spheres, or `None` for brute force.
-    pub sphere_bvh: Option<Bvh>,
+    pub(crate) sphere_bvh: Option<Bvh>,
     /// Spheres in a particle tree (`--accel pkd`, for fields too large for a BVH) instead of `spheres`.
     pub(crate) particles: Particles,
     /// Planar polygons; their triangles in BVH leaf order when there is a BVH.

@@ -64,8 +64,9 @@ pub struct Profile {
     pub(crate) kinds: Vec<KindProfile>,
     /// Threads of the pool.
     pub(crate) threads: usize,
-    /// Work done outside any tagged query (none in the renderer).
-    pub untagged: Work,
+    /// Work done outside any tagged query: none in the renderer, which the tests check with it.
+    #[cfg_attr(not(test), allow(dead_code))]
+    pub(crate) untagged: Work,
     /// All the counting run's work, as the render itself summed it tile by tile.
     pub total: Work,
     /// Ticks one timed query of nothing reads: what each kind's time had taken off per query.

@@ -215,16 +215,10 @@ impl Scene {
     /// };
     /// let scene = Scene::compile(&desc)?;
     /// assert_eq!(scene.geometry.len(), 10);
-    /// assert!(scene.geometry.sphere_bvh.is_some()); // 10 spheres: a BVH rather than brute force
     /// # Ok::<(), bareray::camera::CameraError>(())
     /// ```
     pub fn compile(desc: &SceneDesc) -> Result<Scene, CameraError> {
-        Self::compile_with(desc, Accel::Auto)
-    }
-
-    /// Compiles with a chosen acceleration structure (every other option at its default).
-    pub fn compile_with(desc: &SceneDesc, accel: Accel) -> Result<Scene, CameraError> {
-        Self::compile_with_options(desc, CompileOptions { accel, ..CompileOptions::default() })
+        Self::compile_with_options(desc, CompileOptions::default())
     }
 
     /// Compiles with the given options.

@@ -99,14 +99,6 @@ impl FieldParams {
         let spheres = self.spheres().map_err(|e| io::Error::new(io::ErrorKind::InvalidInput, e))?;
         super::f32r::write(w, self.count, spheres)
     }
-
-    /// The `.xyzr` text in memory (for tests and small fields).
-    pub fn to_xyzr(&self) -> Result<String, GenError> {
-        self.radii()?;
-        let mut out = Vec::new();
-        self.write_xyzr(&mut out).map_err(|e| GenError(e.to_string()))?;
-        Ok(String::from_utf8(out).expect("generated text is ASCII"))
-    }
 }
 
 /// The largest sphereflake level `flake` accepts (level 7 is 5.4 million spheres).

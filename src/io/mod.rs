@@ -60,12 +60,6 @@ impl SceneFormat {
     }
 }
 
-/// Parses a scene held in memory (read from standard input, say) in `format`; errors name `name` as the
-/// file. The text formats must be UTF-8 (bytes that are not are an error at their line and column).
-pub fn parse(format: SceneFormat, name: &std::path::Path, source: Vec<u8>) -> Result<SceneDesc, SceneError> {
-    Ok(parse_with(format, name, source, &LoadOptions::default())?.desc)
-}
-
 /// A scene read with its warnings (unknown elements, say).
 #[derive(Clone, Debug, PartialEq)]
 pub struct SceneRead {
@@ -75,8 +69,9 @@ pub struct SceneRead {
     pub warnings: Vec<String>,
 }
 
-/// [`parse`] with `options`: the frame, view and overrides of particle files (an error for formats they
-/// do not apply to).
+/// Parses a scene held in memory (read from standard input, say) in `format`, with `options`: the frame,
+/// view and overrides of particle files (an error for formats they do not apply to). Errors name `name`
+/// as the file. The text formats must be UTF-8 (bytes that are not are an error at their line and column).
 pub fn parse_with(
     format: SceneFormat,
     name: &std::path::Path,

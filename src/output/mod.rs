@@ -24,7 +24,7 @@ mod radiance;
 mod srgb;
 
 pub(crate) use netpbm::REGION_COMMENT as PPM_REGION_COMMENT;
-pub use srgb::{linear8, srgb8, srgb8_formula, to_rgb8, to_srgb8};
+pub use srgb::{linear8, srgb8, to_rgb8};
 
 /// An image file format bareray writes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -8,7 +8,7 @@ use crate::scene::desc::Transfer;
 
 /// Linear to sRGB-encoded 8-bit, clamped: the definition, one `powf` per value. [`srgb8`] gives the same
 /// bits from a table.
-pub fn srgb8_formula(linear: f32) -> u8 {
+pub(crate) fn srgb8_formula(linear: f32) -> u8 {
     let c = if linear.is_nan() { 0.0 } else { linear.clamp(0.0, 1.0) };
     let s = if c <= 0.003_130_8 { 12.92 * c } else { 1.055 * c.powf(1.0 / 2.4) - 0.055 };
     (s * 255.0 + 0.5) as u8
@@ -123,11 +123,6 @@ pub(super) fn encode8_row(row: &[Rgb], transfer: Transfer, out: &mut [u8]) {
     }
 }
 
-/// 8-bit sRGB copy of the image, a row per task.
-pub fn to_srgb8(img: &Image) -> RgbImage {
-    to_rgb8(img, Transfer::Srgb)
-}
-
 /// Linear transfer to 8-bit: clamped to [0, 1] (NaN to 0), times 255, rounded to nearest, as classic
 /// tracers write their values.
 pub fn linear8(value: f32) -> u8 {
@@ -202,7 +197,7 @@ mod tests {
             let mut v = |j: usize| special.get((3 * k + j) % (2 * n)).copied().unwrap_or_else(&mut random);
             *p = crate::math::V3::new(v(0), v(1), v(2));
         }
-        let out = to_srgb8(&img);
+        let out = to_rgb8(&img, Transfer::Srgb);
         for (k, p) in img.pixels.iter().enumerate() {
             assert_eq!(
                 &out.as_raw()[3 * k..3 * k + 3],

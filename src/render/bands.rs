@@ -6,7 +6,6 @@
 //! column of apron wherever the image goes on. Every pixel is the same bits as in the whole-image render.
 
 use std::ops::Range;
-use std::sync::atomic::AtomicU64;
 use std::time::Instant;
 
 use rayon::prelude::*;
@@ -134,7 +133,7 @@ pub(crate) fn band_rows(width: u32, budget: usize) -> u32 {
 /// the traced window's top. Band `i` can be traced anywhere (another thread, another process) and the
 /// results finished in order by a [`RowStage`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
-pub struct Bands {
+pub(crate) struct Bands {
     /// The pixels wanted.
     pub(crate) window: Window,
     /// The pixels traced: `window` and its apron.
@@ -181,7 +180,8 @@ impl Bands {
 
 /// Band `i` of `bands` traced in packets of `lanes` on `pool`: its pixels (the traced window's width,
 /// row-major, before any postfilter) and what tracing them took; `tile_done` is called after each tile.
-pub fn trace_band_lanes(
+#[cfg(feature = "mpi")]
+pub(crate) fn trace_band_lanes(
     scene: &Scene,
     lanes: usize,
     pool: &rayon::ThreadPool,
@@ -190,14 +190,16 @@ pub fn trace_band_lanes(
     tile_done: &(dyn Fn() + Sync),
 ) -> (Vec<Rgb>, RayCounts, Work) {
     let each = EachTile(tile_done);
-    let counter = TileCounter { progress: &each, done: AtomicU64::new(0), total: bands.tiles() };
+    let counter = TileCounter::new(&each, bands.tiles());
     let (columns, rows) = (bands.traced.x0..bands.traced.x1, bands.rows_of(i));
     with_lanes!(lanes, F => trace_band::<F>(scene, pool, columns, rows, &counter))
 }
 
 /// A [`Progress`] that only counts: a call per finished tile.
+#[cfg(feature = "mpi")]
 struct EachTile<'a>(&'a (dyn Fn() + Sync));
 
+#[cfg(feature = "mpi")]
 impl Progress for EachTile<'_> {
     fn start(&self, _: u64) {}
     fn tile_done(&self, _: u64, _: u64) {
@@ -222,7 +224,7 @@ pub(crate) fn render_window_lanes<E>(
 /// its finished rows to `emit` in order, top to bottom, each call one or more whole rows of the window's
 /// width; stops at the first error `emit` returns. The pixels are those of [`super::render`]'s image, bit
 /// for bit, at every band height, window, width and thread count.
-pub fn render_window<F: Lanes, E>(
+pub(crate) fn render_window<F: Lanes, E>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     progress: &dyn Progress,
@@ -253,7 +255,7 @@ pub fn render_window<F: Lanes, E>(
 
 /// Traced rows to finished rows: as they are, or through the lecture's 3×3 postfilter, which needs each
 /// row's neighbours above and below and so holds back the last row it has until the next arrives.
-pub struct RowStage {
+pub(crate) struct RowStage {
     window: Window,
     traced: Window,
     postfilter: bool,

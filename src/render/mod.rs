@@ -51,14 +51,17 @@ mod tile;
 
 use bands::trace_band;
 pub(crate) use bands::{band_rows, render_window_lanes};
-pub use bands::{render_window, trace_band_lanes, Bands, RowStage, Traced, Window};
+#[cfg(feature = "mpi")]
+pub(crate) use bands::{trace_band_lanes, Bands};
+pub use bands::{Traced, Window};
 pub(crate) use coverage::CoveragePart;
 // Named by the tests (tests/library/) alone.
 #[cfg(test)]
 pub(crate) use coverage::coverage_parts;
 
+pub use primary::fnv1a;
 pub(crate) use primary::trace_primary_window_lanes;
-pub use primary::{fnv1a, trace_primary, trace_primary_window, PrimaryHits};
+pub(crate) use primary::PrimaryHits;
 pub(crate) use primary::{primary_hits_lanes, trace_primary_lanes};
 use tile::trace_tile;
 

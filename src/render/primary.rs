@@ -12,7 +12,7 @@ use super::{for_each_camera_hit, tiles, LargePacket, Offsets, Tile, Window, TILE
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
 #[derive(Clone, Debug)]
-pub struct PrimaryHits {
+pub(crate) struct PrimaryHits {
     /// Columns.
     pub(crate) width: u32,
     /// Rows.
@@ -93,7 +93,7 @@ pub(crate) fn trace_primary_lanes(
 /// `hits` (sized to the camera), every pixel; `hits.seconds` is the wall-clock time of the tracing. Taking
 /// the frame and the pool from the caller lets repeated frames (`bench`) reuse both, as a peer harness
 /// reuses its frame buffers and threads.
-pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
+pub(crate) fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &mut PrimaryHits) {
     let (width, height) = (scene.camera.width, scene.camera.height);
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the camera's");
     trace_primary_window::<F>(scene, pool, Window::whole(width, height), hits);
@@ -101,7 +101,7 @@ pub fn trace_primary<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, hits: &m
 
 /// [`trace_primary`] over `window` of the image: `hits` is the window's size, its pixel (0, 0) the
 /// window's corner.
-pub fn trace_primary_window<F: Lanes>(
+pub(crate) fn trace_primary_window<F: Lanes>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     window: Window,

@@ -11,7 +11,7 @@ use crate::scene::desc::{Filter, Pattern};
 /// The largest image side bareray renders: sample positions are f32 pixel coordinates, exact to the
 /// half pixel below 2^23. PNG's limit (2^31 − 1 rows and columns) and EXR's (2^31 − 1, its coordinates
 /// are i32) lie beyond it.
-pub const MAX_SIDE: u32 = 1 << 23;
+pub(crate) const MAX_SIDE: u32 = 1 << 23;
 
 /// Memory a still's render will take beyond the compiled scene, in bytes.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]

@@ -24,7 +24,7 @@ pub mod merge;
 pub mod mpi;
 pub(crate) mod resume;
 
-pub use check::{check, Estimate, Limit, MAX_SIDE};
+pub use check::{check, Estimate, Limit};
 pub use describe::describe;
 use resume::Resume;
 

@@ -110,8 +110,8 @@ fn check_packets<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>], live: 
 fn bvh_equals_brute_force_at_every_width() {
     for (n, seed) in [(1, 1), (2, 2), (17, 3), (300, 4), (2000, 5)] {
         let desc = field(n, seed);
-        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         assert!(bvh.geometry.sphere_bvh.is_some() && brute.geometry.sphere_bvh.is_none());
         let rays = rays(&desc, 2000, seed + 100);
         check_width::<f32>(&bvh, &brute, &rays);
@@ -131,8 +131,8 @@ fn single_ray_tree_equals_brute_force() {
         let light =
             LightDesc { position: DVec3::new(0.0, 3.0, -3.0), color: Rgb::all(1.0), falloff: Falloff::None };
         desc.lights.push(light);
-        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         let tree = bvh.geometry.sphere_bvh.as_ref().unwrap();
         assert!(tree.wide.is_some(), "a lit scene builds the single-ray tree");
         let rays = rays(&desc, 3000, seed + 100);
@@ -140,7 +140,7 @@ fn single_ray_tree_equals_brute_force() {
         check_width::<f32x16>(&bvh, &brute, &rays);
     }
     // Without lights or mirrors nothing walks one ray from the root: no single-ray tree.
-    let plain = Scene::compile_with(&field(300, 4), Accel::Bvh).unwrap();
+    let plain = common::compile_with(&field(300, 4), Accel::Bvh).unwrap();
     assert!(plain.geometry.sphere_bvh.as_ref().unwrap().wide.is_none());
 }
 
@@ -157,8 +157,8 @@ fn coincident_spheres_get_a_tree_the_walks_can_hold() {
         desc.spheres.extend(std::iter::repeat_n(pile, copies));
         let position = DVec3::new(0.0, 3.0, -3.0);
         desc.lights.push(LightDesc { position, color: Rgb::all(1.0), falloff: Falloff::None });
-        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         assert!(bvh.geometry.sphere_bvh.as_ref().unwrap().wide.is_some());
         // A third of the rays start at sphere centres, most of them inside the pile.
         let rays = rays(&desc, 3000, seed + 100);
@@ -184,8 +184,8 @@ fn packet_box_tests(bvh: &mut Scene, packets: &[Ray<f32>], setting: impl Fn(&mut
 fn frustum_culling_keeps_the_brute_force_answer() {
     for (n, seed) in [(17, 6), (300, 7), (2000, 8)] {
         let desc = field(n, seed);
-        let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let mut bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         // The frustum must rule children out, or this test would not be testing it.
         let packets = coherent_rays(2000, 16, seed + 100);
         let all = packet_box_tests(&mut bvh, &packets, |b| b.frustum_culling = false);
@@ -203,8 +203,8 @@ fn frustum_culling_keeps_the_brute_force_answer() {
 #[test]
 fn frustum_culling_keeps_grazing_rays_from_near_and_far() {
     let desc = field(400, 11);
-    let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-    let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+    let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+    let brute = common::compile_with(&desc, Accel::Brute).unwrap();
     let mut rng = Rng::new(12);
     // Arc: the packet's rays aim around the whole silhouette, or all at one point of it (a thin pyramid
     // tangent to the sphere, which the leaf's sphere test must not rule out).
@@ -240,8 +240,8 @@ fn frustum_culling_keeps_grazing_rays_from_near_and_far() {
 fn single_ray_switch_keeps_the_brute_force_answer() {
     for (n, seed) in [(300, 9), (2000, 10)] {
         let desc = field(n, seed);
-        let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let mut bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         let packets = coherent_rays(2000, 16, seed + 100);
         // Full packets start above the threshold: a difference can only come from switching inside the tree.
         let never = packet_box_tests(&mut bvh, &packets, |b| b.single_ray_lanes = 0);
@@ -276,8 +276,8 @@ fn camera_pyramids_keep_the_brute_force_answer() {
         desc.camera.aim = Aim::LookAt(DVec3::ZERO);
         desc.camera.field = Field::HorizontalAngle(theta);
         (desc.camera.width, desc.camera.height) = (203, 157);
-        let mut bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let mut bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         let pool = |threads| bareray::render::thread_pool(Some(threads)).unwrap();
         let want = bareray::render::primary_hits_lanes(&brute, 1, &pool(1));
         let (hits, prims) = (want.prim.iter().filter(|&&p| p != u32::MAX).count(), want.prim.len());
@@ -305,8 +305,8 @@ fn large_packets_merge_the_other_kinds() {
     desc.camera.aim = Aim::LookAt(DVec3::ZERO);
     desc.camera.field = Field::HorizontalAngle(50.0);
     (desc.camera.width, desc.camera.height) = (131, 97);
-    let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-    let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+    let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+    let brute = common::compile_with(&desc, Accel::Brute).unwrap();
     let pool = bareray::render::thread_pool(Some(2)).unwrap();
     let want = bareray::render::primary_hits_lanes(&brute, 1, &pool);
     let kinds = |hits: &bareray::render::PrimaryHits, scene: &Scene| {
@@ -335,7 +335,7 @@ fn large_packets_merge_the_other_kinds() {
 fn large_packets_share_the_walk() {
     let mut desc = field(20000, 25);
     desc.camera = common::camera(DVec3::new(0.0, 0.0, -4.0), DVec3::ZERO, DVec3::Y, 45.0, 256, 192);
-    let scene = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    let scene = common::compile_with(&desc, Accel::Bvh).unwrap();
     let (tile, separate) = (camera_work(&scene, true), camera_work(&scene, false));
     assert!(
         tile.box_tests * 10 < separate.box_tests * 8,
@@ -381,7 +381,7 @@ fn a_view_away_from_the_field_tests_no_box() {
     let mut desc = field(20000, 26);
     desc.camera =
         common::camera(DVec3::new(0.0, 0.0, -4.0), DVec3::new(0.0, 0.0, -8.0), DVec3::Y, 60.0, 256, 192);
-    let scene = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    let scene = common::compile_with(&desc, Accel::Bvh).unwrap();
     for large in [true, false] {
         let work = camera_work(&scene, large);
         assert_eq!((work.box_tests, work.prim_tests), (0, 0), "large packets {large}");
@@ -422,8 +422,8 @@ fn polygon_field(n: usize, seed: u64) -> SceneDesc {
 fn polygon_bvh_equals_brute_force_at_every_width() {
     for (n, seed) in [(3, 11), (40, 12), (1500, 13)] {
         let desc = polygon_field(n, seed);
-        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         assert!(bvh.geometry.polygon_bvh.is_some() && brute.geometry.polygon_bvh.is_none());
         let rays = rays(&desc, 3000, seed + 100);
         let hits = rays.iter().filter(|r| {
@@ -518,8 +518,8 @@ fn shape_field(n: usize, seed: u64) -> SceneDesc {
 fn ellipsoid_bvh_equals_brute_force_at_every_width() {
     for (n, seed) in [(5, 21), (200, 22)] {
         let desc = shape_field(n, seed);
-        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         let (tree, brute_tree) = (&bvh.geometry.kinds, &brute.geometry.kinds);
         assert!(tree.ellipsoids.bvh.is_some() && brute_tree.ellipsoids.bvh.is_none());
         assert_eq!((tree.ellipsoids.order.len(), tree.planes.len(), tree.planes.bvh.is_none()), (n, 1, true));
@@ -564,8 +564,8 @@ fn cone_field(n: usize, seed: u64) -> SceneDesc {
 fn cone_bvh_equals_brute_force_at_every_width() {
     for (n, seed) in [(4, 31), (300, 32)] {
         let desc = cone_field(n, seed);
-        let bvh = Scene::compile_with(&desc, Accel::Bvh).unwrap();
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         assert!(bvh.geometry.kinds.cones.bvh.is_some() && brute.geometry.kinds.cones.bvh.is_none());
         let rays = rays(&desc, 3000, seed + 100);
         let base = brute.geometry.kinds_base() as u32;
@@ -597,7 +597,7 @@ fn rays_leaving_a_cone_meet_it_again() {
     };
     desc.kinds.cones.extend([tube, flare]);
     for accel in [Accel::Bvh, Accel::Brute] {
-        let scene = Scene::compile_with(&desc, accel).unwrap();
+        let scene = common::compile_with(&desc, accel).unwrap();
         let g = &scene.geometry;
         let (tube_id, flare_id) = (g.kinds_base() as u32, g.kinds_base() as u32 + 1);
         let origin = scene.to_rendering(DVec3::new(1.0, 0.0, 2.0));
@@ -648,12 +648,12 @@ fn scalar_walk_equals_brute_force_for_every_kind() {
         let light =
             LightDesc { position: DVec3::new(0.0, 3.0, -3.0), color: Rgb::all(1.0), falloff: Falloff::None };
         desc.lights.push(light);
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         let rays = rays(&desc, 3000, seed + 100);
         check_packets::<f32>(&scalar(&desc), &brute, &rays, 1);
     }
     for desc in [polygon_field(40, 12), polygon_field(1500, 13), shape_field(200, 22), cone_field(300, 32)] {
-        let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         check_kind::<f32>(&scalar(&desc), &brute, &rays(&desc, 3000, 7));
     }
 }
@@ -686,7 +686,7 @@ fn scalar_walk_is_taken_and_can_be_switched_off() {
     assert!(scene.geometry.set_scalar_walk(true));
     assert_eq!(trace(&scene), scalar);
     // Without the binary trees the switch cannot turn the scalar walk on.
-    let mut plain = Scene::compile_with(&desc, Accel::Bvh).unwrap();
+    let mut plain = common::compile_with(&desc, Accel::Bvh).unwrap();
     assert!(!plain.geometry.set_scalar_walk(true));
     assert_eq!(trace(&plain), simd);
 }

@@ -160,8 +160,8 @@ fn the_particle_tree_finds_brute_forces_hits_at_every_width() {
                 materials: vec![Material::default(); 3],
                 ..SceneDesc::default()
             };
-            let tree = Scene::compile_with(&desc, Accel::Particles).unwrap();
-            let brute = Scene::compile_with(&desc, Accel::Brute).unwrap();
+            let tree = common::compile_with(&desc, Accel::Particles).unwrap();
+            let brute = common::compile_with(&desc, Accel::Brute).unwrap();
             assert_eq!(tree.geometry.particles.len(), n);
             assert!(tree.geometry.spheres.is_empty() && tree.geometry.sphere_bvh.is_none());
             let rays = rays(&brute, &desc.spheres, &mut rng, 1024);
@@ -193,8 +193,8 @@ fn camera_tiles_match_the_bvh() {
         materials: vec![Material::default(); 3],
         ..SceneDesc::default()
     };
-    let tree = common::render(&Scene::compile_with(&desc, Accel::Particles).unwrap(), 2);
-    let bvh = common::render(&Scene::compile_with(&desc, Accel::Bvh).unwrap(), 2);
+    let tree = common::render(&common::compile_with(&desc, Accel::Particles).unwrap(), 2);
+    let bvh = common::render(&common::compile_with(&desc, Accel::Bvh).unwrap(), 2);
     let bits = |p: &bareray::math::Rgb| [p.x, p.y, p.z].map(f32::to_bits);
     assert!(tree.pixels.iter().zip(&bvh.pixels).all(|(a, b)| bits(a) == bits(b)));
     assert!(bvh.pixels.iter().any(|p| bits(p) != bits(&bvh.pixels[0])), "the image shows something");
@@ -246,7 +246,7 @@ fn large_packets_through_the_tree_give_each_packets_hits() {
                 materials: vec![Material::default(); 3],
                 ..SceneDesc::default()
             };
-            let scene = Scene::compile_with(&desc, Accel::Particles).unwrap();
+            let scene = common::compile_with(&desc, Accel::Particles).unwrap();
             assert!(scene.geometry.culls_by_pyramid(), "the tree's camera packets carry pyramids");
             let found = [check::<f32x4>(&scene, &mut rng), check::<f32x8>(&scene, &mut rng)];
             let found16 = check::<f32x16>(&scene, &mut rng);

@@ -264,13 +264,15 @@ fn f32r_fields_hold_the_generators_values_and_frame_like_xyzr() {
     );
     // The same spheres written as text and read back (f64 values) round to the same f32s; the scene
     // around them differs only by the text's decimals, far below what frames the camera.
-    let from_text = xyzr::parse(Path::new("t.xyzr"), &p.to_xyzr().unwrap()).unwrap();
+    let from_text = xyzr::parse(Path::new("t.xyzr"), &xyzr_text(&p)).unwrap();
     let from_binary = f32r::parse(Path::new("t.f32r"), &bytes).unwrap();
     assert_eq!((from_binary.materials.len(), from_binary.lights.len()), (1, 1));
     assert!((from_binary.camera.eye - from_text.camera.eye).length() < 1e-6, "{:?}", from_binary.camera);
     assert!(Scene::compile(&from_binary).is_ok());
     // Read from memory as standard input is.
-    let again = bareray::io::parse(SceneFormat::F32r, Path::new("<stdin>"), bytes.clone()).unwrap();
+    let again =
+        bareray::io::parse_with(SceneFormat::F32r, Path::new("<stdin>"), bytes.clone(), &Default::default());
+    let again = again.unwrap().desc;
     assert_eq!(again, from_binary);
 }
 
@@ -294,7 +296,7 @@ fn f32r_errors_name_the_file_record_and_byte() {
     for (bytes, expected) in [
         (&flipped[..], "t.f32r: not an .f32r sphere list: the first 8 bytes are not 89 46 33 32 52 0d 0a 1a"),
         (&crlf[..], "t.f32r: not an .f32r sphere list"),
-        (&p.to_xyzr().unwrap().into_bytes()[..], "t.f32r: not an .f32r sphere list"),
+        (&xyzr_text(&p).into_bytes()[..], "t.f32r: not an .f32r sphere list"),
         (&good[..11], "t.f32r: the file ends inside the 16-byte header, after 11 bytes"),
         (&good[..16 + 16 * 60 + 15], "t.f32r: the file ends inside record 60 (byte 976): the header's count is 100, which needs 1616 bytes, the file has 991"),
         (&count[..], "t.f32r: 16 bytes follow the last of the header's 99 records"),
@@ -324,7 +326,7 @@ fn field_1e3_matches_the_contract() {
     assert_eq!(all[999], [-0.9755169, 0.56174314, -0.67024505, 0.042300448]);
     // The text form round-trips every f32 exactly through the xyzr reader (which reads f64; compile rounds to
     // f32, and the shortest round-trip text rounds back to the same f32).
-    let back = xyzr::parse(Path::new("f.xyzr"), &p.to_xyzr().unwrap()).unwrap();
+    let back = xyzr::parse(Path::new("f.xyzr"), &xyzr_text(&p)).unwrap();
     assert_eq!(back.spheres.len(), 1000);
     for (s, e) in back.spheres.iter().zip(&all) {
         let got = [s.center.x as f32, s.center.y as f32, s.center.z as f32, s.radius as f32];
@@ -505,3 +507,10 @@ fn a_ray_leaving_a_polygon_never_hits_it_again() {
 }
 
 // ---------------------------------------------------------------------------------------------------- CLI
+
+/// The `.xyzr` text `gen field` writes for `p`.
+fn xyzr_text(p: &FieldParams) -> String {
+    let mut out = Vec::new();
+    p.write_xyzr(&mut out).expect("valid field parameters");
+    String::from_utf8(out).expect("generated text is ASCII")
+}

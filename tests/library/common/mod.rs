@@ -15,7 +15,8 @@ pub use files::scene_files;
 
 use std::path::Path;
 
-use bareray::compile::Scene;
+use bareray::camera::CameraError;
+use bareray::compile::{Accel, CompileOptions, Scene};
 use bareray::film::Image;
 use bareray::geometry::ShapeKind;
 use bareray::io::toml;
@@ -58,6 +59,11 @@ pub fn shapes(list: impl IntoIterator<Item = (ShapeKind, DAffine3)>) -> KindDesc
 
 pub fn compile(desc: &SceneDesc) -> Scene {
     Scene::compile(desc).expect("scene compiles")
+}
+
+/// The scene compiled with `accel` (every other option at its default).
+pub fn compile_with(desc: &SceneDesc, accel: Accel) -> Result<Scene, CameraError> {
+    Scene::compile_with_options(desc, CompileOptions { accel, ..CompileOptions::default() })
 }
 
 pub fn parse_toml(src: &str) -> SceneDesc {
