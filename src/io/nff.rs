@@ -52,6 +52,9 @@ use crate::kinds::cone::ConeDesc;
 use crate::scene::desc::*;
 
 mod chunks;
+mod tokens;
+
+use tokens::{Tok, Tokens};
 
 /// Ambient coefficient of NFF materials (see the module documentation).
 pub(crate) const NFF_AMBIENT: f32 = 0.1;
@@ -74,54 +77,6 @@ fn parse_sequential(path: &Path, source: &str) -> Result<SceneDesc, SceneError> 
     let mut reader = Reader::new(path, source, false);
     reader.read_all()?;
     reader.finish()
-}
-
-/// A token and its 1-based line.
-#[derive(Clone, Copy, Debug)]
-struct Tok<'a> {
-    text: &'a str,
-    line: usize,
-}
-
-/// Tokens separated by ASCII whitespace (byte-wise: splitting on Unicode whitespace, char by char, showed in
-/// the readers' profile; docs/perf-log/2026-11.md), with line numbers, `#` comments removed,
-/// one token of look-ahead.
-struct Tokens<'a> {
-    lines: std::iter::Enumerate<std::str::Lines<'a>>,
-    words: std::str::SplitAsciiWhitespace<'a>,
-    line: usize,
-    peeked: Option<Tok<'a>>,
-}
-
-impl<'a> Tokens<'a> {
-    fn new(source: &'a str) -> Self {
-        Self { lines: source.lines().enumerate(), words: "".split_ascii_whitespace(), line: 0, peeked: None }
-    }
-
-    fn next(&mut self) -> Option<Tok<'a>> {
-        if let Some(t) = self.peeked.take() {
-            return Some(t);
-        }
-        loop {
-            match self.words.next() {
-                // A comment runs to the end of the line: drop the rest of its words.
-                Some(w) if w.starts_with('#') => self.words = "".split_ascii_whitespace(),
-                Some(w) => return Some(Tok { text: w, line: self.line }),
-                None => {
-                    let (i, l) = self.lines.next()?;
-                    self.line = i + 1;
-                    self.words = l.split_ascii_whitespace();
-                }
-            }
-        }
-    }
-
-    fn peek(&mut self) -> Option<Tok<'a>> {
-        if self.peeked.is_none() {
-            self.peeked = self.next();
-        }
-        self.peeked
-    }
 }
 
 struct Reader<'a> {
@@ -169,7 +124,7 @@ impl<'a> Reader<'a> {
 
     /// The next token, or an error saying what was expected instead of the end of the file.
     fn expect(&mut self, what: &str) -> Result<Tok<'a>, SceneError> {
-        let last = self.tokens.line;
+        let last = self.tokens.line();
         self.tokens.next().ok_or_else(|| self.err(last, format!("unexpected end of file, expected {what}")))
     }
 
@@ -191,7 +146,7 @@ impl<'a> Reader<'a> {
     }
 
     fn color(&mut self, what: &str) -> Result<Rgb, SceneError> {
-        let line = self.tokens.peek().map_or(self.tokens.line, |t| t.line);
+        let line = self.tokens.peek().map_or(self.tokens.line(), |t| t.line);
         let c = self.vec3(what)?;
         if c.min_element() < 0.0 {
             return Err(self.err(line, format!("{what} must not be negative, got {c}")));

@@ -15,7 +15,7 @@ use rayon::prelude::*;
 
 use super::{parse_sequential, Reader};
 use crate::io::error::SceneError;
-use crate::scene::desc::SceneDesc;
+use crate::scene::desc::{SceneDesc, SphereDesc};
 
 /// Bytes of text per piece.
 pub(super) const CHUNK_BYTES: usize = 1 << 20;
@@ -84,7 +84,8 @@ fn starts_entity(text: &str) -> bool {
 /// when the file has more than one view.
 fn join<'a>(path: &'a Path, pieces: Vec<Reader<'a>>) -> Option<Reader<'a>> {
     let mut all = Reader::new(path, "", false);
-    all.desc.spheres.reserve_exact(pieces.iter().map(|p| p.desc.spheres.len()).sum());
+    // Each piece's spheres with its materials' mapping, appended together at the end.
+    let mut spheres = Vec::with_capacity(pieces.len());
     for piece in pieces {
         let desc = piece.desc;
         if piece.view_seen {
@@ -105,9 +106,9 @@ fn join<'a>(path: &'a Path, pieces: Vec<Reader<'a>>) -> Option<Reader<'a>> {
         let inherits = inherits.chain(desc.polygons.iter().map(|p| p.material)).any(|m| m == INHERITED);
         let inherited = if inherits { all.current_material() } else { INHERITED };
         let offset = all.desc.materials.len() as u32;
-        let map = |m: u32| if m == INHERITED { inherited } else { m + offset };
+        let map = move |m: u32| if m == INHERITED { inherited } else { m + offset };
         let d = &mut all.desc;
-        d.spheres.extend(desc.spheres.into_iter().map(|mut s| (s.material = map(s.material), s).1));
+        spheres.push((desc.spheres, map));
         d.kinds.cones.extend(desc.kinds.cones.into_iter().map(|mut c| (c.material = map(c.material), c).1));
         d.polygons.extend(desc.polygons.into_iter().map(|mut p| (p.material = map(p.material), p).1));
         d.materials.extend(desc.materials);
@@ -115,7 +116,24 @@ fn join<'a>(path: &'a Path, pieces: Vec<Reader<'a>>) -> Option<Reader<'a>> {
             all.material = Some(m + offset);
         }
     }
+    append_mapped(&mut all.desc.spheres, &spheres);
     Some(all)
+}
+
+/// Appends each part's spheres to `out` in order, their materials mapped by the part's map. In parallel, each
+/// sphere written once into its place: the list is the file's largest (598 000 spheres in SPD's balls at
+/// size 6), and one thread appending it, page by fresh page, showed in the parse's time.
+fn append_mapped(out: &mut Vec<SphereDesc>, parts: &[(Vec<SphereDesc>, impl Fn(u32) -> u32 + Sync)]) {
+    // starts[p]: the place of part p's first sphere among the appended ones.
+    let starts: Vec<usize> =
+        parts.iter().scan(0, |at, (s, _)| Some(std::mem::replace(at, *at + s.len()))).collect();
+    let total = parts.iter().map(|(s, _)| s.len()).sum::<usize>();
+    out.par_extend((0..total).into_par_iter().map(|k| {
+        let p = starts.partition_point(|&start| start <= k) - 1;
+        let (spheres, map) = &parts[p];
+        let s = spheres[k - starts[p]];
+        SphereDesc { material: map(s.material), ..s }
+    }));
 }
 
 #[cfg(test)]
