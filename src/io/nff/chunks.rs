@@ -122,7 +122,7 @@ fn join<'a>(path: &'a Path, pieces: Vec<Reader<'a>>) -> Option<Reader<'a>> {
 
 /// Appends each part's spheres to `out` in order, their materials mapped by the part's map. In parallel, each
 /// sphere written once into its place: the list is the file's largest (598 000 spheres in SPD's balls at
-/// size 6), and one thread appending it, page by fresh page, showed in the parse's time.
+/// size 6), and one thread appending it, page by fresh page, would be a serial step of the parse.
 fn append_mapped(out: &mut Vec<SphereDesc>, parts: &[(Vec<SphereDesc>, impl Fn(u32) -> u32 + Sync)]) {
     // starts[p]: the place of part p's first sphere among the appended ones.
     let starts: Vec<usize> =

@@ -11,8 +11,8 @@ pub(super) struct Tok<'a> {
 /// ASCII whitespace (`u8::is_ascii_whitespace`: space, tab, line feed, form feed, carriage return); a word
 /// that starts with `#` drops the rest of its line. Lines are numbered as `str::lines` counts them (a final
 /// line feed ends the last line rather than starting another), so [`Tokens::line`] at the end of the text is
-/// the last line's number, which end-of-file errors name. Splitting the text into lines and then words
-/// visited every byte twice and showed in the readers' profile.
+/// the last line's number, which end-of-file errors name. One pass, where splitting the text into lines and
+/// then words would read every byte twice.
 pub(super) struct Tokens<'a> {
     source: &'a str,
     /// The next byte to read.
