@@ -31,7 +31,7 @@ pub struct Estimate {
 /// Something a still runs into.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Limit {
-    /// An image side past [`MAX_SIDE`].
+    /// An image side past 2²³ pixels (`MAX_SIDE`).
     Side,
     /// More memory than is available.
     Memory,
@@ -39,7 +39,7 @@ pub enum Limit {
     Disk,
 }
 
-/// Checks `job` before any tracing, on `threads` render threads: the image's size against [`MAX_SIDE`],
+/// Checks `job` before any tracing, on `threads` render threads: the image's size against 2²³ pixels a side,
 /// both output files writable, the memory the bands will take against the memory available, and for the
 /// formats whose size is known in advance (PPM, HDR) the file against the free space of its disk. Returns
 /// the memory estimate, or the refusal with what would fit.
