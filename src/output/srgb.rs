@@ -14,9 +14,9 @@ pub(crate) fn srgb8_formula(linear: f32) -> u8 {
     (s * 255.0 + 0.5) as u8
 }
 
-/// Linear to sRGB-encoded 8-bit, clamped: the sRGB formula (`srgb8_formula`) by table, bit for bit (checked over every f32
-/// in [0, 1] by a test). The table took a large share off an image's write time (docs/perf-log/2026-11.md,
-/// "Exact table-driven sRGB encoding").
+/// Linear to sRGB-encoded 8-bit, clamped: the sRGB formula (`srgb8_formula`) by table, bit for bit (checked
+/// over every f32 in [0, 1] by a test). The table took a large share off an image's write time
+/// (docs/perf-log/2026-11.md, "Exact table-driven sRGB encoding").
 pub fn srgb8(linear: f32) -> u8 {
     SrgbTable::get().encode(linear)
 }
