@@ -261,9 +261,9 @@ fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Optio
 /// Splits `refs` in place: those `left` accepts first. Returns their number and both parts' extents.
 ///
 /// Branch-free (Lomuto's scheme with the swap always made): which side an item goes to is a coin toss for the
-/// branch predictor, and a mispredicted branch per item costs more than the swap. The extents are folded
-/// afterwards, one part at a time in registers: added in the loop, to the side picked by index, each item
-/// waited for the previous one's store (balls6's boxes: about 10 → 5–6 ns an item, both passes together).
+/// branch predictor, and a mispredicted branch per item costs more than the swap. The parts' extents are
+/// folded afterwards (in registers; a large part in parallel): added in the loop, to the side picked by index,
+/// each item waited for the previous one's store (balls6's boxes: about 10 → 5–6 ns an item, both passes).
 fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, Extent) {
     let mut store = 0;
     for i in 0..refs.len() {
