@@ -8,7 +8,9 @@ use rayon::prelude::*;
 use crate::compile::Scene;
 use crate::simd::Lanes;
 
-use super::{for_each_camera_hit, tiles, LargePacket, Offsets, Tile, Window, TILE};
+use super::{
+    column_order, for_each_camera_hit, rows_together, tiles, LargePacket, Offsets, Tile, Window, TILE,
+};
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
 #[derive(Clone, Debug)]
@@ -110,23 +112,28 @@ pub(crate) fn trace_primary_window<F: Lanes>(
     let start = Instant::now();
     let (width, height) = (window.width(), window.height());
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the window's");
-    // One band of tiles per task, written in place: no per-tile buffers and no serial merge.
-    let band = width as usize * TILE as usize;
+    // One band of rows of tiles per task, written in place: no per-tile buffers and no serial merge. Each
+    // band's tiles column by column (`column_order`).
+    let rows = rows_together(height, pool.current_num_threads());
+    let band = width as usize * (TILE * rows) as usize;
     pool.install(|| {
         // One job per band, as for tiles in `render`.
         let bands =
             hits.t.par_chunks_mut(band).zip(hits.prim.par_chunks_mut(band)).enumerate().with_max_len(1);
         bands.for_each(|(band, (t, prim))| {
-            let y0 = band as u32 * TILE;
+            let y0 = band as u32 * TILE * rows;
             let mut large = LargePacket::default();
-            for tile in tiles(width, TILE.min(height - y0)) {
-                let tile = Tile { x0: window.x0 + tile.x0, y0: window.y0 + y0, ..tile };
+            let local = tiles(width, (TILE * rows).min(height - y0));
+            for i in column_order(&local, rows) {
+                let first_row = local[i].y0 as usize;
+                let tile = Tile { x0: window.x0 + local[i].x0, y0: window.y0 + y0 + local[i].y0, ..local[i] };
                 for_each_camera_hit::<F>(scene, tile, &Offsets::Shared(0.5, 0.5), &mut large, |_, hit, b| {
                     let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
                     // Row by row: each row of the block is a run of pixels in the frame's row.
                     for r in 0..b.h as usize {
                         let lane = r * b.bw as usize;
-                        let at = (b.y as usize + r) * width as usize + (tile.x0 - window.x0 + b.x) as usize;
+                        let row = first_row + b.y as usize + r;
+                        let at = row * width as usize + (tile.x0 - window.x0 + b.x) as usize;
                         let n = b.w as usize;
                         copy_row(&mut t[at..at + n], &ts.as_ref()[lane..]);
                         copy_row(&mut prim[at..at + n], &ids.as_ref()[lane..]);
