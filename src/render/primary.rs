@@ -156,3 +156,41 @@ pub(crate) fn trace_primary_window_lanes(
     with_lanes!(lanes, F => trace_primary_window::<F>(scene, pool, window, &mut hits));
     hits
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::thread_pool;
+
+    /// Camera-ray bands of four, two and one rows of tiles (1, 2 and 5 threads on 300 rows, the last row of
+    /// tiles partial), over the whole image and over a window at an odd offset: every pixel the same bits,
+    /// and a window's pixels those of the whole image.
+    #[test]
+    fn every_band_height_and_window_gives_the_same_hits() {
+        let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/field.toml");
+        let mut desc = crate::io::load(&path).unwrap();
+        (desc.camera.width, desc.camera.height) = (150, 300);
+        let scene = Scene::compile(&desc).unwrap();
+        assert_eq!([1, 2, 5].map(|t| rows_together(300, t)), [4, 2, 1]);
+        let bits = |h: &PrimaryHits| (h.t.iter().map(|t| t.to_bits()).collect::<Vec<_>>(), h.prim.clone());
+        let whole = bits(&primary_hits_lanes(&scene, 16, &thread_pool(Some(1)).unwrap()));
+        assert!(whole.1.iter().filter(|&&p| p != u32::MAX).count() > 1000, "too few hits to compare");
+        let window = Window { x0: 7, y0: 21, x1: 150, y1: 293 };
+        for threads in [1, 2, 5] {
+            let pool = thread_pool(Some(threads)).unwrap();
+            for lanes in [1, 16] {
+                assert_eq!(
+                    bits(&primary_hits_lanes(&scene, lanes, &pool)),
+                    whole,
+                    "{threads} threads, K = {lanes}"
+                );
+            }
+            let part = bits(&trace_primary_window_lanes(&scene, 16, &pool, window));
+            for (row, y) in (window.y0..window.y1).enumerate() {
+                let (w, at) = (window.width() as usize, (y * 150 + window.x0) as usize);
+                assert_eq!(part.0[row * w..(row + 1) * w], whole.0[at..at + w], "row {y}, {threads} threads");
+                assert_eq!(part.1[row * w..(row + 1) * w], whole.1[at..at + w], "row {y}, {threads} threads");
+            }
+        }
+    }
+}
