@@ -16,8 +16,8 @@ pub(super) fn rows_together(height: u32, threads: usize) -> u32 {
     (rows_of_tiles / (4 * threads.max(1) as u32).max(1)).clamp(1, ROWS_TOGETHER)
 }
 
-/// The order to trace `tiles` (those of [`super::tiles`], row by row) in: groups of `rows` rows of tiles from the
-/// top, each column by column. Returns each tile's index in `tiles`.
+/// The order to trace `tiles` (those of [`super::tiles`], row by row) in: groups of `rows` rows of tiles from
+/// the top, each column by column. Returns each tile's index in `tiles`.
 pub(super) fn column_order(tiles: &[Tile], rows: u32) -> Vec<usize> {
     let mut order: Vec<usize> = (0..tiles.len()).collect();
     order.sort_by_key(|&i| {
