@@ -23,9 +23,7 @@ const BINS: usize = 16;
 
 /// A range whose centres spread at least this many times as far along one axis as along either other is
 /// binned along that axis alone: a third of the binning's work per item, and the split it misses on the
-/// other axes seldom pays. On balls6 and the 1e6 field the tree's SAH cost moved by −0.8% and +0.1%, balls6's
-/// box tests per ray by −1% to −4% and its sphere tests by 0 to +5%, and the SAH build took 12–15% less time
-/// (docs/perf-log/2026-11-zen3.md, "The SAH build: a dominant axis, extents folded after the partition").
+/// other axes seldom pays (PERF.md, "Register", SAH split candidates).
 const DOMINANT_SPREAD: f32 = 1.5;
 
 /// The most items a leaf holds (as in obvhs's presets other than `fastest`, whose leaves hold one).
@@ -263,7 +261,7 @@ fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Optio
 /// Branch-free (Lomuto's scheme with the swap always made): which side an item goes to is a coin toss for the
 /// branch predictor, and a mispredicted branch per item costs more than the swap. The parts' extents are
 /// folded afterwards (in registers; a large part in parallel): added in the loop, to the side picked by index,
-/// each item waited for the previous one's store (balls6's boxes: about 10 → 5–6 ns an item, both passes).
+/// each item waited for the previous one's store (PERF.md, "Register", the SAH builder's partition).
 fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, Extent) {
     let mut store = 0;
     for i in 0..refs.len() {

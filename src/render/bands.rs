@@ -19,7 +19,7 @@ use crate::scene::desc::{Pattern, PostFilter};
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
 
-use super::{column_order, tile_rows, tiles, trace_tile, Progress, Tile, TileCounter, ROWS_TOGETHER, TILE};
+use super::{column_key, tile_rows, tiles, trace_tile, Progress, Tile, TileCounter, ROWS_TOGETHER, TILE};
 
 /// A rectangle of the image in pixels: columns `x0..x1`, rows `y0..y1`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -90,11 +90,9 @@ pub(super) fn trace_band<F: Lanes>(
     let (width, height) = (columns.end - columns.start, rows.end - rows.start);
     let local = tiles(width, height);
     let mut band = Image::new(width, height);
-    let mut parts: Vec<_> =
-        local.iter().copied().zip(tile_rows(&mut band.pixels, width, &local)).map(Some).collect();
+    let mut jobs: Vec<_> = local.iter().copied().zip(tile_rows(&mut band.pixels, width, &local)).collect();
     // Rows of tiles column by column; each thread takes its share of jobs in that order.
-    let jobs: Vec<_> =
-        column_order(&local, ROWS_TOGETHER).into_iter().filter_map(|i| parts[i].take()).collect();
+    jobs.sort_by_key(|(tile, _)| column_key(tile, ROWS_TOGETHER));
     let traced: Vec<(RayCounts, Work)> = pool.install(|| {
         // One job per tile (with_max_len): rayon otherwise runs whole quarters of the band as single
         // jobs, which a thread slowed by the host cannot hand over (docs/perf-log/2026-11.md).

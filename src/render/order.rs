@@ -16,21 +16,23 @@ pub(super) fn rows_together(height: u32, threads: usize) -> u32 {
     (rows_of_tiles / (4 * threads.max(1) as u32).max(1)).clamp(1, ROWS_TOGETHER)
 }
 
-/// The order to trace `tiles` (those of [`super::tiles`], row by row) in: groups of `rows` rows of tiles from
-/// the top, each column by column. Returns each tile's index in `tiles`.
-pub(super) fn column_order(tiles: &[Tile], rows: u32) -> Vec<usize> {
-    let mut order: Vec<usize> = (0..tiles.len()).collect();
-    order.sort_by_key(|&i| {
-        let t = tiles[i];
-        (t.y0 / (TILE * rows), t.x0, t.y0)
-    });
-    order
+/// Where `tile` (one of [`super::tiles`]) comes in the order: groups of `rows` rows of tiles from the top,
+/// each column by column. Sorting a band's tiles by it gives the order they are traced in.
+pub(super) fn column_key(tile: &Tile, rows: u32) -> (u32, u32, u32) {
+    (tile.y0 / (TILE * rows), tile.x0, tile.y0)
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
     use crate::render::tiles;
+
+    /// Each tile's index in `tiles`, in the order [`column_key`] sorts them.
+    fn column_order(tiles: &[Tile], rows: u32) -> Vec<usize> {
+        let mut order: Vec<usize> = (0..tiles.len()).collect();
+        order.sort_by_key(|&i| column_key(&tiles[i], rows));
+        order
+    }
 
     /// Every tile once; groups of `rows` rows of tiles from the top; inside a group, column by column and
     /// top to bottom in each column.

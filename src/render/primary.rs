@@ -9,7 +9,7 @@ use crate::compile::Scene;
 use crate::simd::Lanes;
 
 use super::{
-    column_order, for_each_camera_hit, rows_together, tiles, LargePacket, Offsets, Tile, Window, TILE,
+    column_key, for_each_camera_hit, rows_together, tiles, LargePacket, Offsets, Tile, Window, TILE,
 };
 
 /// Closest hits of one camera ray through every pixel centre: no shading, no secondary rays.
@@ -113,7 +113,7 @@ pub(crate) fn trace_primary_window<F: Lanes>(
     let (width, height) = (window.width(), window.height());
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the window's");
     // One band of rows of tiles per task, written in place: no per-tile buffers and no serial merge. Each
-    // band's tiles column by column (`column_order`).
+    // band's tiles column by column (`column_key`).
     let rows = rows_together(height, pool.current_num_threads());
     let band = width as usize * (TILE * rows) as usize;
     pool.install(|| {
@@ -123,10 +123,11 @@ pub(crate) fn trace_primary_window<F: Lanes>(
         bands.for_each(|(band, (t, prim))| {
             let y0 = band as u32 * TILE * rows;
             let mut large = LargePacket::default();
-            let local = tiles(width, (TILE * rows).min(height - y0));
-            for i in column_order(&local, rows) {
-                let first_row = local[i].y0 as usize;
-                let tile = Tile { x0: window.x0 + local[i].x0, y0: window.y0 + y0 + local[i].y0, ..local[i] };
+            let mut local = tiles(width, (TILE * rows).min(height - y0));
+            local.sort_by_key(|tile| column_key(tile, rows));
+            for local in local {
+                let first_row = local.y0 as usize;
+                let tile = Tile { x0: window.x0 + local.x0, y0: window.y0 + y0 + local.y0, ..local };
                 for_each_camera_hit::<F>(scene, tile, &Offsets::Shared(0.5, 0.5), &mut large, |_, hit, b| {
                     let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
                     // Row by row: each row of the block is a run of pixels in the frame's row.
