@@ -39,38 +39,160 @@ pub(super) fn stack_need(slots: usize, below: usize) -> usize {
 /// "Kept": the collapse runs in parallel).
 pub(super) const PARALLEL_LEVELS: u32 = 3;
 
-/// [`flatten`] of obvhs inner node `i` into a vector of its own (the subtree's root first, indices local to
-/// it), its inner children's subtrees flattened in parallel for `levels` more levels; with the subtree's
-/// stack need.
-pub(super) fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u32) -> (Vec<T>, usize) {
-    let mut out = Vec::new();
-    if levels == 0 {
-        // This node is at level PARALLEL_LEVELS: the root, at 0, was called with PARALLEL_LEVELS levels left.
-        let (_, need) = flatten(src, i, &mut out, PARALLEL_LEVELS as usize);
-        return (out, need);
+/// [`flatten`] of obvhs inner node `root`: the whole collapsed tree and its stack need. The top `levels`
+/// levels are written first; the subtrees below them are jobs flattened in parallel, each straight into its
+/// range of the output, which is allocated once at its final length (each job's nodes counted first). So
+/// every node is written once, and no second copy of the tree is held: flattened into vectors of their own
+/// and appended level by level, the nodes were copied once per level into fresh memory, and each fresh
+/// page's first touch is costly under a hypervisor (docs/perf-log/2026-11-zen3.md, "balls6's load and
+/// build").
+pub(super) fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], root: usize, levels: u32) -> (Vec<T>, usize) {
+    let mut jobs = Vec::new();
+    let tops = find_jobs(src, root, levels, T::WIDTH, &mut jobs);
+    let level = PARALLEL_LEVELS as usize;
+    let sizes: Vec<usize> = jobs.par_iter().map(|&j| count(src, j, T::WIDTH, level)).collect();
+    let total = tops + sizes.iter().sum::<usize>();
+    let mut out: Vec<T> = Vec::with_capacity(total);
+    let slots = &mut out.spare_capacity_mut()[..total];
+    let mut tops = Tops { slots, at: 0, sizes: sizes.iter(), bases: Vec::with_capacity(jobs.len()) };
+    tops.write(src, root, levels);
+    let Tops { slots, at, bases, .. } = tops;
+    assert_eq!(at, total, "the top nodes and the jobs' nodes fill the output");
+    // The jobs' ranges, in increasing order, cut from the slots between the top nodes.
+    let (mut rest, mut cut, mut ranges) = (slots, 0, Vec::with_capacity(jobs.len()));
+    for ((&base, &size), &job) in bases.iter().zip(&sizes).zip(&jobs) {
+        let (_, tail) = std::mem::take(&mut rest).split_at_mut(base - cut);
+        let (mine, tail) = tail.split_at_mut(size);
+        (rest, cut) = (tail, base + size);
+        ranges.push((InPlace { slots: mine, base, len: 0 }, job));
     }
-    let (open, len) = open_children(src, i, T::WIDTH);
-    let subtrees: Vec<Option<(Vec<T>, usize)>> = open[..len]
-        .par_iter()
-        .map(|&j| (src[j].prim_count == 0).then(|| flatten_parallel(src, j, levels - 1)))
+    let needs: Vec<usize> = ranges
+        .into_par_iter()
+        .map(|(mut range, job)| {
+            let (_, need) = flatten(src, job, &mut range, level);
+            assert_eq!(range.len, range.slots.len(), "a job writes the nodes it was counted");
+            need
+        })
         .collect();
-    out.reserve_exact(1 + subtrees.iter().flatten().map(|(nodes, _)| nodes.len()).sum::<usize>());
-    out.push(T::new(&[]));
-    let (mut children, mut below) = ([EMPTY; MAX_WIDTH], 0);
-    for (k, subtree) in subtrees.into_iter().enumerate() {
-        children[k] = match subtree {
-            None => child_ref(src, open[k], &mut out, 0).0,
-            Some((nodes, need)) => {
-                below = below.max(need);
-                let base = out.len() as u32;
-                out.extend(nodes.into_iter().map(|node| node.shifted(base)));
-                let aabb = &src[open[k]].aabb;
-                ChildRef { lo: aabb.min.to_array(), hi: aabb.max.to_array(), child: base, count: 0 }
-            }
-        };
+    // SAFETY: every one of the first `total` slots was written: the top nodes at the places `Tops::write`
+    // gave them, each job's nodes over its whole range (asserted), and the places and ranges together are
+    // the `total` slots (asserted), each handed out once.
+    unsafe { out.set_len(total) };
+    (out, need(src, root, levels, T::WIDTH, &mut needs.iter()))
+}
+
+/// Lists in depth-first order the inner nodes `levels` levels below obvhs inner node `i` (or `i` itself at
+/// 0) that the collapse's top nodes refer to; returns the number of top nodes above them.
+fn find_jobs(src: &[Bvh2Node], i: usize, levels: u32, width: usize, jobs: &mut Vec<usize>) -> usize {
+    if levels == 0 {
+        jobs.push(i);
+        return 0;
     }
-    out[0] = T::new(&children[..len]);
-    (out, stack_need(len, below))
+    let (open, len) = open_children(src, i, width);
+    let inner = open[..len].iter().filter(|&&j| src[j].prim_count == 0);
+    1 + inner.map(|&j| find_jobs(src, j, levels - 1, width, jobs)).sum::<usize>()
+}
+
+/// The stack need of the tree from obvhs inner node `i`, `levels` levels above the jobs, given the jobs'
+/// needs in depth-first order: [`stack_need`] as [`flatten`] combines it.
+fn need(src: &[Bvh2Node], i: usize, levels: u32, width: usize, jobs: &mut std::slice::Iter<usize>) -> usize {
+    if levels == 0 {
+        return *jobs.next().expect("a need for every job");
+    }
+    let (open, len) = open_children(src, i, width);
+    let inner = open[..len].iter().filter(|&&j| src[j].prim_count == 0);
+    stack_need(len, inner.map(|&j| need(src, j, levels - 1, width, jobs)).max().unwrap_or(0))
+}
+
+/// The nodes [`flatten`] writes for obvhs inner node `i` at `level` of the collapsed tree.
+fn count(src: &[Bvh2Node], i: usize, width: usize, level: usize) -> usize {
+    if level > MAX_COLLAPSE_LEVELS {
+        return 0;
+    }
+    let (open, len) = open_children(src, i, width);
+    let inner = open[..len].iter().filter(|&&j| src[j].prim_count == 0);
+    1 + inner.map(|&j| count(src, j, width, level + 1)).sum::<usize>()
+}
+
+/// Where the collapse writes nodes: a vector, or a job's range of the output.
+pub(super) trait Sink<T> {
+    /// The place the next node goes: its index in the whole tree.
+    fn next(&self) -> usize;
+    /// Writes `node` at [`Sink::next`].
+    fn push(&mut self, node: T);
+    /// Writes `node` over the one at `place`, written before.
+    fn set(&mut self, place: usize, node: T);
+}
+
+impl<T> Sink<T> for Vec<T> {
+    fn next(&self) -> usize {
+        self.len()
+    }
+    fn push(&mut self, node: T) {
+        Vec::push(self, node);
+    }
+    fn set(&mut self, place: usize, node: T) {
+        self[place] = node;
+    }
+}
+
+/// A job's range of the output: the slots from place `base` on, `len` of them written.
+struct InPlace<'a, T> {
+    slots: &'a mut [std::mem::MaybeUninit<T>],
+    base: usize,
+    len: usize,
+}
+
+impl<T> Sink<T> for InPlace<'_, T> {
+    fn next(&self) -> usize {
+        self.base + self.len
+    }
+    fn push(&mut self, node: T) {
+        self.slots[self.len].write(node);
+        self.len += 1;
+    }
+    fn set(&mut self, place: usize, node: T) {
+        assert!(place - self.base < self.len, "a node is set after it was pushed");
+        self.slots[place - self.base].write(node);
+    }
+}
+
+/// The output's top levels being written: its slots, the next free place, the jobs' node counts in
+/// depth-first order, and the place each job was given.
+struct Tops<'a, 'b, T> {
+    slots: &'a mut [std::mem::MaybeUninit<T>],
+    at: usize,
+    sizes: std::slice::Iter<'b, usize>,
+    bases: Vec<usize>,
+}
+
+impl<T: RayNode> Tops<'_, '_, T> {
+    /// Writes the top node for obvhs inner node `i` at the next place, `levels` levels above the jobs, and
+    /// the top nodes below it, giving each job its place in depth-first order: the serial layout. Returns
+    /// the node's place.
+    fn write(&mut self, src: &[Bvh2Node], i: usize, levels: u32) -> u32 {
+        let me = self.at;
+        if levels == 0 {
+            self.bases.push(me);
+            self.at += self.sizes.next().expect("a size for every job");
+            return me as u32;
+        }
+        let (open, len) = open_children(src, i, T::WIDTH);
+        self.at += 1;
+        let mut children = [EMPTY; MAX_WIDTH];
+        for (slot, &j) in children.iter_mut().zip(&open[..len]) {
+            *slot = match src[j].prim_count {
+                0 => {
+                    let n = &src[j];
+                    let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
+                    ChildRef { lo, hi, child: self.write(src, j, levels - 1), count: 0 }
+                }
+                _ => child_ref::<T>(src, j, &mut Vec::new(), 0).0,
+            };
+        }
+        self.slots[me].write(T::new(&children[..len]));
+        me as u32
+    }
 }
 
 /// The reference to obvhs node `i` from its parent, whose node is at `level` of the collapsed tree: a leaf as
@@ -78,7 +200,7 @@ pub(super) fn flatten_parallel<T: RayNode>(src: &[Bvh2Node], i: usize, levels: u
 pub(super) fn child_ref<T: RayNode>(
     src: &[Bvh2Node],
     i: usize,
-    out: &mut Vec<T>,
+    out: &mut impl Sink<T>,
     level: usize,
 ) -> (ChildRef, usize) {
     let n = &src[i];
@@ -118,14 +240,14 @@ pub(super) fn open_children(src: &[Bvh2Node], i: usize, width: usize) -> ([usize
 pub(super) fn flatten<T: RayNode>(
     src: &[Bvh2Node],
     i: usize,
-    out: &mut Vec<T>,
+    out: &mut impl Sink<T>,
     level: usize,
 ) -> (u32, usize) {
     if level > MAX_COLLAPSE_LEVELS {
         return (0, usize::MAX);
     }
     let (open, len) = open_children(src, i, T::WIDTH);
-    let me = out.len();
+    let me = out.next();
     out.push(T::new(&[]));
     let (mut children, mut below) = ([EMPTY; MAX_WIDTH], 0);
     for k in 0..len {
@@ -133,7 +255,7 @@ pub(super) fn flatten<T: RayNode>(
         (children[k], need) = child_ref(src, open[k], out, level);
         below = below.max(need);
     }
-    out[me] = T::new(&children[..len]);
+    out.set(me, T::new(&children[..len]));
     (me as u32, stack_need(len, below))
 }
 

@@ -56,16 +56,6 @@ pub(super) fn slots<const W: usize>(children: &[ChildRef]) -> Slots<W> {
     (bounds, std::array::from_fn(|i| c(i).child), std::array::from_fn(|i| c(i).count))
 }
 
-/// Moves the inner children's node indices (count 0) of the first `slots` up by `base`: a subtree flattened
-/// on its own, placed at `base` in the whole array.
-pub(super) fn shift_inner(child: &mut [u32], count: &[u8], slots: u8, base: u32) {
-    for c in 0..usize::from(slots) {
-        if count[c] == 0 {
-            child[c] += base;
-        }
-    }
-}
-
 /// Bit c set where `count[c]` is not 0: the leaf slots (empty slots have count 0 and are never entered).
 /// Kept in each node: the single-ray occlusion walk asks for it at every visit, and computing it there
 /// showed in balls4's instruction counts (docs/perf-log/2026-11.md, "Leaf bits kept in the
@@ -117,10 +107,6 @@ macro_rules! slot_access {
         fn leaves(&self) -> u32 {
             u32::from(self.leaves)
         }
-        fn shifted(mut self, base: u32) -> Self {
-            shift_inner(&mut self.child, &self.count, self.slots, base);
-            self
-        }
     };
 }
 pub(super) use slot_access;
@@ -140,8 +126,6 @@ pub(super) trait RayNode: Copy + Send + Sync {
     fn child(&self, c: usize) -> (u32, u8);
     /// Bit c set for each leaf child.
     fn leaves(&self) -> u32;
-    /// The node with its inner children's indices moved up by `base`.
-    fn shifted(self, base: u32) -> Self;
 }
 
 impl RayNode for Node {

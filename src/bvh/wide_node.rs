@@ -5,7 +5,7 @@
 
 use wide::f32x8;
 
-use super::node::{leaf_bits, shift_inner, slot_access, slots, ChildRef, RayNode};
+use super::node::{leaf_bits, slot_access, slots, ChildRef, RayNode};
 
 /// Children per node of the single-ray tree (its N).
 pub(crate) const WIDE_N: usize = 8;
