@@ -34,9 +34,9 @@ pub(super) fn stack_need(slots: usize, below: usize) -> usize {
     slots.saturating_sub(1).saturating_add(below.max(1))
 }
 
-/// Levels of 4-wide nodes whose subtrees are flattened as parallel jobs (up to 4 + 16 + 64 of them). Done on
-/// one thread, the collapse was a serial part of a 1e6 build on 2 threads (docs/perf-log/2026-11.md,
-/// "Kept": the collapse runs in parallel).
+/// Levels of collapsed nodes above the subtrees flattened as parallel jobs (at most 4³ = 64 jobs for 4-wide
+/// nodes, 8³ for 8-wide). Done on one thread, the collapse was a serial part of a 1e6 build on 2 threads
+/// (docs/perf-log/2026-11.md, "Kept": the collapse runs in parallel).
 pub(super) const PARALLEL_LEVELS: u32 = 3;
 
 /// [`flatten`] of obvhs inner node `root`: the whole collapsed tree and its stack need. The top `levels`
@@ -88,9 +88,7 @@ fn find_jobs(src: &[Bvh2Node], i: usize, levels: u32, width: usize, jobs: &mut V
         jobs.push(i);
         return 0;
     }
-    let (open, len) = open_children(src, i, width);
-    let inner = open[..len].iter().filter(|&&j| src[j].prim_count == 0);
-    1 + inner.map(|&j| find_jobs(src, j, levels - 1, width, jobs)).sum::<usize>()
+    1 + inner_children(src, i, width).1.map(|j| find_jobs(src, j, levels - 1, width, jobs)).sum::<usize>()
 }
 
 /// The stack need of the tree from obvhs inner node `i`, `levels` levels above the jobs, given the jobs'
@@ -99,9 +97,8 @@ fn need(src: &[Bvh2Node], i: usize, levels: u32, width: usize, jobs: &mut std::s
     if levels == 0 {
         return *jobs.next().expect("a need for every job");
     }
-    let (open, len) = open_children(src, i, width);
-    let inner = open[..len].iter().filter(|&&j| src[j].prim_count == 0);
-    stack_need(len, inner.map(|&j| need(src, j, levels - 1, width, jobs)).max().unwrap_or(0))
+    let (len, inner) = inner_children(src, i, width);
+    stack_need(len, inner.map(|j| need(src, j, levels - 1, width, jobs)).max().unwrap_or(0))
 }
 
 /// The nodes [`flatten`] writes for obvhs inner node `i` at `level` of the collapsed tree.
@@ -109,9 +106,13 @@ fn count(src: &[Bvh2Node], i: usize, width: usize, level: usize) -> usize {
     if level > MAX_COLLAPSE_LEVELS {
         return 0;
     }
+    1 + inner_children(src, i, width).1.map(|j| count(src, j, width, level + 1)).sum::<usize>()
+}
+
+/// The number of children of the node for obvhs inner node `i` ([`open_children`]) and its inner ones.
+fn inner_children(src: &[Bvh2Node], i: usize, width: usize) -> (usize, impl Iterator<Item = usize> + '_) {
     let (open, len) = open_children(src, i, width);
-    let inner = open[..len].iter().filter(|&&j| src[j].prim_count == 0);
-    1 + inner.map(|&j| count(src, j, width, level + 1)).sum::<usize>()
+    (len, open.into_iter().take(len).filter(|&j| src[j].prim_count == 0))
 }
 
 /// Where the collapse writes nodes: a vector, or a job's range of the output.
@@ -182,12 +183,8 @@ impl<T: RayNode> Tops<'_, '_, T> {
         let mut children = [EMPTY; MAX_WIDTH];
         for (slot, &j) in children.iter_mut().zip(&open[..len]) {
             *slot = match src[j].prim_count {
-                0 => {
-                    let n = &src[j];
-                    let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
-                    ChildRef { lo, hi, child: self.write(src, j, levels - 1), count: 0 }
-                }
-                _ => child_ref::<T>(src, j, &mut Vec::new(), 0).0,
+                0 => reference(&src[j], self.write(src, j, levels - 1), 0),
+                _ => leaf_ref(&src[j]),
             };
         }
         self.slots[me].write(T::new(&children[..len]));
@@ -204,13 +201,21 @@ pub(super) fn child_ref<T: RayNode>(
     level: usize,
 ) -> (ChildRef, usize) {
     let n = &src[i];
-    let (lo, hi) = (n.aabb.min.to_array(), n.aabb.max.to_array());
     if n.prim_count > 0 {
-        let count = u8::try_from(n.prim_count).expect("obvhs leaf of more than 255 spheres");
-        return (ChildRef { lo, hi, child: n.first_index, count }, 0);
+        return (leaf_ref(n), 0);
     }
     let (child, need) = flatten(src, i, out, level + 1);
-    (ChildRef { lo, hi, child, count: 0 }, need)
+    (reference(n, child, 0), need)
+}
+
+/// The reference to obvhs leaf `n`: its items as they are.
+fn leaf_ref(n: &Bvh2Node) -> ChildRef {
+    reference(n, n.first_index, u8::try_from(n.prim_count).expect("obvhs leaf of more than 255 spheres"))
+}
+
+/// The reference to obvhs node `n` with its box, as node `child` (inner) or `count` items from `child`.
+fn reference(n: &Bvh2Node, child: u32, count: u8) -> ChildRef {
+    ChildRef { lo: n.aabb.min.to_array(), hi: n.aabb.max.to_array(), child, count }
 }
 
 /// The widest node: the bound of [`RayNode::WIDTH`].
