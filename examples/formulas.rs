@@ -183,7 +183,7 @@ fn main() -> anyhow::Result<()> {
         let s = &scene.geometry.spheres;
         assert!(s.key.iter().enumerate().all(|(i, &k)| k as usize == i), "storage order is not file order");
         let mut name = Path::new(path).file_name().unwrap().to_string_lossy().into_owned();
-        let ignored = desc.kinds.len() + desc.polygons.len();
+        let ignored = desc.kinds.len();
         if ignored > 0 {
             name += &format!(" ({ignored} non-sphere primitive(s) ignored)");
         }

@@ -344,7 +344,7 @@ fn stats_report_scene_rays_and_times() {
     // One build time.
     assert_eq!(text.matches("build").count(), 1, "{text}");
     for needle in [
-        "3 primitives (2 spheres, 0 polygons, 1 plane), 2 lights",
+        "3 primitives (2 spheres, 1 plane), 2 lights",
         "1 sample per pixel (1×1 grid), whitted shading, srgb transfer",
         "skips: bvh, polygons, ellipsoids, cones, tori",
         "brute force",

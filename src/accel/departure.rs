@@ -47,8 +47,8 @@ impl Geometry {
     }
 
     /// For a ray that leaves a solid primitive toward its inside: where it leaves the primitive again.
-    /// Polygons have no inside, so nothing. For a registered kind: its [`crate::kinds::Kind::rehit`] (an
-    /// ellipsoid's exit; for a kind that meets again, whichever side the shading took the ray to be on: an
+    /// For a registered kind: its [`crate::kinds::Kind::rehit`] (an ellipsoid's exit; a polygon's:
+    /// nothing, it has no inside; for a kind that meets again, whichever side the shading took the ray to be on: an
     /// open cone is seen from inside through its ends, so the side a ray heads to is decided by the
     /// kernel; a plane's: nothing).
     fn exit_of_departure(&self, ray: &Ray<f32>, prim: u32, t_max: f32) -> Option<f32> {
@@ -59,7 +59,6 @@ impl Geometry {
                 sphere_roots(centre, r, ray)
             }
             PrimRef::Kind(k) => return self.kinds.rehit(k, ray, t_max),
-            PrimRef::Polygon(_) => return None,
         };
         let (hit, t) = far_root(&roots, t_max);
         hit.then_some(t)

@@ -2,8 +2,8 @@
 //! `occluded` (any hit), for packets of K rays (`_k`) and for single rays (the K = 1 instance).
 //!
 //! Each bounded kind has its own BVH (`crate::bvh`, one tree type monomorphised over the kind's
-//! `crate::bvh::LeafQuery`): spheres (`SphereQuery`), polygons' triangles (`TriangleQuery`) and each
-//! registered kind ([`crate::kinds`]: ellipsoids, open cones, tori); a kind with few items is tested brute
+//! `crate::bvh::LeafQuery`): spheres (`SphereQuery`) and each registered kind ([`crate::kinds`]: polygons'
+//! triangles, ellipsoids, open cones, tori); a kind with few items is tested brute
 //! force by the same query, and so is an unbounded kind (planes). One kind per tree keeps each leaf loop
 //! free of a per-item dispatch and leaves the sphere walk exactly as it is without other kinds.
 
@@ -13,7 +13,6 @@ mod light_buffer;
 mod near_first;
 pub(crate) mod pkd;
 mod sphere_query;
-mod triangle_query;
 pub(crate) use crate::bvh::item_query::{ItemQuery, ItemTest};
 pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
 pub(crate) use crate::bvh::work::{
@@ -24,19 +23,18 @@ pub(crate) use light_buffer::LightBuffer;
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;
 pub(crate) use sphere_query::SphereQuery;
-pub(crate) use triangle_query::{TriangleQuery, Triangles};
 
 use crate::bvh::{Bvh, LeafQuery};
 use crate::kinds::{Kind, KindItems, KindStores, VisitItems};
 
 use crate::geometry::{
-    Departure, DeparturePacket, Hit, HitPacket, Polygons, Pyramid, Ray, RayPacket, Spheres, NO_PRIM,
+    Departure, DeparturePacket, Hit, HitPacket, Pyramid, Ray, RayPacket, Spheres, NO_PRIM,
 };
 use crate::math::{Mask, Vec3f};
 use crate::simd::{IdLanes, Lanes};
 
 /// All primitives: spheres have ids `0..spheres.len()`, then the spheres of the particle tree (a scene has
-/// one or the other), then the polygons, then the registered kinds' items ([`crate::kinds`]: ellipsoids,
+/// one or the other), then the registered kinds' primitives ([`crate::kinds`]: polygons, ellipsoids,
 /// planes, cones, tori) kind by kind.
 #[derive(Clone, Debug, Default)]
 pub struct Geometry {
@@ -46,15 +44,8 @@ pub struct Geometry {
     pub(crate) sphere_bvh: Option<Bvh>,
     /// Spheres in a particle tree (`--accel pkd`, for fields too large for a BVH) instead of `spheres`.
     pub(crate) particles: Particles,
-    /// Planar polygons; their triangles in BVH leaf order when there is a BVH.
-    pub(crate) polygons: Polygons,
-    /// The BVH over the polygons' triangles, or `None` for brute force.
-    pub(crate) polygon_bvh: Option<Bvh>,
-    /// The registered kinds' items and trees ([`crate::kinds`]), ids after the polygons.
+    /// The registered kinds' items and trees ([`crate::kinds`]), ids after the spheres.
     pub(crate) kinds: KindStores,
-    /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
-    /// coordinates.
-    pub(crate) origin: Vec3f,
     /// Per point light (in the scene's order), the spheres each direction from it may meet, for its
     /// shadow rays ([`LightBuffer`]); empty where shading casts no shadow rays or the spheres have no tree,
     /// `None` for a light its buffer would not serve well.
@@ -110,9 +101,7 @@ pub(crate) enum PrimRef {
     Sphere(usize),
     /// Position in [`Geometry::particles`].
     Particle(usize),
-    /// Index into [`Geometry::polygons`].
-    Polygon(usize),
-    /// Index over the registered kinds' items in id order ([`Geometry::kinds`]).
+    /// Index over the registered kinds' primitives in id order ([`Geometry::kinds`]).
     Kind(usize),
 }
 
@@ -217,7 +206,7 @@ impl Geometry {
 
     /// Whether the scene has primitives other than spheres and particles.
     fn has_other_kinds(&self) -> bool {
-        !(self.polygons.is_empty() && self.kinds.is_empty())
+        self.kinds.has_items()
     }
 
     /// The closest hits of every kind but spheres (and particles unless `particles`), merged into `best`.
@@ -231,11 +220,7 @@ impl Geometry {
         if particles {
             self.particles.intersect_k(rays, from, self.spheres.len() as u32, best);
         }
-        if !self.polygons.is_empty() {
-            let q = self.triangle_query(rays, from);
-            intersect_items(self.polygon_bvh.as_ref(), &q, self.polygons.triangles(), rays.active, best);
-        }
-        if !self.kinds.is_empty() {
+        if self.kinds.has_items() {
             let base = self.kinds_base() as u32;
             self.kinds.visit(&mut IntersectKinds { rays, from, best, base });
         }
@@ -318,17 +303,7 @@ impl Geometry {
                 return blocked;
             }
         }
-        if !self.polygons.is_empty() {
-            let q = self.triangle_query(rays, from);
-            let mut triangle = 0;
-            let n = self.polygons.triangles();
-            blocked =
-                blocked | occluded_items(self.polygon_bvh.as_ref(), &q, n, live & !blocked, &mut triangle);
-            if (blocked | !live).all() {
-                return blocked;
-            }
-        }
-        if !self.kinds.is_empty() && !(blocked | !live).all() {
+        if self.kinds.has_items() && !(blocked | !live).all() {
             let base = self.kinds_base() as u32;
             let mut visit = OccludedKinds { rays, from, live, blocked, base };
             self.kinds.visit(&mut visit);
@@ -356,26 +331,14 @@ impl Geometry {
         ItemQuery { items, ray: rays.ray(), t_max: rays.t_max, skip: from.prim, pyramid: rays.pyramid }
     }
 
-    /// The triangle part of a packet query.
-    #[inline(always)]
-    fn triangle_query<'a, F: Lanes>(
-        &'a self,
-        rays: &'a RayPacket<F>,
-        from: &DeparturePacket<F>,
-    ) -> TriangleQuery<'a, F> {
-        let plane_cull = self.polygon_bvh.is_none();
-        let triangles = Triangles { polygons: &self.polygons, base: self.polygon_base() as u32, plane_cull };
-        Self::item_query(triangles, rays, from)
-    }
-
     /// The BVHs the scene has.
     pub(crate) fn bvhs(&self) -> impl Iterator<Item = &Bvh> {
-        [&self.sphere_bvh, &self.polygon_bvh].into_iter().flatten().chain(self.kinds.bvhs())
+        self.sphere_bvh.iter().chain(self.kinds.bvhs())
     }
 
     /// The BVHs the scene has, to change their walk settings.
     pub(crate) fn bvhs_mut(&mut self) -> impl Iterator<Item = &mut Bvh> {
-        [&mut self.sphere_bvh, &mut self.polygon_bvh].into_iter().flatten().chain(self.kinds.bvhs_mut())
+        self.sphere_bvh.iter_mut().chain(self.kinds.bvhs_mut())
     }
 
     /// Sets whether single rays (K = 1: [`Geometry::intersect`], the any-hit queries and the `_k` queries
@@ -462,7 +425,7 @@ impl Geometry {
         let (i, spheres) = (prim as usize, self.spheres.len());
         match self.spheres.key.get(i) {
             Some(&id) => id,
-            None if (spheres..self.polygon_base()).contains(&i) => {
+            None if (spheres..self.kinds_base()).contains(&i) => {
                 (spheres + self.particles.key(i - spheres) as usize) as u32
             }
             None => prim,
@@ -478,15 +441,10 @@ impl Geometry {
         self.len() == 0
     }
 
-    /// The id of the first polygon (polygon k has id `polygon_base() + k`).
-    pub(crate) fn polygon_base(&self) -> usize {
-        self.spheres.len() + self.particles.len()
-    }
-
-    /// The id of the registered kinds' first item (their items are numbered on from it in the registry's
-    /// order).
+    /// The id of the registered kinds' first primitive (their primitives are numbered on from it in the
+    /// registry's order).
     pub(crate) fn kinds_base(&self) -> usize {
-        self.polygon_base() + self.polygons.len()
+        self.spheres.len() + self.particles.len()
     }
 
     /// What primitive id `prim` (< `len()`) refers to.
@@ -494,10 +452,8 @@ impl Geometry {
         let i = prim as usize;
         if i < self.spheres.len() {
             PrimRef::Sphere(i)
-        } else if i < self.polygon_base() {
-            PrimRef::Particle(i - self.spheres.len())
         } else if i < self.kinds_base() {
-            PrimRef::Polygon(i - self.polygon_base())
+            PrimRef::Particle(i - self.spheres.len())
         } else {
             PrimRef::Kind(i - self.kinds_base())
         }
@@ -517,7 +473,6 @@ impl Geometry {
             PrimRef::Sphere(i) => self.spheres.c_eye[i],
             PrimRef::Particle(i) => self.particles.c_eye(i),
             PrimRef::Kind(k) => self.kinds.eye_term(k)?,
-            PrimRef::Polygon(_) => return None,
         };
         crate::geometry::eye_side(f64::from(c_eye))
     }
@@ -538,15 +493,6 @@ impl Geometry {
                 let normal = object_point.normalize();
                 SurfacePoint { point, normal, object_point, material: self.particles.material(i) }
             }
-            PrimRef::Polygon(k) => {
-                let p = &self.polygons;
-                SurfacePoint {
-                    point,
-                    normal: p.shading_normal(k, point),
-                    object_point: point + self.origin,
-                    material: p.material[k],
-                }
-            }
             PrimRef::Kind(k) => {
                 let (normal, object_point, material) =
                     self.kinds.surface(k, ray, t, point).expect("an id below len() is an item");
@@ -561,18 +507,18 @@ struct IntersectKinds<'a, F: Lanes> {
     rays: &'a RayPacket<F>,
     from: &'a DeparturePacket<F>,
     best: &'a mut HitPacket<F>,
-    /// The id of the next kind's first item.
+    /// The id of the kinds' first primitive.
     base: u32,
 }
 
 impl<F: Lanes> VisitItems for IntersectKinds<'_, F> {
     #[inline(always)]
-    fn visit<K: Kind>(&mut self, items: &KindItems<K>) {
-        let n = items.len();
-        if n > 0 {
-            intersect_kind(items, self.base, self.rays, self.from, self.best);
+    fn visit<K: Kind>(&mut self, items: &KindItems<K>, first: u32) {
+        let base = self.base + first;
+        match K::INLINE_QUERIES {
+            true => intersect_kind_here(items, base, self.rays, self.from, self.best),
+            false => intersect_kind(items, base, self.rays, self.from, self.best),
         }
-        self.base += n as u32;
     }
 }
 
@@ -596,6 +542,20 @@ fn intersect_kind<F: Lanes, K: Kind>(
     }
 }
 
+/// [`intersect_kind`] inlined where it is asked, for a kind whose queries are small
+/// ([`Kind::INLINE_QUERIES`]).
+#[inline(always)]
+fn intersect_kind_here<F: Lanes, K: Kind>(
+    items: &KindItems<K>,
+    base: u32,
+    rays: &RayPacket<F>,
+    from: &DeparturePacket<F>,
+    best: &mut HitPacket<F>,
+) {
+    let q = Geometry::item_query(items.items(base), rays, from);
+    intersect_items(items.bvh.as_ref(), &q, items.len(), rays.active, best);
+}
+
 /// [`intersect_kind`]'s tree walk.
 #[inline(never)]
 fn intersect_tree<F: Lanes, Q: LeafQuery<F>>(bvh: &Bvh, q: &Q, live: F::Mask, best: &mut HitPacket<F>) {
@@ -608,19 +568,21 @@ struct OccludedKinds<'a, F: Lanes> {
     from: &'a DeparturePacket<F>,
     live: F::Mask,
     blocked: F::Mask,
-    /// The id of the next kind's first item.
+    /// The id of the kinds' first primitive.
     base: u32,
 }
 
 impl<F: Lanes> VisitItems for OccludedKinds<'_, F> {
     #[inline(always)]
-    fn visit<K: Kind>(&mut self, items: &KindItems<K>) {
-        let n = items.len();
-        let open = self.live & !self.blocked;
-        if n > 0 && open.any() {
-            self.blocked = self.blocked | occluded_kind(items, self.base, self.rays, self.from, open);
+    fn visit<K: Kind>(&mut self, items: &KindItems<K>, first: u32) {
+        let (open, base) = (self.live & !self.blocked, self.base + first);
+        if open.any() {
+            let blocked = match K::INLINE_QUERIES {
+                true => occluded_kind_here(items, base, self.rays, self.from, open),
+                false => occluded_kind(items, base, self.rays, self.from, open),
+            };
+            self.blocked = self.blocked | blocked;
         }
-        self.base += n as u32;
     }
 }
 
@@ -640,6 +602,20 @@ fn occluded_kind<F: Lanes, K: Kind>(
         Some(bvh) => occluded_tree(bvh, &q(), open),
         None => occluded_items(None, &q(), items.len(), open, &mut item),
     }
+}
+
+/// [`occluded_kind`] inlined where it is asked, for a kind whose queries are small
+/// ([`Kind::INLINE_QUERIES`]).
+#[inline(always)]
+fn occluded_kind_here<F: Lanes, K: Kind>(
+    items: &KindItems<K>,
+    base: u32,
+    rays: &RayPacket<F>,
+    from: &DeparturePacket<F>,
+    open: F::Mask,
+) -> F::Mask {
+    let (q, mut item) = (Geometry::item_query(items.items(base), rays, from), 0);
+    occluded_items(items.bvh.as_ref(), &q, items.len(), open, &mut item)
 }
 
 /// [`occluded_kind`]'s tree walk.

@@ -121,7 +121,7 @@ fn print_stats(out: &mut dyn std::io::Write, scene: &Scene, job: &Job, r: &Trace
 /// while some material has a diffuse or specular term (which only lights light).
 pub(super) fn scene_warnings(desc: &SceneDesc) -> Vec<&'static str> {
     let mut warnings = Vec::new();
-    if desc.spheres.is_empty() && desc.polygons.is_empty() && desc.kinds.is_empty() {
+    if desc.spheres.is_empty() && desc.kinds.is_empty() {
         warnings.push("no objects");
     }
     if desc.lights.is_empty() && desc.materials.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0) {

@@ -10,10 +10,8 @@ use crate::scene::desc::{Material, Pattern, PostFilter, Shade};
 pub(crate) struct Counts {
     /// Plain spheres.
     pub(crate) spheres: usize,
-    /// Polygons.
-    pub(crate) polygons: usize,
-    /// The registered kinds' items ([`crate::kinds`]: ellipsoids, planes, open cones, tori), in the
-    /// registry's order.
+    /// The registered kinds' primitives ([`crate::kinds`]: polygons, ellipsoids, planes, open cones, tori),
+    /// in the registry's order.
     pub(crate) kinds: [usize; crate::kinds::COUNT],
 }
 
@@ -44,11 +42,7 @@ impl Features {
         let ao = matches!(scene.render.shade, Shade::Ao(_));
         let deep = scene.render.max_depth > 0 && !ao;
         Features {
-            counts: Counts {
-                spheres: g.spheres.len() + g.particles.len(),
-                polygons: g.polygons.len(),
-                kinds: g.kinds.counts(),
-            },
+            counts: Counts { spheres: g.spheres.len() + g.particles.len(), kinds: g.kinds.counts() },
             bvh: g.bvhs().next().is_some(),
             direct: !ao && lights_shade(!scene.lights.is_empty(), m),
             reflection: !ao && bounces(scene.render.max_depth, m),
@@ -64,14 +58,13 @@ impl Features {
         let mut list = vec![
             ("spheres", self.counts.spheres > 0),
             ("bvh", self.bvh),
-            ("polygons", self.counts.polygons > 0),
             ("direct light + shadow rays", self.direct),
             ("reflection", self.reflection),
             ("refraction", self.refraction),
             ("antialiasing", self.antialiasing),
             ("ambient occlusion rays", self.ao),
         ];
-        list.splice(3..3, kinds);
+        list.splice(2..2, kinds);
         list
     }
 }

@@ -70,12 +70,10 @@ impl RenderingFrame {
 pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
     let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
     let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
-    let vertices = desc.polygons.iter().flat_map(|p| p.vertices.iter().copied());
     let kinds = desc.kinds.world_boxes().into_iter().flatten();
     let (lo, hi) = spheres
         .chain(kinds)
         .chain(extra.into_iter().flatten())
-        .chain(vertices)
         .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
     lo.cmple(hi).all().then_some((lo, hi))
 }

@@ -18,8 +18,6 @@ pub mod memory;
 use crate::accel::{Geometry, LightBuffer, Particles};
 use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
-use crate::geometry::polygon::{newell_normal, triangulate};
-use crate::geometry::Polygons;
 use crate::io::f32r::MappedRecords;
 use crate::math::{Rgb, Vec3f, V3};
 use glam::Vec3A;
@@ -27,7 +25,7 @@ use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use crate::scene::desc::{Ao, Falloff, Material, PolygonDesc, RenderDesc, SceneDesc, Shade};
+use crate::scene::desc::{Ao, Falloff, Material, RenderDesc, SceneDesc, Shade};
 pub(crate) use frame::RenderingFrame;
 
 /// A point light ready for shading.
@@ -171,9 +169,8 @@ fn reach(
     };
     let starts = [(0.0, 0.0), (w, 0.0), (0.0, h), (w, h)].map(corner);
     let lights = desc.lights.iter().map(|l| mag(l.position)).chain(starts);
-    let vertices = desc.polygons.iter().flat_map(|p| &p.vertices).map(|v| mag(*v));
     let kinds = desc.kinds.world_boxes().into_iter().flatten().map(mag);
-    spheres.chain(lights).chain(vertices).chain(kinds).fold(0.0, f64::max) as f32
+    spheres.chain(lights).chain(kinds).fold(0.0, f64::max) as f32
 }
 
 impl Scene {
@@ -272,7 +269,7 @@ impl Scene {
         let mut camera_f64 = Camera::new(&desc.camera)?;
         camera_f64.eye = V3::from(desc.camera.eye - origin);
         camera_f64.start = frame.start;
-        let mut geometry = Geometry { origin: V3::from(origin).to_f32(), ..Geometry::default() };
+        let mut geometry = Geometry::default();
         let pad = bvh::padding(reach(desc, extra, origin, &camera_f64));
         let mut build = BuildStats::default();
         // Per-sphere colours go with the spheres, whichever structure holds them; a list of another length
@@ -297,17 +294,10 @@ impl Scene {
             }
             geometry.spheres.color = colors;
         }
-        for p in &desc.polygons {
-            push_polygon(&mut geometry.polygons, p, origin);
-        }
         // obvhs cannot order boxes with infinite or NaN corners; readers reject such input, and a scene built
         // by hand with them falls back to brute force rather than failing.
         let sp = &geometry.spheres;
         let finite = [&sp.cx, &sp.cy, &sp.cz, &sp.r].iter().all(|v| v.iter().all(|x| x.is_finite()));
-        let pg = &geometry.polygons;
-        let finite_polygons = [&pg.v0, &pg.e1, &pg.e2]
-            .iter()
-            .all(|v| v.iter().all(|p| [p.x, p.y, p.z].iter().all(|x| x.is_finite())));
         geometry.kinds = desc.kinds.compile(origin);
         let wants = |items: usize| wants_tree(accel, items);
         let mut materials = desc.materials.clone();
@@ -317,7 +307,6 @@ impl Scene {
         let job = BvhJob {
             accel,
             spheres: finite && wants(geometry.spheres.len()),
-            polygons: finite_polygons && wants(geometry.polygons.triangles()),
             shadows: light_buffers_pay(desc, &materials),
             options: BuildOptions {
                 pad,
@@ -379,16 +368,9 @@ impl Scene {
                 self.build += BuildStats { seconds: clock.elapsed().as_secs_f64(), node_bytes: bytes };
             }
         }
-        // Triangles, ellipsoids and the registered kinds' items cost more to test than a sphere: their trees split smaller ranges.
+        // The registered kinds' items (triangles, ellipsoids, …) cost more to test than a sphere: their trees
+        // split smaller ranges.
         let dearer = BuildOptions { builder: job.options.builder.for_dearer_items(), ..job.options };
-        if job.polygons {
-            let p = &g.polygons;
-            let item_box = |j: usize| padded(p.triangle_box(j), job.options.pad);
-            let (tree, polygons, stats) =
-                bvh::build(p.triangles(), item_box, dearer, |order| p.permuted(order));
-            (g.polygons, g.polygon_bvh) = (polygons, Some(tree));
-            self.build += stats;
-        }
         let build = &mut self.build;
         g.kinds.build_trees(
             |n| wants_tree(job.accel, n),
@@ -462,29 +444,10 @@ struct BvhJob {
     accel: Accel,
     /// Whether to build the spheres' BVH.
     spheres: bool,
-    /// Whether to build the polygons' triangle BVH.
-    polygons: bool,
     /// Padding, obvhs preset and single-ray tree, alike for both.
     options: BuildOptions,
     /// Whether the spheres' tree gets a light buffer per point light ([`light_buffers_pay`]).
     shadows: bool,
-}
-
-/// Triangulates one polygon into `out` (in f64, moved to rendering space by `−origin`, then rounded). A polygon
-/// the readers would have rejected (a `SceneDesc` built by hand) still gets its id, with a fan of possibly
-/// degenerate triangles, which the kernel can only miss or hit harmlessly: ids must not shift.
-fn push_polygon(out: &mut Polygons, p: &PolygonDesc, origin: glam::DVec3) {
-    let n = p.vertices.len() as u32;
-    let triangles =
-        triangulate(&p.vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect());
-    let vertices: Vec<Vec3f> = p.vertices.iter().map(|v| V3::from(*v - origin).to_f32()).collect();
-    let unit = |v: glam::DVec3| V3::from(v.normalize_or_zero()).to_f32();
-    let normals = p
-        .normals
-        .as_ref()
-        .filter(|ns| ns.len() == p.vertices.len())
-        .map(|ns| ns.iter().map(|v| unit(*v)).collect::<Vec<_>>());
-    out.push(&vertices, normals.as_deref(), &triangles, unit(newell_normal(&p.vertices)), p.material);
 }
 
 #[cfg(test)]

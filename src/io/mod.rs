@@ -134,7 +134,7 @@ fn viewed(mut desc: SceneDesc, options: &LoadOptions) -> SceneDesc {
 /// use std::path::Path;
 ///
 /// let desc = bareray::io::load(Path::new("scenes/balls3.nff"))?;
-/// println!("{} spheres, {} polygons", desc.spheres.len(), desc.polygons.len());
+/// println!("{} spheres, {} other primitives", desc.spheres.len(), desc.kinds.len());
 /// assert!(!desc.spheres.is_empty() && !desc.lights.is_empty());
 ///
 /// let err = bareray::io::load(Path::new("scenes/whitted.obj")).unwrap_err();

@@ -44,11 +44,11 @@ use std::path::Path;
 use glam::DVec3;
 
 use crate::camera::Camera;
-use crate::geometry::polygon::triangulate;
 use crate::math::Rgb;
 
 use super::error::SceneError;
 use crate::kinds::cone::ConeDesc;
+use crate::kinds::polygon::{triangulate, PolygonDesc};
 use crate::scene::desc::*;
 
 mod chunks;
@@ -333,7 +333,7 @@ impl<'a> Reader<'a> {
         triangulate(&vertices).map_err(|e| self.err(line, e.to_string()))?;
         let material = self.current_material();
         let normals = patch.then_some(normals);
-        self.desc.polygons.push(PolygonDesc { vertices, normals, material });
+        self.desc.kinds.polygons.push(PolygonDesc { vertices, normals, material });
         Ok(())
     }
 

@@ -35,8 +35,6 @@ macro_rules! file_with_kinds {
             lights: Vec<LightToml>,
             #[serde(default)]
             spheres: Vec<SphereToml>,
-            #[serde(default)]
-            polygons: Vec<PolygonToml>,
             $(
                 #[serde(default)]
                 $field: Vec<<$kind as Kind>::Toml>,
@@ -185,14 +183,6 @@ struct SphereToml {
     transform: Option<Vec<Spanned<TransformOp>>>,
 }
 
-#[derive(Deserialize)]
-#[serde(deny_unknown_fields)]
-struct PolygonToml {
-    vertices: Spanned<Vec<Vec3>>,
-    normals: Option<Spanned<Vec<Vec3>>>,
-    material: Option<Spanned<String>>,
-}
-
 /// Reads a TOML scene from a file.
 pub fn load(path: &Path) -> Result<SceneDesc, SceneError> {
     let source = super::error::read_text(path, "scene")?;
@@ -316,38 +306,8 @@ impl Reader<'_> {
                 }
             }
         }
-        for p in &file.polygons {
-            desc.polygons.push(self.polygon(p, material(p.material.as_ref())?)?);
-        }
         desc.kinds = kinds;
         Ok(desc)
-    }
-
-    /// A `[[polygons]]` entry: at least three finite vertices (within f32 range) that triangulate (NFF's
-    /// `p` rule), and as many normals as vertices if normals are given (NFF's `pp`).
-    fn polygon(&self, p: &PolygonToml, material: u32) -> Result<PolygonDesc, SceneError> {
-        let finite = |vs: &[Vec3]| vs.iter().flatten().all(|x| x.is_finite() && (*x as f32).is_finite());
-        let vs = p.vertices.get_ref();
-        if vs.len() < 3 || !finite(vs) {
-            return Err(self.err(
-                p.vertices.span(),
-                format!("vertices must be at least three finite points (within f32 range), got {vs:?}"),
-            ));
-        }
-        let vertices: Vec<DVec3> = vs.iter().map(|&v| DVec3::from(v)).collect();
-        crate::geometry::polygon::triangulate(&vertices)
-            .map_err(|e| self.err(p.vertices.span(), e.to_string()))?;
-        let normals = match &p.normals {
-            None => None,
-            Some(ns) if ns.get_ref().len() == vs.len() && finite(ns.get_ref()) => {
-                Some(ns.get_ref().iter().map(|&v| DVec3::from(v)).collect())
-            }
-            Some(ns) => {
-                return Err(self
-                    .err(ns.span(), format!("normals must be {} finite vectors, one per vertex", vs.len())))
-            }
-        };
-        Ok(PolygonDesc { vertices, normals, material })
     }
 
     fn camera(&self, cam: Option<Spanned<CameraToml>>) -> Result<CameraDesc, SceneError> {

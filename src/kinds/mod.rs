@@ -5,7 +5,7 @@
 //! (`KindStores`) and the twin (`KindTwins`) are written once over it.
 //!
 //! Adding a kind: a folder here with a type implementing `Kind`, and its name in `registry!`. Its
-//! primitive ids follow the built-in kinds' (spheres, polygons) in the list's order.
+//! primitive ids follow the spheres' (and the particle tree's) in the list's order.
 //!
 //! ```
 //! use bareray::kinds::{KindDescs, COUNT, NAMES};
@@ -32,6 +32,7 @@ pub(crate) mod ellipsoid;
 pub(crate) mod placed;
 pub(crate) mod placement;
 pub(crate) mod plane;
+pub(crate) mod polygon;
 pub(crate) mod torus;
 
 /// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in
@@ -40,6 +41,7 @@ pub(crate) mod torus;
 macro_rules! registry {
     ($then:ident) => {
         $then! {
+            polygons: $crate::kinds::polygon::Polygon,
             ellipsoids: $crate::kinds::ellipsoid::Ellipsoid,
             planes: $crate::kinds::plane::Plane,
             cones: $crate::kinds::cone::OpenCone,
@@ -76,8 +78,12 @@ impl Stray {
     }
 }
 
-/// What a primitive kind provides. Everything is per item `k` of the kind's store; ids, trees, the loops
-/// over items and the twin's bookkeeping are the registry's.
+/// What a primitive kind provides. A kind's store holds items, which its tree and its leaf tests take one
+/// at a time, and each item belongs to one of its primitives, which get the ids ([`Kind::item_id`]; one
+/// item per primitive by default, a polygon's triangles share its id). [`Kind::len`], [`Kind::bounds`] and
+/// [`Kind::test`] are per item `k`; the rest (`rehit`, `surface`, `eye_term`, the material and the f64
+/// forms) per primitive `k`. Ids, trees, the loops over items and the twin's bookkeeping are the
+/// registry's.
 pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     /// One item, in messages and statistics ("torus").
     const SINGULAR: &'static str;
@@ -86,6 +92,10 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     /// Whether a ray leaving an item can meet it again (open or non-convex surfaces): then the queries ask
     /// [`Kind::rehit`] for every ray departing from it, whichever side it heads to.
     const MEETS_AGAIN: bool;
+    /// Whether the queries over the kind's items are inlined into the loop over kinds: worth it for a small
+    /// kernel (a triangle's), where the call costs as much as a test. Not by default: a large kernel (a
+    /// torus's solver) inlined there puts its stack frame on every query of any kind.
+    const INLINE_QUERIES: bool = false;
 
     /// The item as described, in world space and f64, validated by its reader.
     type Desc: Clone + Debug + PartialEq + Send + Sync;
@@ -109,12 +119,29 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     fn push(store: &mut Self::Store, desc: &Self::Desc, origin: DVec3);
     /// The number of items.
     fn len(store: &Self::Store) -> usize;
+    /// The number of primitives.
+    fn ids(store: &Self::Store) -> usize {
+        Self::len(store)
+    }
+    /// The primitive item `k` belongs to (below [`Kind::ids`]).
+    #[inline(always)]
+    fn item_id(store: &Self::Store, k: usize) -> u32 {
+        let _ = store;
+        k as u32
+    }
     /// A box `(lo, hi)` around item `k` covering every hit the f32 kernel can report; infinite corners for
     /// an unbounded item (the kind is then tested brute force).
     fn bounds(store: &Self::Store, k: usize) -> (Vec3f, Vec3f);
     /// Item `k` against the rays in `[0, t_max)`: the lanes it is hit in and their t (`t_max` elsewhere).
     /// Lane `i` of the result must be the bits of the one-lane call with lane `i`'s ray.
     fn test<F: Lanes>(store: &Self::Store, k: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F);
+    /// Lanes whose ray cannot meet item `k` before `reach`: a conservative test cheaper than
+    /// [`Kind::test`], asked only where no tree culls (brute force). None by default.
+    #[inline(always)]
+    fn culled<F: Lanes>(store: &Self::Store, k: usize, ray: &Ray<F>, reach: F) -> F::Mask {
+        let _ = (store, k, ray, reach);
+        F::mask_from_bits(0)
+    }
     /// For a ray that starts on item `k` (the departure primitive, which [`Kind::test`] is not asked
     /// about): where it meets the item again in `[0, t_max)`. Asked for every departing ray when
     /// [`Kind::MEETS_AGAIN`], else for rays heading into the item (a solid's exit). None by default.
@@ -157,6 +184,11 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     }
     /// The outward unit normal at hit `t` (at `point`) of `ray` on the item.
     fn normal64(item: &Self::Twin, ray: &Ray<f64>, t: f64, point: V3<f64>) -> V3<f64>;
+    /// The unit normal of the surface the hit's `t` is measured on: [`Kind::normal64`] but where shading
+    /// bends it (a polygon's interpolated vertex normals).
+    fn geometric_normal64(item: &Self::Twin, ray: &Ray<f64>, t: f64, point: V3<f64>) -> V3<f64> {
+        Self::normal64(item, ray, t, point)
+    }
     /// [`Kind::eye_term`] in f64.
     fn eye_term64(item: &Self::Twin) -> Option<f64> {
         let _ = item;
@@ -194,6 +226,10 @@ impl<K: Kind> KindItems<K> {
     pub(crate) fn len(&self) -> usize {
         K::len(&self.store)
     }
+    /// The number of primitives (ids).
+    pub(crate) fn ids(&self) -> usize {
+        K::ids(&self.store)
+    }
     /// The leaf test over these items for a query: the tree's items in leaf order, or all in order.
     pub(crate) fn items(&self, base: u32) -> Items<'_, K> {
         let order = self.bvh.as_ref().map(|_| self.order.as_slice());
@@ -202,11 +238,11 @@ impl<K: Kind> KindItems<K> {
 }
 
 /// The items of one kind as a leaf query's items ([`ItemTest`]): item `j` is `order[j]` (without a list,
-/// `j`), primitive `base + order[j]`.
+/// `j`), of primitive `base + item_id(order[j])`.
 pub(crate) struct Items<'a, K: Kind> {
     /// The kind's store.
     pub(crate) store: &'a K::Store,
-    /// The tree's leaf order, or `None` for every item in order.
+    /// The tree's leaf order, or `None` for every item in order (brute force).
     pub(crate) order: Option<&'a [u32]>,
     /// The id of item 0.
     pub(crate) base: u32,
@@ -224,18 +260,46 @@ impl<K: Kind> ItemTest for Items<'_, K> {
     fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32) {
         let k = self.order.map_or(j as u32, |order| order[j]);
         let (hit, t) = K::test(self.store, k as usize, ray, t_max);
-        (hit, t, self.base + k)
+        (hit, t, self.base + K::item_id(self.store, k as usize))
+    }
+
+    /// The kind's own cull, in brute force only (a tree's boxes have culled already).
+    #[inline(always)]
+    fn culled<F: Lanes>(&self, j: usize, ray: &Ray<F>, reach: F) -> F::Mask {
+        match self.order {
+            None => K::culled(self.store, j, ray, reach),
+            Some(_) => F::mask_from_bits(0),
+        }
+    }
+}
+
+/// The number of primitives in one kind's part of the registry's structures: the ids its items carry, or
+/// its f64 forms (one a primitive).
+pub(crate) trait Ids {
+    /// The number of primitives.
+    fn ids(&self) -> usize;
+}
+
+impl<K: Kind> Ids for KindItems<K> {
+    fn ids(&self) -> usize {
+        KindItems::ids(self)
+    }
+}
+
+impl<T> Ids for Vec<T> {
+    fn ids(&self) -> usize {
+        self.len()
     }
 }
 
 /// Something done to each kind's compiled items, in the registry's order (the order of their ids).
 pub(crate) trait VisitItems {
-    /// Kind `K`'s items.
-    fn visit<K: Kind>(&mut self, items: &KindItems<K>);
+    /// Kind `K`'s items (some), its first primitive numbered `first` over every kind's primitives.
+    fn visit<K: Kind>(&mut self, items: &KindItems<K>, first: u32);
 }
 
-/// Calls `$then` with the kind that holds item `$id` (numbered over every kind's items in id order) as
-/// `$then!(field, Type, index within the kind)`; `$none` when no kind holds it.
+/// Evaluates `$body` with the kind that holds primitive `$id` (numbered over every kind's primitives in id
+/// order), its part and the primitive's index within the kind; `$none` when no kind holds it.
 macro_rules! dispatch {
     ($self:ident, $id:expr, $none:expr, |$items:ident, $K:ident, $k:ident| $body:expr; $($field:ident: $kind:ty),*) => {{
         #[allow(unused_mut, unused_assignments)]
@@ -245,10 +309,10 @@ macro_rules! dispatch {
             {
                 type $K = $kind;
                 let $items = &$self.$field;
-                if $k < $items.len() {
+                if $k < Ids::ids($items) {
                     return $body;
                 }
-                $k -= $items.len();
+                $k -= Ids::ids($items);
             }
         )*
         $none
@@ -278,6 +342,11 @@ macro_rules! per_kind {
                 #[doc = concat!("The compiled `", stringify!($field), "`.")]
                 pub(crate) $field: KindItems<$kind>,
             )*
+            /// Bit i: kind i (in the registry's order) has items. The queries visit those alone: most
+            /// scenes have one kind or none beside the spheres.
+            present: u32,
+            /// Kind i's first primitive, numbered over every kind's primitives.
+            first: [u32; COUNT],
         }
 
         /// Every registered kind's items in f64, for the accuracy twin.
@@ -304,12 +373,17 @@ macro_rules! per_kind {
             pub(crate) fn compile(&self, origin: DVec3) -> KindStores {
                 #[allow(unused_mut)]
                 let mut stores = KindStores::default();
+                let (mut kind, mut first) = (0, 0);
                 $(
                     for d in &self.$field {
                         <$kind as Kind>::push(&mut stores.$field.store, d, origin);
                     }
+                    stores.first[kind] = first as u32;
+                    first += stores.$field.ids();
+                    stores.present |= u32::from(stores.$field.len() > 0) << kind;
+                    kind += 1;
                 )*
-                let _ = origin;
+                let _ = (origin, kind, first);
                 stores
             }
             /// The items in f64, moved by `−origin`.
@@ -335,37 +409,46 @@ macro_rules! per_kind {
         // With no kind registered, the per-kind parts expand to nothing and leave arguments unused.
         #[allow(unused_variables, unused_mut)]
         impl KindStores {
-            /// Every item as stored, widened exactly to f64 ([`Kind::widen`]), in id order.
+            /// Every primitive as stored, widened exactly to f64 ([`Kind::widen`]), in id order.
             #[cfg(test)]
             pub(crate) fn widened(&self) -> KindTwins {
                 KindTwins {
-                    $($field: (0..<$kind as Kind>::len(&self.$field.store))
+                    $($field: (0..<$kind as Kind>::ids(&self.$field.store))
                         .map(|k| <$kind as Kind>::widen(&self.$field.store, k))
                         .collect(),)*
                 }
             }
-            /// Calls `v` with each kind's items in id order.
+            /// Calls `v` with each kind's items in id order, for the kinds that have some.
+            #[inline(always)]
             pub(crate) fn visit(&self, v: &mut impl VisitItems) {
-                $(v.visit::<$kind>(&self.$field);)*
-                let _ = v;
+                let mut kind = 0;
+                $(
+                    if self.present & (1 << kind) != 0 {
+                        v.visit::<$kind>(&self.$field, self.first[kind]);
+                    }
+                    kind += 1;
+                )*
+                let _ = (v, kind);
             }
-            /// The number of items of every kind.
+            /// The number of primitives of every kind.
             pub(crate) fn len(&self) -> usize {
-                0 $(+ self.$field.len())*
+                0 $(+ self.$field.ids())*
             }
-            /// True when there are none.
-            pub(crate) fn is_empty(&self) -> bool {
-                self.len() == 0
+            /// Whether some kind has items for the queries to test.
+            #[inline(always)]
+            pub(crate) fn has_items(&self) -> bool {
+                self.present != 0
             }
-            /// Each kind's number of items, in id order.
+            /// Each kind's number of primitives, in id order.
             pub(crate) fn counts(&self) -> [usize; COUNT] {
-                [$(self.$field.len()),*]
+                [$(self.$field.ids()),*]
             }
-            /// The number of items of each kind that has some, in words ("1 torus", "2 tori"), in id order.
+            /// The number of primitives of each kind that has some, in words ("1 torus", "2 tori"), in id
+            /// order.
             pub(crate) fn counted(&self) -> Vec<String> {
                 let word = |n: usize, one: &str, many: &str| format!("{n} {}", if n == 1 { one } else { many });
                 let all: [(usize, &str, &str); COUNT] =
-                    [$((self.$field.len(), <$kind as Kind>::SINGULAR, <$kind as Kind>::PLURAL)),*];
+                    [$((self.$field.ids(), <$kind as Kind>::SINGULAR, <$kind as Kind>::PLURAL)),*];
                 all.iter().filter(|(n, _, _)| *n > 0).map(|&(n, one, many)| word(n, one, many)).collect()
             }
             /// Whether each kind has a tree, in id order.
@@ -408,8 +491,8 @@ macro_rules! per_kind {
             pub(crate) fn any_meets_again(&self) -> bool {
                 false $(|| (<$kind as Kind>::MEETS_AGAIN && self.$field.len() > 0))*
             }
-            /// Whether a ray leaving item `id` (numbered over every kind's items in id order) can meet it
-            /// again ([`Kind::MEETS_AGAIN`]).
+            /// Whether a ray leaving primitive `id` (numbered over every kind's primitives in id order) can
+            /// meet it again ([`Kind::MEETS_AGAIN`]).
             pub(crate) fn meets_again(&self, id: usize) -> bool {
                 dispatch!(self, id, false, |_items, K, _k| K::MEETS_AGAIN; $($field: $kind),*)
             }
@@ -495,6 +578,10 @@ macro_rules! per_kind {
             /// Item `id`'s outward unit normal at hit `t` (at `point`) of `ray`.
             pub(crate) fn normal(&self, id: usize, ray: &Ray<f64>, t: f64, point: V3<f64>) -> Option<V3<f64>> {
                 dispatch!(self, id, None, |items, K, k| Some(K::normal64(&items[k], ray, t, point)); $($field: $kind),*)
+            }
+            /// [`Kind::geometric_normal64`] of item `id`.
+            pub(crate) fn geometric_normal(&self, id: usize, ray: &Ray<f64>, t: f64, point: V3<f64>) -> Option<V3<f64>> {
+                dispatch!(self, id, None, |items, K, k| Some(K::geometric_normal64(&items[k], ray, t, point)); $($field: $kind),*)
             }
             /// [`Kind::grazing64`] of item `id`.
             pub(crate) fn grazing(&self, id: usize, ray: &Ray<f64>, tol: f64, stray: Stray) -> Option<bool> {

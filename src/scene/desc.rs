@@ -458,18 +458,6 @@ pub struct SphereDesc {
     pub material: u32,
 }
 
-/// A planar polygon (NFF `p`, or `pp` with per-vertex normals).
-#[derive(Clone, Debug, PartialEq)]
-pub struct PolygonDesc {
-    /// Vertices in order around the outline; the geometric normal follows the right-hand rule.
-    pub(crate) vertices: Vec<DVec3>,
-    /// One normal per vertex, interpolated across the polygon for shading (any length; normalised by
-    /// compile), or `None` for a flat polygon.
-    pub(crate) normals: Option<Vec<DVec3>>,
-    /// Index into `SceneDesc::materials`.
-    pub(crate) material: u32,
-}
-
 /// A whole scene as data.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SceneDesc {
@@ -489,9 +477,8 @@ pub struct SceneDesc {
     /// than a material per colour. Compile ignores a list of another length (a description built by hand),
     /// as it degrades other inconsistent hand-built input: the spheres keep their materials' colours.
     pub sphere_colors: Vec<Rgb8>,
-    /// Planar polygons: ids after the spheres, one per polygon however it is triangulated.
-    pub polygons: Vec<PolygonDesc>,
-    /// The registered kinds' items ([`crate::kinds`]: ellipsoids, planes, open cones, tori): ids after the
-    /// polygons, kind by kind in the registry's order.
+    /// The registered kinds' primitives ([`crate::kinds`]: polygons, ellipsoids, planes, open cones, tori):
+    /// ids after the spheres, kind by kind in the registry's order (a polygon one id however it is
+    /// triangulated).
     pub kinds: KindDescs,
 }

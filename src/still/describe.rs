@@ -20,10 +20,9 @@ pub fn describe(scene: &Scene, job: &Job) -> String {
     let mut out = String::new();
     let _ = writeln!(
         out,
-        "scene: {} ({}, {}{}), {}, {}{}",
+        "scene: {} ({}{}), {}, {}{}",
         plural(g.len(), "primitive"),
         plural(n.spheres, "sphere"),
-        plural(n.polygons, "polygon"),
         g.kinds.counted().iter().map(|c| format!(", {c}")).collect::<String>(),
         plural(scene.lights.len(), "light"),
         plural(scene.materials.len(), "material"),
@@ -75,8 +74,7 @@ pub fn describe(scene: &Scene, job: &Job) -> String {
     };
     let _ = writeln!(
         out,
-        "accel: spheres by {spheres}, polygons by {}{}",
-        search(&g.polygon_bvh),
+        "accel: spheres by {spheres}{}",
         (crate::kinds::NAMES.iter().zip(g.kinds.trees()).zip(g.kinds.counts()))
             .filter(|(_, n)| *n > 0)
             .map(|((name, tree), _)| format!(", {name} by {}", if tree { "BVH" } else { "brute force" }))

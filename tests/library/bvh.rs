@@ -402,12 +402,12 @@ fn polygon_field(n: usize, seed: u64) -> SceneDesc {
             _ => vec![c, c + u, c + u + w, c + w],
         };
         let normals = (k % 3 == 0).then(|| vec![u.cross(w).normalize(); vertices.len()]);
-        desc.polygons.push(bareray::scene::desc::PolygonDesc { vertices, normals, material: 0 });
+        desc.kinds.polygons.push(bareray::kinds::polygon::PolygonDesc { vertices, normals, material: 0 });
     }
     // A large floor, entered by most rays that reach the bottom, and an exact copy: ties between polygon ids.
     let floor = [[-3.0, -1.2, -3.0], [3.0, -1.2, -3.0], [3.0, -1.2, 3.0], [-3.0, -1.2, 3.0]].map(DVec3::from);
     for _ in 0..2 {
-        desc.polygons.push(bareray::scene::desc::PolygonDesc {
+        desc.kinds.polygons.push(bareray::kinds::polygon::PolygonDesc {
             vertices: floor.to_vec(),
             normals: None,
             material: 0,
@@ -424,11 +424,11 @@ fn polygon_bvh_equals_brute_force_at_every_width() {
         let desc = polygon_field(n, seed);
         let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = common::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.polygon_bvh.is_some() && brute.geometry.polygon_bvh.is_none());
+        assert!(bvh.geometry.kinds.polygons.bvh.is_some() && brute.geometry.kinds.polygons.bvh.is_none());
         let rays = rays(&desc, 3000, seed + 100);
         let hits = rays.iter().filter(|r| {
             let h = brute.geometry.intersect(r, Departure::CAMERA, f32::INFINITY);
-            h.prim as usize >= brute.geometry.polygon_base()
+            h.prim as usize >= brute.geometry.kinds_base()
         });
         assert!(hits.count() > rays.len() / 5, "{n} polygons: too few rays hit a polygon");
         check_kind_at_every_width(&bvh, &brute, &rays);

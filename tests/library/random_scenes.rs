@@ -22,8 +22,9 @@ use std::path::{Path, PathBuf};
 use bareray::accuracy::{self, Options, Twin};
 use bareray::compile::{CompileOptions, Scene};
 use bareray::film::Image;
-use bareray::geometry::{intersect_triangle, Departure, Ray};
+use bareray::geometry::{Departure, Ray};
 use bareray::io::random_scene::{random_scene_toml, MATERIALS};
+use bareray::kinds::polygon::intersect_triangle;
 use bareray::math::V3;
 use bareray::render::{render_lanes, thread_pool, Rendered};
 use bareray::scene::desc::{Ao, SceneDesc, Shade};
@@ -198,7 +199,7 @@ fn generator_covers_every_kind_and_is_deterministic() {
             materials[k] += usize::from(text.contains(&format!("material = \"{m}\"")));
         }
         ellipsoids += usize::from(!desc.kinds.ellipsoids.is_empty());
-        normals += usize::from(desc.polygons.iter().any(|p| p.normals.is_some()));
+        normals += usize::from(desc.kinds.polygons.iter().any(|p| p.normals.is_some()));
         far += usize::from(desc.camera.eye.length() > 1e4);
         inside += usize::from(text.contains("InsideOne") || text.contains("InsideAll"));
     }
@@ -323,7 +324,7 @@ fn torus_left_at_a_grazing_slant_is_met_again_near_its_start() {
     // The torus in the twin's space: its prim is the registered kinds' first id plus k.
     let k = hit.prim as usize
         - desc.spheres.len()
-        - desc.polygons.len()
+        - desc.kinds.polygons.len()
         - desc.kinds.ellipsoids.len()
         - desc.kinds.planes.len()
         - desc.kinds.cones.len();

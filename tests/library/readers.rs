@@ -5,12 +5,13 @@ use std::path::Path;
 
 use bareray::accel::Geometry;
 use bareray::compile::Scene;
-use bareray::geometry::polygon::triangulate;
-use bareray::geometry::{intersect_triangle, Departure, Ray, NO_PRIM};
+use bareray::geometry::{Departure, Ray, NO_PRIM};
 use bareray::io::generate::{flake, flake_count, flake_nff, FieldParams};
 use bareray::io::{f32r, nff, xyzr, SceneError, SceneFormat};
+use bareray::kinds::polygon::{intersect_triangle, triangulate, PolygonDesc};
+use bareray::kinds::KindDescs;
 use bareray::math::{Rgb, V3};
-use bareray::scene::desc::{Aim, Field, PolygonDesc, SphereDesc, Sweep};
+use bareray::scene::desc::{Aim, Field, SphereDesc, Sweep};
 use bareray::scene::SceneDesc;
 
 use glam::DVec3;
@@ -34,7 +35,7 @@ const VIEW: &str = "v\nfrom 0 0 -5\nat 0 0 0\nup 0 1 0\nangle 45\nhither 0.01\nr
 #[test]
 fn balls2_counts_camera_lights_and_fills() {
     let d = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
-    assert_eq!((d.spheres.len(), d.polygons.len(), d.lights.len()), (91, 1, 3));
+    assert_eq!((d.spheres.len(), d.kinds.polygons.len(), d.lights.len()), (91, 1, 3));
     assert_eq!(d.camera.eye, DVec3::new(2.1, 1.3, 1.7));
     assert_eq!(d.camera.aim, Aim::LookAt(DVec3::ZERO));
     assert_eq!(d.camera.up, DVec3::Z);
@@ -46,11 +47,11 @@ fn balls2_counts_camera_lights_and_fills() {
     assert!(d.lights.iter().all(|l| l.color == Rgb::all(third)));
     assert_eq!(d.lights[1].position, DVec3::new(1.0, -4.0, 4.0));
     // Floor fill then sphere fill; Ks is both the highlight and the mirror weight.
-    let floor = &d.materials[d.polygons[0].material as usize];
+    let floor = &d.materials[d.kinds.polygons[0].material as usize];
     assert_eq!((floor.color, floor.diffuse, floor.reflect), (Rgb::new(1.0, 0.75, 0.33), 0.8, 0.0));
     let ball = &d.materials[d.spheres[0].material as usize];
     assert_eq!((ball.diffuse, ball.specular, ball.reflect, ball.shininess), (0.5, 0.5, 0.5, 3.0827));
-    assert_eq!(d.polygons[0].vertices[2], DVec3::new(-12.0, -12.0, -0.5));
+    assert_eq!(d.kinds.polygons[0].vertices[2], DVec3::new(-12.0, -12.0, -0.5));
     assert_eq!(d.spheres[90].center, DVec3::new(0.471405, -0.471405, -0.222222));
 }
 
@@ -71,7 +72,7 @@ fn balls2_floor_is_one_primitive_after_the_spheres() {
     let d = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
     let scene = Scene::compile(&d).unwrap();
     let g = &scene.geometry;
-    assert_eq!((g.len(), g.polygons.len(), g.polygons.triangles()), (92, 1, 2));
+    assert_eq!((g.len(), g.kinds.polygons.ids(), g.kinds.polygons.len()), (92, 1, 2));
     // Straight down onto the floor, away from the flake: polygon id 91, at z = −0.5, normal ±z.
     let ray = Ray::new(scene.to_rendering(DVec3::new(5.0, 5.0, 3.0)), V3::new(0.0, 0.0, -1.0));
     let hit = g.intersect(&ray, Departure::CAMERA, f32::INFINITY);
@@ -121,10 +122,10 @@ fn nff_patches_interpolate_normals_and_concave_polygons_are_triangulated() {
          p 6\n0 0 5\n2 0 5\n2 1 5\n1 1 5\n1 2 5\n0 2 5\n"
     );
     let d = nff::parse(Path::new("t.nff"), &src).unwrap();
-    let n = d.polygons[0].normals.as_ref().unwrap();
+    let n = d.kinds.polygons[0].normals.as_ref().unwrap();
     assert_eq!(n[1], DVec3::new(2.0, -1.0, 4.0));
     let g = Scene::compile(&d).unwrap().geometry;
-    assert_eq!((g.polygons.len(), g.polygons.triangles()), (2, 5));
+    assert_eq!((g.kinds.polygons.ids(), g.kinds.polygons.len()), (2, 5));
     let ray = Ray::new(V3::new(1.0f32 / 3.0, 1.0 / 3.0, -1.0), V3::new(0.0, 0.0, 1.0));
     let hit = g.intersect(&ray, Departure::CAMERA, f32::INFINITY);
     assert_eq!(hit.prim, 0);
@@ -404,9 +405,9 @@ fn flake_level_2_reproduces_spd_balls2_to_its_printed_precision() {
 fn flake_nff_parses_back_with_balls_view_lights_and_floor() {
     let d = nff::parse(Path::new("b4.nff"), &flake_nff(4).unwrap()).unwrap();
     let balls = nff::parse(Path::new("balls2.nff"), BALLS2).unwrap();
-    assert_eq!((d.spheres.len(), d.polygons.len(), d.lights.len()), (7381, 1, 3));
+    assert_eq!((d.spheres.len(), d.kinds.polygons.len(), d.lights.len()), (7381, 1, 3));
     assert_eq!((d.camera, d.render, &d.materials), (balls.camera, balls.render, &balls.materials));
-    assert_eq!(d.polygons, balls.polygons);
+    assert_eq!(d.kinds.polygons, balls.kinds.polygons);
     // Level 4 starts like level 2 (depth first: the first child of the first child comes third) ...
     assert!((d.spheres[2].radius - 0.5 / 9.0).abs() < 1e-16);
     assert!((d.spheres[2].center - balls.spheres[2].center).length() < 1e-6);
@@ -485,7 +486,7 @@ fn a_ray_leaving_a_polygon_never_hits_it_again() {
     };
     let desc = SceneDesc {
         spheres: vec![SphereDesc { center: DVec3::new(50.0, 0.0, 0.0), radius: 1.0, material: 0 }],
-        polygons: vec![square(0.0), square(-1.0)],
+        kinds: KindDescs { polygons: vec![square(0.0), square(-1.0)], ..KindDescs::default() },
         ..SceneDesc::default()
     };
     let scene = Scene::compile(&desc).unwrap();

@@ -201,12 +201,12 @@ fn polygons_are_read() {
          normals = [[0, 0, 1], [0.1, 0, 1], [0, 0.1, 1]]\n",
     )
     .unwrap();
-    assert_eq!(d.polygons.len(), 2);
-    assert_eq!(d.polygons[0].vertices.len(), 4);
-    assert_eq!(d.polygons[0].vertices[2], glam::DVec3::new(1.0, 1.0, 1.0));
-    assert_eq!((d.polygons[0].material, d.polygons[1].material), (1, 0));
-    assert!(d.polygons[0].normals.is_none());
-    assert_eq!(d.polygons[1].normals.as_ref().map(Vec::len), Some(3));
+    assert_eq!(d.kinds.polygons.len(), 2);
+    assert_eq!(d.kinds.polygons[0].vertices.len(), 4);
+    assert_eq!(d.kinds.polygons[0].vertices[2], glam::DVec3::new(1.0, 1.0, 1.0));
+    assert_eq!((d.kinds.polygons[0].material, d.kinds.polygons[1].material), (1, 0));
+    assert!(d.kinds.polygons[0].normals.is_none());
+    assert_eq!(d.kinds.polygons[1].normals.as_ref().map(Vec::len), Some(3));
     error_at("[[polygons]]\nvertices = [[0, 0, 0], [1, 0, 0]]\n", 2, "at least three");
     error_at("[[polygons]]\nvertices = [[0, 0, 0], [1, 0, 0], [2, 0, 0]]\n", 2, "polygon");
     error_at(

@@ -39,7 +39,7 @@ fn scaled(desc: &SceneDesc, s: f64, offset: DVec3) -> SceneDesc {
     for sh in out.kinds.ellipsoids.iter_mut().chain(&mut out.kinds.planes) {
         sh.world_from_object = a * sh.world_from_object;
     }
-    for p in &mut out.polygons {
+    for p in &mut out.kinds.polygons {
         p.vertices.iter_mut().for_each(|v| *v = a.transform_point3(*v));
     }
     for l in &mut out.lights {

@@ -14,7 +14,9 @@ use super::common;
 use bareray::compile::Scene;
 use bareray::geometry::{far_root, sphere_roots, Departure, Ray, ShapeKind, NO_PRIM};
 use bareray::io::generate::flake;
-use bareray::scene::desc::{PolygonDesc, SceneDesc, SphereDesc};
+use bareray::kinds::polygon::PolygonDesc;
+use bareray::kinds::KindDescs;
+use bareray::scene::desc::{SceneDesc, SphereDesc};
 use common::oracle::Oracle;
 use common::rng::Rng;
 use common::wide::{dv, f32v, wide, wide_ray, wide_shape};
@@ -233,7 +235,10 @@ fn departure_planes_and_polygons_never_rehit() {
             let w = n.cross(v).normalize();
             let quad = [v * size, w * size * 0.7, -v * size * 1.3, -w * size].map(|q| p0 + q).to_vec();
             SceneDesc {
-                polygons: vec![PolygonDesc { vertices: quad, normals: None, material: 0 }],
+                kinds: KindDescs {
+                    polygons: vec![PolygonDesc { vertices: quad, normals: None, material: 0 }],
+                    ..KindDescs::default()
+                },
                 ..SceneDesc::default()
             }
         };

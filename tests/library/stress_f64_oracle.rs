@@ -14,7 +14,9 @@ use super::common;
 use bareray::compile::Scene;
 use bareray::geometry::{Departure, ShapeKind, NO_PRIM};
 use bareray::io::generate::{flake, FieldParams};
-use bareray::scene::desc::{PolygonDesc, SceneDesc};
+use bareray::kinds::polygon::PolygonDesc;
+use bareray::kinds::KindDescs;
+use bareray::scene::desc::SceneDesc;
 use common::oracle::Oracle;
 use common::rng::Rng;
 use common::wide::{dv, wide_ray};
@@ -188,13 +190,16 @@ fn oracle_sphereflake_contacts() {
     let desc = SceneDesc {
         camera: camera(DVec3::new(2.1, 1.3, 1.7), DVec3::ZERO, DVec3::Z, 45.0, 256, 256),
         spheres: flake(2).unwrap().iter().map(|s| sphere(DVec3::new(s[0], s[1], s[2]), s[3])).collect(),
-        polygons: vec![PolygonDesc {
-            vertices: [[12.0, 12.0], [-12.0, 12.0], [-12.0, -12.0], [12.0, -12.0]]
-                .map(|[x, y]| DVec3::new(x, y, -0.5))
-                .to_vec(),
-            normals: None,
-            material: 0,
-        }],
+        kinds: KindDescs {
+            polygons: vec![PolygonDesc {
+                vertices: [[12.0, 12.0], [-12.0, 12.0], [-12.0, -12.0], [12.0, -12.0]]
+                    .map(|[x, y]| DVec3::new(x, y, -0.5))
+                    .to_vec(),
+                normals: None,
+                material: 0,
+            }],
+            ..KindDescs::default()
+        },
         ..SceneDesc::default()
     };
     check_agreement("flake", &compile(&desc), 2e-5, 2e-5, 1e-3);

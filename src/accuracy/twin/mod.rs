@@ -6,27 +6,22 @@
 //! is stored as `p − origin`, computed in f64 (sphere centres, polygon vertices, the registered kinds'
 //! items, lights), and camera rays start where the renderer's do (at exactly 0, or a far scene's start
 //! distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to f32.
-//! Intersections run the generic kernels of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`],
-//! [`intersect_triangle`]) and each registered kind's f64 form ([`crate::kinds::Kind::intersect64`]), with
+//! Intersections run the sphere kernel of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`])
+//! and each registered kind's f64 form ([`crate::kinds::Kind::intersect64`]), with
 //! the renderer's rules: closest hit by the total order (smaller t, then lower id), and a ray that leaves a
 //! primitive ([`Departure`]) never hits it again except, for a solid left toward its inside, at its exit
 //! root, and for a kind that says so (an open cone, a torus), wherever it meets that item again
 //! ([`crate::kinds::Kind::rehit64`], as `accel/departure.rs` rules).
 //!
-//! Ids are scene-file ids: spheres `0..` in file order, then polygons (one id per polygon), then the
-//! registered kinds' items. Spheres are searched through the twin's own BVH ([`super::bvh64`]) from
+//! Ids are scene-file ids: spheres `0..` in file order, then the registered kinds' primitives (polygons
+//! first, one id per polygon). Spheres are searched through the twin's own BVH ([`super::bvh64`]) from
 //! [`TWIN_BVH_MIN_SPHERES`] on; the rest brute force (planes are unbounded).
-
-use std::ops::Range;
 
 use glam::DVec3;
 
 use crate::camera::{Camera, CameraError};
 use crate::compile::RenderingFrame;
-use crate::geometry::polygon::{newell_normal, triangulate};
-use crate::geometry::{
-    far_root, first_root, intersect_sphere, intersect_triangle, sphere_roots, Departure, Ray, NO_PRIM,
-};
+use crate::geometry::{far_root, first_root, intersect_sphere, sphere_roots, Departure, Ray, NO_PRIM};
 use crate::kinds::KindTwins;
 use crate::math::V3;
 use crate::scene::desc::SceneDesc;
@@ -51,29 +46,6 @@ pub(crate) const TWIN_BVH_MIN_SPHERES: usize = 16;
 /// normal). Zero for camera rays.
 pub(crate) use crate::kinds::Stray as Slack;
 
-/// One triangle of a polygon, camera-relative.
-#[derive(Clone, Copy, Debug)]
-struct Tri64 {
-    v0: V3<f64>,
-    e1: V3<f64>,
-    e2: V3<f64>,
-    /// The polygon's scene-file id.
-    id: u32,
-    /// Unit vertex normals (NFF `pp`), to interpolate.
-    normals: Option<[V3<f64>; 3]>,
-}
-
-/// A polygon's outline and plane, camera-relative.
-#[derive(Clone, Debug)]
-struct Polygon64 {
-    /// Its triangles in [`Twin::tris`].
-    tris: Range<usize>,
-    /// Unit geometric normal (Newell, right-hand rule).
-    normal: V3<f64>,
-    /// The vertices in order.
-    outline: Vec<V3<f64>>,
-}
-
 /// The f64 reference scene: see the module documentation.
 #[derive(Clone, Debug)]
 pub(crate) struct Twin {
@@ -86,9 +58,7 @@ pub(crate) struct Twin {
     /// Light positions in the twin's space.
     pub(crate) lights: Vec<V3<f64>>,
     spheres: Vec<(V3<f64>, f64)>,
-    tris: Vec<Tri64>,
-    polygons: Vec<Polygon64>,
-    /// The registered kinds' items, ids after the polygons.
+    /// The registered kinds' primitives (polygons among them), ids after the spheres.
     kinds: KindTwins,
     bvh: Option<Bvh64>,
 }
@@ -118,37 +88,6 @@ impl Twin {
         (camera.eye, camera.start) = (v(desc.camera.eye - origin), frame.start);
         let spheres: Vec<(V3<f64>, f64)> =
             desc.spheres.iter().map(|s| (v(s.center - origin), s.radius)).collect();
-        let base = spheres.len() as u32;
-        let (mut tris, mut polygons) = (Vec::new(), Vec::new());
-        for (k, p) in desc.polygons.iter().enumerate() {
-            let vertices: Vec<DVec3> = p.vertices.iter().map(|&x| x - origin).collect();
-            let n = vertices.len() as u32;
-            // compile's rule: a polygon the readers would have rejected still gets its id, as a plain fan.
-            let triangles =
-                triangulate(&vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect());
-            let normals: Option<Vec<V3<f64>>> = p
-                .normals
-                .as_ref()
-                .filter(|ns| ns.len() == vertices.len())
-                .map(|ns| ns.iter().map(|x| v(x.normalize_or_zero())).collect());
-            let first = tris.len();
-            for &[a, b, c] in &triangles {
-                let [a, b, c] = [a, b, c].map(|i| i as usize);
-                let at = |i: usize| v(vertices[i]);
-                tris.push(Tri64 {
-                    v0: at(a),
-                    e1: at(b) - at(a),
-                    e2: at(c) - at(a),
-                    id: base + k as u32,
-                    normals: normals.as_ref().map(|ns| [ns[a], ns[b], ns[c]]),
-                });
-            }
-            polygons.push(Polygon64 {
-                tris: first..tris.len(),
-                normal: v(newell_normal(&vertices).normalize_or_zero()),
-                outline: vertices.iter().map(|&x| v(x)).collect(),
-            });
-        }
         let finite = spheres
             .iter()
             .all(|(c, r)| c.x.is_finite() && c.y.is_finite() && c.z.is_finite() && r.is_finite());
@@ -158,8 +97,6 @@ impl Twin {
             origin,
             lights: desc.lights.iter().map(|l| v(l.position - origin)).collect(),
             spheres,
-            tris,
-            polygons,
             kinds: desc.kinds.twins(origin),
             bvh,
         })
@@ -179,7 +116,7 @@ impl Twin {
 
     /// The id of the registered kinds' first item.
     fn kinds_base(&self) -> usize {
-        self.spheres.len() + self.polygons.len()
+        self.spheres.len()
     }
 
     /// Primitive `prim`'s index over the registered kinds' items, when it is one.
@@ -211,14 +148,6 @@ impl Twin {
                             best.update(i as u32, t);
                         }
                     }
-                }
-            }
-        }
-        for tri in &self.tris {
-            if tri.id != from.prim {
-                let (hit, t) = intersect_triangle(tri.v0, tri.e1, tri.e2, ray, t_max);
-                if hit {
-                    best.update(tri.id, t);
                 }
             }
         }
@@ -268,19 +197,8 @@ impl Twin {
         if let Some(k) = self.kind(prim) {
             return self.kinds.hit_of(k, ray);
         }
-        let ns = self.spheres.len();
-        let (hit, t) = if i < ns {
-            first_root(&sphere_roots(self.spheres[i].0, self.spheres[i].1, ray), f64::INFINITY)
-        } else {
-            let mut best = Hit64::MISS;
-            for tri in &self.tris[self.polygons[i - ns].tris.clone()] {
-                let (hit, t) = intersect_triangle(tri.v0, tri.e1, tri.e2, ray, f64::INFINITY);
-                if hit {
-                    best.update(tri.id, t);
-                }
-            }
-            (best.is_hit(), best.t)
-        };
+        let (centre, radius) = self.spheres[i];
+        let (hit, t) = first_root(&sphere_roots(centre, radius, ray), f64::INFINITY);
         hit.then_some(t)
     }
 
@@ -296,43 +214,23 @@ impl Twin {
     }
 
     /// The hit point of `ray` at `t` on `prim` and the unit outward normal there (a polygon's interpolated
-    /// vertex normal when it has them, a cone's normal away from its axis), computed as [`crate::accel::Geometry::surface`] computes them in f32.
+    /// vertex normal when it has them, a cone's normal away from its axis), computed as
+    /// [`crate::accel::Geometry::surface`] computes them in f32.
     pub(crate) fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
         let point = ray.at(t);
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        let normal = if i < ns {
-            (point - self.spheres[i].0).normalize()
-        } else if let Some(n) = self.kind(prim).and_then(|k| self.kinds.normal(k, ray, t, point)) {
-            n
-        } else {
-            self.polygon_normal(i - ns, point)
+        let normal = match self.spheres.get(prim as usize) {
+            Some(&(centre, _)) => (point - centre).normalize(),
+            None => self.kind(prim).and_then(|k| self.kinds.normal(k, ray, t, point)).expect("a primitive"),
         };
         (point, normal)
     }
 
-    /// Polygon `k`'s shading normal at `point`: the vertex normals interpolated over the triangle that
-    /// contains the point best (largest smallest barycentric), else the geometric normal (the f32 rule).
-    fn polygon_normal(&self, k: usize, point: V3<f64>) -> V3<f64> {
-        let poly = &self.polygons[k];
-        let mut best: Option<(f64, V3<f64>)> = None;
-        for tri in &self.tris[poly.tris.clone()] {
-            let Some([n0, n1, n2]) = tri.normals else { continue };
-            let w = point - tri.v0;
-            let (d00, d01, d11) = (tri.e1.dot(tri.e1), tri.e1.dot(tri.e2), tri.e2.dot(tri.e2));
-            let (d20, d21) = (w.dot(tri.e1), w.dot(tri.e2));
-            let denom = d00 * d11 - d01 * d01;
-            let b1 = (d11 * d20 - d01 * d21) / denom;
-            let b2 = (d00 * d21 - d01 * d20) / denom;
-            let b0 = 1.0 - b1 - b2;
-            let score = b0.min(b1).min(b2);
-            if best.is_none_or(|(s, _)| score > s) {
-                best = Some((score, (n0 * b0 + n1 * b1 + n2 * b2).normalize()));
-            }
-        }
-        match best {
-            Some((_, n)) if n.x.is_finite() && n.y.is_finite() && n.z.is_finite() => n,
-            _ => poly.normal,
+    /// The unit normal of the surface the hit's `t` is measured on: [`Twin::surface`]'s, but a polygon's
+    /// plane normal rather than its interpolated vertex normals.
+    fn geometric_normal(&self, ray: &Ray<f64>, t: f64, prim: u32) -> V3<f64> {
+        match self.kind(prim) {
+            Some(k) => self.kinds.geometric_normal(k, ray, t, ray.at(t)).expect("a primitive"),
+            None => self.surface(ray, t, prim).1,
         }
     }
 }

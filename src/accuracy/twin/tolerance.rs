@@ -41,32 +41,9 @@ impl Twin {
             let dist = len(c - ray.origin);
             return near_tangent(c, r, ray, dist + r, slack.at(dist));
         }
-        if let Some(k) = self.kind(prim) {
-            return self.kinds.grazing(k, ray, tol, slack).unwrap_or(false);
-        }
-        let poly = &self.polygons[i - ns];
-        let (n, d) = (poly.normal, ray.dir);
-        let cos = n.dot(d).abs() / len(d);
-        if cos <= tol + slack.dir {
-            return true;
-        }
-        let Some(&anchor) = poly.outline.first() else { return false };
-        let t = n.dot(anchor - ray.origin) / n.dot(d);
-        let p = ray.at(t);
-        let m = poly.outline.len();
-        let edge = (0..m)
-            .map(|j| segment_distance(p, poly.outline[j], poly.outline[(j + 1) % m]))
-            .fold(f64::INFINITY, f64::min);
-        edge * cos <= tol * (len(ray.origin) + len(p)) + slack.at(t)
-    }
-
-    /// The unit geometric normal of `prim` at `ray`'s point `t`: [`Twin::surface`]'s, but a polygon's plane
-    /// normal rather than its interpolated vertex normals (the surface the hit's `t` is measured on).
-    fn geometric_normal(&self, ray: &Ray<f64>, t: f64, prim: u32) -> V3<f64> {
-        let first = self.spheres.len();
-        match (prim as usize).checked_sub(first).and_then(|k| self.polygons.get(k)) {
-            Some(poly) => poly.normal,
-            None => self.surface(ray, t, prim).1,
+        match self.kind(prim) {
+            Some(k) => self.kinds.grazing(k, ray, tol, slack).unwrap_or(false),
+            None => false,
         }
     }
 
@@ -141,20 +118,6 @@ impl Twin {
             // The magnitudes the kernel's f32 operations round: |p|, the centre's distance and the radius.
             return (len(p - c) - r).abs() <= tol * (len(p) + len(c - p) + r) + slack;
         }
-        if let Some(near) = self.kind(prim).and_then(|k| self.kinds.near(k, p, tol, slack)) {
-            return near;
-        }
-        let poly = &self.polygons[i - ns];
-        let Some(&anchor) = poly.outline.first() else { return false };
-        let extent = poly.outline.iter().map(|&x| len(x - anchor)).fold(0.0, f64::max);
-        poly.normal.dot(p - anchor).abs() <= tol * (len(p) + len(anchor) + extent) + slack
+        self.kind(prim).and_then(|k| self.kinds.near(k, p, tol, slack)).unwrap_or(false)
     }
-}
-
-/// Distance from `p` to the segment `a..b`.
-fn segment_distance(p: V3<f64>, a: V3<f64>, b: V3<f64>) -> f64 {
-    let ab = b - a;
-    let dd = ab.dot(ab);
-    let s = if dd > 0.0 { ((p - a).dot(ab) / dd).clamp(0.0, 1.0) } else { 0.0 };
-    len(p - (a + ab * s))
 }

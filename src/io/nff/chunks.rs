@@ -103,14 +103,15 @@ fn join<'a>(path: &'a Path, pieces: Vec<Reader<'a>>) -> Option<Reader<'a>> {
         // The first object without a fill of its own makes the default material, as in one pass.
         let inherits =
             desc.spheres.iter().map(|s| s.material).chain(desc.kinds.cones.iter().map(|c| c.material));
-        let inherits = inherits.chain(desc.polygons.iter().map(|p| p.material)).any(|m| m == INHERITED);
+        let inherits = inherits.chain(desc.kinds.polygons.iter().map(|p| p.material)).any(|m| m == INHERITED);
         let inherited = if inherits { all.current_material() } else { INHERITED };
         let offset = all.desc.materials.len() as u32;
         let map = move |m: u32| if m == INHERITED { inherited } else { m + offset };
         let d = &mut all.desc;
         spheres.push((desc.spheres, map));
         d.kinds.cones.extend(desc.kinds.cones.into_iter().map(|mut c| (c.material = map(c.material), c).1));
-        d.polygons.extend(desc.polygons.into_iter().map(|mut p| (p.material = map(p.material), p).1));
+        let polygons = desc.kinds.polygons.into_iter().map(|mut p| (p.material = map(p.material), p).1);
+        d.kinds.polygons.extend(polygons);
         d.materials.extend(desc.materials);
         if let Some(m) = piece.material {
             all.material = Some(m + offset);

@@ -1,13 +1,13 @@
 //! The f64 oracle: a scene's f32 geometry (centres, radii, the f32 inverse transforms, triangle edges)
 //! widened exactly to f64 and intersected by the f64 instances of the same kernels, brute force. What it
 //! measures against the f32 path is the f32 arithmetic of the kernels, not the rounding of the scene
-//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, polygons, then the
-//! registered kinds' items: ellipsoids, planes, cones, tori), as `Geometry::intersect` reports them. The registered
-//! kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a kind
+//! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, then the registered
+//! kinds' primitives: polygons, ellipsoids, planes, cones, tori), as `Geometry::intersect` reports them. The
+//! registered kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a kind
 //! is covered here as soon as it is registered.
 
 use bareray::accel::Geometry;
-use bareray::geometry::{intersect_sphere, intersect_triangle, sphere_roots, Ray, NO_PRIM};
+use bareray::geometry::{intersect_sphere, sphere_roots, Ray, NO_PRIM};
 use bareray::kinds::{KindTwins, Stray};
 use bareray::math::V3;
 
@@ -18,25 +18,16 @@ use super::EPS32;
 /// brute force, ties to the lower id (the renderer's rule).
 pub struct Oracle {
     spheres: Vec<(V3<f64>, f64)>,
-    tris: Vec<Tri>,
-    /// The registered kinds' items, widened, with ids from `kinds_base`.
+    /// The registered kinds' primitives (polygons among them), widened, with ids from `kinds_base`.
     kinds: KindTwins,
     kinds_base: u32,
 }
 
-/// A triangle for the oracle: v0, e1, e2 and its polygon's primitive id.
-pub type Tri = (V3<f64>, V3<f64>, V3<f64>, u32);
-
 impl Oracle {
     pub fn new(g: &Geometry) -> Self {
         let s = &g.spheres;
-        let p = &g.polygons;
-        let base = g.polygon_base() as u32;
         Self {
             spheres: (0..s.len()).map(|i| (wide(s.center(i)), f64::from(s.r[i]))).collect(),
-            tris: (0..p.triangles())
-                .map(|j| (wide(p.v0[j]), wide(p.e1[j]), wide(p.e2[j]), base + p.polygon[j]))
-                .collect(),
             kinds: g.kinds.widened(),
             kinds_base: g.kinds_base() as u32,
         }
@@ -54,21 +45,8 @@ impl Oracle {
         if let Some(k) = self.kind(prim) {
             return self.kinds.hit_of(k, ray);
         }
-        let ns = self.spheres.len();
-        let (hit, t) = if i < ns {
-            intersect_sphere(self.spheres[i].0, self.spheres[i].1, ray, f64::INFINITY)
-        } else {
-            let mut best = (false, f64::INFINITY);
-            for &(v0, e1, e2, id) in &self.tris {
-                if id == prim {
-                    let (h, t) = intersect_triangle(v0, e1, e2, ray, best.1);
-                    if h {
-                        best = (true, t);
-                    }
-                }
-            }
-            best
-        };
+        let &(centre, radius) = self.spheres.get(i)?;
+        let (hit, t) = intersect_sphere(centre, radius, ray, f64::INFINITY);
         hit.then_some(t)
     }
 
@@ -79,12 +57,6 @@ impl Oracle {
             let (h, t) = intersect_sphere(c, r, ray, best.1);
             if h && i as u32 != skip {
                 best = (i as u32, t);
-            }
-        }
-        for &(v0, e1, e2, id) in &self.tris {
-            let (h, t) = intersect_triangle(v0, e1, e2, ray, best.1);
-            if h && id != skip {
-                best = (id, t);
             }
         }
         self.kinds.intersect(self.kinds_base, skip, ray, f64::INFINITY, &mut best);

@@ -1,5 +1,5 @@
 //! Planar polygons (NFF `p` and `pp`), stored as triangles that carry their polygon's id: the triangles are the
-//! items of the polygons' BVH, in its leaf order, and each polygon keeps the list of its triangles for shading.
+//! items of the polygons' BVH, and each polygon keeps the list of its triangles for shading.
 
 use crate::math::{Vec3f, V3};
 
@@ -29,16 +29,15 @@ pub(crate) struct Polygons {
     pub(crate) thickness: Vec<f32>,
     /// Per polygon: material index.
     pub(crate) material: Vec<u32>,
+    /// The rendering space's origin in world space, rounded to f32: polygons' solid textures are in world
+    /// space (a hit's object point is the point plus it).
+    pub(crate) origin: Vec3f,
 }
 
 impl Polygons {
     /// Number of polygons.
     pub(crate) fn len(&self) -> usize {
         self.normal.len()
-    }
-    /// True when there are none.
-    pub(crate) fn is_empty(&self) -> bool {
-        self.normal.is_empty()
     }
     /// Number of triangles.
     pub(crate) fn triangles(&self) -> usize {
@@ -85,29 +84,6 @@ impl Polygons {
         self.thickness.push((thickness as f32).max(f32::MIN_POSITIVE));
         self.normal.push(normal);
         self.material.push(material);
-    }
-
-    /// The triangles in a new order (`order[j]` is the old index of new triangle `j`), each polygon's list of
-    /// triangles following them; polygon ids do not change.
-    pub(crate) fn permuted(&self, order: &[u32]) -> Polygons {
-        use super::gathered;
-        let mut moved_to = vec![0u32; order.len()];
-        for (new, &old) in order.iter().enumerate() {
-            moved_to[old as usize] = new as u32;
-        }
-        Polygons {
-            v0: gathered(&self.v0, order),
-            e1: gathered(&self.e1, order),
-            e2: gathered(&self.e2, order),
-            polygon: gathered(&self.polygon, order),
-            vertex_normals: gathered(&self.vertex_normals, order),
-            members: self.members.iter().map(|&j| moved_to[j as usize]).collect(),
-            first: self.first.clone(),
-            normal: self.normal.clone(),
-            anchor: self.anchor.clone(),
-            thickness: self.thickness.clone(),
-            material: self.material.clone(),
-        }
     }
 
     /// The box of triangle `j` over its vertices `v0`, `v0 + e1`, `v0 + e2` (the sums rounded: the BVH's

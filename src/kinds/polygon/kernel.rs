@@ -17,7 +17,7 @@ use glam::{DVec2, DVec3};
 
 use crate::math::{Real, V3};
 
-use super::Ray;
+use crate::geometry::Ray;
 
 /// Closest hit of one ray with the triangle `(v0, v0 + e1, v0 + e2)` in `[0, t_max)`, both sides.
 ///
