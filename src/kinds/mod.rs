@@ -244,7 +244,7 @@ pub(crate) struct Items<'a, K: Kind> {
     pub(crate) store: &'a K::Store,
     /// The tree's leaf order, or `None` for every item in order (brute force).
     pub(crate) order: Option<&'a [u32]>,
-    /// The id of item 0.
+    /// The id of the kind's first primitive.
     pub(crate) base: u32,
 }
 

@@ -155,9 +155,14 @@ impl Kind for Polygon {
         stays_off_plane(anchor, normal, F::splat_f32(store.thickness[p]), ray, reach)
     }
 
-    /// The interpolated vertex normal (else the plane's), and the world-space point for solid textures.
+    /// The interpolated vertex normal (else the plane's), and the world-space point for solid textures,
+    /// moved onto the polygon's plane first: the rounded hit points scatter an ulp or so either side of it,
+    /// and a checker's cells at an integer height (a floor at y = 0) would flip pixel by pixel. On an
+    /// axis-aligned polygon the moved point's height is the anchor's exactly.
     fn surface(store: &Polygons, k: usize, _ray: &Ray<f32>, _t: f32, point: Vec3f) -> (Vec3f, Vec3f) {
-        (store.shading_normal(k, point), point + store.origin)
+        let (normal, anchor) = (store.normal[k], store.anchor[k]);
+        let on_plane = point - normal * normal.dot(point - anchor);
+        (store.shading_normal(k, point), on_plane + store.origin)
     }
 
     fn item_material(store: &Polygons, k: usize) -> u32 {
@@ -192,5 +197,41 @@ impl Kind for Polygon {
 
     fn near64(p: &Polygon64, point: V3<f64>, tol: f64, slack: f64) -> bool {
         p.near(point, tol, slack)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::math::SplitMix64;
+
+    /// Hit points an ulp or so off a floor at y = 0 (and one at y = 2) all read the floor's height as the
+    /// solid texture's, so a checker's cells do not flip between neighbouring pixels; x and z stay the hit's.
+    #[test]
+    fn an_axis_aligned_floor_reads_one_height() {
+        let origin = DVec3::new(0.3, 1.6, -7.1);
+        for height in [0.0, 2.0] {
+            let square = [[-5.0, -5.0], [5.0, -5.0], [5.0, 5.0], [-5.0, 5.0]];
+            let vertices = square.iter().map(|&[x, z]| DVec3::new(x, height, z)).collect();
+            let mut store = Polygons::default();
+            Polygon::push(&mut store, &PolygonDesc { vertices, normals: None, material: 0 }, origin);
+            let plane_y = (height - origin.y) as f32;
+            let mut rng = SplitMix64::new(9);
+            let mut heights = std::collections::BTreeSet::new();
+            for _ in 0..1000 {
+                let (x, z) = ((rng.unit() * 10.0 - 5.0) as f32, (rng.unit() * 10.0 - 5.0) as f32);
+                let ulps = (rng.unit() * 8.0) as u32;
+                let y = match rng.unit() < 0.5 {
+                    true => f32::from_bits(plane_y.to_bits() + ulps),
+                    false => f32::from_bits(plane_y.to_bits().wrapping_sub(ulps)),
+                };
+                let point = V3::new(x, y, z);
+                let ray = Ray { origin: point, dir: V3::new(0.0, -1.0, 0.0) };
+                let (_, object) = Polygon::surface(&store, 0, &ray, 0.0, point);
+                heights.insert(object.y.to_bits());
+                assert_eq!((object.x, object.z), (x + store.origin.x, z + store.origin.z));
+            }
+            assert_eq!(heights.len(), 1, "floor at {height}: heights {heights:?}");
+        }
     }
 }
