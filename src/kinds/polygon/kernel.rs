@@ -116,6 +116,26 @@ pub(crate) fn newell_normal(vertices: &[DVec3]) -> DVec3 {
     })
 }
 
+/// Barycentric coordinates of `p` (assumed in the plane) in the triangle `(v0, v0 + e1, v0 + e2)`: the f32
+/// store's shading normals and the twin's f64 ones interpolate with the same operations.
+pub(crate) fn barycentric<F: Real>(v0: V3<F>, e1: V3<F>, e2: V3<F>, p: V3<F>) -> [F; 3] {
+    let w = p - v0;
+    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
+    let (d20, d21) = (w.dot(e1), w.dot(e2));
+    let denom = d00 * d11 - d01 * d01;
+    let b1 = (d11 * d20 - d01 * d21) / denom;
+    let b2 = (d00 * d21 - d01 * d20) / denom;
+    [F::splat(1.0) - b1 - b2, b1, b2]
+}
+
+/// The triangles compile and the twin make of a polygon's `vertices`: [`triangulate`]'s, or for a polygon
+/// the readers would have rejected (a description built by hand), a fan of possibly degenerate triangles,
+/// which the kernel can only miss or hit harmlessly, so that the polygon still gets its id.
+pub(crate) fn triangles_or_fan(vertices: &[DVec3]) -> Vec<[u32; 3]> {
+    let n = vertices.len() as u32;
+    triangulate(vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect())
+}
+
 /// Splits a planar polygon into triangles (vertex index triples, each wound like the polygon).
 ///
 /// Convex polygons become a fan from vertex 0. Non-convex simple polygons are ear-clipped in the plane of

@@ -11,7 +11,7 @@ use glam::DVec3;
 use serde::Deserialize;
 use toml::Spanned;
 
-pub(crate) use kernel::{intersect_triangle, newell_normal, stays_off_plane, triangulate};
+pub(crate) use kernel::{intersect_triangle, newell_normal, stays_off_plane, triangles_or_fan, triangulate};
 pub(crate) use store::Polygons;
 use twin::Polygon64;
 
@@ -46,14 +46,6 @@ pub(crate) struct PolygonToml {
 }
 
 impl PolygonDesc {
-    /// The triangles (vertex index triples) compile and the twin make of the polygon. One the readers would
-    /// have rejected (a description built by hand) still gets its id, as a fan of possibly degenerate
-    /// triangles that the kernel can only miss or hit harmlessly: ids must not shift.
-    pub(crate) fn triangles(&self) -> Vec<[u32; 3]> {
-        let n = self.vertices.len() as u32;
-        triangulate(&self.vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect())
-    }
-
     /// The vertex normals to interpolate, each of unit length (zero for a zero vector), when there is one
     /// per vertex.
     pub(crate) fn unit_normals(&self) -> Option<Vec<DVec3>> {
@@ -118,7 +110,7 @@ impl Kind for Polygon {
         let unit = |v: DVec3| V3::from(v.normalize_or_zero()).to_f32();
         let normals = d.unit_normals().map(|ns| ns.iter().map(|&v| V3::from(v).to_f32()).collect::<Vec<_>>());
         let normal = unit(newell_normal(&d.vertices));
-        store.push(&vertices, normals.as_deref(), &d.triangles(), normal, d.material);
+        store.push(&vertices, normals.as_deref(), &triangles_or_fan(&d.vertices), normal, d.material);
         store.origin = V3::from(origin).to_f32();
     }
 

@@ -1,6 +1,7 @@
 //! Planar polygons (NFF `p` and `pp`), stored as triangles that carry their polygon's id: the triangles are the
 //! items of the polygons' BVH, and each polygon keeps the list of its triangles for shading.
 
+use super::kernel::barycentric;
 use crate::math::{Vec3f, V3};
 
 /// Planar polygons, stored as triangles that carry their polygon's index: one primitive id per polygon.
@@ -118,15 +119,4 @@ impl Polygons {
 
 fn min3(b: [f32; 3]) -> f32 {
     b[0].min(b[1]).min(b[2])
-}
-
-/// Barycentric coordinates of `p` (assumed in the plane) in the triangle `(v0, v0 + e1, v0 + e2)`.
-fn barycentric(v0: Vec3f, e1: Vec3f, e2: Vec3f, p: Vec3f) -> [f32; 3] {
-    let w = p - v0;
-    let (d00, d01, d11) = (e1.dot(e1), e1.dot(e2), e2.dot(e2));
-    let (d20, d21) = (w.dot(e1), w.dot(e2));
-    let denom = d00 * d11 - d01 * d01;
-    let b1 = (d11 * d20 - d01 * d21) / denom;
-    let b2 = (d00 * d21 - d01 * d20) / denom;
-    [1.0 - b1 - b2, b1, b2]
 }

@@ -3,7 +3,8 @@
 
 use glam::DVec3;
 
-use super::{intersect_triangle, newell_normal, triangulate, PolygonDesc};
+use super::kernel::barycentric;
+use super::{intersect_triangle, newell_normal, triangles_or_fan, PolygonDesc};
 use crate::geometry::Ray;
 use crate::kinds::Stray;
 use crate::math::V3;
@@ -36,13 +37,10 @@ fn len(p: V3<f64>) -> f64 {
 }
 
 impl Polygon64 {
-    /// The polygon moved by `−origin`, triangulated there (compile's rule for a polygon the readers would
-    /// have rejected: a plain fan).
+    /// The polygon moved by `−origin`, triangulated there ([`triangles_or_fan`]).
     pub(crate) fn new(d: &PolygonDesc, origin: DVec3) -> Self {
         let vertices: Vec<DVec3> = d.vertices.iter().map(|&x| x - origin).collect();
-        let n = vertices.len() as u32;
-        let triangles =
-            triangulate(&vertices).unwrap_or_else(|_| (1..n.max(2) - 1).map(|i| [0, i, i + 1]).collect());
+        let triangles = triangles_or_fan(&vertices);
         let normals: Option<Vec<V3<f64>>> = d.unit_normals().map(|ns| ns.into_iter().map(V3::from).collect());
         let at = |i: u32| V3::from(vertices[i as usize]);
         let tris: Vec<Tri64> = triangles
@@ -109,13 +107,7 @@ impl Polygon64 {
         let mut best: Option<(f64, V3<f64>)> = None;
         for tri in &self.tris {
             let Some([n0, n1, n2]) = tri.normals else { continue };
-            let w = point - tri.v0;
-            let (d00, d01, d11) = (tri.e1.dot(tri.e1), tri.e1.dot(tri.e2), tri.e2.dot(tri.e2));
-            let (d20, d21) = (w.dot(tri.e1), w.dot(tri.e2));
-            let denom = d00 * d11 - d01 * d01;
-            let b1 = (d11 * d20 - d01 * d21) / denom;
-            let b2 = (d00 * d21 - d01 * d20) / denom;
-            let b0 = 1.0 - b1 - b2;
+            let [b0, b1, b2] = barycentric(tri.v0, tri.e1, tri.e2, point);
             let score = b0.min(b1).min(b2);
             if best.is_none_or(|(s, _)| score > s) {
                 best = Some((score, (n0 * b0 + n1 * b1 + n2 * b2).normalize()));
