@@ -4,7 +4,7 @@
 # it is an independent reference for framing and visibility; bareray renders SPD's NFF output of the same scene.
 #
 # 1. Build SPD's generators and write the scenes (once):
-#      SPD_DIR=/work/spd bench-peers/spd_compare.sh setup SPD_SRC
+#      SPD_DIR=$HOME/spd bench-peers/spd_compare.sh setup SPD_SRC
 #    SPD_SRC is a checkout of https://github.com/erich666/StandardProceduralDatabases (the directory holding
 #    src/makefile) or a bare git directory of it (exported with `git archive HEAD`). The sources go to
 #    $SPD_DIR/src and are built with SPD's own makefile. They call MSVC's sscanf_s/sprintf_s/fopen_s, so the
@@ -14,7 +14,7 @@
 #    NAME.pov` (SPD's "POV-Ray 3.1" output; sombrero's writes its height field to hf000.tga beside it).
 #    $SPD_DIR/scenes/entities.txt lists the NFF entities of each scene.
 # 2. Compare:
-#      SPD_DIR=/work/spd bench-peers/spd_compare.sh path/to/bareray [SIZE]
+#      SPD_DIR=$HOME/spd bench-peers/spd_compare.sh path/to/bareray [SIZE]
 #    For each scene, at SIZE x SIZE (default 256), one sample per pixel, THREADS threads (default 2):
 #      * POV-Ray: SPD's .pov with `#version 3.7; global_settings { assumed_gamma 1.0 }` put in front (SPD
 #        writes neither; without them POV-Ray 3.7 warns and falls back to 3.62 compatibility with gamma
