@@ -128,6 +128,49 @@ fn unknown_elements_get_the_fallback_and_one_warning() {
     assert!(read.warnings[0].contains("`Qq` (2 particles)"), "{:?}", read.warnings);
 }
 
+/// Four- and five-site water models' charge sites (GROMACS's `MW`, AMBER's `EPW`, TIP5P's `LP1`/`LP2`) are
+/// no atoms: left out with a warning counting them, drawn when given a radius; a file of nothing else is an
+/// error that says why. A real element whose name starts alike (`MG`, magnesium) is drawn.
+#[test]
+fn virtual_sites_are_left_out_unless_given_a_radius() {
+    let dir = tempfile::tempdir().unwrap();
+    let tip4p = concat!(
+        "tip4p\n    5\n",
+        "    1SOL     OW    1   0.126   1.624   1.679\n",
+        "    1SOL    HW1    2   0.190   1.661   1.747\n",
+        "    1SOL    HW2    3   0.177   1.568   1.613\n",
+        "    1SOL     MW    4   0.140   1.621   1.683\n",
+        "    2MG      MG    5   0.500   0.500   0.500\n",
+        "   1.86206   1.86206   1.86206\n"
+    );
+    let none = LoadOptions::default();
+    let read_default = read(dir.path(), "w.gro", tip4p, &none);
+    assert_eq!(read_default.desc.spheres.len(), 4, "O, H, H, Mg: the MW site left out");
+    assert!((radii(&read_default)[3] - 0.251).abs() < 1e-12, "magnesium 2.51 Å in nm");
+    assert_eq!(read_default.warnings.len(), 1, "{:?}", read_default.warnings);
+    let warning = &read_default.warnings[0];
+    assert!(warning.contains("`MW` (1 particle)") && warning.contains("--radius MW=R"), "{warning}");
+    let given = LoadOptions { radius: vec![("mw".to_owned(), 0.01)], ..LoadOptions::default() };
+    let drawn = read(dir.path(), "w.gro", tip4p, &given);
+    assert_eq!(drawn.desc.spheres.len(), 5, "--radius draws them");
+    assert_eq!(drawn.desc.spheres[3].radius, 0.01);
+    assert!(drawn.warnings.is_empty(), "{:?}", drawn.warnings);
+    // PDB names of AMBER's and TIP5P's sites, without an element column.
+    let pdb = concat!(
+        "ATOM      1  O   WAT     1       0.000   0.000   0.000  1.00  0.00\n",
+        "ATOM      2  EPW WAT     1       0.150   0.000   0.000  1.00  0.00\n",
+        "ATOM      3  LP1 WAT     2       5.000   0.000   0.000  1.00  0.00\n",
+        "ATOM      4  LP2 WAT     2       5.000   0.500   0.000  1.00  0.00\n",
+    );
+    let sites = read(dir.path(), "s.pdb", pdb, &none);
+    assert_eq!(radii(&sites), [1.5], "the oxygen alone");
+    assert_eq!(sites.warnings.len(), 3, "one a kind (EPW, LP1, LP2): {:?}", sites.warnings);
+    assert!(sites.warnings[1].contains("`LP1` (1 particle)"), "{:?}", sites.warnings);
+    let only = write(dir.path(), "m.pdb", pdb.lines().nth(1).unwrap().as_bytes());
+    let e = load_with(&only, &none).unwrap_err();
+    assert!(e.message.contains("no particles but 1 virtual site, not drawn"), "{e}");
+}
+
 #[test]
 fn triclinic_scaled_coordinates_land_on_the_known_point() {
     // lx 10, ly 8, lz 6 from the origin, tilts xy 2, xz -1, yz 1; LAMMPS writes the bounding box's bounds.

@@ -9,6 +9,10 @@
 //! kind, the sidecar's, the file's colour for the particle, the table's for the element, `TYPE_COLORS`
 //! for a LAMMPS type, `elements::FALLBACK_COLOR`.
 //!
+//! Virtual sites ([`is_virtual_site`]: the massless charge sites of four- and five-site water models, which no
+//! element names) are left out unless the file, `--radius` or the sidecar gives them a radius; a warning
+//! counts them.
+//!
 //! With [`ParticleOptions::draw_box`], the frame's periodic box is drawn as twelve open cylinders with a
 //! sphere at each corner to close the joints, all of radius `box_radius` and the grey `BOX_COLOR`.
 
@@ -28,6 +32,20 @@ pub(crate) const TYPE_COLORS: [u32; 8] =
 
 /// The radius of a LAMMPS type without a radius column or an override (half the unit length).
 pub(crate) const TYPE_RADIUS: f64 = 0.5;
+
+/// The names of virtual sites, letters only and upper case: TIP4P's `MW` (GROMACS) and `M` (OpenMM), AMBER's
+/// `EPW` and `EP1`/`EP2` (TIP4P-Ew, TIP5P), GROMACS's TIP5P lone pairs `LP1`/`LP2`.
+const VIRTUAL_SITE_NAMES: [&str; 5] = ["MW", "M", "EPW", "EP", "LP"];
+
+/// Whether particles of `kind` are virtual sites: no element, not a LAMMPS type, and a name whose letters
+/// are one of [`VIRTUAL_SITE_NAMES`]. They carry a charge, not an atom, and sit inside their oxygen's
+/// sphere (TIP4P's `MW` 0.15 Å from it), so drawn at the unknown element's radius they would poke out of it.
+pub(crate) fn is_virtual_site(kind: &Kind) -> bool {
+    let letters: String = kind.name.chars().filter(char::is_ascii_alphabetic).collect();
+    kind.element.is_none()
+        && !kind.lammps_type
+        && VIRTUAL_SITE_NAMES.iter().any(|v| v.eq_ignore_ascii_case(&letters))
+}
 
 /// The view when none is chosen: from +z.
 pub(crate) const DEFAULT_VIEW: DVec3 = DVec3::Z;
@@ -86,9 +104,19 @@ pub(crate) fn scene(
         Unit::Nanometre => 0.1,
     };
     let mut defaults = Vec::with_capacity(frame.kinds.len());
+    // Kinds whose particles are left out where the file gives them no radius: virtual sites without a
+    // radius given for their kind.
+    let mut left_out = vec![false; frame.kinds.len()];
+    let mut sites = 0;
     for (i, kind) in frame.kinds.iter().enumerate() {
         let (radius, color, known) = by_kind(kind, unit);
-        if !known && counts[i] > 0 && radius_over[i].is_none() {
+        if is_virtual_site(kind) && radius_over[i].is_none() {
+            left_out[i] = true;
+            sites += counts[i];
+            if counts[i] > 0 {
+                warnings.push(virtual_sites(kind, counts[i]));
+            }
+        } else if !known && counts[i] > 0 && radius_over[i].is_none() {
             warnings.push(unknown(kind, counts[i], FALLBACK_RADIUS * unit));
         }
         defaults.push((radius_over[i].unwrap_or(radius), color_over[i].unwrap_or(color)));
@@ -98,13 +126,20 @@ pub(crate) fn scene(
     let mut colors = Vec::with_capacity(frame.particles.len());
     for p in &frame.particles {
         let k = p.kind as usize;
+        if left_out[k] && p.radius.is_none() {
+            continue;
+        }
         let radius = radius_over[k].or(p.radius).unwrap_or(defaults[k].0) * scale;
         let color = color_over[k].or(p.color).unwrap_or(defaults[k].1);
         spheres.push(SphereDesc { center: p.center, radius, material: 0 });
         colors.push(Rgb8::quantize(color));
     }
     if spheres.is_empty() {
-        return Err("no particles".to_owned());
+        return Err(match sites {
+            0 => "no particles".to_owned(),
+            1 => "no particles but 1 virtual site, not drawn (--radius NAME=R draws it)".to_owned(),
+            n => format!("no particles but {n} virtual sites, not drawn (--radius NAME=R draws them)"),
+        });
     }
     let cell = match (options.draw_box, frame.cell) {
         (false, _) => None,
@@ -181,6 +216,16 @@ fn unknown(kind: &Kind, count: usize, radius: f64) -> String {
     };
     let s = if count == 1 { "" } else { "s" };
     format!("`{}` ({count} particle{s}) {what} (--radius and --color set others)", kind.name)
+}
+
+/// The warning for virtual sites left out.
+fn virtual_sites(kind: &Kind, count: usize) -> String {
+    let s = if count == 1 { "" } else { "s" };
+    format!(
+        "`{}` ({count} particle{s}) named as a virtual site (a water model's charge site, no atom): not drawn \
+         (--radius {}=R draws them)",
+        kind.name, kind.name
+    )
 }
 
 /// The material of particles of `color`: diffuse with a little highlight.
