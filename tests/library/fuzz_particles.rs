@@ -1,6 +1,6 @@
-//! Mutated particle files: small valid samples of each particle format (XYZ, extended XYZ, PDB, PQR, GRO,
-//! LAMMPS dump, and a gzip-compressed XYZ) with bytes flipped, lines cut, duplicated or dropped, and the
-//! whole cut short, parsed with a random frame and with or without the periodic box drawn; and mutated types
+//! Mutated particle files: small valid samples of each particle format (XYZ, extended XYZ, PDB, PQR, GRO
+//! with a water model's virtual site, LAMMPS dump, a gzip-compressed XYZ and a bzip2-compressed PDB) with
+//! bytes flipped, lines cut, duplicated or dropped, and the whole cut short, parsed with a random frame and with or without the periodic box drawn; and mutated types
 //! sidecars. Every input must give a scene or an error naming the file and a line within the text (or the
 //! file as a whole); none may panic.
 //!
@@ -32,7 +32,7 @@ const SAMPLES: &[(&str, &str)] = &[
     ("s.pqr", "CRYST1 5 5 5 90 90 120\nATOM      1  N   MET     1      1.0   2.0   3.0 -0.30 1.824\nATOM      2  O   MET A   1      0.0   0.0   0.0 -0.50 1.7\n"),
     (
         "s.gro",
-        "water\n    2\n    1SOL     OW    1   0.126   1.624   1.679\n    1SOL    HW1    2   0.190   1.661   1.747\n   1.86206   1.86206   1.86206\n",
+        "water\n    3\n    1SOL     OW    1   0.126   1.624   1.679\n    1SOL    HW1    2   0.190   1.661   1.747\n    1SOL     MW    3   0.140   1.621   1.683\n   1.86206   1.86206   1.86206\n",
     ),
     (
         "s.lammpstrj",
@@ -82,12 +82,13 @@ fn gzip(bytes: &[u8]) -> Vec<u8> {
     enc.finish().unwrap()
 }
 
-/// Runs `inputs` mutations of every sample (and of the gzip-compressed XYZ sample); panics on a panic or
-/// a badly placed error.
+/// Runs `inputs` mutations of every sample (and of the gzip-compressed XYZ and bzip2-compressed PDB samples);
+/// panics on a panic or a badly placed error.
 fn run(inputs: u64) {
     let mut samples: Vec<(String, Vec<u8>)> =
         SAMPLES.iter().map(|(n, t)| (n.to_string(), t.as_bytes().to_vec())).collect();
     samples.push(("s.xyz.gz".to_owned(), gzip(SAMPLES[0].1.as_bytes())));
+    samples.push(("s.pdb.bz2".to_owned(), super::common::samples::bzip(SAMPLES[2].1.as_bytes())));
     for (k, (name, sample)) in samples.iter().enumerate() {
         let path = Path::new(name.as_str());
         let format = SceneFormat::from_extension(path).expect("a particle extension");
@@ -108,7 +109,7 @@ fn run(inputs: u64) {
                     assert!(e.path == path, "{name}: input {i}: {e}");
                     // Line numbers of a compressed file count its decompressed lines.
                     assert!(
-                        name.ends_with(".gz") || e.line <= text_lines,
+                        name.ends_with(".gz") || name.ends_with(".bz2") || e.line <= text_lines,
                         "{name}: input {i}: line {} of {text_lines}: {e}",
                         e.line
                     );
