@@ -78,7 +78,14 @@ fn compressed_files_read_as_the_plain_ones() {
     let e = load_with(&path, &none).unwrap_err();
     assert!(e.message.starts_with("bad gzip data"), "{e}");
     let path = write(dir.path(), "plain.xyz.gz", XYZ.as_bytes());
-    assert!(load_with(&path, &none).unwrap_err().message.contains("does not hold gz data"));
+    assert!(load_with(&path, &none).unwrap_err().message.contains("does not hold gzip data"));
+    // A tar archive named .bz2 (as some test-data sets ship) is told apart.
+    let mut tar = vec![0u8; 1024];
+    tar[..5].copy_from_slice(b"a.pdb");
+    tar[257..263].copy_from_slice(b"ustar ");
+    let path = write(dir.path(), "a.pdb.bz2", &tar);
+    let e = load_with(&path, &none).unwrap_err();
+    assert!(e.message.ends_with("does not hold bzip2 data (it is a tar archive: unpack it first)"), "{e}");
 }
 
 #[test]
@@ -126,6 +133,15 @@ fn unknown_elements_get_the_fallback_and_one_warning() {
     assert_eq!(colour(&read, 0), Rgb::new(1.0, 20.0 / 255.0, 147.0 / 255.0), "pink #FF1493");
     assert_eq!(read.warnings.len(), 1);
     assert!(read.warnings[0].contains("`Qq` (2 particles)"), "{:?}", read.warnings);
+    // A GRO atom without a name.
+    let blank = "x\n    1\n    1SOL          1   0.126   1.624   1.679\n   1.0   1.0   1.0\n";
+    let read = super::particle_files::read(dir.path(), "b.gro", blank, &LoadOptions::default());
+    assert_eq!(read.warnings.len(), 1);
+    assert!(
+        read.warnings[0].starts_with("a blank name (1 particle) is not an element"),
+        "{:?}",
+        read.warnings
+    );
 }
 
 /// Four- and five-site water models' charge sites (GROMACS's `MW`, AMBER's `EPW`, TIP5P's `LP1`/`LP2`) are

@@ -290,7 +290,13 @@ pub(crate) fn decompress(path: &Path, bytes: Vec<u8>) -> Result<Vec<u8>, SceneEr
     } else {
         return match ext.as_deref() {
             Some(e @ ("gz" | "bz2")) => {
-                Err(SceneError::whole_file(path, format!("named .{e} but does not hold {e} data")))
+                let what = if e == "gz" { "gzip" } else { "bzip2" };
+                // A tar archive says so at byte 257 (POSIX `ustar`).
+                let tar = match bytes.get(257..262) == Some(b"ustar") {
+                    true => " (it is a tar archive: unpack it first)",
+                    false => "",
+                };
+                Err(SceneError::whole_file(path, format!("named .{e} but does not hold {what} data{tar}")))
             }
             _ => Ok(bytes),
         };

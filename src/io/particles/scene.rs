@@ -215,7 +215,11 @@ fn unknown(kind: &Kind, count: usize, radius: f64) -> String {
         None => format!("is not an element the table knows: radius {radius}, colour #{FALLBACK_COLOR:06X}"),
     };
     let s = if count == 1 { "" } else { "s" };
-    format!("`{}` ({count} particle{s}) {what} (--radius and --color set others)", kind.name)
+    let name = match kind.name.is_empty() {
+        true => "a blank name".to_owned(),
+        false => format!("`{}`", kind.name),
+    };
+    format!("{name} ({count} particle{s}) {what} (--radius and --color set others)")
 }
 
 /// The warning for virtual sites left out.
