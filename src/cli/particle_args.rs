@@ -25,11 +25,12 @@ pub(crate) struct ParticleArgs {
     #[arg(long, value_name = "DIR", value_parser = parse_view, allow_hyphen_values = true)]
     pub(crate) view: Option<DVec3>,
     /// The radius of a kind of particle, `TYPE=R` in the file's unit (Å; nm for .gro), TYPE an element
-    /// symbol (any case) or a LAMMPS type number; beats the file's and the table's radius. Repeatable.
+    /// symbol (any case), a LAMMPS type number, or `*` for every kind (coarse-grained beads) but water
+    /// models' virtual sites; beats the file's and the table's radius, a named TYPE beats `*`. Repeatable.
     #[arg(long, value_name = "TYPE=R", value_parser = parse_radius)]
     pub(crate) radius: Vec<(String, f64)>,
-    /// The colour of a kind of particle, `TYPE=R,G,B` with channels from 0 to 1; beats the file's and the
-    /// table's colour. Repeatable.
+    /// The colour of a kind of particle, `TYPE=R,G,B` with channels from 0 to 1 (TYPE as for `--radius`,
+    /// `*` too); beats the file's and the table's colour. Repeatable.
     #[arg(long, value_name = "TYPE=R,G,B", value_parser = parse_color)]
     pub(crate) color: Vec<(String, Rgb)>,
     /// Multiplies every particle radius (after the overrides).

@@ -187,6 +187,42 @@ fn virtual_sites_are_left_out_unless_given_a_radius() {
     assert!(e.message.contains("no particles but 1 virtual site, not drawn"), "{e}");
 }
 
+/// `*` names every kind: a coarse-grained file's beads (Martini's `NC3` reads as nitrogen, `GL1` as
+/// nothing, `W` as tungsten) drawn alike, a named kind's value beating it whatever the order, the sidecar's
+/// `["*"]` beneath the flags; virtual sites stay out.
+#[test]
+fn a_wildcard_sets_every_kind_but_virtual_sites() {
+    let dir = tempfile::tempdir().unwrap();
+    let martini = concat!(
+        "cg\n    4\n",
+        "    1DPPC   NC3    1   1.000   1.000   1.000\n",
+        "    1DPPC   GL1    2   1.000   1.000   1.400\n",
+        "    2W        W    3   2.000   2.000   2.000\n",
+        "    3SOL     MW    4   3.000   3.000   3.000\n",
+        "   5.0   5.0   5.0\n"
+    );
+    let flags = LoadOptions {
+        radius: vec![("W".to_owned(), 0.26), ("*".to_owned(), 0.235)],
+        color: vec![("*".to_owned(), Rgb::new(0.0, 0.5, 1.0))],
+        ..LoadOptions::default()
+    };
+    let read = read(dir.path(), "cg.gro", martini, &flags);
+    assert_eq!(radii(&read), [0.235, 0.235, 0.26], "W named beats `*` given after it; MW left out");
+    assert!((0..3).all(|i| colour(&read, i) == Rgb::new(0.0, 128.0 / 255.0, 1.0)), "every bead coloured");
+    assert_eq!(read.warnings.len(), 1, "only the virtual site's: {:?}", read.warnings);
+    assert!(read.warnings[0].contains("`MW`"), "{:?}", read.warnings);
+    // The sidecar's `*` and a named kind; the flags' `*` beats both.
+    let sidecar = write(dir.path(), "cg.types.toml", b"[\"*\"]\nradius = 0.2\n\n[GL1]\nradius = 0.3\n");
+    let by_sidecar = LoadOptions { types: Some(sidecar), ..LoadOptions::default() };
+    assert_eq!(radii(&read_with(dir.path(), martini, &by_sidecar)), [0.2, 0.3, 0.2]);
+    let both = LoadOptions { radius: vec![("*".to_owned(), 0.25)], ..by_sidecar };
+    assert_eq!(radii(&read_with(dir.path(), martini, &both)), [0.25, 0.25, 0.25]);
+}
+
+fn read_with(dir: &Path, text: &str, options: &LoadOptions) -> SceneRead {
+    read(dir, "cg.gro", text, options)
+}
+
 #[test]
 fn triclinic_scaled_coordinates_land_on_the_known_point() {
     // lx 10, ly 8, lz 6 from the origin, tilts xy 2, xz -1, yz 1; LAMMPS writes the bounding box's bounds.

@@ -3,11 +3,11 @@
 //! the framing of `crate::io::xyzr::scene_framing` from the chosen view, with a white background
 //! (`particle_scene`, which spheres given as arrays share).
 //!
-//! A radius is, first to last: `--radius` for the kind, the types sidecar's ([`super::types`]), the file's
-//! radius for the particle, the table's for the element (÷ 10 in a file in nm), 0.5 for a LAMMPS type,
-//! `elements::FALLBACK_RADIUS` (÷ 10 in nm); then times the radius scale. A colour is `--color` for the
-//! kind, the sidecar's, the file's colour for the particle, the table's for the element, `TYPE_COLORS`
-//! for a LAMMPS type, `elements::FALLBACK_COLOR`.
+//! A radius is, first to last: `--radius` for the kind, then for every kind ([`WILDCARD`]), the types
+//! sidecar's ([`super::types`]) alike, the file's radius for the particle, the table's for the element (÷ 10
+//! in a file in nm), 0.5 for a LAMMPS type, `elements::FALLBACK_RADIUS` (÷ 10 in nm); then times the radius
+//! scale. A colour is `--color` for the kind, then for every kind, the sidecar's alike, the file's colour for
+//! the particle, the table's for the element, `TYPE_COLORS` for a LAMMPS type, `elements::FALLBACK_COLOR`.
 //!
 //! Virtual sites ([`is_virtual_site`]: the massless charge sites of four- and five-site water models, which no
 //! element names) are left out unless the file, `--radius` or the sidecar gives them a radius; a warning
@@ -47,6 +47,17 @@ pub(crate) fn is_virtual_site(kind: &Kind) -> bool {
         && VIRTUAL_SITE_NAMES.iter().any(|v| v.eq_ignore_ascii_case(&letters))
 }
 
+/// The kind name of an override for every kind (`--radius '*=0.24'`): coarse-grained beads, whose names
+/// read as elements or as nothing the table knows, all drawn alike.
+pub(crate) const WILDCARD: &str = "*";
+
+/// `items` with those named [`WILDCARD`] first, the rest in their order.
+fn wildcard_first<T>(items: &[T], name: impl Fn(&T) -> &str) -> Vec<&T> {
+    let mut sorted: Vec<&T> = items.iter().collect();
+    sorted.sort_by_key(|t| name(t) != WILDCARD);
+    sorted
+}
+
 /// The view when none is chosen: from +z.
 pub(crate) const DEFAULT_VIEW: DVec3 = DVec3::Z;
 
@@ -77,26 +88,35 @@ pub(crate) fn scene(
     // Particles of each kind without a radius of their own: those the fallback may be for.
     let mut counts = vec![0usize; frame.kinds.len()];
     frame.particles.iter().filter(|p| p.radius.is_none()).for_each(|p| counts[p.kind as usize] += 1);
-    let find = |name: &str| frame.kinds.iter().position(|k| k.name.eq_ignore_ascii_case(name));
+    // The kinds an override names: `*` every kind but the virtual sites (which only their own name draws),
+    // else the one of that name, if the frame has it.
+    let kinds = |name: &str| -> Vec<usize> {
+        match name {
+            WILDCARD => (0..frame.kinds.len()).filter(|&i| !is_virtual_site(&frame.kinds[i])).collect(),
+            _ => frame.kinds.iter().position(|k| k.name.eq_ignore_ascii_case(name)).into_iter().collect(),
+        }
+    };
     let mut radius_over = vec![None; frame.kinds.len()];
     let mut color_over = vec![None; frame.kinds.len()];
-    // The sidecar first, so that the flags' values replace its.
-    for entry in sidecar.map_or(&[][..], |t| &t.entries[..]) {
-        if let Some(i) = find(&entry.name) {
+    // The sidecar first, so that the flags' values replace its; in each, `*` first, so that a named kind's
+    // value replaces it.
+    let entries = sidecar.map_or(&[][..], |t| &t.entries[..]);
+    for entry in wildcard_first(entries, |e| &e.name) {
+        for i in kinds(&entry.name) {
             radius_over[i] = entry.radius.or(radius_over[i]);
             color_over[i] = entry.color.or(color_over[i]);
         }
     }
-    for (name, r) in &options.radius {
-        match find(name) {
-            Some(i) => radius_over[i] = Some(*r),
-            None => warnings.push(format!("--radius {name}: no particle of that kind in the frame")),
+    for (name, r) in wildcard_first(&options.radius, |(name, _)| name) {
+        match kinds(name)[..] {
+            [] => warnings.push(format!("--radius {name}: no particle of that kind in the frame")),
+            ref found => found.iter().for_each(|&i| radius_over[i] = Some(*r)),
         }
     }
-    for (name, c) in &options.color {
-        match find(name) {
-            Some(i) => color_over[i] = Some(*c),
-            None => warnings.push(format!("--color {name}: no particle of that kind in the frame")),
+    for (name, c) in wildcard_first(&options.color, |(name, _)| name) {
+        match kinds(name)[..] {
+            [] => warnings.push(format!("--color {name}: no particle of that kind in the frame")),
+            ref found => found.iter().for_each(|&i| color_over[i] = Some(*c)),
         }
     }
     let unit = match frame.unit {
