@@ -97,17 +97,21 @@ impl Polygons {
     }
 
     /// The shading normal of polygon `k` at `point`: interpolated over the triangle that contains the point
-    /// (the one whose smallest barycentric is largest, robust to rounding at shared edges), else geometric.
+    /// (the one whose smallest barycentric is largest, robust to rounding at shared edges; the first of equal
+    /// ones, as the f64 twin chooses), else geometric.
     pub(crate) fn shading_normal(&self, k: usize, point: Vec3f) -> Vec3f {
         let members = &self.members[self.first[k] as usize..self.first[k + 1] as usize];
-        let best = members
-            .iter()
-            .map(|&j| j as usize)
-            .filter_map(|j| {
-                self.vertex_normals[j].map(|n| (barycentric(self.v0[j], self.e1[j], self.e2[j], point), n))
-            })
-            .max_by(|(a, _), (b, _)| min3(*a).total_cmp(&min3(*b)));
-        let Some(([b0, b1, b2], [n0, n1, n2])) = best else { return self.normal[k] };
+        let mut best: Option<(f32, [f32; 3], [Vec3f; 3])> = None;
+        for &j in members {
+            let j = j as usize;
+            let Some(normals) = self.vertex_normals[j] else { continue };
+            let b = barycentric(self.v0[j], self.e1[j], self.e2[j], point);
+            let score = min3(b);
+            if best.is_none_or(|(s, _, _)| score > s) {
+                best = Some((score, b, normals));
+            }
+        }
+        let Some((_, [b0, b1, b2], [n0, n1, n2])) = best else { return self.normal[k] };
         let n = (n0 * b0 + n1 * b1 + n2 * b2).normalize();
         if n.x.is_finite() && n.y.is_finite() && n.z.is_finite() {
             n
@@ -119,4 +123,23 @@ impl Polygons {
 
 fn min3(b: [f32; 3]) -> f32 {
     b[0].min(b[1]).min(b[2])
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Two triangles on the same vertices score alike at every point: the first one's normals are taken,
+    /// as the f64 twin takes them (`Polygon64::shading_normal`), not the last.
+    #[test]
+    fn equal_scores_take_the_first_triangle() {
+        let (a, b, c) = (V3::new(0.0, 0.0, 0.0), V3::new(1.0, 0.0, 0.0), V3::new(0.0, 1.0, 0.0));
+        let (up, tilted) = (V3::new(0.0, 0.0, 1.0), V3::new(0.0, 0.6, 0.8));
+        let mut store = Polygons::default();
+        let normals = [up, up, up, tilted, tilted, tilted];
+        store.push(&[a, b, c, a, b, c], Some(&normals), &[[0, 1, 2], [3, 4, 5]], up, 0);
+        for point in [V3::new(0.25, 0.25, 0.0), V3::new(0.1, 0.7, 0.0), V3::new(0.5, 0.0, 0.0)] {
+            assert_eq!(store.shading_normal(0, point), up, "{point:?}");
+        }
+    }
 }
