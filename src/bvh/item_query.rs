@@ -13,9 +13,10 @@ use super::{LeafQuery, SingleLeafQuery};
 
 /// How one kind tests its items.
 pub(crate) trait ItemTest: Copy {
-    /// Item `j` against the rays in `[0, t_max)`: the lanes it is hit in, their t, and the item's primitive
-    /// id (the same for every lane).
-    fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32);
+    /// Item `j`'s primitive id.
+    fn id(&self, j: usize) -> u32;
+    /// Item `j` against the rays in `[0, t_max)`: the lanes it is hit in and their t.
+    fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F);
     /// Lanes whose ray cannot meet item `j` before `reach` (its best hit so far, or its `t_max`): a
     /// conservative test cheaper than [`ItemTest::test`], which is skipped when it rules out every live lane.
     /// None by default.
@@ -43,12 +44,17 @@ pub(crate) struct ItemQuery<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy = Ra
 }
 
 impl<F: Lanes, T: ItemTest, R: Borrow<Ray<F>> + Copy> ItemQuery<F, T, R> {
-    /// Item `j`'s hits for the lanes of `live` (the departure primitive's excluded), its t and id.
+    /// Item `j`'s hits for the lanes of `live` (the departure primitive's excluded), its t and id. The
+    /// departure is checked first: an item no live ray may hit (the one every lane leaves) is not tested.
     #[inline(always)]
     fn item(&self, j: usize, live: F::Mask) -> (F::Mask, F, F::Ids) {
-        let (hit, t, id) = self.items.test(j, self.ray.borrow(), self.t_max);
-        let id = F::Ids::splat(id);
-        (live & hit & !F::ids_eq(id, self.skip), t, id)
+        let id = F::Ids::splat(self.items.id(j));
+        let lanes = live & !F::ids_eq(id, self.skip);
+        if !lanes.any() {
+            return (lanes, self.t_max, id);
+        }
+        let (hit, t) = self.items.test(j, self.ray.borrow(), self.t_max);
+        (lanes & hit, t, id)
     }
 }
 

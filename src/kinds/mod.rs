@@ -248,6 +248,14 @@ pub(crate) struct Items<'a, K: Kind> {
     pub(crate) base: u32,
 }
 
+impl<K: Kind> Items<'_, K> {
+    /// The store's index of leaf item `j`.
+    #[inline(always)]
+    fn item(&self, j: usize) -> usize {
+        self.order.map_or(j, |order| order[j] as usize)
+    }
+}
+
 impl<K: Kind> Clone for Items<'_, K> {
     fn clone(&self) -> Self {
         *self
@@ -257,10 +265,13 @@ impl<K: Kind> Copy for Items<'_, K> {}
 
 impl<K: Kind> ItemTest for Items<'_, K> {
     #[inline(always)]
-    fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F, u32) {
-        let k = self.order.map_or(j as u32, |order| order[j]);
-        let (hit, t) = K::test(self.store, k as usize, ray, t_max);
-        (hit, t, self.base + K::item_id(self.store, k as usize))
+    fn id(&self, j: usize) -> u32 {
+        self.base + K::item_id(self.store, self.item(j))
+    }
+
+    #[inline(always)]
+    fn test<F: Lanes>(&self, j: usize, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
+        K::test(self.store, self.item(j), ray, t_max)
     }
 
     /// The kind's own cull, in brute force only (a tree's boxes have culled already).

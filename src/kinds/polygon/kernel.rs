@@ -15,14 +15,16 @@
 
 use glam::{DVec2, DVec3};
 
-use crate::math::{Real, V3};
+use crate::math::{Mask, Real, V3};
 
 use crate::geometry::Ray;
 
-/// Closest hit of one ray with the triangle `(v0, v0 + e1, v0 + e2)` in `[0, t_max)`, both sides.
+/// Closest hit of each lane's ray with the triangle `(v0, v0 + e1, v0 + e2)` in `[0, t_max)`, both sides:
+/// the lanes hit and their t (`t_max` in the rest).
 ///
-/// Branch-free: every condition is a mask, so a lane instance evaluates the same IEEE operations as the
-/// scalar one. One reciprocal (a true division, not an approximation) is shared by u, v and t.
+/// Every condition is a mask, so a lane evaluates the same IEEE operations as the scalar form; the only
+/// branches stop the test once no lane is left (after u, then after v), which changes no lane's answer.
+/// One reciprocal (a true division, not an approximation) is shared by u, v and t.
 #[inline(always)]
 pub(crate) fn intersect_triangle<F: Real>(
     v0: V3<F>,
@@ -34,16 +36,26 @@ pub(crate) fn intersect_triangle<F: Real>(
     let zero = F::splat(0.0);
     let p = ray.dir.cross(e2);
     let det = e1.dot(p);
+    // det ≠ 0 written as two comparisons: NaN fails both, so NaN rays miss.
+    let facing = det.lt(zero) | det.gt(zero);
     let inv = F::splat(1.0) / det;
     let s = ray.origin - v0;
     let u = s.dot(p) * inv;
+    // Most tests miss on a barycentric: the test stops once every lane has (a single ray at once), before
+    // the next coordinate is computed.
+    let open = facing & u.ge(zero);
+    if !open.any() {
+        return (open, t_max);
+    }
     let v = -s.dot(ray.dir.cross(e1)) * inv;
+    let open = open & v.ge(zero) & (u + v).le(F::splat(1.0));
+    if !open.any() {
+        return (open, t_max);
+    }
     let q = s.cross(e1);
     let t = e2.dot(q) * inv;
-    // det ≠ 0 written as two comparisons: NaN fails both, so NaN rays miss.
-    let facing = det.lt(zero) | det.gt(zero);
-    let inside = u.ge(zero) & v.ge(zero) & (u + v).le(F::splat(1.0));
-    (facing & inside & t.ge(zero) & t.lt(t_max), t)
+    let hit = open & t.ge(zero) & t.lt(t_max);
+    (hit, F::select(hit, t, t_max))
 }
 
 /// Rounding allowance of [`stays_off_plane`] per unit of the coordinates it sums: its heights are a few
