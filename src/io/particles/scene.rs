@@ -40,7 +40,7 @@ const VIRTUAL_SITE_NAMES: [&str; 5] = ["MW", "M", "EPW", "EP", "LP"];
 /// Whether particles of `kind` are virtual sites: no element, not a LAMMPS type, and a name whose letters
 /// are one of [`VIRTUAL_SITE_NAMES`]. They carry a charge, not an atom, and sit inside their oxygen's
 /// sphere (TIP4P's `MW` 0.15 Å from it), so drawn at the unknown element's radius they would poke out of it.
-pub(crate) fn is_virtual_site(kind: &Kind) -> bool {
+fn is_virtual_site(kind: &Kind) -> bool {
     let letters: String = kind.name.chars().filter(char::is_ascii_alphabetic).collect();
     kind.element.is_none()
         && !kind.lammps_type
@@ -49,7 +49,7 @@ pub(crate) fn is_virtual_site(kind: &Kind) -> bool {
 
 /// The kind name of an override for every kind (`--radius '*=0.24'`): coarse-grained beads, whose names
 /// read as elements or as nothing the table knows, all drawn alike.
-pub(crate) const WILDCARD: &str = "*";
+const WILDCARD: &str = "*";
 
 /// `items` with those named [`WILDCARD`] first, the rest in their order.
 fn wildcard_first<T>(items: &[T], name: impl Fn(&T) -> &str) -> Vec<&T> {
@@ -88,37 +88,7 @@ pub(crate) fn scene(
     // Particles of each kind without a radius of their own: those the fallback may be for.
     let mut counts = vec![0usize; frame.kinds.len()];
     frame.particles.iter().filter(|p| p.radius.is_none()).for_each(|p| counts[p.kind as usize] += 1);
-    // The kinds an override names: `*` every kind but the virtual sites (which only their own name draws),
-    // else the one of that name, if the frame has it.
-    let kinds = |name: &str| -> Vec<usize> {
-        match name {
-            WILDCARD => (0..frame.kinds.len()).filter(|&i| !is_virtual_site(&frame.kinds[i])).collect(),
-            _ => frame.kinds.iter().position(|k| k.name.eq_ignore_ascii_case(name)).into_iter().collect(),
-        }
-    };
-    let mut radius_over = vec![None; frame.kinds.len()];
-    let mut color_over = vec![None; frame.kinds.len()];
-    // The sidecar first, so that the flags' values replace its; in each, `*` first, so that a named kind's
-    // value replaces it.
-    let entries = sidecar.map_or(&[][..], |t| &t.entries[..]);
-    for entry in wildcard_first(entries, |e| &e.name) {
-        for i in kinds(&entry.name) {
-            radius_over[i] = entry.radius.or(radius_over[i]);
-            color_over[i] = entry.color.or(color_over[i]);
-        }
-    }
-    for (name, r) in wildcard_first(&options.radius, |(name, _)| name) {
-        match kinds(name)[..] {
-            [] => warnings.push(format!("--radius {name}: no particle of that kind in the frame")),
-            ref found => found.iter().for_each(|&i| radius_over[i] = Some(*r)),
-        }
-    }
-    for (name, c) in wildcard_first(&options.color, |(name, _)| name) {
-        match kinds(name)[..] {
-            [] => warnings.push(format!("--color {name}: no particle of that kind in the frame")),
-            ref found => found.iter().for_each(|&i| color_over[i] = Some(*c)),
-        }
-    }
+    let (radius_over, color_over) = overrides(&frame, options, sidecar, &mut warnings);
     let unit = match frame.unit {
         Unit::Angstrom => 1.0,
         Unit::Nanometre => 0.1,
@@ -195,6 +165,48 @@ pub(crate) fn scene(
         }));
     }
     Ok((desc, warnings))
+}
+
+/// Each kind's radius and colour overrides, by the sidecar and the flags (warning of flags that name no kind
+/// in the frame).
+fn overrides(
+    frame: &Frame,
+    options: &ParticleOptions,
+    sidecar: Option<&Types>,
+    warnings: &mut Vec<String>,
+) -> (Vec<Option<f64>>, Vec<Option<Rgb>>) {
+    // The kinds an override names: `*` every kind but the virtual sites (which only their own name draws),
+    // else the one of that name, if the frame has it.
+    let kinds = |name: &str| -> Vec<usize> {
+        match name {
+            WILDCARD => (0..frame.kinds.len()).filter(|&i| !is_virtual_site(&frame.kinds[i])).collect(),
+            _ => frame.kinds.iter().position(|k| k.name.eq_ignore_ascii_case(name)).into_iter().collect(),
+        }
+    };
+    let mut radius_over = vec![None; frame.kinds.len()];
+    let mut color_over = vec![None; frame.kinds.len()];
+    // The sidecar first, so that the flags' values replace its; in each, `*` first, so that a named kind's
+    // value replaces it.
+    let entries = sidecar.map_or(&[][..], |t| &t.entries[..]);
+    for entry in wildcard_first(entries, |e| &e.name) {
+        for i in kinds(&entry.name) {
+            radius_over[i] = entry.radius.or(radius_over[i]);
+            color_over[i] = entry.color.or(color_over[i]);
+        }
+    }
+    for (name, r) in wildcard_first(&options.radius, |(name, _)| name) {
+        match kinds(name)[..] {
+            [] => warnings.push(format!("--radius {name}: no particle of that kind in the frame")),
+            ref found => found.iter().for_each(|&i| radius_over[i] = Some(*r)),
+        }
+    }
+    for (name, c) in wildcard_first(&options.color, |(name, _)| name) {
+        match kinds(name)[..] {
+            [] => warnings.push(format!("--color {name}: no particle of that kind in the frame")),
+            ref found => found.iter().for_each(|&i| color_over[i] = Some(*c)),
+        }
+    }
+    (radius_over, color_over)
 }
 
 /// The scene of particles: `spheres` (each with material 0) and their colours (empty, or one per sphere),
