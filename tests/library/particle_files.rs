@@ -177,10 +177,11 @@ fn virtual_sites_are_left_out_unless_given_a_radius() {
         "ATOM      2  EPW WAT     1       0.150   0.000   0.000  1.00  0.00\n",
         "ATOM      3  LP1 WAT     2       5.000   0.000   0.000  1.00  0.00\n",
         "ATOM      4  LP2 WAT     2       5.000   0.500   0.000  1.00  0.00\n",
+        "ATOM      5  OM  TIP4    3       9.000   0.000   0.000  1.00  0.00\n",
     );
     let sites = read(dir.path(), "s.pdb", pdb, &none);
     assert_eq!(radii(&sites), [1.5], "the oxygen alone");
-    assert_eq!(sites.warnings.len(), 3, "one a kind (EPW, LP1, LP2): {:?}", sites.warnings);
+    assert_eq!(sites.warnings.len(), 4, "one a kind (EPW, LP1, LP2, CHARMM's OM): {:?}", sites.warnings);
     assert!(sites.warnings[1].contains("`LP1` (1 particle)"), "{:?}", sites.warnings);
     let only = write(dir.path(), "m.pdb", pdb.lines().nth(1).unwrap().as_bytes());
     let e = load_with(&only, &none).unwrap_err();

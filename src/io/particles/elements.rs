@@ -63,12 +63,23 @@ pub(crate) fn rgb(hex: u32) -> Rgb {
     Rgb::new(channel(16), channel(8), channel(0))
 }
 
+/// Residue names of water models (`TIP`: CHARMM's `TIP4` in PDB's three residue columns, its `4` falling in
+/// the chain's).
+const WATERS: [&str; 16] = [
+    "HOH", "WAT", "SOL", "H2O", "SPC", "SPCE", "TIP", "TIP3", "TIP4", "TIP5", "TP3", "TP4", "TP5", "T3P",
+    "T4P", "T5P",
+];
+
 /// The element of a PDB/GRO atom name (`CA`, `OW`, `HG21`, `1HB`, `NA`): the ion named as its residue
 /// (`NA` in residue `NA`) or, when `two_letters` allows it, a known two-letter element written from the
-/// name's first character; otherwise the name's first letter.
+/// name's first character; otherwise the name's first letter. None for CHARMM's TIP4P charge site `OM` in a
+/// water residue, which is no oxygen.
 pub(crate) fn from_atom_name(name: &str, residue: &str, two_letters: bool) -> Option<&'static Element> {
     let letters: String = name.trim().chars().filter(char::is_ascii_alphabetic).collect();
     if letters.is_empty() {
+        return None;
+    }
+    if letters.eq_ignore_ascii_case("OM") && WATERS.iter().any(|w| w.eq_ignore_ascii_case(residue.trim())) {
         return None;
     }
     if letters.eq_ignore_ascii_case(residue.trim()) {
@@ -108,5 +119,7 @@ mod tests {
         assert_eq!(from_atom_name("1HB", "ALA", false).unwrap().0, "H");
         assert_eq!(from_atom_name("OW", "SOL", false).unwrap().0, "O");
         assert!(from_atom_name("123", "X", false).is_none());
+        assert!(from_atom_name(" OM ", "TIP4", false).is_none(), "CHARMM's TIP4P site");
+        assert_eq!(from_atom_name("OM", "LIG", false).unwrap().0, "O", "elsewhere an oxygen");
     }
 }

@@ -33,9 +33,10 @@ pub(crate) const TYPE_COLORS: [u32; 8] =
 /// The radius of a LAMMPS type without a radius column or an override (half the unit length).
 pub(crate) const TYPE_RADIUS: f64 = 0.5;
 
-/// The names of virtual sites, letters only and upper case: TIP4P's `MW` (GROMACS) and `M` (OpenMM), AMBER's
-/// `EPW` and `EP1`/`EP2` (TIP4P-Ew, TIP5P), GROMACS's TIP5P lone pairs `LP1`/`LP2`.
-const VIRTUAL_SITE_NAMES: [&str; 5] = ["MW", "M", "EPW", "EP", "LP"];
+/// The names of virtual sites, letters only and upper case: TIP4P's `MW` (GROMACS), `M` (OpenMM) and `OM`
+/// (CHARMM, in a water residue only: elsewhere an oxygen, `elements::from_atom_name`), AMBER's `EPW` and
+/// `EP1`/`EP2` (TIP4P-Ew, TIP5P), GROMACS's TIP5P lone pairs `LP1`/`LP2`.
+const VIRTUAL_SITE_NAMES: [&str; 6] = ["MW", "M", "OM", "EPW", "EP", "LP"];
 
 /// Whether particles of `kind` are virtual sites: no element, not a LAMMPS type, and a name whose letters
 /// are one of [`VIRTUAL_SITE_NAMES`]. They carry a charge, not an atom, and sit inside their oxygen's
