@@ -251,7 +251,7 @@ impl LightBuffer {
             let n = self.reachable(c, one.t_max()).count();
             Work::lanes(n, n, 0, 0)
         });
-        match scalar || one_at_a_time() {
+        match scalar {
             true => self
                 .reachable(c, one.t_max())
                 .any(|s| one.occluded(s as usize..s as usize + 1, true, blocker)),
@@ -287,11 +287,6 @@ impl LightBuffer {
         }
         F::move_mask(blocked)
     }
-}
-
-fn one_at_a_time() -> bool {
-    static ONE: std::sync::OnceLock<bool> = std::sync::OnceLock::new();
-    *ONE.get_or_init(|| std::env::var_os("BR_LB_ONE").is_some())
 }
 
 /// The cells' lists over the `n` boxes `grown(i)` (relative to the light): each cell's start, its spheres
