@@ -407,9 +407,10 @@ impl PyScene {
 }
 
 /// Reads a scene file (TOML, NFF, xyzr, f32r, or a particle file: XYZ, PDB/PQR, GRO, LAMMPS dump, maybe .gz
-/// or .bz2), frame `frame` of a file with several; a particle file's types sidecar (`FILE.types.toml`) is
-/// read when it exists. A file that does not exist raises FileNotFoundError (errno and filename set, as
-/// `open` raises it); a reader's error raises ValueError naming the file and the line.
+/// or .bz2), frame `frame` of a particle file with several (frame 0, the first, of any file); a particle
+/// file's types sidecar (`FILE.types.toml`) is read when it exists. A file that does not exist raises
+/// FileNotFoundError (errno and filename set, as `open` raises it); a reader's error raises ValueError naming
+/// the file and the line.
 #[pyfunction]
 #[pyo3(signature = (path, frame=0))]
 fn load(py: Python<'_>, path: PathBuf, frame: usize) -> PyResult<PyScene> {
@@ -421,7 +422,9 @@ fn load(py: Python<'_>, path: PathBuf, frame: usize) -> PyResult<PyScene> {
             return Err(PyFileNotFoundError::new_err((errno, "No such file or directory", filename)));
         }
     }
-    let inner = py.detach(|| FileScene::open(&path, Some(frame))).map_err(api_error)?;
+    // Frame 0 is the first, which every file has: asked of a scene or sphere list too, it is no error.
+    let frame = (frame > 0).then_some(frame);
+    let inner = py.detach(|| FileScene::open(&path, frame)).map_err(api_error)?;
     Ok(PyScene { inner })
 }
 

@@ -190,6 +190,16 @@ def test_load_reads_a_particle_file_and_renders_it(tmp_path):
     assert timing["rays"] >= 48 * 27 and timing["median"] > 0
 
 
+def test_load_takes_the_first_frame_of_any_file(tmp_path):
+    # Frame 0, the default, is every file's first: a sphere list loads with it; a later one is for particle files.
+    path = tmp_path / "pair.xyzr"
+    path.write_text("0 0 0 1\n3 0 0 1\n")
+    assert bareray.load(str(path)).spheres == 2
+    assert bareray.load(str(path), frame=0).spheres == 2
+    with pytest.raises(ValueError, match="for particle files"):
+        bareray.load(str(path), frame=1)
+
+
 def test_bench_splits_the_render_by_ray_kind_on_every_path(tmp_path):
     # A 6×6×6 lattice of carbon atoms: enough spheres for a BVH, so every path has box tests to count.
     atoms = [f"C {1.6 * x} {1.6 * y} {1.6 * z}" for x in range(6) for y in range(6) for z in range(6)]
