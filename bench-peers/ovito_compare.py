@@ -10,8 +10,8 @@ the vertical half-angle at 1920x1080, horizontal angle 45 degrees) and renders i
   - with TachyonRenderer and ambient occlusion of N samples (Tachyon keeps shadows with AO);
   - with OVITO's OSPRayRenderer: 1 sample, 1 refinement (as issue 39 timed it), and N samples per pixel
     (its path tracer's ambient light then takes N samples a pixel, the nearest it has to N AO rays);
-  - with `bareray render` at Whitted (a point light at the eye, a shadow ray for every visible hit, 1 sample
-    at the pixel centre) and `--shade ao:N,L` (N occlusion rays a hit, no light), with L the diagonal of
+  - with `bareray render` at Whitted (a point light at the eye, 1 sample at the pixel centre; its visible hits
+    see that light without a shadow ray, since the camera ray found the way back clear) and `--shade ao:N,L` (N occlusion rays a hit, no light), with L the diagonal of
     the spheres' box, so that an occlusion ray reaches every sphere as Tachyon's do (its shader sets their
     `maxdist` to FHUGE, unbounded), and with bareray's default L (a quarter of that diagonal).
 
@@ -119,9 +119,9 @@ def vec(v):
 
 def run_bareray(binary, xyzr, out, cam, shade):
     eye, _, up, hfov, _, look = cam
-    # `--view +z` gives the list a headlight at the eye (the camera flags then set the same camera), so that
-    # every visible hit traces a shadow ray, as under Tachyon's direct light; without it the list's light
-    # would sit behind the spheres and most hits would trace none.
+    # `--view +z` gives the list a headlight at the eye, which the camera flags then move to the same camera's
+    # eye, so that every visible hit is lit head-on, as under Tachyon's direct light (without it the list's
+    # light would sit beside the camera). Hits see a light at the eye without shadow rays.
     cmd = [binary, "render", xyzr, "-o", out, "--view", "+z", "--width", str(WIDTH), "--height", str(HEIGHT),
            "--eye", vec(eye), "--look", vec(look), "--up", vec(up), "--hfov", repr(hfov), "--shade", shade]
     start = time.perf_counter()

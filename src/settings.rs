@@ -53,9 +53,14 @@ pub enum SettingsError {
 }
 
 impl Overrides {
-    /// Applies the changes to `desc`; on an error `desc` may be changed in part.
+    /// Applies the changes to `desc`; on an error `desc` may be changed in part. A light at the eye is a
+    /// headlight (particle files and arrays are lit so): a new eye takes it along.
     pub fn apply(&self, desc: &mut SceneDesc) -> Result<(), SettingsError> {
+        let eye = desc.camera.eye;
         self.camera.apply(&mut desc.camera);
+        for light in desc.lights.iter_mut().filter(|l| l.position == eye) {
+            light.position = desc.camera.eye;
+        }
         if let Some(ambient) = &self.ambient {
             set_ambient(desc, ambient)?;
         }
@@ -211,5 +216,29 @@ mod tests {
             Overrides { ambient: Some(vec![0.1; desc.materials.len() + 2]), ..Overrides::default() };
         let e = ambient.apply(&mut desc).unwrap_err();
         assert!(e.to_string().starts_with("ambient gave"), "{e}");
+    }
+
+    #[test]
+    fn a_new_eye_takes_the_headlight_along() {
+        use crate::scene::desc::LightDesc;
+        use glam::DVec3;
+        let mut desc = SceneDesc::default();
+        let light =
+            |position| LightDesc { position, color: crate::math::Rgb::all(1.0), falloff: Default::default() };
+        let (eye, away) = (desc.camera.eye, DVec3::new(3.0, 4.0, 5.0));
+        desc.lights = vec![light(eye), light(away)];
+        let look = Overrides {
+            camera: CameraOverrides { look: Some(DVec3::X), ..CameraOverrides::default() },
+            ..Overrides::default()
+        };
+        look.apply(&mut desc).unwrap();
+        assert_eq!((desc.lights[0].position, desc.lights[1].position), (eye, away), "the eye stayed");
+        let to = DVec3::new(1.0, 2.0, -9.0);
+        let moved = Overrides {
+            camera: CameraOverrides { eye: Some(to), ..CameraOverrides::default() },
+            ..Overrides::default()
+        };
+        moved.apply(&mut desc).unwrap();
+        assert_eq!((desc.camera.eye, desc.lights[0].position, desc.lights[1].position), (to, to, away));
     }
 }

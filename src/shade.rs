@@ -246,7 +246,12 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let lambert_or_phong = found & (s.diffuse.gt(zero_f) | s.specular.gt(zero_f));
         if lambert_or_phong.any() {
             let same_side = DeparturePacket { prim: hit.prim, inward: s.inside };
-            let direct = self.direct(&s, view, lambert_or_phong, &same_side);
+            // Camera rays' hits see a light at the eye (`Tracer::direct`).
+            let clear = match depth {
+                0 => at_eye(rays.ray.origin),
+                _ => F::mask_from_bits(0),
+            };
+            let direct = self.direct(&s, view, lambert_or_phong, &same_side, clear);
             color = V3::select(lambert_or_phong, color + direct, color);
         }
         if depth < self.scene.render.max_depth {
@@ -442,7 +447,20 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 
     /// Lambert and Phong from every light each lane sees, by one occlusion packet per light.
-    fn direct(&mut self, s: &Surface<F>, view: V3<F>, lanes: F::Mask, from: &DeparturePacket<F>) -> V3<F> {
+    ///
+    /// A light at the eye needs no shadow ray from the lanes of `clear`, camera rays' closest hits: the way
+    /// back to the eye is the camera ray's own segment, on which it found nothing nearer. (The shadow ray
+    /// from the rounded hit point would retrace it only up to rounding, so where it reported a blocker, a
+    /// surface grazed or left, the light was in fact seen.) Particle files and arrays light their spheres so
+    /// by default, and those shadow rays cost as much as the camera rays, all of them unblocked.
+    fn direct(
+        &mut self,
+        s: &Surface<F>,
+        view: V3<F>,
+        lanes: F::Mask,
+        from: &DeparturePacket<F>,
+        clear: F::Mask,
+    ) -> V3<F> {
         let zero = F::splat_f32(0.0);
         let mut sum = V3::all(zero);
         for (k, light) in self.scene.lights.iter().enumerate() {
@@ -456,11 +474,20 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             if !lit.any() {
                 continue;
             }
-            self.counts.shadow += lanes_set::<F>(lit);
-            let shadow = RayPacket::new(s.point, l, dist, lit);
-            let hint = &mut self.shadow_hints[k];
-            let geometry = &self.scene.geometry;
-            let visible = lit & !traced(RayKind::Shadow, || geometry.shadowed_k(&shadow, from, hint, k));
+            let seen = match light.at_eye() {
+                true => lit & clear,
+                false => F::mask_from_bits(0),
+            };
+            let asked = lit & !seen;
+            let mut visible = seen;
+            if asked.any() {
+                self.counts.shadow += lanes_set::<F>(asked);
+                let shadow = RayPacket::new(s.point, l, dist, asked);
+                let hint = &mut self.shadow_hints[k];
+                let geometry = &self.scene.geometry;
+                let blocked = traced(RayKind::Shadow, || geometry.shadowed_k(&shadow, from, hint, k));
+                visible = visible | (asked & !blocked);
+            }
             let intensity = match light.falloff {
                 Falloff::None => splat_rgb::<F>(light.color),
                 Falloff::InverseSquare => splat_rgb::<F>(light.color) * (F::splat_f32(1.0) / dist2),

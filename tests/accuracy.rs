@@ -25,6 +25,7 @@ fn json_output_has_every_key() {
         "t_rel_err_max",
         "self_hits",
         "shadow_rays",
+        "shadow_seen_from_eye",
         "shadow_disagree",
         "shadow_unexplained",
         "reflection_rays",

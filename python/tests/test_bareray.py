@@ -201,10 +201,11 @@ def test_load_takes_the_first_frame_of_any_file(tmp_path):
 
 
 def test_bench_splits_the_render_by_ray_kind_on_every_path(tmp_path):
-    # A 6×6×6 lattice of carbon atoms: enough spheres for a BVH, so every path has box tests to count.
-    atoms = [f"C {1.6 * x} {1.6 * y} {1.6 * z}" for x in range(6) for y in range(6) for z in range(6)]
-    path = tmp_path / "lattice.xyz"
-    path.write_text(f"{len(atoms)}\nlattice\n" + "\n".join(atoms) + "\n")
+    # A 6×6×6 lattice of spheres: enough for a BVH, so every path has box tests to count. As an `.xyzr` list
+    # it is lit from beside the camera, so its hits send shadow rays.
+    spheres = [f"{1.6 * x} {1.6 * y} {1.6 * z} 0.9" for x in range(6) for y in range(6) for z in range(6)]
+    path = tmp_path / "lattice.xyzr"
+    path.write_text("\n".join(spheres) + "\n")
     scene = bareray.load(str(path))
     plain = scene.bench(reps=1, width=48, height=27, threads=1, lanes=8)
     assert "by_kind" not in plain and plain["lanes"] == 8
@@ -213,7 +214,7 @@ def test_bench_splits_the_render_by_ray_kind_on_every_path(tmp_path):
         assert timing["lanes"] == lanes
         split = timing["by_kind"]
         kinds = {k["kind"]: k for k in split["kinds"]}
-        # A particle file is shaded Whitted with a headlight: camera and shadow rays, every ray counted once.
+        # Whitted with one light and no mirrors: camera and shadow rays, every ray counted once.
         assert set(kinds) == {"camera", "shadow"}, kinds
         assert sum(k["rays"] for k in kinds.values()) == timing["rays"]
         assert kinds["camera"]["rays"] == 48 * 27
@@ -221,6 +222,13 @@ def test_bench_splits_the_render_by_ray_kind_on_every_path(tmp_path):
         # One ray per test on the single-ray paths; a packet's tests serve more where its lanes are live.
         per_box = kinds["camera"]["rays_per_box_test"]
         assert per_box == 1.0 if lanes in ["scalar", 1] else per_box > 1.0, (lanes, per_box)
+    # The same lattice as a particle file has a headlight, which camera rays' hits see without shadow rays.
+    atoms = [f"C {1.6 * x} {1.6 * y} {1.6 * z}" for x in range(6) for y in range(6) for z in range(6)]
+    xyz = tmp_path / "lattice.xyz"
+    xyz.write_text(f"{len(atoms)}\nlattice\n" + "\n".join(atoms) + "\n")
+    headlit = bareray.load(str(xyz)).bench(reps=1, width=48, height=27, threads=1, lanes=8, by_kind=True)
+    assert [k["kind"] for k in headlit["by_kind"]["kinds"]] == ["camera"], headlit["by_kind"]
+    assert headlit["rays"] == 48 * 27
     # Ambient occlusion: camera rays and `ao` rays, 4 per hit.
     ao = scene.bench(reps=1, width=48, height=27, threads=1, lanes=8, shade="ao:4,2", by_kind=True)
     kinds = {k["kind"]: k["rays"] for k in ao["by_kind"]["kinds"]}

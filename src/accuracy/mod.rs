@@ -350,6 +350,7 @@ impl Comparer<'_> {
             normal32: n32,
             inside32,
             from32: Departure { prim: storage, inward: inside32 },
+            from_eye32,
             point64: p64,
             dir64: ray64.dir,
             normal64: n64,

@@ -123,6 +123,9 @@ impl HitStats {
 pub(crate) struct ShadowStats {
     /// Shadow rays traced in both precisions (lights in front of the surface in both).
     pub(crate) rays: u64,
+    /// Of those, rays from a camera ray's hit toward a light at the eye, which shading does not trace (the
+    /// light is seen): unblocked on the f32 side, traced by the twin alone.
+    pub(crate) seen_from_eye: u64,
     /// Lights in front of the surface in one precision only (a shadow ray in one only).
     pub(crate) lit_disagree: u64,
     /// Occluded in one precision only.
@@ -142,6 +145,7 @@ impl ShadowStats {
     }
     pub(super) fn add(&mut self, o: &ShadowStats) {
         self.rays += o.rays;
+        self.seen_from_eye += o.seen_from_eye;
         self.lit_disagree += o.lit_disagree;
         self.occluded_disagree += o.occluded_disagree;
         self.explained.add(&o.explained);
@@ -255,6 +259,7 @@ impl Report {
         put("unexplained_total", self.unexplained().to_string());
         if let Some(s) = &self.shadow {
             put("shadow_rays", s.rays.to_string());
+            put("shadow_seen_from_eye", s.seen_from_eye.to_string());
             put("shadow_disagree", s.disagree().to_string());
             put("shadow_lit_disagree", s.lit_disagree.to_string());
             put("shadow_occluded_disagree", s.occluded_disagree.to_string());
@@ -394,6 +399,14 @@ impl Report {
         let _ = writeln!(o, "explained primary: {}", why(&self.primary.explained));
         if let Some(s) = &self.shadow {
             let _ = writeln!(o, "explained shadow: {}", why(&s.explained));
+            if s.seen_from_eye > 0 {
+                let _ = writeln!(
+                    o,
+                    "shadow rays toward a light at the eye from camera hits: {} (shading sees the light without \
+                     them; only the twin traces them)",
+                    s.seen_from_eye
+                );
+            }
         }
         if let Some(r) = &self.reflection {
             let _ = writeln!(o, "explained reflection: {}", why(&r.explained));

@@ -23,6 +23,8 @@ pub(super) struct Start {
     pub(crate) inside32: bool,
     /// Departure of the f32 rays that leave on the camera ray's side.
     pub(crate) from32: Departure,
+    /// The f32 camera ray starts at the eye (shading then sends no shadow ray toward a light there).
+    pub(crate) from_eye32: bool,
     pub(crate) point64: V3<f64>,
     pub(crate) dir64: V3<f64>,
     pub(crate) normal64: V3<f64>,
@@ -100,10 +102,19 @@ impl Comparer<'_> {
                 continue;
             }
             acc.shadow.rays += 1;
-            // As shading asks: through the light's buffer, where it has one.
-            let blocked32 = g.shadowed(&s32, s.from32, dist32, k);
-            let b32 = g.intersect(&s32, s.from32, dist32);
-            let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
+            // As shading asks: not at all from a camera ray's hit toward a light at the eye (`Tracer::direct`:
+            // seen; the twin's ray below checks it), else through the light's buffer, where it has one.
+            let (blocked32, b32) = match s.from_eye32 && light32.at_eye() {
+                true => {
+                    acc.shadow.seen_from_eye += 1;
+                    (false, Hit64::MISS)
+                }
+                false => {
+                    let b32 = g.intersect(&s32, s.from32, dist32);
+                    let b32 = Hit64 { t: f64::from(b32.t), prim: self.file_id(b32.prim) };
+                    (g.shadowed(&s32, s.from32, dist32, k), b32)
+                }
+            };
             let b64 = self.twin.intersect(&s64, s.from64, dist64);
             let contact = self.twin.contact_entry(b32, &s32);
             if is_self_hit(b32, b64, s.prim, s.self_tol, meets_again, contact) {

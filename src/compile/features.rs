@@ -2,7 +2,7 @@
 
 use std::fmt;
 
-use super::Scene;
+use super::{Light, Scene};
 use crate::scene::desc::{Material, Pattern, PostFilter, Shade};
 
 /// How many primitives of each kind a scene has.
@@ -22,8 +22,11 @@ pub(crate) struct Features {
     pub(crate) counts: Counts,
     /// Some kind is searched through a BVH (else all brute force).
     pub(crate) bvh: bool,
-    /// Lights that shade something: Lambert or Phong terms and shadow rays.
+    /// Lights that shade something: Lambert and Phong terms.
     pub(crate) direct: bool,
+    /// Shadow rays: lights shade, and some light is away from the eye or rays bounce (camera rays' hits see
+    /// a light at the eye without one, `shade::Tracer::direct`).
+    pub(crate) shadow_rays: bool,
     /// Mirror materials and a depth limit above 0.
     pub(crate) reflection: bool,
     /// Transmissive materials and a depth limit above 0.
@@ -41,10 +44,13 @@ impl Features {
         let m = &scene.materials;
         let ao = matches!(scene.render.shade, Shade::Ao(_));
         let deep = scene.render.max_depth > 0 && !ao;
+        let direct = !ao && lights_shade(!scene.lights.is_empty(), m);
+        let away = !scene.lights.iter().all(Light::at_eye);
         Features {
             counts: Counts { spheres: g.spheres.len() + g.particles.len(), kinds: g.kinds.counts() },
             bvh: g.bvhs().next().is_some(),
-            direct: !ao && lights_shade(!scene.lights.is_empty(), m),
+            direct,
+            shadow_rays: direct && (away || bounces(scene.render.max_depth, m)),
             reflection: !ao && bounces(scene.render.max_depth, m),
             refraction: deep && m.iter().any(|m| m.transmit > 0.0),
             antialiasing: scene.render.pattern != Pattern::Grid(1)
@@ -58,7 +64,8 @@ impl Features {
         let mut list = vec![
             ("spheres", self.counts.spheres > 0),
             ("bvh", self.bvh),
-            ("direct light + shadow rays", self.direct),
+            ("direct light", self.direct),
+            ("shadow rays", self.shadow_rays),
             ("reflection", self.reflection),
             ("refraction", self.refraction),
             ("antialiasing", self.antialiasing),

@@ -39,6 +39,14 @@ pub struct Light {
     pub(crate) falloff: Falloff,
 }
 
+impl Light {
+    /// Whether the light is exactly at the eye, the origin of the rendering space and of camera rays (a
+    /// headlight): camera rays' hits then see it without a shadow ray (`shade::Tracer::direct`).
+    pub(crate) fn at_eye(&self) -> bool {
+        self.position == Vec3f::default()
+    }
+}
+
 /// What a render reads: immutable, shared by all threads.
 #[derive(Clone, Debug)]
 pub struct Scene {
@@ -308,6 +316,7 @@ impl Scene {
             accel,
             spheres: finite && wants(geometry.spheres.len()),
             shadows: light_buffers_pay(desc, &materials),
+            bounces: features::bounces(desc.render.max_depth, &materials),
             options: BuildOptions {
                 pad,
                 builder: preset.builder(),
@@ -362,8 +371,10 @@ impl Scene {
             if job.shadows {
                 let clock = std::time::Instant::now();
                 let spheres = &g.spheres;
-                g.light_buffers =
-                    self.lights.par_iter().map(|l| LightBuffer::new(l.position, spheres, pad)).collect();
+                let serves = |l: &Light| job.bounces || !l.at_eye();
+                g.light_buffers = (self.lights.par_iter())
+                    .map(|l| serves(l).then(|| LightBuffer::new(l.position, spheres, pad)).flatten())
+                    .collect();
                 let bytes = g.light_buffers.iter().flatten().map(LightBuffer::bytes).sum();
                 self.build += BuildStats { seconds: clock.elapsed().as_secs_f64(), node_bytes: bytes };
             }
@@ -448,6 +459,9 @@ struct BvhJob {
     options: BuildOptions,
     /// Whether the spheres' tree gets a light buffer per point light ([`light_buffers_pay`]).
     shadows: bool,
+    /// Whether rays bounce ([`features::bounces`]): else a light at the eye gets no buffer, since only
+    /// camera rays' hits shade, and they see it without shadow rays ([`Light::at_eye`]).
+    bounces: bool,
 }
 
 #[cfg(test)]

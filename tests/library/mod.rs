@@ -15,6 +15,7 @@ mod coverage;
 mod far_scenes;
 mod fuzz_particles;
 mod fuzz_readers;
+mod headlight;
 mod light_buffers;
 mod packet_kernels;
 mod particle_files;
