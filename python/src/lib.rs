@@ -178,7 +178,8 @@ fn to_numpy<'py>(py: Python<'py>, image: &Image) -> PyResult<Bound<'py, PyArrayD
 /// Renders spheres: `centers` of shape (n, 3), `radii` of shape (n,) or one number, `colors` of shape
 /// (n, 3) with channels in [0, 1] (default: grey). Without a camera the spheres are framed as bareray frames
 /// a particle file: seen from `view` ("+z" by default; "-x", … or a direction), a light at the eye, on
-/// white. `eye`, `look`, `up` (three numbers) and `hfov` (degrees) change that camera. `shade` is
+/// white. `eye`, `look`, `up` (three numbers) and `hfov` (degrees) change that camera (a new `eye` takes
+/// the light along). `shade` is
 /// "whitted" or "ao[:SAMPLES[,DISTANCE]]", `spp` a square number of samples per pixel on a grid.
 ///
 /// Returns float32 linear RGB of shape (height, width, 3): the values bareray writes to EXR, and, clamped
@@ -285,8 +286,9 @@ struct PyScene {
 
 #[pymethods]
 impl PyScene {
-    /// Renders the scene, with the file's camera, shading and samples unless given; float32 linear RGB of
-    /// shape (height, width, 3) (`to_uint8(image, scene.transfer)` gives the command line's 8-bit image).
+    /// Renders the scene, with the file's camera, shading and samples unless given (a new `eye` takes a light
+    /// at the file's eye along, as `--eye` does); float32 linear RGB of shape (height, width, 3)
+    /// (`to_uint8(image, scene.transfer)` gives the command line's 8-bit image).
     #[pyo3(signature = (*, width=None, height=None, eye=None, look=None, up=None, hfov=None, shade=None,
         spp=None, threads=None, lanes=None))]
     #[allow(clippy::too_many_arguments)]

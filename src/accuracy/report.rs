@@ -121,7 +121,8 @@ impl HitStats {
 /// Shadow rays compared.
 #[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
 pub(crate) struct ShadowStats {
-    /// Shadow rays traced in both precisions (lights in front of the surface in both).
+    /// Shadow rays compared: lights in front of the surface in both precisions (each traced in both, but for
+    /// those of [`ShadowStats::seen_from_eye`], which the f32 side sees unblocked as shading does).
     pub(crate) rays: u64,
     /// Of those, rays from a camera ray's hit toward a light at the eye, which shading does not trace (the
     /// light is seen): unblocked on the f32 side, traced by the twin alone.

@@ -45,12 +45,11 @@ impl Features {
         let ao = matches!(scene.render.shade, Shade::Ao(_));
         let deep = scene.render.max_depth > 0 && !ao;
         let direct = !ao && lights_shade(!scene.lights.is_empty(), m);
-        let away = !scene.lights.iter().all(Light::at_eye);
         Features {
             counts: Counts { spheres: g.spheres.len() + g.particles.len(), kinds: g.kinds.counts() },
             bvh: g.bvhs().next().is_some(),
             direct,
-            shadow_rays: direct && (away || bounces(scene.render.max_depth, m)),
+            shadow_rays: !ao && casts_shadows(&scene.lights, m, scene.render.max_depth),
             reflection: !ao && bounces(scene.render.max_depth, m),
             refraction: deep && m.iter().any(|m| m.transmit > 0.0),
             antialiasing: scene.render.pattern != Pattern::Grid(1)
@@ -79,6 +78,13 @@ impl Features {
 /// Whether lights shade anything: there are some, and some material has a Lambert or Phong term.
 pub(crate) fn lights_shade(has_lights: bool, materials: &[Material]) -> bool {
     has_lights && materials.iter().any(|m| m.diffuse > 0.0 || m.specular > 0.0)
+}
+
+/// Whether Whitted shading casts shadow rays: lights shade, and some light is away from the eye or rays
+/// bounce (camera rays' hits see a light at the eye without one, [`Light::at_eye`]).
+pub(crate) fn casts_shadows(lights: &[Light], materials: &[Material], max_depth: u32) -> bool {
+    lights_shade(!lights.is_empty(), materials)
+        && (bounces(max_depth, materials) || !lights.iter().all(Light::at_eye))
 }
 
 /// Whether rays bounce: a depth limit above 0 and some mirror or transmissive material.

@@ -37,13 +37,16 @@ pub struct Light {
     pub(crate) color: Rgb,
     /// Distance falloff.
     pub(crate) falloff: Falloff,
+    /// The light is exactly at the eye (a headlight) in a scene rendered in the eye's frame, where camera
+    /// rays start at the rendering space's origin: their hits then see it without a shadow ray
+    /// (`shade::Tracer::direct`).
+    pub(crate) at_eye: bool,
 }
 
 impl Light {
-    /// Whether the light is exactly at the eye, the origin of the rendering space and of camera rays (a
-    /// headlight): camera rays' hits then see it without a shadow ray (`shade::Tracer::direct`).
+    /// Whether camera rays' hits see the light without shadow rays ([`Light::at_eye`]).
     pub(crate) fn at_eye(&self) -> bool {
-        self.position == Vec3f::default()
+        self.at_eye
     }
 }
 
@@ -312,6 +315,15 @@ impl Scene {
         if materials.is_empty() {
             materials.push(Material::default());
         }
+        let lights = desc
+            .lights
+            .iter()
+            .map(|l| {
+                let position = V3::from(l.position - origin).to_f32();
+                let at_eye = frame.start == 0.0 && position == Vec3f::default();
+                Light { position, color: l.color, falloff: l.falloff, at_eye }
+            })
+            .collect::<Vec<_>>();
         let job = BvhJob {
             accel,
             spheres: finite && wants(geometry.spheres.len()),
@@ -322,7 +334,7 @@ impl Scene {
                 builder: preset.builder(),
                 // The 8-wide single-ray trees serve the K = 1 tracer's secondary and ambient occlusion
                 // rays: only scenes that trace them pay for their build.
-                single_ray_tree: features::lights_shade(!desc.lights.is_empty(), &materials)
+                single_ray_tree: features::casts_shadows(&lights, &materials, desc.render.max_depth)
                     || features::bounces(desc.render.max_depth, &materials)
                     || matches!(desc.render.shade, Shade::Ao(_)),
                 scalar_tree: scalar,
@@ -330,15 +342,6 @@ impl Scene {
                 single_ray_lanes,
             },
         };
-        let lights = desc
-            .lights
-            .iter()
-            .map(|l| Light {
-                position: V3::from(l.position - origin).to_f32(),
-                color: l.color,
-                falloff: l.falloff,
-            })
-            .collect();
         let scene = Scene {
             camera: camera_f64.to_f32(),
             camera_f64,

@@ -256,8 +256,13 @@ impl Gen {
         let n = self.pick(&[1, 1, 2, 3]);
         for k in 0..n {
             let position = if k == 1 && self.chance(0.3) {
-                // A headlight, just off the eye.
-                eye + self.dir() * radius * 1e-3
+                // A headlight: at the eye when the direction drawn points up (camera hits then send it no
+                // shadow rays), else just off it.
+                let off = self.dir();
+                match off.z > 0.0 {
+                    true => eye,
+                    false => eye + off * radius * 1e-3,
+                }
             } else {
                 centre + self.dir() * radius * self.log(0.5, 5.0)
             };
