@@ -4,7 +4,8 @@
 //! 1. A packed field lit from the eye casts no shadow ray and builds no light buffer, and renders the same
 //!    bits and counts at every width, thread count and on the scalar path; with its light moved off the eye
 //!    it casts one a lit hit and builds the buffer.
-//! 2. With mirror spheres the reflections' hits still send theirs, at every width alike.
+//! 2. With mirror spheres the reflections' hits still send theirs, at every width alike; a scene far enough
+//!    to be rendered around its own centre keeps them all.
 //! 3. The twin agrees: every camera hit's ray toward the eye, traced in f64, meets nothing.
 
 use super::common;
@@ -73,6 +74,25 @@ fn a_light_at_the_eye_needs_no_shadow_rays_from_camera_hits() {
     assert!(off.counts.shadow as usize > hits * 9 / 10, "{:?} for {hits} hits", off.counts);
     assert!(off.counts.shadow <= off.counts.primary);
     assert!(scene.geometry.light_buffers[0].is_some());
+}
+
+/// Seen from 100 times its size away, the field is rendered around its own centre (camera rays no longer
+/// start at the rendering space's origin): a light at the eye keeps its shadow rays there, and the light at
+/// the centre, now at that origin, is no headlight.
+#[test]
+fn a_far_scene_keeps_its_headlights_shadow_rays() {
+    let far = DVec3::new(0.0, 0.0, -400.0);
+    let mut desc = field(far, false);
+    desc.camera = camera(far, DVec3::ZERO, DVec3::Y, 1.2, 128, 96);
+    let (r, scene) = at_every_width(&desc);
+    assert!(!scene.lights[0].at_eye());
+    let hits = r.image.pixels.iter().filter(|p| p.x > 0.0).count();
+    assert!(hits > 1000, "the field covers {hits} pixels");
+    assert!(r.counts.shadow as usize > hits * 9 / 10, "{:?} for {hits} hits", r.counts);
+    // Lit from its centre, the field's far sides face away: some hits send shadow rays.
+    desc.lights[0].position = DVec3::ZERO;
+    let (r, scene) = at_every_width(&desc);
+    assert!(!scene.lights[0].at_eye() && r.counts.shadow > 0, "{:?}", r.counts);
 }
 
 #[test]
