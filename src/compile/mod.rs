@@ -40,11 +40,12 @@ pub struct Light {
     /// The light is exactly at the eye (a headlight) in a scene rendered in the eye's frame, where camera
     /// rays start at the rendering space's origin: their hits then see it without a shadow ray
     /// (`shade::Tracer::direct`).
-    pub(crate) at_eye: bool,
+    at_eye: bool,
 }
 
 impl Light {
-    /// Whether camera rays' hits see the light without shadow rays ([`Light::at_eye`]).
+    /// Whether camera rays' hits see the light without shadow rays: it is exactly at the eye, in the eye's
+    /// frame.
     pub(crate) fn at_eye(&self) -> bool {
         self.at_eye
     }
@@ -324,18 +325,19 @@ impl Scene {
                 Light { position, color: l.color, falloff: l.falloff, at_eye }
             })
             .collect::<Vec<_>>();
+        let bounces = features::bounces(desc.render.max_depth, &materials);
         let job = BvhJob {
             accel,
             spheres: finite && wants(geometry.spheres.len()),
             shadows: light_buffers_pay(desc, &materials),
-            bounces: features::bounces(desc.render.max_depth, &materials),
+            bounces,
             options: BuildOptions {
                 pad,
                 builder: preset.builder(),
                 // The 8-wide single-ray trees serve the K = 1 tracer's secondary and ambient occlusion
                 // rays: only scenes that trace them pay for their build.
                 single_ray_tree: features::casts_shadows(&lights, &materials, desc.render.max_depth)
-                    || features::bounces(desc.render.max_depth, &materials)
+                    || bounces
                     || matches!(desc.render.shade, Shade::Ao(_)),
                 scalar_tree: scalar,
                 frustum_culling,

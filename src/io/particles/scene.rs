@@ -195,19 +195,25 @@ fn overrides(
             color_over[i] = entry.color.or(color_over[i]);
         }
     }
-    for (name, r) in wildcard_first(&options.radius, |(name, _)| name) {
-        match kinds(name)[..] {
-            [] => warnings.push(format!("--radius {name}: no particle of that kind in the frame")),
-            ref found => found.iter().for_each(|&i| radius_over[i] = Some(*r)),
-        }
-    }
-    for (name, c) in wildcard_first(&options.color, |(name, _)| name) {
-        match kinds(name)[..] {
-            [] => warnings.push(format!("--color {name}: no particle of that kind in the frame")),
-            ref found => found.iter().for_each(|&i| color_over[i] = Some(*c)),
-        }
-    }
+    by_flag("radius", &options.radius, &kinds, &mut radius_over, warnings);
+    by_flag("color", &options.color, &kinds, &mut color_over, warnings);
     (radius_over, color_over)
+}
+
+/// The values `--flag` gives by kind name into `over`, `*` first, warning of names no kind in the frame has.
+fn by_flag<T: Copy>(
+    flag: &str,
+    given: &[(String, T)],
+    kinds: &dyn Fn(&str) -> Vec<usize>,
+    over: &mut [Option<T>],
+    warnings: &mut Vec<String>,
+) {
+    for (name, value) in wildcard_first(given, |(name, _)| name) {
+        match kinds(name)[..] {
+            [] => warnings.push(format!("--{flag} {name}: no particle of that kind in the frame")),
+            ref found => found.iter().for_each(|&i| over[i] = Some(*value)),
+        }
+    }
 }
 
 /// The scene of particles: `spheres` (each with material 0) and their colours (empty, or one per sphere),

@@ -1,8 +1,8 @@
 //! Types sidecars: radii and colours by kind in a small TOML file, for particle files whose kinds are LAMMPS
 //! type numbers or elements whose table values do not suit. Each table is a kind, named as `--radius` names
 //! it (an element symbol in any case, a LAMMPS type number, or `["*"]` for every kind beneath the named
-//! ones), with an optional `radius` (positive, in the
-//! particle file's unit) and an optional `color` (`[r, g, b]`, channels from 0 to 1):
+//! ones), with an optional `radius` (positive, in the particle file's unit) and an optional `color` (`[r, g,
+//! b]`, channels from 0 to 1):
 //!
 //! ```toml
 //! [1]
