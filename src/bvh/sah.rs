@@ -384,12 +384,23 @@ pub(super) fn build_sah(
             nodes
         })
         .collect();
-    // Each subtree's root goes in its slot, the rest after the nodes so far, its links moved with it.
-    nodes.reserve_exact(subtrees.iter().map(|s| s.len() - 1).sum());
-    for (t, subtree) in tasks.iter().zip(subtrees) {
-        let shift = nodes.len() as u32 - 1;
-        nodes[t.slot] = moved(subtree[0], shift);
-        nodes.extend(subtree[1..].iter().map(|&v| moved(v, shift)));
+    // Each subtree's root goes in its slot, the rest after the nodes so far in task order, its links moved
+    // with it; the subtrees are copied in parallel.
+    let top = nodes.len();
+    nodes.resize(top + subtrees.iter().map(|s| s.len() - 1).sum::<usize>(), unset());
+    let (mut rest, mut shift, mut places) = (&mut nodes[top..], top as u32 - 1, Vec::new());
+    for subtree in &subtrees {
+        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(subtree.len() - 1);
+        let next = shift + mine.len() as u32;
+        places.push((mine, shift));
+        (rest, shift) = (tail, next);
+    }
+    (places.par_iter_mut().zip(&subtrees)).for_each(|((mine, shift), subtree)| {
+        (mine.iter_mut().zip(&subtree[1..])).for_each(|(slot, &v)| *slot = moved(v, *shift));
+    });
+    let roots = places.iter().map(|&(_, shift)| shift).zip(&subtrees).map(|(shift, s)| moved(s[0], shift));
+    for (t, root) in tasks.iter().zip(roots.collect::<Vec<_>>()) {
+        nodes[t.slot] = root;
     }
     (nodes, refs.par_iter().map(Ref::item).collect())
 }

@@ -68,13 +68,14 @@ impl RenderingFrame {
 /// The box around every bounded primitive and the box `extra`, in f64 world space (`None` without any):
 /// spheres, polygons and the registered kinds' bounded items (ellipsoids, cones, tori; not planes).
 pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
-    let ball = |c: DVec3, r: f64| [c - DVec3::splat(r), c + DVec3::splat(r)];
-    let spheres = desc.spheres.iter().flat_map(|s| ball(s.center, s.radius));
+    use rayon::prelude::*;
+    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    let union = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
+    // Minima and maxima are exact and (NaN ignored) independent of order: the same box however cut.
+    let ball = |s: &crate::scene::desc::SphereDesc| (s.center - s.radius, s.center + s.radius);
+    let spheres = desc.spheres.par_iter().with_min_len(1 << 14).map(ball).reduce(|| empty, union);
     let kinds = desc.kinds.world_boxes().into_iter().flatten();
-    let (lo, hi) = spheres
-        .chain(kinds)
-        .chain(extra.into_iter().flatten())
-        .fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let (lo, hi) = kinds.chain(extra.into_iter().flatten()).map(|p| (p, p)).fold(spheres, union);
     lo.cmple(hi).all().then_some((lo, hi))
 }
 

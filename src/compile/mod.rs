@@ -18,6 +18,7 @@ pub mod memory;
 use crate::accel::{Geometry, LightBuffer, Particles};
 use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
+use crate::geometry::Spheres;
 use crate::io::f32r::MappedRecords;
 use crate::math::{Rgb, Vec3f, V3};
 use glam::Vec3A;
@@ -173,7 +174,10 @@ fn reach(
 ) -> f32 {
     let mag = |p: glam::DVec3| (p - origin).abs().max_element();
     let extra = extra.into_iter().flatten().map(mag);
-    let spheres = desc.spheres.iter().map(|s| mag(s.center) + s.radius).chain(extra);
+    // A maximum is exact and (NaN ignored) independent of order: the same reach however the list is cut.
+    let sphere = |s: &crate::scene::desc::SphereDesc| mag(s.center) + s.radius;
+    let spheres = desc.spheres.par_iter().with_min_len(1 << 14).map(sphere).reduce(|| 0.0, f64::max);
+    let spheres = std::iter::once(spheres).chain(extra);
     let (w, h) = (f64::from(camera.width), f64::from(camera.height));
     let corner = |(x, y): (f64, f64)| {
         let o = camera.ray(x, y).origin;
@@ -293,23 +297,25 @@ impl Scene {
         if accel == Accel::Particles {
             let clock = std::time::Instant::now();
             let records =
-                desc.spheres.iter().map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect();
-            let material = desc.spheres.iter().map(|s| s.material).collect();
+                desc.spheres.par_iter().map(|s| [s.center.x, s.center.y, s.center.z, s.radius]).collect();
+            let material = desc.spheres.par_iter().map(|s| s.material).collect();
             geometry.particles = Particles::from_f64(records, material, colors, origin, pad);
             geometry.particles.frustum_culling = frustum_culling;
             build.seconds = clock.elapsed().as_secs_f64();
             build.node_bytes = geometry.particles.overhead_bytes();
         } else {
-            geometry.spheres.reserve_exact(desc.spheres.len());
-            for s in &desc.spheres {
-                geometry.spheres.push_exact(V3::from(s.center - origin), s.radius, s.material);
-            }
+            let sphere = |i: usize| {
+                let s = &desc.spheres[i];
+                (V3::from(s.center - origin), s.radius, s.material)
+            };
+            geometry.spheres = Spheres::from_exact(desc.spheres.len(), sphere);
             geometry.spheres.color = colors;
         }
         // obvhs cannot order boxes with infinite or NaN corners; readers reject such input, and a scene built
         // by hand with them falls back to brute force rather than failing.
         let sp = &geometry.spheres;
-        let finite = [&sp.cx, &sp.cy, &sp.cz, &sp.r].iter().all(|v| v.iter().all(|x| x.is_finite()));
+        let finite_slice = |v: &[f32]| v.iter().fold(true, |all, x| all & x.is_finite());
+        let finite = [&sp.cx, &sp.cy, &sp.cz, &sp.r].iter().all(|v| v.par_chunks(1 << 14).all(finite_slice));
         geometry.kinds = desc.kinds.compile(origin);
         let wants = |items: usize| wants_tree(accel, items);
         let mut materials = desc.materials.clone();

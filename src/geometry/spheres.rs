@@ -76,21 +76,40 @@ impl Spheres {
         }
     }
 
-    /// Room for `more` spheres in every array: compile knows the count, so each array is allocated once, at
-    /// its final size.
-    pub(crate) fn reserve_exact(&mut self, more: usize) {
-        for v in [&mut self.cx, &mut self.cy, &mut self.cz, &mut self.r, &mut self.c_eye] {
-            v.reserve_exact(more);
-        }
-        for v in [&mut self.material, &mut self.key] {
-            v.reserve_exact(more);
-        }
-    }
-
     /// Appends a sphere whose f32 centre and radius are exact (hand-built geometry, tests); its file index is
     /// its position. Its eye term is computed from these values.
     pub fn push(&mut self, center: Vec3f, radius: f32, material: u32) {
         self.push_exact(center.to_f64(), f64::from(radius), material);
+    }
+
+    /// `n` spheres given in f64 (rendering space) by `sphere(i)` = (centre, radius, material), each stored as
+    /// [`Spheres::push_exact`] appends it, in slices on the current rayon pool (a compile of a large field
+    /// would otherwise fill its arrays on one thread while the other waits).
+    pub(crate) fn from_exact(n: usize, sphere: impl Fn(usize) -> (V3<f64>, f64, u32) + Sync) -> Spheres {
+        use rayon::prelude::*;
+        const SLICE: usize = 1 << 14;
+        let zeros = || vec![0.0; n];
+        let (mut cx, mut cy, mut cz, mut r, mut c_eye) = (zeros(), zeros(), zeros(), zeros(), zeros());
+        let (mut material, mut key) = (vec![0; n], vec![0; n]);
+        let floats = (cx.par_chunks_mut(SLICE).zip(cy.par_chunks_mut(SLICE)).zip(cz.par_chunks_mut(SLICE)))
+            .zip(r.par_chunks_mut(SLICE).zip(c_eye.par_chunks_mut(SLICE)));
+        let ints = material.par_chunks_mut(SLICE).zip(key.par_chunks_mut(SLICE));
+        let slices = floats.zip(ints).enumerate();
+        let eye_terms_help = (slices.map(|(k, ((((cx, cy), cz), (r, c_eye)), (material, key)))| {
+            let mut help = false;
+            for j in 0..cx.len() {
+                let i = k * SLICE + j;
+                let (center, radius, m) = sphere(i);
+                let c = center.to_f32();
+                (cx[j], cy[j], cz[j], r[j]) = (c.x, c.y, c.z, radius as f32);
+                let term = eye_term(center, radius);
+                help |= term.abs() < 4.0 * radius * radius;
+                (c_eye[j], material[j], key[j]) = (term as f32, m, i as u32);
+            }
+            help
+        }))
+        .reduce(|| false, |a, b| a || b);
+        Spheres { cx, cy, cz, r, c_eye, material, color: Vec::new(), key, eye_terms_help }
     }
 
     /// Appends a sphere given in f64 (rendering space), rounding its centre and radius to f32 once and
@@ -123,5 +142,42 @@ pub(crate) fn eye_side(c_eye: f64) -> Option<bool> {
         std::cmp::Ordering::Less => Some(true),
         std::cmp::Ordering::Greater => Some(false),
         std::cmp::Ordering::Equal => None,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Built in slices on a pool of three threads, the arrays hold what appending each sphere gives: centres
+    /// and radii rounded once, eye terms from the f64 values, file order as keys; the flag for eye terms set by
+    /// the one sphere near the eye (or by none).
+    #[test]
+    fn spheres_built_in_slices_are_the_appended_ones() {
+        let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();
+        for near in [None, Some(40_000)] {
+            let sphere = |i: usize| {
+                let f = i as f64;
+                let center = V3::new(f.sin() * 1e3 + 0.1, (f * 0.37).cos() * 7e2, 5.0 + f * 1e-3);
+                match Some(i) == near {
+                    true => (V3::new(0.0, 0.0, 1.0 + 1e-9), 1.0, 2),
+                    false => (center, 0.1 + (i % 7) as f64 * 0.013, (i % 5) as u32),
+                }
+            };
+            let n = 3 * (1 << 14) + 12_345;
+            let built = pool.install(|| Spheres::from_exact(n, sphere));
+            let mut appended = Spheres::default();
+            (0..n).map(sphere).for_each(|(c, r, m)| appended.push_exact(c, r, m));
+            let bits = |v: &[f32]| v.iter().map(|x| x.to_bits()).collect::<Vec<_>>();
+            for (a, b) in [(&built.cx, &appended.cx), (&built.cy, &appended.cy), (&built.cz, &appended.cz)]
+                .into_iter()
+                .chain([(&built.r, &appended.r), (&built.c_eye, &appended.c_eye)])
+            {
+                assert_eq!(bits(a), bits(b));
+            }
+            assert_eq!((&built.material, &built.key), (&appended.material, &appended.key));
+            assert_eq!(built.eye_terms_help, near.is_some());
+            assert_eq!(appended.eye_terms_help, near.is_some());
+        }
     }
 }

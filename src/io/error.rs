@@ -70,9 +70,9 @@ pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
     let mapped =
         large.then(|| unsafe { memmap2::MmapOptions::new().populate().map(&file) }).and_then(Result::ok);
     match mapped {
-        Some(map) => match std::str::from_utf8(&map) {
-            Ok(_) => Ok(Text::Mapped(map)),
-            Err(e) => Err(not_utf8(path, &map, e)),
+        Some(map) => match is_utf8(&map) {
+            true => Ok(Text::Mapped(map)),
+            false => Err(not_utf8(path, &map, std::str::from_utf8(&map).expect_err("not UTF-8"))),
         },
         None => {
             let mut bytes = Vec::new();
@@ -80,6 +80,19 @@ pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
             text(path, bytes).map(Text::Read)
         }
     }
+}
+
+/// Whether `bytes` are UTF-8, checked in pieces on the current rayon pool. A piece ends just before an
+/// ASCII byte, which is never inside a character, so the pieces are UTF-8 exactly when the whole is.
+fn is_utf8(bytes: &[u8]) -> bool {
+    use rayon::prelude::*;
+    const PIECE: usize = 1 << 20;
+    let mut ends = vec![0];
+    while let Some(&end) = ends.last().filter(|&&end| end < bytes.len()) {
+        let from = (end + PIECE).min(bytes.len());
+        ends.push(bytes[from..].iter().position(u8::is_ascii).map_or(bytes.len(), |i| from + i));
+    }
+    ends.par_windows(2).all(|w| std::str::from_utf8(&bytes[w[0]..w[1]]).is_ok())
 }
 
 /// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start.
@@ -151,6 +164,34 @@ mod tests {
         let e = read_text(&path, "scene").unwrap_err();
         let lines = body.matches('\n').count();
         assert_eq!((e.line, e.column), (lines, line.len() - 2), "{e}");
+    }
+
+    /// Pieces end before ASCII bytes: characters straddling a megabyte boundary, long runs without ASCII and
+    /// bad bytes at, before or after a boundary give the whole text's answer.
+    #[test]
+    fn utf8_in_pieces_agrees_with_the_whole() {
+        const MB: usize = 1 << 20;
+        let base = vec![b'a'; 3 * MB + 5];
+        let euro = "€".as_bytes();
+        let mut cases: Vec<Vec<u8>> = vec![Vec::new(), base.clone()];
+        for at in [MB - 2, MB - 1, MB, MB + 1, 2 * MB - 1] {
+            let mut ok = base.clone();
+            ok[at..at + 3].copy_from_slice(euro);
+            cases.push(ok.clone());
+            for (cut, byte) in [(1, b'a'), (2, b'a'), (0, 0x82), (1, 0xFF)] {
+                let mut bad = ok.clone();
+                bad[at + cut] = byte;
+                cases.push(bad);
+            }
+        }
+        // Two megabytes of three-byte characters: one piece longer than the rest, then a truncated one.
+        let wide: Vec<u8> = euro.iter().copied().cycle().take(3 * (2 * MB / 3)).chain(*b"tail").collect();
+        cases.push(wide.clone());
+        cases.push(wide[..wide.len() - 5].to_vec());
+        for (i, bytes) in cases.iter().enumerate() {
+            assert_eq!(is_utf8(bytes), std::str::from_utf8(bytes).is_ok(), "case {i}");
+        }
+        assert!(cases.iter().filter(|b| !is_utf8(b)).count() >= 20, "the bad cases are bad");
     }
 
     #[test]
