@@ -385,22 +385,20 @@ pub(super) fn build_sah(
         })
         .collect();
     // Each subtree's root goes in its slot, the rest after the nodes so far in task order, its links moved
-    // with it; the subtrees are copied in parallel.
+    // with it: written in parallel, each node once into its place (one thread faulting in and filling a
+    // large field's node array was a serial step of the build).
     let top = nodes.len();
-    nodes.resize(top + subtrees.iter().map(|s| s.len() - 1).sum::<usize>(), unset());
-    let (mut rest, mut shift, mut places) = (&mut nodes[top..], top as u32 - 1, Vec::new());
-    for subtree in &subtrees {
-        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(subtree.len() - 1);
-        let next = shift + mine.len() as u32;
-        places.push((mine, shift));
-        (rest, shift) = (tail, next);
-    }
-    (places.par_iter_mut().zip(&subtrees)).for_each(|((mine, shift), subtree)| {
-        (mine.iter_mut().zip(&subtree[1..])).for_each(|(slot, &v)| *slot = moved(v, *shift));
-    });
-    let roots = places.iter().map(|&(_, shift)| shift).zip(&subtrees).map(|(shift, s)| moved(s[0], shift));
-    for (t, root) in tasks.iter().zip(roots.collect::<Vec<_>>()) {
-        nodes[t.slot] = root;
+    let starts: Vec<usize> =
+        (subtrees.iter()).scan(0, |at, s| Some(std::mem::replace(at, *at + s.len() - 1))).collect();
+    let shift = |p: usize| (top - 1 + starts[p]) as u32;
+    let total = subtrees.iter().map(|s| s.len() - 1).sum::<usize>();
+    nodes.par_extend((0..total).into_par_iter().map(|k| {
+        // The last subtree starting at or before k holds it (one with no nodes past its root holds none).
+        let p = starts.partition_point(|&start| start <= k) - 1;
+        moved(subtrees[p][1 + k - starts[p]], shift(p))
+    }));
+    for (p, t) in tasks.iter().enumerate() {
+        nodes[t.slot] = moved(subtrees[p][0], shift(p));
     }
     (nodes, refs.par_iter().map(Ref::item).collect())
 }
@@ -437,6 +435,9 @@ mod tests {
         let pile = cubes((0..5000).map(|_| (Vec3A::ONE, 0.25)));
         let spread = cubes((0..800).map(|i| (Vec3A::X * 1.1f32.powi(i), 1e-3 * 1.1f32.powi(i))));
         let flat: Vec<Aabb> = (0..2000).map(|i| Aabb::from_point(Vec3A::new(i as f32, 0.0, 0.0))).collect();
+        // Two boxes far from 6000 others: the first split leaves them a subtree that is one leaf.
+        let far = |i: usize| (i >= 6000).then(|| Vec3A::splat(1e6 + i as f32));
+        let outliers = cubes((0..6002).map(|i| (far(i).unwrap_or_else(&mut point), 0.05)));
         let few = |n: usize| cubes((0..n).map(|i| (Vec3A::Y * i as f32, 0.5)));
         vec![
             ("uniform", uniform),
@@ -444,6 +445,7 @@ mod tests {
             ("pile", pile),
             ("spread", spread),
             ("flat", flat),
+            ("outliers", outliers),
             ("one", few(1)),
             ("two", few(2)),
             ("nine", few(9)),

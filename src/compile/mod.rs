@@ -26,7 +26,7 @@ use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use crate::scene::desc::{Ao, Falloff, Material, RenderDesc, SceneDesc, Shade};
+use crate::scene::desc::{Ao, Falloff, Material, RenderDesc, SceneDesc, Shade, SphereDesc};
 pub(crate) use frame::RenderingFrame;
 
 /// A point light ready for shading.
@@ -175,7 +175,7 @@ fn reach(
     let mag = |p: glam::DVec3| (p - origin).abs().max_element();
     let extra = extra.into_iter().flatten().map(mag);
     // A maximum is exact and (NaN ignored) independent of order: the same reach however the list is cut.
-    let sphere = |s: &crate::scene::desc::SphereDesc| mag(s.center) + s.radius;
+    let sphere = |s: &SphereDesc| mag(s.center) + s.radius;
     let spheres = desc.spheres.par_iter().with_min_len(1 << 14).map(sphere).reduce(|| 0.0, f64::max);
     let spheres = std::iter::once(spheres).chain(extra);
     let (w, h) = (f64::from(camera.width), f64::from(camera.height));

@@ -142,15 +142,8 @@ impl std::fmt::Display for Shortest {
 
 /// A scene showing `spheres`: default material, a camera framing their bounds, one light.
 pub(crate) fn scene_around(spheres: Vec<SphereDesc>) -> SceneDesc {
-    let (lo, hi) = bounds(&spheres);
+    let (lo, hi) = sphere_bounds(&spheres);
     SceneDesc { spheres, ..scene_framing(lo, hi, None) }
-}
-
-/// The box around `spheres`.
-pub(crate) fn bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
-    spheres.iter().fold((DVec3::INFINITY, DVec3::NEG_INFINITY), |(lo, hi), s| {
-        (lo.min(s.center - s.radius), hi.max(s.center + s.radius))
-    })
 }
 
 /// The scene [`scene_around`] makes for spheres within `[lo, hi]`, without the spheres (a mapped field's

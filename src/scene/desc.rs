@@ -458,6 +458,16 @@ pub struct SphereDesc {
     pub material: u32,
 }
 
+/// The box around `spheres` (each centre ± radius), `(+∞, −∞)` for none: a parallel reduction of minima and
+/// maxima, which are exact and (NaN ignored) independent of order, so the same box however the list is cut.
+pub(crate) fn sphere_bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
+    use rayon::prelude::*;
+    let ball = |s: &SphereDesc| (s.center - s.radius, s.center + s.radius);
+    let union = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
+    let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
+    spheres.par_iter().with_min_len(1 << 14).map(ball).reduce(|| empty, union)
+}
+
 /// A whole scene as data.
 #[derive(Clone, Debug, PartialEq, Default)]
 pub struct SceneDesc {

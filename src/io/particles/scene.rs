@@ -221,7 +221,7 @@ fn by_flag<T: Copy>(
 /// a headlight), on a white background, with one material ([`material_of`] bareray's default grey, which
 /// shows only without colours).
 pub(crate) fn particle_scene(spheres: Vec<SphereDesc>, colors: Vec<Rgb8>, view: DVec3) -> SceneDesc {
-    let (lo, hi) = xyzr::bounds(&spheres);
+    let (lo, hi) = crate::scene::desc::sphere_bounds(&spheres);
     let mut desc = xyzr::scene_framing(lo, hi, Some(view));
     desc.render.background = Rgb::all(1.0);
     desc.materials = vec![material_of(Material::default().color)];
