@@ -26,7 +26,7 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
             return frame(&mut lines, count, source.len());
         }
         for _ in 0..count {
-            lines.expect(&format!("{count} atom lines (frame {index})"))?;
+            lines.expect_with(|| format!("{count} atom lines (frame {index})"))?;
         }
         box_line(&mut lines)?;
         index += 1;
@@ -49,7 +49,7 @@ fn frame(lines: &mut Lines, count: usize, bytes: usize) -> Result<Frame, SceneEr
     let mut kinds: HashMap<(&str, &str), u32> = HashMap::new();
     let mut width = None;
     for _ in 0..count {
-        let line = lines.expect(&format!("{count} atom lines"))?;
+        let line = lines.expect_with(|| format!("{count} atom lines"))?;
         let w = *width.get_or_insert_with(|| field_width(line));
         let v = |k: usize, what| text::number(columns(line, 20 + k * w, 20 + (k + 1) * w), what);
         let xyz = (|| Ok::<_, String>(DVec3::new(v(0, "x")?, v(1, "y")?, v(2, "z")?)))();

@@ -47,7 +47,7 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
                 return atoms(&mut lines, n, columns, cell, source.len());
             }
             for k in 0..n {
-                let line = lines.expect(&format!("{n} atom lines (frame {index})"))?;
+                let line = lines.expect_with(|| format!("{n} atom lines (frame {index})"))?;
                 if line.trim_start().starts_with("ITEM:") {
                     return Err(
                         lines.error(format!("NUMBER OF ATOMS said {n}, but only {k} atom lines follow"))
@@ -138,7 +138,7 @@ fn atoms(
     let mut types: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
     let mut words: Vec<&str> = Vec::with_capacity(c.words);
     for k in 0..count {
-        let line = lines.expect(&format!("{count} atom lines"))?;
+        let line = lines.expect_with(|| format!("{count} atom lines"))?;
         words.clear();
         words.extend(line.split_ascii_whitespace());
         if words.first().is_some_and(|w| *w == "ITEM:") {

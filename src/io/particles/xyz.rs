@@ -44,7 +44,7 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
             return Ok(frame);
         }
         for _ in 0..count {
-            lines.expect(&format!("{count} particle lines (frame {index})"))?;
+            lines.expect_with(|| format!("{count} particle lines (frame {index})"))?;
         }
         index += 1;
     }
@@ -137,13 +137,28 @@ fn find_key(text: &str, key: &str) -> Option<usize> {
 
 /// The `count` particle lines of a frame.
 fn frame(lines: &mut Lines, count: usize, columns: Columns, bytes: usize) -> Result<Frame, SceneError> {
+    if count >= PIECES_FROM {
+        if let Some(frame) = frame_in_pieces(lines, count, columns) {
+            return Ok(frame);
+        }
+    }
+    frame_in_one_pass(lines, count, columns, bytes)
+}
+
+/// [`frame`] one line after another.
+fn frame_in_one_pass(
+    lines: &mut Lines,
+    count: usize,
+    columns: Columns,
+    bytes: usize,
+) -> Result<Frame, SceneError> {
     let mut frame = Frame::new(Unit::Angstrom);
     frame.particles.reserve(text::capacity(count, bytes));
     let mut cache = KindCache::default();
     let unnamed = frame.element_kind("?");
     let mut words: Vec<&str> = Vec::with_capacity(columns.words);
     for _ in 0..count {
-        let line = lines.expect(&format!("{count} particle lines"))?;
+        let line = lines.expect_with(|| format!("{count} particle lines"))?;
         words.clear();
         words.extend(line.split_ascii_whitespace());
         let particle =
@@ -154,6 +169,85 @@ fn frame(lines: &mut Lines, count: usize, columns: Columns, bytes: usize) -> Res
         return Err(lines.error("a frame of 0 particles"));
     }
     Ok(frame)
+}
+
+/// Frames of at least this many particles are read in pieces ([`frame_in_pieces`]).
+const PIECES_FROM: usize = 1 << 15;
+
+/// Bytes of text per piece.
+const PIECE_BYTES: usize = 1 << 20;
+
+/// The particles of one piece, each kind an index into its `names` (`u32::MAX`: no kind column).
+struct Piece<'a> {
+    particles: Vec<Particle>,
+    names: Vec<&'a str>,
+}
+
+/// [`frame`]'s read of the `count` particle lines, in pieces on the current rayon pool: the same particles
+/// and kinds (each piece's element names in order of first sight, named in the frame in piece order, so in
+/// the order one pass meets them). `None`, with nothing taken from `lines`, when the file ends first or a
+/// line does not read: the one-pass read then reports the first error at its line.
+fn frame_in_pieces(lines: &mut Lines, count: usize, columns: Columns) -> Option<Frame> {
+    use rayon::prelude::*;
+    let rest = lines.rest();
+    let mut ends = rest.match_indices('\n').map(|(i, _)| i + 1);
+    let end = match ends.nth(count - 1) {
+        Some(end) => end,
+        // The frame's last line is the file's, without a line end.
+        None => (rest.matches('\n').count() == count - 1 && !rest.ends_with('\n')).then_some(rest.len())?,
+    };
+    let text = &rest[..end];
+    let mut cuts = vec![0];
+    while let Some(&at) = cuts.last().filter(|&&at| at < end) {
+        let from = (at + PIECE_BYTES).min(end);
+        cuts.push(text[from..].find('\n').map_or(end, |i| from + i + 1));
+    }
+    let pieces: Vec<Piece> =
+        cuts.par_windows(2).map(|w| piece(&text[w[0]..w[1]], columns)).collect::<Option<_>>()?;
+    let mut frame = Frame::new(Unit::Angstrom);
+    let mut cache = KindCache::default();
+    let unnamed = frame.element_kind("?");
+    let kinds: Vec<Vec<u32>> =
+        pieces.iter().map(|p| p.names.iter().map(|name| cache.element(&mut frame, name)).collect()).collect();
+    let starts: Vec<usize> =
+        pieces.iter().scan(0, |at, p| Some(std::mem::replace(at, *at + p.particles.len()))).collect();
+    frame.particles.par_extend((0..count).into_par_iter().map(|k| {
+        let p = starts.partition_point(|&start| start <= k) - 1;
+        let particle = pieces[p].particles[k - starts[p]];
+        let kind = kinds[p].get(particle.kind as usize).copied().unwrap_or(unnamed);
+        Particle { kind, ..particle }
+    }));
+    lines.skip(end, count);
+    Some(frame)
+}
+
+/// The particle lines of `text` as [`frame`] reads them, or `None` where one does not read.
+fn piece(text: &str, columns: Columns) -> Option<Piece<'_>> {
+    let mut names: Vec<&str> = Vec::new();
+    let mut local: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
+    let mut words: Vec<&str> = Vec::with_capacity(columns.words);
+    let mut scratch = Frame::new(Unit::Angstrom);
+    let mut particles = Vec::with_capacity(text.matches('\n').count() + 1);
+    for line in text.lines() {
+        words.clear();
+        words.extend(line.split_ascii_whitespace());
+        // Kinds are named after the pieces are read: here the kind is the name's place in `names`.
+        let mut particle = particle(
+            &words,
+            Columns { kind: None, ..columns },
+            &mut scratch,
+            &mut KindCache::default(),
+            u32::MAX,
+        )
+        .ok()?;
+        if let Some(k) = columns.kind {
+            let name = words[k];
+            particle.kind =
+                *local.entry(name).or_insert_with(|| (names.push(name), names.len() as u32 - 1).1);
+        }
+        particles.push(particle);
+    }
+    Some(Piece { particles, names })
 }
 
 /// One particle line, split into words.
@@ -233,5 +327,59 @@ mod tests {
         assert!(e.line == 2 && e.message.contains("expected 9"), "{e}");
         let e = parse(path, &with_origin.replace("-1 -1 -1", "nan 0 0"), 0).unwrap_err();
         assert!(e.line == 2 && e.message.contains("Origin"), "{e}");
+    }
+
+    /// Frames read in pieces give one pass's particles and kinds (kinds in order of first sight, names
+    /// that are one element merged, no kind column), for line ends `\n` and `\r\n` and a last line with or
+    /// without one; a bad line anywhere, or a file that ends early, gives one pass's error at its line.
+    #[test]
+    fn frames_in_pieces_read_as_one_pass() {
+        let path = Path::new("t.xyz");
+        let n = 3 * PIECES_FROM + 7;
+        let names = ["Zz", "C", "O", "8", "Xx", "c"];
+        // A kind first seen only in the last piece, and the rest cycling.
+        let name = |i: usize| if i == n - 2 { "Qq" } else { names[(i * 7 + i / 1000) % names.len()] };
+        let line = |i: usize| {
+            let (x, y, z, r) = (i % 97, i % 13, i % 11, 1 + i % 5);
+            format!("{} {i} {x}.5 -{y}e-3 {z} {r} 0.{} 0.5 1", name(i), i % 10)
+        };
+        let extended = "Properties=species:S:1:id:I:1:pos:R:3:radius:R:1:color:R:3";
+        let one_pass = |text: &str| {
+            let mut lines = Lines::new(path, text);
+            lines.expect("count").unwrap();
+            let comment = lines.expect("comment").unwrap();
+            frame_in_one_pass(&mut lines, n, columns(comment).unwrap(), text.len())
+        };
+        for (comment, end, last) in
+            [(extended, "\n", "\n"), ("plain", "\r\n", ""), ("Properties=pos:R:3", "\n", "")]
+        {
+            let body: Vec<String> = (0..n)
+                .map(|i| match comment {
+                    "plain" => line(i)
+                        .split(' ')
+                        .enumerate()
+                        .filter(|(k, _)| *k != 1)
+                        .map(|(_, w)| w)
+                        .collect::<Vec<_>>()
+                        .join(" "),
+                    "Properties=pos:R:3" => line(i).split(' ').skip(2).take(3).collect::<Vec<_>>().join(" "),
+                    _ => line(i),
+                })
+                .collect();
+            let text = format!("{n}{end}{comment}{end}{}{last}", body.join(end));
+            let read = parse(path, &text, 0).unwrap();
+            assert!(read == one_pass(&text).unwrap(), "{comment}: the frames differ");
+            assert_eq!(read.particles.len(), n);
+            for bad in [5, PIECES_FROM + 3, n - 1] {
+                let mut lines: Vec<String> = body.clone();
+                lines[bad] = lines[bad].replacen(".5 ", ".5x ", 1);
+                let text = format!("{n}{end}{comment}{end}{}{last}", lines.join(end));
+                let e = parse(path, &text, 0).unwrap_err();
+                assert_eq!(e, one_pass(&text).unwrap_err());
+                assert_eq!(e.line, bad + 3, "{e}");
+            }
+            let short = format!("{n}{end}{comment}{end}{}", body[..n - 1].join(end));
+            assert_eq!(parse(path, &short, 0).unwrap_err(), one_pass(&short).unwrap_err());
+        }
     }
 }
