@@ -385,8 +385,7 @@ pub(super) fn build_sah(
         })
         .collect();
     // Each subtree's root goes in its slot, the rest after the nodes so far in task order, its links moved
-    // with it: written in parallel, each node once into its place (one thread faulting in and filling a
-    // large field's node array was a serial step of the build).
+    // with it: written in parallel, each node once into its place.
     let top = nodes.len();
     let starts: Vec<usize> =
         (subtrees.iter()).scan(0, |at, s| Some(std::mem::replace(at, *at + s.len() - 1))).collect();

@@ -20,7 +20,7 @@
 
 use glam::DVec3;
 
-use crate::scene::desc::{sphere_bounds, SceneDesc};
+use crate::scene::desc::{box_union, sphere_bounds, SceneDesc};
 
 /// The eye must be this many bounding radii from the geometry's centre for the frame to move there: the
 /// gain in resolution is about this over 3 (the origin's and the direction's roundings above), so the frame
@@ -68,10 +68,9 @@ impl RenderingFrame {
 /// The box around every bounded primitive and the box `extra`, in f64 world space (`None` without any):
 /// spheres, polygons and the registered kinds' bounded items (ellipsoids, cones, tori; not planes).
 pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option<(DVec3, DVec3)> {
-    let union = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
     let spheres = sphere_bounds(&desc.spheres);
     let kinds = desc.kinds.world_boxes().into_iter().flatten();
-    let (lo, hi) = kinds.chain(extra.into_iter().flatten()).map(|p| (p, p)).fold(spheres, union);
+    let (lo, hi) = kinds.chain(extra.into_iter().flatten()).map(|p| (p, p)).fold(spheres, box_union);
     lo.cmple(hi).all().then_some((lo, hi))
 }
 

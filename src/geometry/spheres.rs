@@ -83,8 +83,7 @@ impl Spheres {
     }
 
     /// `n` spheres given in f64 (rendering space) by `sphere(i)` = (centre, radius, material), each stored as
-    /// [`Spheres::push_exact`] appends it, in slices on the current rayon pool (a compile of a large field
-    /// would otherwise fill its arrays on one thread while the other waits).
+    /// [`Spheres::push_exact`] appends it, filled in slices on the current rayon pool.
     pub(crate) fn from_exact(n: usize, sphere: impl Fn(usize) -> (V3<f64>, f64, u32) + Sync) -> Spheres {
         use rayon::prelude::*;
         const SLICE: usize = 1 << 14;

@@ -458,14 +458,25 @@ pub struct SphereDesc {
     pub material: u32,
 }
 
-/// The box around `spheres` (each centre ± radius), `(+∞, −∞)` for none: a parallel reduction of minima and
-/// maxima, which are exact and (NaN ignored) independent of order, so the same box however the list is cut.
+/// The box around `spheres` (each centre ± radius), `(+∞, −∞)` for none: a parallel reduction by
+/// [`box_union`], so the same box however the list is cut.
 pub(crate) fn sphere_bounds(spheres: &[SphereDesc]) -> (DVec3, DVec3) {
     use rayon::prelude::*;
-    let ball = |s: &SphereDesc| (s.center - s.radius, s.center + s.radius);
-    let union = |(lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)| (lo.min(l), hi.max(h));
+    // Both corners on both sides, so a sphere built by hand with a negative radius still spans its box.
+    let ball = |s: &SphereDesc| {
+        let (a, b) = (s.center - s.radius, s.center + s.radius);
+        box_union((a, a), (b, b))
+    };
     let empty = (DVec3::INFINITY, DVec3::NEG_INFINITY);
-    spheres.par_iter().with_min_len(1 << 14).map(ball).reduce(|| empty, union)
+    spheres.par_iter().with_min_len(1 << 14).map(ball).reduce(|| empty, box_union)
+}
+
+/// The union of two boxes `(lo, hi)`, component by component with `f64::min` and `f64::max`: exact,
+/// associative and commutative, a NaN ignored (glam's `min` and `max` are neither for NaN), so a reduction
+/// gives the same box in any order.
+pub(crate) fn box_union((lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)) -> (DVec3, DVec3) {
+    let min = DVec3::new(lo.x.min(l.x), lo.y.min(l.y), lo.z.min(l.z));
+    (min, DVec3::new(hi.x.max(h.x), hi.y.max(h.y), hi.z.max(h.z)))
 }
 
 /// A whole scene as data.
@@ -491,4 +502,35 @@ pub struct SceneDesc {
     /// ids after the spheres, kind by kind in the registry's order (a polygon one id however it is
     /// triangulated).
     pub kinds: KindDescs,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The box of a list with NaN centres and radii here and there is the box of its other spheres, on one
+    /// thread or three (glam's `min` would have kept or dropped a NaN depending on the order).
+    #[test]
+    fn sphere_bounds_ignore_nan_in_any_order() {
+        let sphere = |i: usize| {
+            let f = i as f64;
+            let center = DVec3::new(f.sin() * 10.0, f * 0.01, -(f.cos() * 3.0));
+            SphereDesc { center, radius: 0.5, material: 0 }
+        };
+        let finite: Vec<SphereDesc> = (0..70_000).map(sphere).collect();
+        let mut with_nan = finite.clone();
+        for i in [0, 1, 16_383, 16_384, 40_000, 69_999] {
+            with_nan.insert(i, SphereDesc { center: DVec3::new(f64::NAN, 1.0, 2.0), ..sphere(i) });
+            with_nan.insert(i + 1, SphereDesc { radius: f64::NAN, ..sphere(i) });
+        }
+        let on = |threads: usize, spheres: &[SphereDesc]| {
+            let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
+            pool.install(|| sphere_bounds(spheres))
+        };
+        let expected = on(1, &finite);
+        assert!(expected.0.is_finite() && expected.1.is_finite());
+        assert_eq!(on(1, &with_nan), expected);
+        assert_eq!(on(3, &with_nan), expected);
+        assert_eq!(on(3, &[]), (DVec3::INFINITY, DVec3::NEG_INFINITY));
+    }
 }

@@ -57,8 +57,7 @@ impl<'a> Lines<'a> {
         self.expect_with(|| what.to_owned())
     }
 
-    /// [`Lines::expect`] with the expected thing's name made only for the error (a name formatted for every
-    /// line of a million-particle frame was a tenth of its read).
+    /// [`Lines::expect`] with the expected thing's name made only for an error, not for every line taken.
     pub(crate) fn expect_with(&mut self, what: impl FnOnce() -> String) -> Result<&'a str, SceneError> {
         self.next().ok_or_else(|| {
             let what = what();

@@ -200,7 +200,8 @@ fn frame_in_pieces(lines: &mut Lines, count: usize, columns: Columns) -> Option<
     let mut cuts = vec![0];
     while let Some(&at) = cuts.last().filter(|&&at| at < end) {
         let from = (at + PIECE_BYTES).min(end);
-        cuts.push(text[from..].find('\n').map_or(end, |i| from + i + 1));
+        // Bytes, not characters: `from` may fall inside one; the cut after a '\n' is a character boundary.
+        cuts.push(text.as_bytes()[from..].iter().position(|&b| b == b'\n').map_or(end, |i| from + i + 1));
     }
     let pieces: Vec<Piece> =
         cuts.par_windows(2).map(|w| piece(&text[w[0]..w[1]], columns)).collect::<Option<_>>()?;
@@ -226,20 +227,14 @@ fn piece(text: &str, columns: Columns) -> Option<Piece<'_>> {
     let mut names: Vec<&str> = Vec::new();
     let mut local: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
     let mut words: Vec<&str> = Vec::with_capacity(columns.words);
-    let mut scratch = Frame::new(Unit::Angstrom);
+    let (mut scratch, mut unused) = (Frame::new(Unit::Angstrom), KindCache::default());
+    let no_kind = Columns { kind: None, ..columns };
     let mut particles = Vec::with_capacity(text.matches('\n').count() + 1);
     for line in text.lines() {
         words.clear();
         words.extend(line.split_ascii_whitespace());
         // Kinds are named after the pieces are read: here the kind is the name's place in `names`.
-        let mut particle = particle(
-            &words,
-            Columns { kind: None, ..columns },
-            &mut scratch,
-            &mut KindCache::default(),
-            u32::MAX,
-        )
-        .ok()?;
+        let mut particle = particle(&words, no_kind, &mut scratch, &mut unused, u32::MAX).ok()?;
         if let Some(k) = columns.kind {
             let name = words[k];
             particle.kind =
@@ -350,9 +345,15 @@ mod tests {
             let comment = lines.expect("comment").unwrap();
             frame_in_one_pass(&mut lines, n, columns(comment).unwrap(), text.len())
         };
-        for (comment, end, last) in
-            [(extended, "\n", "\n"), ("plain", "\r\n", ""), ("Properties=pos:R:3", "\n", "")]
-        {
+        // Line ends; the text after the frame (a second frame, a bare '\r', nothing); a non-ASCII comment
+        // column on every line, so that piece cuts fall inside characters.
+        let next_frame = "\n2\nnext\nC 0 0 0\nO 1 1 1\n";
+        for (comment, end, last, note) in [
+            (extended, "\n", next_frame, " # café ∂x"),
+            ("plain", "\r\n", "", ""),
+            ("plain", "\n", "\r", " ∂"),
+            ("Properties=pos:R:3", "\n", "", ""),
+        ] {
             let body: Vec<String> = (0..n)
                 .map(|i| match comment {
                     "plain" => line(i)
@@ -364,11 +365,16 @@ mod tests {
                         .join(" "),
                     "Properties=pos:R:3" => line(i).split(' ').skip(2).take(3).collect::<Vec<_>>().join(" "),
                     _ => line(i),
-                })
+                } + note)
                 .collect();
             let text = format!("{n}{end}{comment}{end}{}{last}", body.join(end));
             let read = parse(path, &text, 0).unwrap();
             assert!(read == one_pass(&text).unwrap(), "{comment}: the frames differ");
+            let mut lines = Lines::new(path, &text);
+            lines.next();
+            let comment_line = lines.next().unwrap();
+            let pieces = frame_in_pieces(&mut lines, n, columns(comment_line).unwrap());
+            assert!(pieces.is_some_and(|f| f == read), "{comment}: not read in pieces");
             assert_eq!(read.particles.len(), n);
             for bad in [5, PIECES_FROM + 3, n - 1] {
                 let mut lines: Vec<String> = body.clone();
