@@ -86,13 +86,9 @@ pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
 /// ASCII byte, which is never inside a character, so the pieces are UTF-8 exactly when the whole is.
 fn is_utf8(bytes: &[u8]) -> bool {
     use rayon::prelude::*;
-    const PIECE: usize = 1 << 20;
-    let mut ends = vec![0];
-    while let Some(&end) = ends.last().filter(|&&end| end < bytes.len()) {
-        let from = (end + PIECE).min(bytes.len());
-        ends.push(bytes[from..].iter().position(u8::is_ascii).map_or(bytes.len(), |i| from + i));
-    }
-    ends.par_windows(2).all(|w| std::str::from_utf8(&bytes[w[0]..w[1]]).is_ok())
+    let ascii = |from: usize| bytes[from..].iter().position(u8::is_ascii).map(|i| from + i);
+    let cuts = super::pieces::cuts(bytes, 1 << 20, ascii);
+    cuts.par_windows(2).all(|w| std::str::from_utf8(&bytes[w[0]..w[1]]).is_ok())
 }
 
 /// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start.

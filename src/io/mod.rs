@@ -6,6 +6,7 @@ pub mod f32r;
 pub mod generate;
 pub mod nff;
 pub mod particles;
+pub(crate) mod pieces;
 pub mod random_scene;
 pub mod toml;
 pub mod xyzr;

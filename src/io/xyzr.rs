@@ -37,7 +37,7 @@ pub(crate) fn parse(path: &Path, source: &str) -> Result<SceneDesc, SceneError> 
 /// counted first, so that its spheres are parsed straight into their place in the one list: no per-chunk
 /// lists to grow and then copy (at 1e7 spheres, 400 MB of fresh memory and a copy of it).
 fn parse_in_chunks(path: &Path, source: &str, chunk_bytes: usize) -> Result<SceneDesc, SceneError> {
-    let chunks = line_chunks(source, chunk_bytes);
+    let chunks = crate::io::pieces::line_pieces(source, chunk_bytes);
     let counts: Vec<usize> =
         chunks.par_iter().map(|text| text.lines().filter(|line| is_sphere(line.trim())).count()).collect();
     // Lines that are not blank or comments are spheres or errors, so with none there is no error to report.
@@ -66,20 +66,6 @@ fn parse_in_chunks(path: &Path, source: &str, chunk_bytes: usize) -> Result<Scen
 
 /// Bytes of text per parallel chunk.
 const CHUNK_BYTES: usize = 1 << 20;
-
-/// `source` cut after a newline every `size` bytes or so.
-fn line_chunks(source: &str, size: usize) -> Vec<&str> {
-    let bytes = source.as_bytes();
-    let (mut chunks, mut start) = (Vec::new(), 0);
-    while start < bytes.len() {
-        let cut = start.saturating_add(size).min(bytes.len());
-        let end = bytes[cut..].iter().position(|&b| b == b'\n').map_or(bytes.len(), |p| cut + p + 1);
-        // `end` follows a '\n' or is the end, so it is a char boundary.
-        chunks.push(&source[start..end]);
-        start = end;
-    }
-    chunks
-}
 
 /// Whether a trimmed line holds a sphere (or an error): it is neither blank nor a `#` comment.
 pub(super) fn is_sphere(trimmed: &str) -> bool {

@@ -15,6 +15,7 @@ use rayon::prelude::*;
 
 use super::{parse_sequential, Reader};
 use crate::io::error::SceneError;
+use crate::io::pieces::{after_newline, cuts};
 use crate::scene::desc::{SceneDesc, SphereDesc};
 
 /// Bytes of text per piece.
@@ -54,24 +55,14 @@ fn read_pieces<'a>(path: &'a Path, pieces: &[&'a str]) -> Option<Reader<'a>> {
 /// whose first word names an entity.
 fn pieces(source: &str, size: usize) -> Vec<&str> {
     let bytes = source.as_bytes();
-    let (mut pieces, mut start) = (Vec::new(), 0);
-    while start < bytes.len() {
-        let mut end = start.saturating_add(size).min(bytes.len());
-        loop {
-            let Some(newline) = bytes[end..].iter().position(|&b| b == b'\n') else {
-                end = bytes.len();
-                break;
-            };
-            // Just after a '\n', so a char boundary.
-            end += newline + 1;
-            if starts_entity(&source[end..]) {
-                break;
-            }
+    let entity = |mut from: usize| loop {
+        // Just after a '\n', so a char boundary.
+        from = after_newline(bytes, from)?;
+        if starts_entity(&source[from..]) {
+            return Some(from);
         }
-        pieces.push(&source[start..end]);
-        start = end;
-    }
-    pieces
+    };
+    cuts(bytes, size, entity).windows(2).map(|w| &source[w[0]..w[1]]).collect()
 }
 
 /// Whether the first word of `text`'s first line names an entity.

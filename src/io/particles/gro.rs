@@ -4,18 +4,23 @@
 //! the usual 3 decimals); velocities after them are ignored. The element comes from the atom name (an ion
 //! named as its residue, `NA` in residue `NA`, else the name's first letter: `OW` is oxygen).
 
-use std::collections::HashMap;
 use std::path::Path;
 
 use glam::DVec3;
 
 use super::elements;
+use super::frame_lines::{self, How};
 use super::text::{self, columns, Lines};
 use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Reads frame `wanted` (from 0) of a `.gro` text.
 pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+    parse_as(path, source, wanted, How::Auto)
+}
+
+/// [`parse`], the frame's atom lines read as `how` says.
+fn parse_as(path: &Path, source: &str, wanted: usize, how: How) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let mut index = 0;
     while lines.more() {
@@ -23,7 +28,7 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
         let count_line = lines.expect("an atom count")?;
         let count = text::count(count_line, "an atom count").map_err(|m| lines.error(m))?;
         if index == wanted {
-            return frame(&mut lines, count, source.len());
+            return frame(&mut lines, count, how);
         }
         for _ in 0..count {
             lines.expect_with(|| format!("{count} atom lines (frame {index})"))?;
@@ -40,31 +45,30 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
 }
 
 /// The atoms of a frame and its box line.
-fn frame(lines: &mut Lines, count: usize, bytes: usize) -> Result<Frame, SceneError> {
+fn frame<'a>(lines: &mut Lines<'a>, count: usize, how: How) -> Result<Frame, SceneError> {
     if count == 0 {
         return Err(lines.error("a frame of 0 atoms"));
     }
     let mut frame = Frame::new(Unit::Nanometre);
-    frame.particles.reserve(text::capacity(count, bytes));
-    let mut kinds: HashMap<(&str, &str), u32> = HashMap::new();
-    let mut width = None;
-    for _ in 0..count {
-        let line = lines.expect_with(|| format!("{count} atom lines"))?;
-        let w = *width.get_or_insert_with(|| field_width(line));
-        let v = |k: usize, what| text::number(columns(line, 20 + k * w, 20 + (k + 1) * w), what);
-        let xyz = (|| Ok::<_, String>(DVec3::new(v(0, "x")?, v(1, "y")?, v(2, "z")?)))();
-        let center = xyz.map_err(|m| lines.error(format!("{m} (columns from 21, {w} wide)")))?;
-        let (residue, name) = (columns(line, 5, 10), columns(line, 10, 15));
-        let kind = *kinds.entry((name, residue)).or_insert_with(|| {
-            match elements::from_atom_name(name, residue, false) {
-                Some(e) => frame.kind(Kind { name: e.0.to_owned(), element: Some(e), lammps_type: false }),
-                None => frame.element_kind(name.trim()),
-            }
-        });
-        frame.particles.push(Particle { center, kind, radius: None, color: None });
-    }
+    let width = lines.peek().map_or(8, field_width);
+    let read = |_: usize, line: &'a str, _: &mut Vec<&'a str>| atom(line, width);
+    let name = |(name, residue): (&str, &str)| match elements::from_atom_name(name, residue, false) {
+        Some(e) => frame.kind(Kind { name: e.0.to_owned(), element: Some(e), lammps_type: false }),
+        None => frame.element_kind(name.trim()),
+    };
+    frame.particles = frame_lines::read(lines, count, ("atom", how), read, name)?;
     frame.cell = Some(box_line(lines)?);
     Ok(frame)
+}
+
+/// One atom line, its coordinates `w` wide from column 21, and its atom and residue names (the key of its
+/// kind).
+fn atom(line: &str, w: usize) -> Result<(Particle, (&str, &str)), String> {
+    let v = |k: usize, what| text::number(columns(line, 20 + k * w, 20 + (k + 1) * w), what);
+    let xyz = (|| Ok::<_, String>(DVec3::new(v(0, "x")?, v(1, "y")?, v(2, "z")?)))();
+    let center = xyz.map_err(|m| format!("{m} (columns from 21, {w} wide)"))?;
+    let particle = Particle { center, kind: 0, radius: None, color: None };
+    Ok((particle, (columns(line, 10, 15), columns(line, 5, 10))))
 }
 
 /// The width of the coordinate fields of an atom line: the distance between the decimal points of x and
@@ -167,5 +171,43 @@ mod tests {
         assert_eq!(e.line, 4, "{e}");
         let e = parse(Path::new("t.gro"), &WATER.replace("    3\n", "    4\n"), 0).unwrap_err();
         assert_eq!(e.line, 6, "{e}");
+    }
+
+    /// A large frame read in pieces gives one pass's atoms, kinds (an ion first seen in the last piece)
+    /// and box, with `\n` or `\r\n` line ends; a bad coordinate in any piece, or a file that ends early,
+    /// gives one pass's error at its line.
+    #[test]
+    fn large_frames_in_pieces_read_as_one_pass() {
+        let path = Path::new("t.gro");
+        let n = 2 * frame_lines::PIECES_FROM + 5;
+        let names = [("SOL", "OW"), ("SOL", "HW1"), ("SOL", "HW2"), ("LIG", "C1"), ("LIG", "N2")];
+        let line = |i: usize| {
+            let (residue, name) =
+                if i == n - 3 { ("NA", "NA") } else { names[(i * 3 + i / 777) % names.len()] };
+            let (x, y, z) = ((i % 1000) as f64 * 0.013, (i % 37) as f64 * 0.1, -((i % 7) as f64));
+            format!("{:>5}{residue:<5}{name:>5}{:>5}{x:8.3}{y:8.3}{z:8.3}", i % 100_000, i % 100_000)
+        };
+        for end in ["\n", "\r\n"] {
+            let body: Vec<String> = (0..n).map(line).collect();
+            let text =
+                |body: &[String]| format!("big{end}{n}{end}{}{end}   2.0   3.0   4.0{end}", body.join(end));
+            let whole = text(&body);
+            let read = parse(path, &whole, 0).unwrap();
+            assert!(read == parse_as(path, &whole, 0, How::OnePass).unwrap(), "{end:?}: the frames differ");
+            assert!(parse_as(path, &whole, 0, How::Pieces).is_ok_and(|f| f == read), "{end:?}: no pieces");
+            assert_eq!((read.particles.len(), read.kinds.last().map(|k| k.name.as_str())), (n, Some("Na")));
+            for bad in [3, frame_lines::PIECES_FROM + 1, n - 1] {
+                let mut broken = body.clone();
+                broken[bad].replace_range(24..25, "x");
+                let e = parse(path, &text(&broken), 0).unwrap_err();
+                assert_eq!(e, parse_as(path, &text(&broken), 0, How::OnePass).unwrap_err());
+                assert_eq!(e.line, bad + 3, "{e}");
+            }
+            let short = format!("big{end}{n}{end}{}", body[..n - 1].join(end));
+            assert_eq!(
+                parse(path, &short, 0).unwrap_err(),
+                parse_as(path, &short, 0, How::OnePass).unwrap_err()
+            );
+        }
     }
 }

@@ -10,8 +10,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::frame_lines::{self, How};
 use super::text::{self, Lines};
-use super::{Cell, Frame, Kind, KindCache, Particle, Unit};
+use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Where the columns of interest are.
@@ -28,6 +29,11 @@ struct Columns {
 
 /// Reads frame `wanted` (from 0) of a LAMMPS dump.
 pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+    parse_as(path, source, wanted, How::Auto)
+}
+
+/// [`parse`], the frame's atom lines read as `how` says.
+fn parse_as(path: &Path, source: &str, wanted: usize, how: How) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let (mut index, mut count, mut cell) = (0usize, None, None);
     while lines.more() {
@@ -44,7 +50,7 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
             let n = count.ok_or_else(|| lines.error("ITEM: ATOMS before ITEM: NUMBER OF ATOMS"))?;
             if index == wanted {
                 let columns = columns(names, cell.is_some()).map_err(|m| lines.error(m))?;
-                return atoms(&mut lines, n, columns, cell, source.len());
+                return atoms(&mut lines, n, columns, cell, how);
             }
             for k in 0..n {
                 let line = lines.expect_with(|| format!("{n} atom lines (frame {index})"))?;
@@ -121,51 +127,55 @@ fn columns(names: &str, has_cell: bool) -> Result<Columns, String> {
 }
 
 /// The `count` atom lines of the chosen frame.
-fn atoms(
-    lines: &mut Lines,
+fn atoms<'a>(
+    lines: &mut Lines<'a>,
     count: usize,
     c: Columns,
     cell: Option<Cell>,
-    bytes: usize,
+    how: How,
 ) -> Result<Frame, SceneError> {
     if count == 0 {
         return Err(lines.error("a frame of 0 atoms"));
     }
     let mut frame = Frame::new(Unit::Angstrom);
     frame.cell = cell;
-    frame.particles.reserve(text::capacity(count, bytes));
-    let mut elements = KindCache::default();
-    let mut types: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
-    let mut words: Vec<&str> = Vec::with_capacity(c.words);
-    for k in 0..count {
-        let line = lines.expect_with(|| format!("{count} atom lines"))?;
-        words.clear();
-        words.extend(line.split_ascii_whitespace());
-        if words.first().is_some_and(|w| *w == "ITEM:") {
-            return Err(lines.error(format!("NUMBER OF ATOMS said {count}, but only {k} atom lines follow")));
-        }
-        if words.len() < c.words {
-            return Err(lines.error(format!("expected {} columns, got {}", c.words, words.len())));
-        }
-        let v = |i: usize, what| text::number(words[i], what).map_err(|m| lines.error(m));
-        let mut center = DVec3::new(v(c.pos[0], "x")?, v(c.pos[1], "y")?, v(c.pos[2], "z")?);
-        if c.scaled {
-            center = cell.expect("checked with the columns").point(center);
-        }
-        let kind = match (c.element, c.kind) {
-            (Some(e), _) => elements.element(&mut frame, words[e]),
-            (None, Some(t)) => *types.entry(words[t]).or_insert_with(|| {
-                frame.kind(Kind { name: words[t].to_owned(), element: None, lammps_type: true })
-            }),
-            (None, None) => frame.kind(Kind { name: "1".to_owned(), element: None, lammps_type: true }),
-        };
-        let radius = match c.radius {
-            Some((i, factor)) => Some(text::radius(words[i], "radius").map_err(|m| lines.error(m))? * factor),
-            None => None,
-        };
-        frame.particles.push(Particle { center, kind, radius, color: None });
-    }
+    let read = |k: usize, line: &'a str, words: &mut Vec<&'a str>| atom((k, count), line, words, c, cell);
+    let name = |key: Option<&str>| match (c.element, key) {
+        (Some(_), Some(element)) => frame.element_kind(element),
+        (None, Some(t)) => frame.kind(Kind { name: t.to_owned(), element: None, lammps_type: true }),
+        (_, None) => frame.kind(Kind { name: "1".to_owned(), element: None, lammps_type: true }),
+    };
+    frame.particles = frame_lines::read(lines, count, ("atom", how), read, name)?;
     Ok(frame)
+}
+
+/// Atom line `k` of `count` and the key of its kind: its `element` word, else its `type` word, else none.
+fn atom<'a>(
+    (k, count): (usize, usize),
+    line: &'a str,
+    words: &mut Vec<&'a str>,
+    c: Columns,
+    cell: Option<Cell>,
+) -> Result<(Particle, Option<&'a str>), String> {
+    words.clear();
+    words.extend(line.split_ascii_whitespace());
+    if words.first().is_some_and(|w| *w == "ITEM:") {
+        return Err(format!("NUMBER OF ATOMS said {count}, but only {k} atom lines follow"));
+    }
+    if words.len() < c.words {
+        return Err(format!("expected {} columns, got {}", c.words, words.len()));
+    }
+    let v = |i: usize, what| text::number(words[i], what);
+    let mut center = DVec3::new(v(c.pos[0], "x")?, v(c.pos[1], "y")?, v(c.pos[2], "z")?);
+    if c.scaled {
+        center = cell.expect("checked with the columns").point(center);
+    }
+    let radius = match c.radius {
+        Some((i, factor)) => Some(text::radius(words[i], "radius")? * factor),
+        None => None,
+    };
+    let key = c.element.or(c.kind).map(|i| words[i]);
+    Ok((Particle { center, kind: 0, radius, color: None }, key))
 }
 
 #[cfg(test)]
@@ -206,5 +216,46 @@ mod tests {
         assert_eq!(e.line, 11, "{e}");
         let e = parse(path, &text.replace("xu yu zu", "a b c"), 0).unwrap_err();
         assert_eq!(e.line, 9, "{e}");
+    }
+
+    /// A large frame read in pieces gives one pass's atoms and kinds, by type or by element and with
+    /// scaled coordinates through a triclinic box; a bad line or an `ITEM:` line too early in any piece
+    /// gives one pass's error at its line.
+    #[test]
+    fn large_frames_in_pieces_read_as_one_pass() {
+        let path = Path::new("t.dump");
+        let n = 2 * frame_lines::PIECES_FROM + 9;
+        let head = |columns: &str| {
+            format!(
+                "ITEM: TIMESTEP\n7\nITEM: NUMBER OF ATOMS\n{n}\nITEM: BOX BOUNDS xy xz yz pp pp pp\n\
+                     0 13 2\n-1 8 1\n0 6 -1\nITEM: ATOMS {columns}\n"
+            )
+        };
+        let kinds = ["1", "2", "3", "C", "O"];
+        let line = |i: usize, element: bool| {
+            let kind = if i == n - 2 { "7" } else { kinds[(i * 5 + i / 999) % if element { 5 } else { 3 }] };
+            let (x, y, z) = ((i % 101) as f64 / 101.0, (i % 13) as f64 / 13.0, (i % 7) as f64 / 7.0);
+            format!("{i} {kind} {x} {y} {z} {}", 1 + i % 3)
+        };
+        for (columns, element) in [("id type xs ys zs diameter", false), ("id element xs ys zs radius", true)]
+        {
+            let body: Vec<String> = (0..n).map(|i| line(i, element)).collect();
+            let whole = head(columns) + &body.join("\n") + "\n";
+            let read = parse(path, &whole, 0).unwrap();
+            assert!(read == parse_as(path, &whole, 0, How::OnePass).unwrap(), "{columns}: the frames differ");
+            assert!(parse_as(path, &whole, 0, How::Pieces).is_ok_and(|f| f == read), "{columns}: no pieces");
+            assert_eq!(read.particles.len(), n);
+            assert_eq!(read.kinds.iter().any(|k| k.lammps_type), !element);
+            for (bad, with) in
+                [(2, "1 1 x 0 0 1"), (frame_lines::PIECES_FROM + 4, "ITEM: ATOMS"), (n - 1, "1 1")]
+            {
+                let mut broken = body.clone();
+                broken[bad] = with.to_owned();
+                let text = head(columns) + &broken.join("\n") + "\n";
+                let e = parse(path, &text, 0).unwrap_err();
+                assert_eq!(e, parse_as(path, &text, 0, How::OnePass).unwrap_err());
+                assert_eq!(e.line, bad + 10, "{e}");
+            }
+        }
     }
 }

@@ -10,6 +10,7 @@
 
 pub mod arrays;
 pub(crate) mod elements;
+mod frame_lines;
 pub(crate) mod gro;
 pub(crate) mod lammps;
 pub(crate) mod pdb;
@@ -313,15 +314,4 @@ pub(crate) fn missing_frame(path: &Path, wanted: usize, count: usize) -> SceneEr
         n => format!("{n} frames (0 to {})", n - 1),
     };
     SceneError::whole_file(path, format!("frame {wanted} asked for, but the file has {has}"))
-}
-
-/// Kinds by the word a file names them with, so that each word is looked up in the table once.
-#[derive(Default)]
-pub(crate) struct KindCache<'a>(std::collections::HashMap<&'a str, u32>);
-
-impl<'a> KindCache<'a> {
-    /// The kind of the element (or unknown name) `word`.
-    pub(crate) fn element(&mut self, frame: &mut Frame, word: &'a str) -> u32 {
-        *self.0.entry(word).or_insert_with(|| frame.element_kind(word))
-    }
 }

@@ -10,8 +10,9 @@ use std::path::Path;
 
 use glam::DVec3;
 
+use super::frame_lines::{self, How};
 use super::text::{self, Lines};
-use super::{Cell, Frame, KindCache, Particle, Unit};
+use super::{Cell, Frame, Particle, Unit};
 use crate::io::SceneError;
 use crate::math::Rgb;
 
@@ -30,6 +31,11 @@ const PLAIN: Columns = Columns { kind: Some(0), pos: 1, radius: None, color: Non
 
 /// Reads frame `wanted` (from 0) of an XYZ text.
 pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, SceneError> {
+    parse_as(path, source, wanted, How::Auto)
+}
+
+/// [`parse`], the frame's lines read as `how` says.
+fn parse_as(path: &Path, source: &str, wanted: usize, how: How) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let mut index = 0;
     while lines.more() {
@@ -39,7 +45,7 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize) -> Result<Frame, S
         if index == wanted {
             let columns = columns(comment).map_err(|m| lines.error(m))?;
             let cell = lattice(comment).map_err(|m| lines.error(m))?;
-            let mut frame = frame(&mut lines, count, columns, source.len())?;
+            let mut frame = frame(&mut lines, count, columns, how)?;
             frame.cell = cell;
             return Ok(frame);
         }
@@ -135,130 +141,33 @@ fn find_key(text: &str, key: &str) -> Option<usize> {
     lower.find(key).map(|i| i + key.len())
 }
 
-/// The `count` particle lines of a frame.
-fn frame(lines: &mut Lines, count: usize, columns: Columns, bytes: usize) -> Result<Frame, SceneError> {
-    if count >= PIECES_FROM {
-        if let Some(frame) = frame_in_pieces(lines, count, columns) {
-            return Ok(frame);
-        }
-    }
-    frame_in_one_pass(lines, count, columns, bytes)
-}
-
-/// [`frame`] one line after another.
-fn frame_in_one_pass(
-    lines: &mut Lines,
-    count: usize,
-    columns: Columns,
-    bytes: usize,
-) -> Result<Frame, SceneError> {
+/// The `count` particle lines of a frame ([`frame_lines::read`]; kinds named by element, a frame without
+/// a kind column all of kind `?`, which is named first in any case).
+fn frame<'a>(lines: &mut Lines<'a>, count: usize, columns: Columns, how: How) -> Result<Frame, SceneError> {
     let mut frame = Frame::new(Unit::Angstrom);
-    frame.particles.reserve(text::capacity(count, bytes));
-    let mut cache = KindCache::default();
     let unnamed = frame.element_kind("?");
-    let mut words: Vec<&str> = Vec::with_capacity(columns.words);
-    for _ in 0..count {
-        let line = lines.expect_with(|| format!("{count} particle lines"))?;
-        words.clear();
-        words.extend(line.split_ascii_whitespace());
-        let particle =
-            particle(&words, columns, &mut frame, &mut cache, unnamed).map_err(|m| lines.error(m))?;
-        frame.particles.push(particle);
-    }
+    let read = |_: usize, line: &'a str, words: &mut Vec<&'a str>| particle(line, columns, words);
+    let name = |key: Option<&str>| key.map_or(unnamed, |name| frame.element_kind(name));
+    frame.particles = frame_lines::read(lines, count, ("particle", how), read, name)?;
     if count == 0 {
         return Err(lines.error("a frame of 0 particles"));
     }
     Ok(frame)
 }
 
-/// Frames of at least this many particles are read in pieces ([`frame_in_pieces`]).
-const PIECES_FROM: usize = 1 << 15;
-
-/// Bytes of text per piece.
-const PIECE_BYTES: usize = 1 << 20;
-
-/// The particles of one piece, each kind an index into its `names` (`u32::MAX`: no kind column).
-struct Piece<'a> {
-    particles: Vec<Particle>,
-    names: Vec<&'a str>,
-}
-
-/// [`frame`]'s read of the `count` particle lines, in pieces on the current rayon pool: the same particles
-/// and kinds (each piece's element names in order of first sight, named in the frame in piece order, so in
-/// the order one pass meets them). `None`, with nothing taken from `lines`, when the file ends first or a
-/// line does not read: the one-pass read then reports the first error at its line.
-fn frame_in_pieces(lines: &mut Lines, count: usize, columns: Columns) -> Option<Frame> {
-    use rayon::prelude::*;
-    let rest = lines.rest();
-    let mut ends = rest.match_indices('\n').map(|(i, _)| i + 1);
-    let end = match ends.nth(count - 1) {
-        Some(end) => end,
-        // The frame's last line is the file's, without a line end.
-        None => (rest.matches('\n').count() == count - 1 && !rest.ends_with('\n')).then_some(rest.len())?,
-    };
-    let text = &rest[..end];
-    let mut cuts = vec![0];
-    while let Some(&at) = cuts.last().filter(|&&at| at < end) {
-        let from = (at + PIECE_BYTES).min(end);
-        // Bytes, not characters: `from` may fall inside one; the cut after a '\n' is a character boundary.
-        cuts.push(text.as_bytes()[from..].iter().position(|&b| b == b'\n').map_or(end, |i| from + i + 1));
-    }
-    let pieces: Vec<Piece> =
-        cuts.par_windows(2).map(|w| piece(&text[w[0]..w[1]], columns)).collect::<Option<_>>()?;
-    let mut frame = Frame::new(Unit::Angstrom);
-    let mut cache = KindCache::default();
-    let unnamed = frame.element_kind("?");
-    let kinds: Vec<Vec<u32>> =
-        pieces.iter().map(|p| p.names.iter().map(|name| cache.element(&mut frame, name)).collect()).collect();
-    let starts: Vec<usize> =
-        pieces.iter().scan(0, |at, p| Some(std::mem::replace(at, *at + p.particles.len()))).collect();
-    frame.particles.par_extend((0..count).into_par_iter().map(|k| {
-        let p = starts.partition_point(|&start| start <= k) - 1;
-        let particle = pieces[p].particles[k - starts[p]];
-        let kind = kinds[p].get(particle.kind as usize).copied().unwrap_or(unnamed);
-        Particle { kind, ..particle }
-    }));
-    lines.skip(end, count);
-    Some(frame)
-}
-
-/// The particle lines of `text` as [`frame`] reads them, or `None` where one does not read.
-fn piece(text: &str, columns: Columns) -> Option<Piece<'_>> {
-    let mut names: Vec<&str> = Vec::new();
-    let mut local: std::collections::HashMap<&str, u32> = std::collections::HashMap::new();
-    let mut words: Vec<&str> = Vec::with_capacity(columns.words);
-    let (mut scratch, mut unused) = (Frame::new(Unit::Angstrom), KindCache::default());
-    let no_kind = Columns { kind: None, ..columns };
-    let mut particles = Vec::with_capacity(text.matches('\n').count() + 1);
-    for line in text.lines() {
-        words.clear();
-        words.extend(line.split_ascii_whitespace());
-        // Kinds are named after the pieces are read: here the kind is the name's place in `names`.
-        let mut particle = particle(&words, no_kind, &mut scratch, &mut unused, u32::MAX).ok()?;
-        if let Some(k) = columns.kind {
-            let name = words[k];
-            particle.kind =
-                *local.entry(name).or_insert_with(|| (names.push(name), names.len() as u32 - 1).1);
-        }
-        particles.push(particle);
-    }
-    Some(Piece { particles, names })
-}
-
-/// One particle line, split into words.
+/// One particle line and its element name (`None` without a kind column).
 fn particle<'a>(
-    words: &[&'a str],
+    line: &'a str,
     c: Columns,
-    frame: &mut Frame,
-    cache: &mut KindCache<'a>,
-    unnamed: u32,
-) -> Result<Particle, String> {
+    words: &mut Vec<&'a str>,
+) -> Result<(Particle, Option<&'a str>), String> {
+    words.clear();
+    words.extend(line.split_ascii_whitespace());
     if words.len() < c.words {
         return Err(format!("expected {} columns, got {}", c.words, words.len()));
     }
     let v = |i: usize, what: &str| text::number(words[i], what);
     let center = DVec3::new(v(c.pos, "x")?, v(c.pos + 1, "y")?, v(c.pos + 2, "z")?);
-    let kind = c.kind.map_or(unnamed, |k| cache.element(frame, words[k]));
     let radius = c.radius.map(|i| text::radius(words[i], "radius")).transpose()?;
     let color = match c.color {
         Some(i) => {
@@ -270,7 +179,7 @@ fn particle<'a>(
         }
         None => None,
     };
-    Ok(Particle { center, kind, radius, color })
+    Ok((Particle { center, kind: 0, radius, color }, c.kind.map(|k| words[k])))
 }
 
 #[cfg(test)]
@@ -330,7 +239,7 @@ mod tests {
     #[test]
     fn frames_in_pieces_read_as_one_pass() {
         let path = Path::new("t.xyz");
-        let n = 3 * PIECES_FROM + 7;
+        let n = 3 * frame_lines::PIECES_FROM + 7;
         let names = ["Zz", "C", "O", "8", "Xx", "c"];
         // A kind first seen only in the last piece, and the rest cycling.
         let name = |i: usize| if i == n - 2 { "Qq" } else { names[(i * 7 + i / 1000) % names.len()] };
@@ -339,12 +248,7 @@ mod tests {
             format!("{} {i} {x}.5 -{y}e-3 {z} {r} 0.{} 0.5 1", name(i), i % 10)
         };
         let extended = "Properties=species:S:1:id:I:1:pos:R:3:radius:R:1:color:R:3";
-        let one_pass = |text: &str| {
-            let mut lines = Lines::new(path, text);
-            lines.expect("count").unwrap();
-            let comment = lines.expect("comment").unwrap();
-            frame_in_one_pass(&mut lines, n, columns(comment).unwrap(), text.len())
-        };
+        let one_pass = |text: &str| parse_as(path, text, 0, How::OnePass);
         // Line ends; the text after the frame (a second frame, a bare '\r', nothing); a non-ASCII comment
         // column on every line, so that piece cuts fall inside characters.
         let next_frame = "\n2\nnext\nC 0 0 0\nO 1 1 1\n";
@@ -370,13 +274,10 @@ mod tests {
             let text = format!("{n}{end}{comment}{end}{}{last}", body.join(end));
             let read = parse(path, &text, 0).unwrap();
             assert!(read == one_pass(&text).unwrap(), "{comment}: the frames differ");
-            let mut lines = Lines::new(path, &text);
-            lines.next();
-            let comment_line = lines.next().unwrap();
-            let pieces = frame_in_pieces(&mut lines, n, columns(comment_line).unwrap());
-            assert!(pieces.is_some_and(|f| f == read), "{comment}: not read in pieces");
+            let pieces = parse_as(path, &text, 0, How::Pieces);
+            assert!(pieces.is_ok_and(|f| f == read), "{comment}: not read in pieces");
             assert_eq!(read.particles.len(), n);
-            for bad in [5, PIECES_FROM + 3, n - 1] {
+            for bad in [5, frame_lines::PIECES_FROM + 3, n - 1] {
                 let mut lines: Vec<String> = body.clone();
                 lines[bad] = lines[bad].replacen(".5 ", ".5x ", 1);
                 let text = format!("{n}{end}{comment}{end}{}{last}", lines.join(end));

@@ -1,0 +1,164 @@
+//! A frame's particle lines, read in one pass or, for a large frame, in pieces on the current rayon pool,
+//! with the same particles and kinds either way. A reader (XYZ, GRO, LAMMPS) gives the read of one line,
+//! which yields a particle and the key of its kind (an element name, a LAMMPS type, a GRO atom and residue
+//! name), and the naming of a key as a kind of the frame. Keys are named once each, in the order one pass
+//! first meets them, so kinds are numbered as one pass numbers them.
+
+use std::collections::HashMap;
+use std::hash::Hash;
+
+use rayon::prelude::*;
+
+use super::text::{self, Lines};
+use super::Particle;
+use crate::io::pieces::line_pieces;
+use crate::io::SceneError;
+
+/// Frames of at least this many particles are read in pieces.
+pub(super) const PIECES_FROM: usize = 1 << 15;
+
+/// Bytes of text per piece.
+const PIECE_BYTES: usize = 1 << 20;
+
+/// The read of one particle line: `(k, line, words)`, `k` the line's place in the frame (from 0, for
+/// messages), `words` a scratch list for the line's words. It gives the particle (its kind unset) and the
+/// key of its kind, or what is wrong with the line.
+pub(super) trait ReadLine<'a, K>:
+    Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync
+{
+}
+
+impl<'a, K, F> ReadLine<'a, K> for F where
+    F: Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync
+{
+}
+
+/// How [`read`] reads a frame.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum How {
+    /// In pieces from [`PIECES_FROM`] lines on, else (or where the pieces do not read) in one pass.
+    Auto,
+    /// In one pass.
+    #[cfg_attr(not(test), allow(dead_code))]
+    OnePass,
+    /// In pieces, whatever the count; an error where the pieces do not read (the tests compare the ways).
+    #[cfg_attr(not(test), allow(dead_code))]
+    Pieces,
+}
+
+/// The `count` particle lines that `lines` holds next, each read by `read`, each key of a kind named by
+/// `name` (its kind's index in the frame) once, in the order one pass meets them. By [`How::Auto`], a
+/// frame of [`PIECES_FROM`] lines or more is read in pieces; where the text ends first or a line does not
+/// read, it is read again in one pass, which reports the first error at its line (`noun` names the lines:
+/// "expected 9 atom lines").
+pub(super) fn read<'a, K: Copy + Eq + Hash + Send + Sync>(
+    lines: &mut Lines<'a>,
+    count: usize,
+    (noun, how): (&str, How),
+    read: impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync,
+    mut name: impl FnMut(K) -> u32,
+) -> Result<Vec<Particle>, SceneError> {
+    if how == How::Pieces || (how == How::Auto && count >= PIECES_FROM) {
+        match (in_pieces(lines, count, &read, &mut name), how) {
+            (Some(particles), _) => return Ok(particles),
+            (None, How::Pieces) => return Err(lines.error("not read in pieces")),
+            (None, _) => {}
+        }
+    }
+    one_pass(lines, count, noun, &read, &mut name)
+}
+
+/// [`read`] one line after another.
+fn one_pass<'a, K: Copy + Eq + Hash>(
+    lines: &mut Lines<'a>,
+    count: usize,
+    noun: &str,
+    read: &impl ReadLine<'a, K>,
+    name: &mut impl FnMut(K) -> u32,
+) -> Result<Vec<Particle>, SceneError> {
+    let mut particles = Vec::with_capacity(text::capacity(count, lines.rest().len()));
+    let mut kinds: HashMap<K, u32> = HashMap::new();
+    let mut words = Vec::new();
+    for k in 0..count {
+        let line = lines.expect_with(|| format!("{count} {noun} lines"))?;
+        let (particle, key) = read(k, line, &mut words).map_err(|m| lines.error(m))?;
+        let kind = *kinds.entry(key).or_insert_with(|| name(key));
+        particles.push(Particle { kind, ..particle });
+    }
+    Ok(particles)
+}
+
+/// [`read`] in pieces: `None`, with nothing taken from `lines` and no key named, when the text ends
+/// before `count` lines or a line does not read. Each piece's lines are counted first, so that its
+/// particles are read straight into their places in the one list, each kind as the place of its key among
+/// the piece's keys in order of first sight; the keys are then named piece by piece (the order of one
+/// pass) and the kinds renumbered.
+fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
+    lines: &mut Lines<'a>,
+    count: usize,
+    read: &impl ReadLine<'a, K>,
+    name: &mut impl FnMut(K) -> u32,
+) -> Option<Vec<Particle>> {
+    let rest = lines.rest();
+    let end = frame_end(rest, count.checked_sub(1)?)?;
+    let pieces = line_pieces(&rest[..end], PIECE_BYTES);
+    let counts: Vec<usize> = pieces.par_iter().map(|p| p.lines().count()).collect();
+    let firsts: Vec<usize> = counts.iter().scan(0, |at, n| Some(std::mem::replace(at, *at + n))).collect();
+    debug_assert_eq!(counts.iter().sum::<usize>(), count);
+    let unset = Particle { center: glam::DVec3::ZERO, kind: 0, radius: None, color: None };
+    let mut particles: Vec<Particle> = (0..count).into_par_iter().map(|_| unset).collect();
+    let keys: Vec<Vec<K>> = slices(&mut particles, &counts)
+        .into_par_iter()
+        .zip(pieces.par_iter().zip(&firsts))
+        .map(|(out, (text, &first))| piece(text, first, out, read))
+        .collect::<Option<_>>()?;
+    let mut kinds: HashMap<K, u32> = HashMap::new();
+    let renumber: Vec<Vec<u32>> = keys
+        .iter()
+        .map(|keys| keys.iter().map(|&key| *kinds.entry(key).or_insert_with(|| name(key))).collect())
+        .collect();
+    slices(&mut particles, &counts).into_par_iter().zip(&renumber).for_each(|(out, kinds)| {
+        out.iter_mut().for_each(|p| p.kind = kinds[p.kind as usize]);
+    });
+    lines.skip(end, count);
+    Some(particles)
+}
+
+/// The byte offset in `rest` where its line `last` (from 0) ends (after its `\n`, or the text's end for
+/// a last line without one); `None` when it has fewer lines.
+fn frame_end(rest: &str, last: usize) -> Option<usize> {
+    match rest.match_indices('\n').map(|(i, _)| i + 1).nth(last) {
+        Some(end) => Some(end),
+        None => (rest.matches('\n').count() == last && !rest.ends_with('\n')).then_some(rest.len()),
+    }
+}
+
+/// `all` cut into consecutive slices of `counts` particles.
+fn slices<'p>(mut all: &'p mut [Particle], counts: &[usize]) -> Vec<&'p mut [Particle]> {
+    counts
+        .iter()
+        .map(|&n| {
+            let (mine, rest) = std::mem::take(&mut all).split_at_mut(n);
+            all = rest;
+            mine
+        })
+        .collect()
+}
+
+/// The lines of one piece, the first being line `first` of the frame, read into `out` with kinds
+/// numbered by first sight among the piece's keys, which it returns; `None` where a line does not read.
+fn piece<'a, K: Copy + Eq + Hash>(
+    text: &'a str,
+    first: usize,
+    out: &mut [Particle],
+    read: &impl ReadLine<'a, K>,
+) -> Option<Vec<K>> {
+    let (mut keys, mut local) = (Vec::new(), HashMap::new());
+    let mut words = Vec::new();
+    for ((k, line), slot) in text.lines().enumerate().zip(out) {
+        let (particle, key) = read(first + k, line, &mut words).ok()?;
+        let kind = *local.entry(key).or_insert_with(|| (keys.push(key), keys.len() as u32 - 1).1);
+        *slot = Particle { kind, ..particle };
+    }
+    Some(keys)
+}
