@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::error::SceneError;
+use super::error::{SceneError, Text};
 use crate::math::Rgb;
 use crate::scene::SceneDesc;
 
@@ -238,13 +238,16 @@ pub(crate) fn load(
     format: ParticleFormat,
     options: &ParticleOptions,
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
-    let bytes = std::fs::read(path)
-        .map_err(|e| SceneError::whole_file(path, format!("cannot read particle file: {e}")))?;
+    let bytes = super::error::read_bytes(path, "particle file")?;
     let sidecar = match &options.types {
         Some(types) => Some(types::read(types)?),
         None => types::sidecar_of(path).map(|p| types::read(&p)).transpose()?,
     };
-    build(path, format, bytes, options, sidecar.as_ref())
+    let source = match decompress(path, &bytes)? {
+        Some(plain) => Text::Read(super::error::text(path, plain)?),
+        None => bytes.into_text(path)?,
+    };
+    build(path, format, &source, options, sidecar.as_ref())
 }
 
 /// [`load`] of a file's bytes, gzip- or bzip2-compressed or not (told by their first bytes); the types
@@ -256,38 +259,38 @@ pub(crate) fn parse(
     options: &ParticleOptions,
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
     let sidecar = options.types.as_deref().map(types::read).transpose()?;
-    build(path, format, bytes, options, sidecar.as_ref())
+    let source = super::error::text(path, decompress(path, &bytes)?.unwrap_or(bytes))?;
+    build(path, format, &source, options, sidecar.as_ref())
 }
 
-/// The scene of a particle file's bytes with a sidecar's types.
+/// The scene of a particle file's text with a sidecar's types.
 fn build(
     path: &Path,
     format: ParticleFormat,
-    bytes: Vec<u8>,
+    source: &str,
     options: &ParticleOptions,
     sidecar: Option<&types::Types>,
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
-    let source = super::error::text(path, decompress(path, bytes)?)?;
     let wanted = options.frame.unwrap_or(0);
     let frame = match format {
-        ParticleFormat::Xyz => xyz::parse(path, &source, wanted),
-        ParticleFormat::Pdb => pdb::parse(path, &source, wanted, false),
-        ParticleFormat::Pqr => pdb::parse(path, &source, wanted, true),
-        ParticleFormat::Gro => gro::parse(path, &source, wanted),
-        ParticleFormat::Lammps => lammps::parse(path, &source, wanted),
+        ParticleFormat::Xyz => xyz::parse(path, source, wanted),
+        ParticleFormat::Pdb => pdb::parse(path, source, wanted, false),
+        ParticleFormat::Pqr => pdb::parse(path, source, wanted, true),
+        ParticleFormat::Gro => gro::parse(path, source, wanted),
+        ParticleFormat::Lammps => lammps::parse(path, source, wanted),
     }?;
     scene::scene(frame, options, sidecar).map_err(|m| SceneError::whole_file(path, m))
 }
 
-/// `bytes` decompressed when they start as gzip (`1f 8b`) or bzip2 (`BZh`) data does; a name ending in
-/// `.gz` or `.bz2` must hold such data.
-pub(crate) fn decompress(path: &Path, bytes: Vec<u8>) -> Result<Vec<u8>, SceneError> {
+/// `bytes` decompressed when they start as gzip (`1f 8b`) or bzip2 (`BZh`) data does, else `None`; a name
+/// ending in `.gz` or `.bz2` must hold such data.
+pub(crate) fn decompress(path: &Path, bytes: &[u8]) -> Result<Option<Vec<u8>>, SceneError> {
     let ext = path.extension().and_then(|e| e.to_str()).map(str::to_ascii_lowercase);
     let mut out = Vec::new();
     let result = if bytes.starts_with(&[0x1f, 0x8b]) {
-        flate2::read::MultiGzDecoder::new(&bytes[..]).read_to_end(&mut out).map_err(|e| ("gzip", e))
+        flate2::read::MultiGzDecoder::new(bytes).read_to_end(&mut out).map_err(|e| ("gzip", e))
     } else if bytes.starts_with(b"BZh") {
-        bzip2::read::MultiBzDecoder::new(&bytes[..]).read_to_end(&mut out).map_err(|e| ("bzip2", e))
+        bzip2::read::MultiBzDecoder::new(bytes).read_to_end(&mut out).map_err(|e| ("bzip2", e))
     } else {
         return match ext.as_deref() {
             Some(e @ ("gz" | "bz2")) => {
@@ -299,11 +302,11 @@ pub(crate) fn decompress(path: &Path, bytes: Vec<u8>) -> Result<Vec<u8>, SceneEr
                 };
                 Err(SceneError::whole_file(path, format!("named .{e} but does not hold {what} data{tar}")))
             }
-            _ => Ok(bytes),
+            _ => Ok(None),
         };
     };
     result.map_err(|(what, e)| SceneError::whole_file(path, format!("bad {what} data: {e}")))?;
-    Ok(out)
+    Ok(Some(out))
 }
 
 /// The error for a frame past the end: how many frames the file has.

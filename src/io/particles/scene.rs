@@ -17,10 +17,11 @@
 //! sphere at each corner to close the joints, all of radius `box_radius` and the grey `BOX_COLOR`.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::elements::{self, FALLBACK_COLOR, FALLBACK_RADIUS};
 use super::types::Types;
-use super::{Cell, Frame, Kind, ParticleOptions, Unit};
+use super::{Cell, Frame, Kind, Particle, ParticleOptions, Unit};
 use crate::io::xyzr;
 use crate::kinds::cone::ConeDesc;
 use crate::math::{Rgb, Rgb8};
@@ -87,8 +88,7 @@ pub(crate) fn scene(
 ) -> Result<(SceneDesc, Vec<String>), String> {
     let mut warnings = Vec::new();
     // Particles of each kind without a radius of their own: those the fallback may be for.
-    let mut counts = vec![0usize; frame.kinds.len()];
-    frame.particles.iter().filter(|p| p.radius.is_none()).for_each(|p| counts[p.kind as usize] += 1);
+    let counts = kind_counts(&frame);
     let (radius_over, color_over) = overrides(&frame, options, sidecar, &mut warnings);
     let unit = match frame.unit {
         Unit::Angstrom => 1.0,
@@ -113,17 +113,25 @@ pub(crate) fn scene(
         defaults.push((radius_over[i].unwrap_or(radius), color_over[i].unwrap_or(color)));
     }
     let scale = options.radius_scale.unwrap_or(1.0);
-    let mut spheres = Vec::with_capacity(frame.particles.len());
-    let mut colors = Vec::with_capacity(frame.particles.len());
-    for p in &frame.particles {
+    let sphere = |p: &Particle| {
         let k = p.kind as usize;
-        if left_out[k] && p.radius.is_none() {
-            continue;
-        }
         let radius = radius_over[k].or(p.radius).unwrap_or(defaults[k].0) * scale;
         let color = color_over[k].or(p.color).unwrap_or(defaults[k].1);
-        spheres.push(SphereDesc { center: p.center, radius, material: 0 });
-        colors.push(Rgb8::quantize(color));
+        (SphereDesc { center: p.center, radius, material: 0 }, Rgb8::quantize(color))
+    };
+    // Room for the box's eight corners too.
+    let room = frame.particles.len() + 8;
+    let (mut spheres, mut colors) = (Vec::with_capacity(room), Vec::with_capacity(room));
+    if left_out.contains(&true) {
+        let kept = |p: &&Particle| !(left_out[p.kind as usize] && p.radius.is_none());
+        for (s, c) in frame.particles.iter().filter(kept).map(sphere) {
+            spheres.push(s);
+            colors.push(c);
+        }
+    } else {
+        frame.particles.par_iter().map(sphere).unzip_into_vecs(&mut spheres, &mut colors);
+        spheres.reserve_exact(8);
+        colors.reserve_exact(8);
     }
     if spheres.is_empty() {
         return Err(match sites {
@@ -166,6 +174,20 @@ pub(crate) fn scene(
         }));
     }
     Ok((desc, warnings))
+}
+
+/// The number of particles of each kind without a radius of their own.
+fn kind_counts(frame: &Frame) -> Vec<usize> {
+    let n = frame.kinds.len();
+    let add = |mut counts: Vec<usize>, p: &Particle| {
+        counts[p.kind as usize] += usize::from(p.radius.is_none());
+        counts
+    };
+    let sum = |mut a: Vec<usize>, b: Vec<usize>| {
+        a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
+        a
+    };
+    frame.particles.par_iter().fold(|| vec![0; n], add).reduce(|| vec![0; n], sum)
 }
 
 /// Each kind's radius and colour overrides, by the sidecar and the flags (warning of flags that name no kind
