@@ -19,7 +19,7 @@ use crate::scene::desc::{Pattern, PostFilter};
 use crate::shade::{RayCounts, Tracer};
 use crate::simd::Lanes;
 
-use super::{column_key, tile_rows, tiles, trace_tile, Progress, Tile, TileCounter, ROWS_TOGETHER, TILE};
+use super::{column_key, tile_group, tile_rows, tiles, trace_tile, Progress, Tile, TileCounter, TILE};
 
 /// A rectangle of the image in pixels: columns `x0..x1`, rows `y0..y1`.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -91,8 +91,9 @@ pub(super) fn trace_band<F: Lanes>(
     let local = tiles(width, height);
     let mut band = Image::new(width, height);
     let mut jobs: Vec<_> = local.iter().copied().zip(tile_rows(&mut band.pixels, width, &local)).collect();
-    // Rows of tiles column by column; each thread takes its share of jobs in that order.
-    jobs.sort_by_key(|(tile, _)| column_key(tile, ROWS_TOGETHER));
+    // Rows of tiles column by column (or one by one: `tile_group`); each thread takes its share of jobs in
+    // that order.
+    jobs.sort_by_key(|(tile, _)| column_key(tile, tile_group()));
     let traced: Vec<(RayCounts, Work)> = pool.install(|| {
         // One job per tile (with_max_len): rayon otherwise runs whole quarters of the band as single
         // jobs, which a thread slowed by the host cannot hand over (docs/perf-log/2026-11.md).

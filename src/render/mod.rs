@@ -60,7 +60,9 @@ pub(crate) use coverage::CoveragePart;
 #[cfg(test)]
 pub(crate) use coverage::coverage_parts;
 
-use order::{column_key, rows_together, ROWS_TOGETHER};
+use order::{column_key, rows_together, tile_group};
+#[cfg(test)]
+use order::{rows_for, ROWS_TOGETHER};
 pub use primary::fnv1a;
 pub(crate) use primary::trace_primary_window_lanes;
 pub(crate) use primary::PrimaryHits;

@@ -109,12 +109,23 @@ pub(crate) fn trace_primary_window<F: Lanes>(
     window: Window,
     hits: &mut PrimaryHits,
 ) {
+    let rows = rows_together(window.height(), pool.current_num_threads());
+    trace_primary_rows::<F>(scene, pool, window, rows, hits);
+}
+
+/// [`trace_primary_window`] in bands of `rows` rows of tiles, each band's tiles column by column.
+fn trace_primary_rows<F: Lanes>(
+    scene: &Scene,
+    pool: &rayon::ThreadPool,
+    window: Window,
+    rows: u32,
+    hits: &mut PrimaryHits,
+) {
     let start = Instant::now();
     let (width, height) = (window.width(), window.height());
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the window's");
     // One band of rows of tiles per task, written in place: no per-tile buffers and no serial merge. Each
     // band's tiles column by column (`column_key`).
-    let rows = rows_together(height, pool.current_num_threads());
     let band = width as usize * (TILE * rows) as usize;
     pool.install(|| {
         // One job per band, as for tiles in `render`.
@@ -161,18 +172,18 @@ pub(crate) fn trace_primary_window_lanes(
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::render::thread_pool;
+    use crate::render::{rows_for, thread_pool, ROWS_TOGETHER};
 
     /// Camera-ray bands of four, two and one rows of tiles (1, 2 and 5 threads on 300 rows, the last row of
-    /// tiles partial), over the whole image and over a window at an odd offset: every pixel the same bits,
-    /// and a window's pixels those of the whole image.
+    /// tiles partial), and the rows this machine takes, over the whole image and over a window at an odd
+    /// offset: every pixel the same bits, and a window's pixels those of the whole image.
     #[test]
     fn every_band_height_and_window_gives_the_same_hits() {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("scenes/field.toml");
         let mut desc = crate::io::load(&path).unwrap();
         (desc.camera.width, desc.camera.height) = (150, 300);
         let scene = Scene::compile(&desc).unwrap();
-        assert_eq!([1, 2, 5].map(|t| rows_together(300, t)), [4, 2, 1]);
+        assert_eq!([1, 2, 5].map(|t| rows_for(300, t, ROWS_TOGETHER)), [4, 2, 1]);
         let bits = |h: &PrimaryHits| (h.t.iter().map(|t| t.to_bits()).collect::<Vec<_>>(), h.prim.clone());
         let whole = bits(&primary_hits_lanes(&scene, 16, &thread_pool(Some(1)).unwrap()));
         assert!(whole.1.iter().filter(|&&p| p != u32::MAX).count() > 1000, "too few hits to compare");
@@ -186,6 +197,10 @@ mod tests {
                     "{threads} threads, K = {lanes}"
                 );
             }
+            let mut grouped = PrimaryHits::new(150, 300);
+            let rows = rows_for(300, threads, ROWS_TOGETHER);
+            trace_primary_rows::<wide::f32x16>(&scene, &pool, Window::whole(150, 300), rows, &mut grouped);
+            assert_eq!(bits(&grouped), whole, "{threads} threads in bands of {rows} rows of tiles");
             let part = bits(&trace_primary_window_lanes(&scene, 16, &pool, window));
             for (row, y) in (window.y0..window.y1).enumerate() {
                 let (w, at) = (window.width() as usize, (y * 150 + window.x0) as usize);
