@@ -10,10 +10,9 @@ use super::{Tile, TILE};
 pub(super) const ROWS_TOGETHER: u32 = 4;
 
 /// An L2 cache per core this large or larger keeps what a row of tiles shares with the next: rows of tiles
-/// are then traced one by one, left to right. The column order pays only where the L2 is smaller (512 KB on
-/// Zen 3: camera rays at 1e6 1.07x); with a 2 MB L2 it cost camera rays 4% at 1e6 and 15% at 1e3, since
-/// each tile's writes to the frame then start new lines the prefetcher has not seen coming (PERF.md,
-/// "Register", tiles column by column).
+/// are then traced one by one, left to right. The column order pays only where the L2 is smaller (Zen 3's
+/// 512 KB); with a 2 MB L2 it cost camera rays time, since each tile's writes to the frame then start lines
+/// the prefetcher has not seen coming (PERF.md, "Register", tiles column by column).
 const LARGE_L2: u64 = 1 << 20;
 
 /// The rows of tiles traced together on this machine: [`ROWS_TOGETHER`], or 1 where the first core's L2
