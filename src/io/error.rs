@@ -57,44 +57,12 @@ impl std::ops::Deref for Text {
     }
 }
 
-/// A file's bytes: read into memory, or for large files its pages mapped read-only (as [`Text`]).
-/// Derefs to `[u8]`.
-#[derive(Debug)]
-pub(crate) enum Bytes {
-    /// Read into memory.
-    Read(Vec<u8>),
-    /// Mapped.
-    Mapped(memmap2::Mmap),
-}
-
-impl std::ops::Deref for Bytes {
-    type Target = [u8];
-    fn deref(&self) -> &[u8] {
-        match self {
-            Bytes::Read(v) => v,
-            Bytes::Mapped(m) => m,
-        }
-    }
-}
-
-impl Bytes {
-    /// The bytes as text, or an error at the line and column where bytes that are not UTF-8 start.
-    pub(crate) fn into_text(self, path: &Path) -> Result<Text, SceneError> {
-        match self {
-            Bytes::Read(bytes) => text(path, bytes).map(Text::Read),
-            Bytes::Mapped(map) => match is_utf8(&map) {
-                true => Ok(Text::Mapped(map)),
-                false => Err(not_utf8(path, &map, std::str::from_utf8(&map).expect_err("not UTF-8"))),
-            },
-        }
-    }
-}
-
-/// A file's bytes. Regular files of at least [`MAP_BYTES`] are mapped (and their pages faulted in by one
-/// call) instead of read; like any mapped input, such a file must not be truncated by another process while
-/// it is being parsed. Where mapping fails the file is read. `what` names the file's kind in the error when
-/// it cannot be read.
-pub(crate) fn read_bytes(path: &Path, what: &str) -> Result<Bytes, SceneError> {
+/// The text of a scene file. Bytes that are not UTF-8 are an error at the line and column where they start;
+/// `what` names the file's kind in the error when it cannot be read at all. Regular files of at least
+/// [`MAP_BYTES`] are mapped (and their pages faulted in by one call) instead of read; like any mapped input,
+/// such a file must not be truncated by another process while it is being parsed. Where mapping fails the
+/// file is read.
+pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
     let cannot = |e: std::io::Error| SceneError::whole_file(path, format!("cannot read {what}: {e}"));
     let file = std::fs::File::open(path).map_err(cannot)?;
     let large = file.metadata().is_ok_and(|m| m.is_file() && m.len() >= MAP_BYTES);
@@ -102,18 +70,16 @@ pub(crate) fn read_bytes(path: &Path, what: &str) -> Result<Bytes, SceneError> {
     let mapped =
         large.then(|| unsafe { memmap2::MmapOptions::new().populate().map(&file) }).and_then(Result::ok);
     match mapped {
-        Some(map) => Ok(Bytes::Mapped(map)),
+        Some(map) => match is_utf8(&map) {
+            true => Ok(Text::Mapped(map)),
+            false => Err(not_utf8(path, &map, std::str::from_utf8(&map).expect_err("not UTF-8"))),
+        },
         None => {
             let mut bytes = Vec::new();
             std::io::Read::read_to_end(&mut &file, &mut bytes).map_err(cannot)?;
-            Ok(Bytes::Read(bytes))
+            text(path, bytes).map(Text::Read)
         }
     }
-}
-
-/// The text of a scene file ([`read_bytes`], then [`Bytes::into_text`]).
-pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
-    read_bytes(path, what)?.into_text(path)
 }
 
 /// Whether `bytes` are UTF-8, checked in pieces on the current rayon pool. A piece ends just before an
@@ -125,10 +91,13 @@ fn is_utf8(bytes: &[u8]) -> bool {
     cuts.par_windows(2).all(|w| std::str::from_utf8(&bytes[w[0]..w[1]]).is_ok())
 }
 
-/// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start. Checked in
-/// parallel pieces ([`is_utf8`]), so a large text is not checked on one thread.
+/// Texts in memory from this size up are checked in parallel pieces ([`text`]).
+const PARALLEL_CHECK_BYTES: usize = 1 << 20;
+
+/// `bytes` as text, or an error at the line and column where bytes that are not UTF-8 start. A text of
+/// [`PARALLEL_CHECK_BYTES`] or more is checked in parallel pieces ([`is_utf8`]), not on one thread.
 pub(crate) fn text(path: &Path, bytes: Vec<u8>) -> Result<String, SceneError> {
-    if bytes.len() < MAP_BYTES as usize || !is_utf8(&bytes) {
+    if bytes.len() < PARALLEL_CHECK_BYTES || !is_utf8(&bytes) {
         return String::from_utf8(bytes).map_err(|e| not_utf8(path, e.as_bytes(), e.utf8_error()));
     }
     // SAFETY: `is_utf8` found every piece, and so the whole, to be UTF-8.
@@ -227,7 +196,7 @@ mod tests {
             assert_eq!(is_utf8(bytes), std::str::from_utf8(bytes).is_ok(), "case {i}");
         }
         assert!(cases.iter().filter(|b| !is_utf8(b)).count() >= 20, "the bad cases are bad");
-        // Bytes in memory (a decompressed particle file) give the same text or error as one check.
+        // Bytes in memory (a particle file, read or decompressed) give the same text or error as one check.
         let path = Path::new("t.xyz");
         for bytes in cases {
             let one =

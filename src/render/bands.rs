@@ -93,7 +93,8 @@ pub(super) fn trace_band<F: Lanes>(
     let mut jobs: Vec<_> = local.iter().copied().zip(tile_rows(&mut band.pixels, width, &local)).collect();
     // Rows of tiles column by column (or one by one: `tile_group`); each thread takes its share of jobs in
     // that order.
-    jobs.sort_by_key(|(tile, _)| column_key(tile, tile_group()));
+    let group = tile_group();
+    jobs.sort_by_key(|(tile, _)| column_key(tile, group));
     let traced: Vec<(RayCounts, Work)> = pool.install(|| {
         // One job per tile (with_max_len): rayon otherwise runs whole quarters of the band as single
         // jobs, which a thread slowed by the host cannot hand over (docs/perf-log/2026-11.md).

@@ -1,7 +1,8 @@
-//! The order tiles are traced in: rows of tiles together, column by column, so that a tile's neighbours above
-//! and below are traced just before and after it rather than a whole row of tiles away, while the tree nodes
-//! and spheres their rays share are still in the core's cache (PERF.md, "Register", tiles column by column).
-//! Every tile's pixels are the same bits in any order.
+//! The order tiles are traced in. Where the core's L2 is small, rows of tiles go together, column by column,
+//! so that a tile's neighbours above and below are traced just before and after it rather than a whole row of
+//! tiles away, while the tree nodes and spheres their rays share are still in the cache; where it is large,
+//! row by row ([`tile_group`]; PERF.md, "Register", tiles column by column). Every tile's pixels are the same
+//! bits in any order.
 
 use super::{Tile, TILE};
 
@@ -10,13 +11,15 @@ use super::{Tile, TILE};
 pub(super) const ROWS_TOGETHER: u32 = 4;
 
 /// An L2 cache per core this large or larger keeps what a row of tiles shares with the next: rows of tiles
-/// are then traced one by one, left to right. The column order pays only where the L2 is smaller (Zen 3's
-/// 512 KB); with a 2 MB L2 it cost camera rays time, since each tile's writes to the frame then start lines
-/// the prefetcher has not seen coming (PERF.md, "Register", tiles column by column).
-const LARGE_L2: u64 = 1 << 20;
+/// are then traced one by one, left to right. The column order paid where the L2 was 512 KB (Zen 3); with
+/// 2 MB it cost camera rays time, since each tile's writes to the frame then start lines the prefetcher has
+/// not seen coming (PERF.md, "Register", tiles column by column). Sizes between were not measured and keep
+/// the column order.
+const LARGE_L2: u64 = 2 << 20;
 
 /// The rows of tiles traced together on this machine: [`ROWS_TOGETHER`], or 1 where the first core's L2
-/// holds at least [`LARGE_L2`] (Linux's sysfs tells; where it does not, [`ROWS_TOGETHER`]).
+/// holds at least [`LARGE_L2`] (Linux's sysfs tells; where it does not, [`ROWS_TOGETHER`]). Where an L2 is
+/// shared by a cluster of cores, its whole size is taken.
 pub(super) fn tile_group() -> u32 {
     static GROUP: std::sync::OnceLock<u32> = std::sync::OnceLock::new();
     *GROUP.get_or_init(|| group_for(l2_bytes()))
@@ -55,7 +58,7 @@ fn cache_size(text: &str) -> Option<u64> {
         "G" => 1 << 30,
         _ => return None,
     };
-    digits.parse::<u64>().ok().map(|n| n * scale)
+    digits.parse::<u64>().ok()?.checked_mul(scale)
 }
 
 /// The rows of tiles to trace together over `height` rows of the image on `threads` threads: at most
@@ -130,15 +133,17 @@ mod tests {
         assert!([1, ROWS_TOGETHER].contains(&rows_together(1080, 2)));
     }
 
-    /// Rows of tiles go one by one where the L2 is 1 MiB or more, and sysfs sizes read as bytes.
+    /// Rows of tiles go one by one where the L2 is 2 MiB or more, and sysfs sizes read as bytes.
     #[test]
     fn the_group_follows_the_l2() {
         assert_eq!(group_for(Some(512 << 10)), ROWS_TOGETHER);
         assert_eq!(group_for(None), ROWS_TOGETHER);
-        assert_eq!([1 << 20, 2 << 20].map(|b| group_for(Some(b))), [1, 1]);
+        assert_eq!([1 << 20, 2 << 20, 32 << 20].map(|b| group_for(Some(b))), [ROWS_TOGETHER, 1, 1]);
         assert_eq!(cache_size("2048K\n"), Some(2 << 20));
         assert_eq!(cache_size("1M"), Some(1 << 20));
         assert_eq!(cache_size("524288"), Some(512 << 10));
         assert_eq!([cache_size("2 KB"), cache_size(""), cache_size("K")], [None, None, None]);
+        assert_eq!(cache_size("99999999999999999999G"), None);
+        assert_eq!(cache_size("9999999999999G"), None);
     }
 }

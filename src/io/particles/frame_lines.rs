@@ -20,19 +20,6 @@ pub(super) const PIECES_FROM: usize = 1 << 15;
 /// Bytes of text per piece.
 const PIECE_BYTES: usize = 1 << 20;
 
-/// The read of one particle line: `(k, line, words)`, `k` the line's place in the frame (from 0, for
-/// messages), `words` a scratch list for the line's words. It gives the particle (its kind unset) and the
-/// key of its kind, or what is wrong with the line.
-pub(super) trait ReadLine<'a, K>:
-    Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync
-{
-}
-
-impl<'a, K, F> ReadLine<'a, K> for F where
-    F: Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync
-{
-}
-
 /// How [`read`] reads a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub(super) enum How {
@@ -46,7 +33,9 @@ pub(super) enum How {
     Pieces,
 }
 
-/// The `count` particle lines that `lines` holds next, each read by `read`, each key of a kind named by
+/// The `count` particle lines that `lines` holds next, each read by `read_line` (`(k, line, words)`: `k` the
+/// line's place in the frame, from 0, for messages; `words` a scratch list for its words) into a particle
+/// (its kind unset) and the key of its kind, each key of a kind named by
 /// `name` (its kind's index in the frame) once, in the order one pass meets them. By [`How::Auto`], a
 /// frame of [`PIECES_FROM`] lines or more is read in pieces; where the text ends first or a line does not
 /// read, it is read again in one pass, which reports the first error at its line (`noun` names the lines:
@@ -54,18 +43,19 @@ pub(super) enum How {
 pub(super) fn read<'a, K: Copy + Eq + Hash + Send + Sync>(
     lines: &mut Lines<'a>,
     count: usize,
-    (noun, how): (&str, How),
-    read: impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync,
+    noun: &str,
+    how: How,
+    read_line: impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync,
     mut name: impl FnMut(K) -> u32,
 ) -> Result<Vec<Particle>, SceneError> {
     if how == How::Pieces || (how == How::Auto && count >= PIECES_FROM) {
-        match (in_pieces(lines, count, &read, &mut name), how) {
+        match (in_pieces(lines, count, &read_line, &mut name), how) {
             (Some(particles), _) => return Ok(particles),
             (None, How::Pieces) => return Err(lines.error("not read in pieces")),
             (None, _) => {}
         }
     }
-    one_pass(lines, count, noun, &read, &mut name)
+    one_pass(lines, count, noun, &read_line, &mut name)
 }
 
 /// [`read`] one line after another.
@@ -73,7 +63,7 @@ fn one_pass<'a, K: Copy + Eq + Hash>(
     lines: &mut Lines<'a>,
     count: usize,
     noun: &str,
-    read: &impl ReadLine<'a, K>,
+    read_line: &impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String>,
     name: &mut impl FnMut(K) -> u32,
 ) -> Result<Vec<Particle>, SceneError> {
     let mut particles = Vec::with_capacity(text::capacity(count, lines.rest().len()));
@@ -81,7 +71,7 @@ fn one_pass<'a, K: Copy + Eq + Hash>(
     let mut words = Vec::new();
     for k in 0..count {
         let line = lines.expect_with(|| format!("{count} {noun} lines"))?;
-        let (particle, key) = read(k, line, &mut words).map_err(|m| lines.error(m))?;
+        let (particle, key) = read_line(k, line, &mut words).map_err(|m| lines.error(m))?;
         let kind = *kinds.entry(key).or_insert_with(|| name(key));
         particles.push(Particle { kind, ..particle });
     }
@@ -96,7 +86,7 @@ fn one_pass<'a, K: Copy + Eq + Hash>(
 fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     lines: &mut Lines<'a>,
     count: usize,
-    read: &impl ReadLine<'a, K>,
+    read_line: &(impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync),
     name: &mut impl FnMut(K) -> u32,
 ) -> Option<Vec<Particle>> {
     let rest = lines.rest();
@@ -104,13 +94,15 @@ fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     let pieces = line_pieces(&rest[..end], PIECE_BYTES);
     let counts: Vec<usize> = pieces.par_iter().map(|p| p.lines().count()).collect();
     let firsts: Vec<usize> = counts.iter().scan(0, |at, n| Some(std::mem::replace(at, *at + n))).collect();
-    debug_assert_eq!(counts.iter().sum::<usize>(), count);
+    if counts.iter().sum::<usize>() != count {
+        return None;
+    }
     let unset = Particle { center: glam::DVec3::ZERO, kind: 0, radius: None, color: None };
     let mut particles: Vec<Particle> = (0..count).into_par_iter().map(|_| unset).collect();
     let keys: Vec<Vec<K>> = slices(&mut particles, &counts)
         .into_par_iter()
         .zip(pieces.par_iter().zip(&firsts))
-        .map(|(out, (text, &first))| piece(text, first, out, read))
+        .map(|(out, (text, &first))| piece(text, first, out, read_line))
         .collect::<Option<_>>()?;
     let mut kinds: HashMap<K, u32> = HashMap::new();
     let renumber: Vec<Vec<u32>> = keys
@@ -129,7 +121,10 @@ fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
 fn frame_end(rest: &str, last: usize) -> Option<usize> {
     match rest.match_indices('\n').map(|(i, _)| i + 1).nth(last) {
         Some(end) => Some(end),
-        None => (rest.matches('\n').count() == last && !rest.ends_with('\n')).then_some(rest.len()),
+        None => {
+            let last_unended = !rest.is_empty() && !rest.ends_with('\n');
+            (last_unended && rest.matches('\n').count() == last).then_some(rest.len())
+        }
     }
 }
 
@@ -151,14 +146,39 @@ fn piece<'a, K: Copy + Eq + Hash>(
     text: &'a str,
     first: usize,
     out: &mut [Particle],
-    read: &impl ReadLine<'a, K>,
+    read_line: &impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String>,
 ) -> Option<Vec<K>> {
     let (mut keys, mut local) = (Vec::new(), HashMap::new());
     let mut words = Vec::new();
     for ((k, line), slot) in text.lines().enumerate().zip(out) {
-        let (particle, key) = read(first + k, line, &mut words).ok()?;
+        let (particle, key) = read_line(first + k, line, &mut words).ok()?;
         let kind = *local.entry(key).or_insert_with(|| (keys.push(key), keys.len() as u32 - 1).1);
         *slot = Particle { kind, ..particle };
     }
     Some(keys)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// Where line `last` ends: after its `\n`, or at the end of a last line without one; never in a text
+    /// with fewer lines (an empty text has none, and a frame asked of it in pieces is an error, not a
+    /// particle made up).
+    #[test]
+    fn frame_ends_after_the_last_line() {
+        assert_eq!(frame_end("", 0), None);
+        assert_eq!(frame_end("a", 0), Some(1));
+        assert_eq!(frame_end("a\n", 0), Some(2));
+        assert_eq!(frame_end("a\nb", 1), Some(3));
+        assert_eq!(frame_end("a\n", 1), None);
+        assert_eq!(frame_end("a\r\nb\r\nc", 1), Some(6));
+        assert_eq!(frame_end("a\nb\r", 1), Some(4));
+        let particle = Particle { center: glam::DVec3::ZERO, kind: 0, radius: None, color: None };
+        let read_line = |_: usize, _: &str, _: &mut Vec<&str>| Ok((particle, ()));
+        let mut lines = Lines::new(std::path::Path::new("t"), "");
+        assert!(read(&mut lines, 1, "test", How::Pieces, read_line, |()| 0).is_err());
+        let mut lines = Lines::new(std::path::Path::new("t"), "x");
+        assert_eq!(read(&mut lines, 1, "test", How::Pieces, read_line, |()| 0), Ok(vec![particle]));
+    }
 }

@@ -56,7 +56,7 @@ fn frame<'a>(lines: &mut Lines<'a>, count: usize, how: How) -> Result<Frame, Sce
         Some(e) => frame.kind(Kind { name: e.0.to_owned(), element: Some(e), lammps_type: false }),
         None => frame.element_kind(name.trim()),
     };
-    frame.particles = frame_lines::read(lines, count, ("atom", how), read, name)?;
+    frame.particles = frame_lines::read(lines, count, "atom", how, read, name)?;
     frame.cell = Some(box_line(lines)?);
     Ok(frame)
 }

@@ -145,7 +145,7 @@ fn atoms<'a>(
         (None, Some(t)) => frame.kind(Kind { name: t.to_owned(), element: None, lammps_type: true }),
         (_, None) => frame.kind(Kind { name: "1".to_owned(), element: None, lammps_type: true }),
     };
-    frame.particles = frame_lines::read(lines, count, ("atom", how), read, name)?;
+    frame.particles = frame_lines::read(lines, count, "atom", how, read, name)?;
     Ok(frame)
 }
 
@@ -219,8 +219,8 @@ mod tests {
     }
 
     /// A large frame read in pieces gives one pass's atoms and kinds, by type or by element and with
-    /// scaled coordinates through a triclinic box; a bad line or an `ITEM:` line too early in any piece
-    /// gives one pass's error at its line.
+    /// scaled coordinates through a triclinic box, with `\n` or `\r\n` line ends and a last line with or
+    /// without one; a bad line or an `ITEM:` line too early in any piece gives one pass's error at its line.
     #[test]
     fn large_frames_in_pieces_read_as_one_pass() {
         let path = Path::new("t.dump");
@@ -237,10 +237,13 @@ mod tests {
             let (x, y, z) = ((i % 101) as f64 / 101.0, (i % 13) as f64 / 13.0, (i % 7) as f64 / 7.0);
             format!("{i} {kind} {x} {y} {z} {}", 1 + i % 3)
         };
-        for (columns, element) in [("id type xs ys zs diameter", false), ("id element xs ys zs radius", true)]
-        {
+        let cases = [
+            ("id type xs ys zs diameter", false, "\n", "\n"),
+            ("id element xs ys zs radius", true, "\r\n", ""),
+        ];
+        for (columns, element, end, last) in cases {
             let body: Vec<String> = (0..n).map(|i| line(i, element)).collect();
-            let whole = head(columns) + &body.join("\n") + "\n";
+            let whole = head(columns) + &body.join(end) + last;
             let read = parse(path, &whole, 0).unwrap();
             assert!(read == parse_as(path, &whole, 0, How::OnePass).unwrap(), "{columns}: the frames differ");
             assert!(parse_as(path, &whole, 0, How::Pieces).is_ok_and(|f| f == read), "{columns}: no pieces");
@@ -251,7 +254,7 @@ mod tests {
             {
                 let mut broken = body.clone();
                 broken[bad] = with.to_owned();
-                let text = head(columns) + &broken.join("\n") + "\n";
+                let text = head(columns) + &broken.join(end) + last;
                 let e = parse(path, &text, 0).unwrap_err();
                 assert_eq!(e, parse_as(path, &text, 0, How::OnePass).unwrap_err());
                 assert_eq!(e.line, bad + 10, "{e}");

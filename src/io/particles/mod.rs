@@ -24,7 +24,7 @@ use std::path::{Path, PathBuf};
 
 use glam::DVec3;
 
-use super::error::{SceneError, Text};
+use super::error::SceneError;
 use crate::math::Rgb;
 use crate::scene::SceneDesc;
 
@@ -238,16 +238,15 @@ pub(crate) fn load(
     format: ParticleFormat,
     options: &ParticleOptions,
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
-    let bytes = super::error::read_bytes(path, "particle file")?;
+    // Read, not mapped as large scene files are: simulations rewrite their dump files as they run, and a
+    // mapped file cut short under the reader would stop the process with SIGBUS instead of an error.
+    let bytes = std::fs::read(path)
+        .map_err(|e| SceneError::whole_file(path, format!("cannot read particle file: {e}")))?;
     let sidecar = match &options.types {
         Some(types) => Some(types::read(types)?),
         None => types::sidecar_of(path).map(|p| types::read(&p)).transpose()?,
     };
-    let source = match decompress(path, &bytes)? {
-        Some(plain) => Text::Read(super::error::text(path, plain)?),
-        None => bytes.into_text(path)?,
-    };
-    build(path, format, &source, options, sidecar.as_ref())
+    parsed(path, format, bytes, options, sidecar.as_ref())
 }
 
 /// [`load`] of a file's bytes, gzip- or bzip2-compressed or not (told by their first bytes); the types
@@ -259,8 +258,26 @@ pub(crate) fn parse(
     options: &ParticleOptions,
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
     let sidecar = options.types.as_deref().map(types::read).transpose()?;
-    let source = super::error::text(path, decompress(path, &bytes)?.unwrap_or(bytes))?;
-    build(path, format, &source, options, sidecar.as_ref())
+    parsed(path, format, bytes, options, sidecar.as_ref())
+}
+
+/// The scene of a particle file's bytes, decompressed where they are compressed (the compressed bytes freed
+/// before the parse), with a sidecar's types.
+fn parsed(
+    path: &Path,
+    format: ParticleFormat,
+    bytes: Vec<u8>,
+    options: &ParticleOptions,
+    sidecar: Option<&types::Types>,
+) -> Result<(SceneDesc, Vec<String>), SceneError> {
+    let plain = match decompress(path, &bytes)? {
+        Some(plain) => {
+            drop(bytes);
+            plain
+        }
+        None => bytes,
+    };
+    build(path, format, &super::error::text(path, plain)?, options, sidecar)
 }
 
 /// The scene of a particle file's text with a sidecar's types.

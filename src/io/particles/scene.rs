@@ -129,9 +129,8 @@ pub(crate) fn scene(
             colors.push(c);
         }
     } else {
+        // Into the vectors as allocated: their room for the corners stays.
         frame.particles.par_iter().map(sphere).unzip_into_vecs(&mut spheres, &mut colors);
-        spheres.reserve_exact(8);
-        colors.reserve_exact(8);
     }
     if spheres.is_empty() {
         return Err(match sites {
@@ -176,6 +175,10 @@ pub(crate) fn scene(
     Ok((desc, warnings))
 }
 
+/// Kinds up to this many are counted in parallel, each thread's job with a count per kind; a frame with
+/// more (a hostile file can name a million LAMMPS types) is counted in one pass.
+const PARALLEL_COUNT_KINDS: usize = 1024;
+
 /// The number of particles of each kind without a radius of their own.
 fn kind_counts(frame: &Frame) -> Vec<usize> {
     let n = frame.kinds.len();
@@ -183,6 +186,9 @@ fn kind_counts(frame: &Frame) -> Vec<usize> {
         counts[p.kind as usize] += usize::from(p.radius.is_none());
         counts
     };
+    if n > PARALLEL_COUNT_KINDS {
+        return frame.particles.iter().fold(vec![0; n], add);
+    }
     let sum = |mut a: Vec<usize>, b: Vec<usize>| {
         a.iter_mut().zip(b).for_each(|(a, b)| *a += b);
         a

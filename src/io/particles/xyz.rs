@@ -148,7 +148,7 @@ fn frame<'a>(lines: &mut Lines<'a>, count: usize, columns: Columns, how: How) ->
     let unnamed = frame.element_kind("?");
     let read = |_: usize, line: &'a str, words: &mut Vec<&'a str>| particle(line, columns, words);
     let name = |key: Option<&str>| key.map_or(unnamed, |name| frame.element_kind(name));
-    frame.particles = frame_lines::read(lines, count, ("particle", how), read, name)?;
+    frame.particles = frame_lines::read(lines, count, "particle", how, read, name)?;
     if count == 0 {
         return Err(lines.error("a frame of 0 particles"));
     }
