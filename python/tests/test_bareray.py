@@ -140,21 +140,25 @@ def test_render_equals_the_command_lines_image(tmp_path):
 
 def test_a_second_thread_runs_while_a_render_is_in_progress():
     centers, radii, colors = field(20000, seed=2)
-    done = {}
+    # Larger images until a render lasts long enough to tell: a fast machine finishes the first at once.
+    for scale in (1, 2, 4, 8):
+        done = {}
 
-    def render():
-        start = time.perf_counter()
-        done["image"] = bareray.render(centers, radii, colors, width=640, height=480, shade="ao:16", threads=1)
-        done["seconds"] = time.perf_counter() - start
+        def render(width=640 * scale, height=480 * scale):
+            start = time.perf_counter()
+            done["image"] = bareray.render(centers, radii, colors, width=width, height=height, shade="ao:16", threads=1)
+            done["seconds"] = time.perf_counter() - start
 
-    worker = threading.Thread(target=render)
-    worker.start()
-    ticks = 0
-    while worker.is_alive():
-        ticks += 1
-        time.sleep(0.001)
-    worker.join()
-    assert done["image"].shape == (480, 640, 3)
+        worker = threading.Thread(target=render)
+        worker.start()
+        ticks = 0
+        while worker.is_alive():
+            ticks += 1
+            time.sleep(0.001)
+        worker.join()
+        assert done["image"].shape == (480 * scale, 640 * scale, 3)
+        if done["seconds"] > 0.1:
+            break
     # With the GIL held for the whole render this loop could not run until it ended (a tick or two).
     assert done["seconds"] > 0.1, "the render was too quick to tell"
     assert ticks > 20, f"{ticks} ticks in {done['seconds']:.2f} s"

@@ -35,11 +35,10 @@ pub(super) enum How {
 
 /// The `count` particle lines that `lines` holds next, each read by `read_line` (`(k, line, words)`: `k` the
 /// line's place in the frame, from 0, for messages; `words` a scratch list for its words) into a particle
-/// (its kind unset) and the key of its kind, each key of a kind named by
-/// `name` (its kind's index in the frame) once, in the order one pass meets them. By [`How::Auto`], a
-/// frame of [`PIECES_FROM`] lines or more is read in pieces; where the text ends first or a line does not
-/// read, it is read again in one pass, which reports the first error at its line (`noun` names the lines:
-/// "expected 9 atom lines").
+/// (its kind unset) and the key of its kind; each key is named once by `name`, which gives its kind's index
+/// in the frame, in the order one pass meets the keys. By [`How::Auto`], a frame of [`PIECES_FROM`] lines or more
+/// is read in pieces; where the text ends first or a line does not read, it is read again in one pass, which
+/// reports the first error at its line (`noun` names the lines: "expected 9 atom lines").
 pub(super) fn read<'a, K: Copy + Eq + Hash + Send + Sync>(
     lines: &mut Lines<'a>,
     count: usize,
