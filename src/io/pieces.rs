@@ -32,6 +32,19 @@ pub(crate) fn line_pieces(text: &str, size: usize) -> Vec<&str> {
     cuts.windows(2).map(|w| &text[w[0]..w[1]]).collect()
 }
 
+/// `all` cut into consecutive slices of `counts[i]` items each, for the pieces to fill in parallel (the
+/// counts sum to at most `all.len()`).
+pub(crate) fn slices_of<'a, T>(mut all: &'a mut [T], counts: &[usize]) -> Vec<&'a mut [T]> {
+    counts
+        .iter()
+        .map(|&n| {
+            let (mine, rest) = std::mem::take(&mut all).split_at_mut(n);
+            all = rest;
+            mine
+        })
+        .collect()
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
@@ -62,5 +75,8 @@ mod tests {
         assert_eq!(after_newline(b"ab\ncd", 3), None);
         assert_eq!(after_newline(b"ab\ncd", 9), None);
         assert_eq!(after_newline(b"ab\ncd", 0), Some(3));
+        let mut all = [1, 2, 3, 4, 5, 6];
+        let parts: Vec<Vec<i32>> = slices_of(&mut all, &[2, 0, 3]).into_iter().map(|s| s.to_vec()).collect();
+        assert_eq!(parts, [vec![1, 2], vec![], vec![3, 4, 5]]);
     }
 }

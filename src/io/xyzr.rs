@@ -47,13 +47,7 @@ fn parse_in_chunks(path: &Path, source: &str, chunk_bytes: usize) -> Result<Scen
     }
     let unset = SphereDesc { center: DVec3::ZERO, radius: 0.0, material: 0 };
     let mut spheres: Vec<SphereDesc> = (0..total).into_par_iter().map(|_| unset).collect();
-    let mut slots = Vec::with_capacity(chunks.len());
-    let mut rest = spheres.as_mut_slice();
-    for &count in &counts {
-        let (mine, tail) = std::mem::take(&mut rest).split_at_mut(count);
-        slots.push(mine);
-        rest = tail;
-    }
+    let slots = crate::io::pieces::slices_of(&mut spheres, &counts);
     let parsed: Vec<_> = chunks.par_iter().zip(slots).map(|(text, out)| parse_lines(text, out)).collect();
     if let Some((k, (line, message))) = parsed.into_iter().enumerate().find_map(|(k, r)| Some((k, r.err()?)))
     {

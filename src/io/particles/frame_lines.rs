@@ -11,7 +11,7 @@ use rayon::prelude::*;
 
 use super::text::{self, Lines};
 use super::Particle;
-use crate::io::pieces::line_pieces;
+use crate::io::pieces::{line_pieces, slices_of};
 use crate::io::SceneError;
 
 /// Frames of at least this many particles are read in pieces.
@@ -98,7 +98,7 @@ fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     }
     let unset = Particle { center: glam::DVec3::ZERO, kind: 0, radius: None, color: None };
     let mut particles: Vec<Particle> = (0..count).into_par_iter().map(|_| unset).collect();
-    let keys: Vec<Vec<K>> = slices(&mut particles, &counts)
+    let keys: Vec<Vec<K>> = slices_of(&mut particles, &counts)
         .into_par_iter()
         .zip(pieces.par_iter().zip(&firsts))
         .map(|(out, (text, &first))| piece(text, first, out, read_line))
@@ -108,7 +108,7 @@ fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
         .iter()
         .map(|keys| keys.iter().map(|&key| *kinds.entry(key).or_insert_with(|| name(key))).collect())
         .collect();
-    slices(&mut particles, &counts).into_par_iter().zip(&renumber).for_each(|(out, kinds)| {
+    slices_of(&mut particles, &counts).into_par_iter().zip(&renumber).for_each(|(out, kinds)| {
         out.iter_mut().for_each(|p| p.kind = kinds[p.kind as usize]);
     });
     lines.skip(end, count);
@@ -125,18 +125,6 @@ fn frame_end(rest: &str, last: usize) -> Option<usize> {
             (last_unended && rest.matches('\n').count() == last).then_some(rest.len())
         }
     }
-}
-
-/// `all` cut into consecutive slices of `counts` particles.
-fn slices<'p>(mut all: &'p mut [Particle], counts: &[usize]) -> Vec<&'p mut [Particle]> {
-    counts
-        .iter()
-        .map(|&n| {
-            let (mine, rest) = std::mem::take(&mut all).split_at_mut(n);
-            all = rest;
-            mine
-        })
-        .collect()
 }
 
 /// The lines of one piece, the first being line `first` of the frame, read into `out` with kinds
