@@ -18,7 +18,7 @@ use crate::io::SceneError;
 pub(super) const PIECES_FROM: usize = 1 << 15;
 
 /// Bytes of text per piece.
-const PIECE_BYTES: usize = 1 << 20;
+pub(super) const PIECE_BYTES: usize = 1 << 20;
 
 /// How [`read`] reads a frame.
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -92,26 +92,44 @@ fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     let end = frame_end(rest, count.checked_sub(1)?)?;
     let pieces = line_pieces(&rest[..end], PIECE_BYTES);
     let counts: Vec<usize> = pieces.par_iter().map(|p| p.lines().count()).collect();
-    let firsts: Vec<usize> = counts.iter().scan(0, |at, n| Some(std::mem::replace(at, *at + n))).collect();
     if counts.iter().sum::<usize>() != count {
         return None;
     }
+    let particles = read_pieces(&pieces, &counts, |_| true, read_line, name)?;
+    lines.skip(end, count);
+    Some(particles)
+}
+
+/// The particles of `pieces` (whole lines each, in order), read in parallel: piece `p` holds `counts[p]`
+/// lines that `keep` takes (the others are skipped), each read by `read_line` (`k` its place among the kept
+/// lines of all the pieces). Each piece's particles are read straight into their places in one list, each
+/// kind as the place of its key among the piece's keys in order of first sight; the keys are then named
+/// piece by piece (the order of one pass) and the kinds renumbered. `None`, no key named, where a piece's
+/// kept lines are not its count or a line does not read.
+pub(super) fn read_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
+    pieces: &[&'a str],
+    counts: &[usize],
+    keep: impl Fn(&str) -> bool + Sync,
+    read_line: &(impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync),
+    name: &mut impl FnMut(K) -> u32,
+) -> Option<Vec<Particle>> {
+    let firsts: Vec<usize> = counts.iter().scan(0, |at, n| Some(std::mem::replace(at, *at + n))).collect();
+    let count = counts.iter().sum();
     let unset = Particle { center: glam::DVec3::ZERO, kind: 0, radius: None, color: None };
     let mut particles: Vec<Particle> = (0..count).into_par_iter().map(|_| unset).collect();
-    let keys: Vec<Vec<K>> = slices_of(&mut particles, &counts)
+    let keys: Vec<Vec<K>> = slices_of(&mut particles, counts)
         .into_par_iter()
         .zip(pieces.par_iter().zip(&firsts))
-        .map(|(out, (text, &first))| piece(text, first, out, read_line))
+        .map(|(out, (text, &first))| piece(text, first, out, &keep, read_line))
         .collect::<Option<_>>()?;
     let mut kinds: HashMap<K, u32> = HashMap::new();
     let renumber: Vec<Vec<u32>> = keys
         .iter()
         .map(|keys| keys.iter().map(|&key| *kinds.entry(key).or_insert_with(|| name(key))).collect())
         .collect();
-    slices_of(&mut particles, &counts).into_par_iter().zip(&renumber).for_each(|(out, kinds)| {
+    slices_of(&mut particles, counts).into_par_iter().zip(&renumber).for_each(|(out, kinds)| {
         out.iter_mut().for_each(|p| p.kind = kinds[p.kind as usize]);
     });
-    lines.skip(end, count);
     Some(particles)
 }
 
@@ -127,22 +145,25 @@ fn frame_end(rest: &str, last: usize) -> Option<usize> {
     }
 }
 
-/// The lines of one piece, the first being line `first` of the frame, read into `out` with kinds
-/// numbered by first sight among the piece's keys, which it returns; `None` where a line does not read.
+/// The lines of one piece that `keep` takes, the first being line `first` of the frame, read into `out`
+/// (which they must fill exactly) with kinds numbered by first sight among the piece's keys, which it
+/// returns; `None` where a line does not read or the kept lines do not fill `out`.
 fn piece<'a, K: Copy + Eq + Hash>(
     text: &'a str,
     first: usize,
     out: &mut [Particle],
+    keep: &impl Fn(&str) -> bool,
     read_line: &impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String>,
 ) -> Option<Vec<K>> {
     let (mut keys, mut local) = (Vec::new(), HashMap::new());
     let mut words = Vec::new();
-    for ((k, line), slot) in text.lines().enumerate().zip(out) {
-        let (particle, key) = read_line(first + k, line, &mut words).ok()?;
+    let mut kept = text.lines().filter(|line| keep(line));
+    for (k, slot) in out.iter_mut().enumerate() {
+        let (particle, key) = read_line(first + k, kept.next()?, &mut words).ok()?;
         let kind = *local.entry(key).or_insert_with(|| (keys.push(key), keys.len() as u32 - 1).1);
         *slot = Particle { kind, ..particle };
     }
-    Some(keys)
+    kept.next().is_none().then_some(keys)
 }
 
 #[cfg(test)]

@@ -14,48 +14,66 @@ use std::path::Path;
 use glam::DVec3;
 
 use super::elements;
+use super::frame_lines::{self, How};
+use super::pdb_pieces;
 use super::text::{self, columns, Lines};
 use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
 
 /// Reads frame `wanted` (from 0) of a PDB text, or of a PQR text when `pqr`.
 pub(crate) fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame, SceneError> {
+    parse_as(path, source, wanted, pqr, How::Auto)
+}
+
+/// [`parse`], the text read as `how` says: a text of [`pdb_pieces::PIECES_FROM_BYTES`] or more in pieces
+/// by [`How::Auto`], or again in one pass where the pieces stop (one pass then reports why).
+pub(super) fn parse_as(
+    path: &Path,
+    source: &str,
+    wanted: usize,
+    pqr: bool,
+    how: How,
+) -> Result<Frame, SceneError> {
+    if how == How::Pieces || (how == How::Auto && source.len() >= pdb_pieces::PIECES_FROM_BYTES) {
+        match (pdb_pieces::read(source, wanted, pqr, frame_lines::PIECE_BYTES), how) {
+            (Some(frame), _) => return Ok(frame),
+            (None, How::Pieces) => return Err(SceneError::whole_file(path, "not read in pieces")),
+            (None, _) => {}
+        }
+    }
+    one_pass(path, source, wanted, pqr)
+}
+
+/// [`parse`] one record after another.
+fn one_pass(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame, SceneError> {
     let mut lines = Lines::new(path, source);
     let mut frame = Frame::new(Unit::Angstrom);
     let mut kinds: HashMap<(Key, bool), u32> = HashMap::new();
     // The frame the next atoms belong to, and whether it has begun (an atom or a MODEL record seen).
     let (mut current, mut open) = (0usize, false);
     while let Some(line) = lines.next() {
-        // PDB's record name fills columns 1-6; a PQR's is its first word.
-        let record = match pqr {
-            true => line.split_ascii_whitespace().next().unwrap_or(""),
-            false => columns(line, 0, 6).trim_end(),
-        };
-        match record {
-            "ATOM" | "HETATM" => {
+        match record(line, pqr) {
+            Record::Atom { hetatm } => {
                 open = true;
                 if current == wanted {
-                    let hetatm = record == "HETATM";
-                    let read = if pqr { pqr_atom(line) } else { pdb_atom(line) };
-                    let (center, radius, key) = read.map_err(|m| lines.error(m))?;
-                    let kind =
-                        *kinds.entry((key, hetatm)).or_insert_with(|| kind_of(&mut frame, key, hetatm));
-                    frame.particles.push(Particle { center, kind, radius, color: None });
+                    let (particle, key) = atom(line, pqr, hetatm).map_err(|m| lines.error(m))?;
+                    let kind = *kinds.entry(key).or_insert_with(|| kind_of(&mut frame, key));
+                    frame.particles.push(Particle { kind, ..particle });
                 }
             }
             // A MODEL record also ends a frame its ENDMDL is missing from.
-            "MODEL" | "ENDMDL" => {
+            r @ (Record::Model | Record::EndModel) => {
                 if open {
                     if current == wanted {
                         return finish(&lines, frame, wanted);
                     }
                     current += 1;
                 }
-                open = record == "MODEL";
+                open = r == Record::Model;
             }
-            "CRYST1" => frame.cell = cryst1(line, pqr).map_err(|m| lines.error(m))?,
-            "END" => break,
-            _ => {}
+            Record::Cryst1 => frame.cell = cryst1(line, pqr).map_err(|m| lines.error(m))?,
+            Record::End => break,
+            Record::Other => {}
         }
     }
     if open && current == wanted {
@@ -68,6 +86,44 @@ pub(crate) fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Resu
     }
 }
 
+/// What a record does to frames, by its name (a PDB record's columns 1-6, a PQR record's first word).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub(super) enum Record {
+    /// `ATOM` or `HETATM`.
+    Atom {
+        hetatm: bool,
+    },
+    Model,
+    EndModel,
+    End,
+    Cryst1,
+    /// Any other record, skipped.
+    Other,
+}
+
+/// The record `line` holds.
+pub(super) fn record(line: &str, pqr: bool) -> Record {
+    let name = match pqr {
+        true => line.split_ascii_whitespace().next().unwrap_or(""),
+        false => columns(line, 0, 6).trim_end(),
+    };
+    match name {
+        "ATOM" => Record::Atom { hetatm: false },
+        "HETATM" => Record::Atom { hetatm: true },
+        "MODEL" => Record::Model,
+        "ENDMDL" => Record::EndModel,
+        "END" => Record::End,
+        "CRYST1" => Record::Cryst1,
+        _ => Record::Other,
+    }
+}
+
+/// An atom record: the particle (kind unset) and the key of its kind.
+pub(super) fn atom(line: &str, pqr: bool, hetatm: bool) -> Result<(Particle, (Key<'_>, bool)), String> {
+    let (center, radius, key) = if pqr { pqr_atom(line) } else { pdb_atom(line) }?;
+    Ok((Particle { center, kind: 0, radius, color: None }, (key, hetatm)))
+}
+
 /// The frame read, unless it has no atoms.
 fn finish(lines: &Lines, frame: Frame, wanted: usize) -> Result<Frame, SceneError> {
     match frame.particles.is_empty() {
@@ -78,13 +134,13 @@ fn finish(lines: &Lines, frame: Frame, wanted: usize) -> Result<Frame, SceneErro
 
 /// What decides an atom's kind: its element columns when they are filled, else its name and residue.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-enum Key<'a> {
+pub(super) enum Key<'a> {
     Element(&'a str),
     Name(&'a str, &'a str),
 }
 
-/// The kind of an atom.
-fn kind_of(frame: &mut Frame, key: Key, hetatm: bool) -> u32 {
+/// The kind of an atom, from its key and whether its record is `HETATM`.
+pub(super) fn kind_of(frame: &mut Frame, (key, hetatm): (Key, bool)) -> u32 {
     let (name, residue) = match key {
         Key::Name(name, residue) => (name, residue),
         Key::Element(element) => return frame.element_kind(element),
@@ -118,7 +174,7 @@ fn pdb_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
 
 /// A `CRYST1` record's box: `None` for the unit cube of 90° that PDB writes when there is no box, and for
 /// zero lengths or angles that close no box, which other writers put there.
-fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
+pub(super) fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
     const FIELDS: [(usize, usize, &str); 6] =
         [(6, 15, "a"), (15, 24, "b"), (24, 33, "c"), (33, 40, "alpha"), (40, 47, "beta"), (47, 54, "gamma")];
     let words: Vec<&str> = line.split_ascii_whitespace().skip(1).collect();
