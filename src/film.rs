@@ -26,6 +26,25 @@ impl Image {
     pub(crate) fn set(&mut self, x: u32, y: u32, c: Rgb) {
         self.pixels[y as usize * self.width as usize + x as usize] = c;
     }
+
+    /// The pixels' channels, `r, g, b` per pixel in row order (what an array of shape (height, width, 3)
+    /// holds), copied in parallel into zeroed memory.
+    ///
+    /// ```
+    /// let image = bareray::film::Image::new(2, 1);
+    /// assert_eq!(image.rgb_values(), [0.0; 6]);
+    /// ```
+    pub fn rgb_values(&self) -> Vec<f32> {
+        use rayon::prelude::*;
+        const PIXELS: usize = 1 << 14;
+        let mut values = vec![0.0f32; 3 * self.pixels.len()];
+        values.par_chunks_mut(3 * PIXELS).zip(self.pixels.par_chunks(PIXELS)).for_each(|(out, pixels)| {
+            for (o, p) in out.chunks_exact_mut(3).zip(pixels) {
+                o.copy_from_slice(&[p.x, p.y, p.z]);
+            }
+        });
+        values
+    }
 }
 
 /// `n` black pixels from the allocator's zeroed memory. `vec![Rgb::default(); n]` would write every pixel

@@ -167,6 +167,27 @@ fn bad_arrays_name_the_first_bad_sphere() {
     let huge = [0.0, 0.0, 1e39];
     let a = SphereArrays { centers: Floats::F64(&huge), radii: Floats::F64(&[1.0]), colors: None };
     assert_eq!(a.check().unwrap_err().index, Some(0), "beyond f32's range");
+    // Among many spheres (checked in parallel) the first bad one is named, whatever its fault and the
+    // faults after it, with one thread or several.
+    let n = 300_000;
+    let (mut centers, mut radii, mut colors) = (vec![0.5; 3 * n], vec![1.0; n], vec![0.5f32; 3 * n]);
+    (centers[3 * 250_000 + 2], radii[200_000], colors[3 * 150_001]) = (f64::NAN, -2.0, 2.0);
+    for threads in [1, 2, 3] {
+        let a = SphereArrays {
+            centers: Floats::F64(&centers),
+            radii: Floats::F64(&radii),
+            colors: Some(Floats::F32(&colors)),
+        };
+        let first = |a: SphereArrays| pool(threads).install(|| a.check().unwrap_err().to_string());
+        assert_eq!(first(a), "colors[150001]: (2, 0.5, 0.5) has a channel outside [0, 1]");
+        assert_eq!(
+            first(SphereArrays { colors: None, ..a }),
+            "radii[200000]: -2 is not a positive finite radius"
+        );
+        let ok = vec![1.0; n];
+        let a = SphereArrays { radii: Floats::F64(&ok), colors: None, ..a };
+        assert!(first(a).starts_with("centers[250000]: (0.5, 0.5, NaN)"));
+    }
 }
 
 /// A colour list of the wrong length (a description built by hand) is ignored: the spheres keep their

@@ -170,7 +170,7 @@ fn api_error(e: api::Error) -> PyErr {
 
 /// The image as a float32 array of shape (height, width, 3).
 fn to_numpy<'py>(py: Python<'py>, image: &Image) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
-    let values: Vec<f32> = image.pixels.iter().flat_map(|p| [p.x, p.y, p.z]).collect();
+    let values = image.rgb_values();
     let shape = [image.height as usize, image.width as usize, 3];
     PyArray1::from_vec(py, values).reshape(shape.to_vec())
 }
@@ -237,8 +237,12 @@ fn render<'py>(
         radii: radii.floats(),
         colors: colors.as_ref().map(Array::floats),
     };
-    let desc = arrays.scene(view_of(view)?).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let picture: Picture = py.detach(|| api::render_desc(desc, &options)).map_err(api_error)?;
+    let view = view_of(view)?;
+    // The arrays are checked and made a scene with the GIL released too (in parallel, over every sphere).
+    let picture: Picture = py.detach(|| match arrays.scene(view) {
+        Ok(desc) => api::render_desc(desc, &options).map_err(api_error),
+        Err(e) => Err(PyValueError::new_err(e.to_string())),
+    })?;
     to_numpy(py, &picture.rendered.image)
 }
 

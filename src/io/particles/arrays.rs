@@ -5,6 +5,7 @@
 //! f64 (40 bytes) and its colour in 3 bytes.
 
 use glam::DVec3;
+use rayon::prelude::*;
 
 use super::scene::{particle_scene, DEFAULT_VIEW};
 use crate::math::{Rgb, Rgb8};
@@ -86,7 +87,7 @@ impl SphereArrays<'_> {
 
     /// Checks the arrays: lengths that agree and at least one sphere, finite centres (within f32's range,
     /// as every reader demands), positive finite radii, colour channels in [0, 1]. The error names the first
-    /// bad sphere.
+    /// bad sphere (the spheres are checked in parallel).
     pub fn check(&self) -> Result<(), ArrayError> {
         let n = self.len();
         let whole = |array, message: String| Err(ArrayError { array, index: None, message });
@@ -99,27 +100,34 @@ impl SphereArrays<'_> {
         if let Some(c) = self.colors.filter(|c| c.len() != 3 * n) {
             return whole("colors", format!("{} values for {n} spheres: expected n×3", c.len()));
         }
+        // The spheres are checked in parallel for the first bad one, whose fault is then described.
         let in_f32 = |v: f64| v.is_finite() && (v as f32).is_finite();
-        for i in 0..n {
-            let c = [0, 1, 2].map(|k| self.centers.get(3 * i + k));
-            if !c.iter().all(|&v| in_f32(v)) {
-                let message = format!("({}, {}, {}) is not finite (or beyond f32's range)", c[0], c[1], c[2]);
-                return Err(ArrayError::at("centers", i, message));
-            }
+        let center = |i: usize| [0, 1, 2].map(|k| self.centers.get(3 * i + k));
+        let center_ok = |i: usize| center(i).iter().all(|&v| in_f32(v));
+        let radius_ok = |i: usize| {
             let r = self.radii.get(i);
-            if !(in_f32(r) && r > 0.0 && r as f32 > 0.0) {
-                return Err(ArrayError::at("radii", i, format!("{r} is not a positive finite radius")));
-            }
-            if let Some(colors) = self.colors {
-                let rgb = [0, 1, 2].map(|k| colors.get(3 * i + k));
-                if !rgb.iter().all(|v| (0.0..=1.0).contains(v)) {
-                    let message =
-                        format!("({}, {}, {}) has a channel outside [0, 1]", rgb[0], rgb[1], rgb[2]);
-                    return Err(ArrayError::at("colors", i, message));
-                }
-            }
+            in_f32(r) && r > 0.0 && r as f32 > 0.0
+        };
+        let color = |c: &Floats, i: usize| [0, 1, 2].map(|k| c.get(3 * i + k));
+        let color_ok =
+            |i: usize| self.colors.is_none_or(|c| color(&c, i).iter().all(|v| (0.0..=1.0).contains(v)));
+        let Some(i) =
+            (0..n).into_par_iter().position_first(|i| !(center_ok(i) && radius_ok(i) && color_ok(i)))
+        else {
+            return Ok(());
+        };
+        if !center_ok(i) {
+            let c = center(i);
+            let message = format!("({}, {}, {}) is not finite (or beyond f32's range)", c[0], c[1], c[2]);
+            return Err(ArrayError::at("centers", i, message));
         }
-        Ok(())
+        if !radius_ok(i) {
+            let r = self.radii.get(i);
+            return Err(ArrayError::at("radii", i, format!("{r} is not a positive finite radius")));
+        }
+        let rgb = self.colors.map_or([0.0; 3], |c| color(&c, i));
+        let message = format!("({}, {}, {}) has a channel outside [0, 1]", rgb[0], rgb[1], rgb[2]);
+        Err(ArrayError::at("colors", i, message))
     }
 
     /// The scene of these spheres, as a particle file of them gives it (`particle_scene`): seen from `view`
@@ -149,6 +157,7 @@ impl SphereArrays<'_> {
         self.check()?;
         let n = self.len();
         let spheres = (0..n)
+            .into_par_iter()
             .map(|i| SphereDesc {
                 center: DVec3::new(
                     self.centers.get(3 * i),
@@ -161,6 +170,7 @@ impl SphereArrays<'_> {
             .collect();
         let colors = match self.colors {
             Some(c) => (0..n)
+                .into_par_iter()
                 .map(|i| {
                     let [r, g, b] = [0, 1, 2].map(|k| c.get(3 * i + k) as f32);
                     Rgb8::quantize(Rgb::new(r, g, b))
