@@ -237,12 +237,10 @@ fn render<'py>(
         radii: radii.floats(),
         colors: colors.as_ref().map(Array::floats),
     };
-    let view = view_of(view)?;
-    // The arrays are checked and made a scene with the GIL released too (in parallel, over every sphere).
-    let picture: Picture = py.detach(|| match arrays.scene(view) {
-        Ok(desc) => api::render_desc(desc, &options).map_err(api_error),
-        Err(e) => Err(PyValueError::new_err(e.to_string())),
-    })?;
+    // Checked and read with the GIL held: no Python thread can write an array between its check and its read
+    // (the check and the read run in parallel on threads that do not touch Python).
+    let desc = arrays.scene(view_of(view)?).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    let picture: Picture = py.detach(|| api::render_desc(desc, &options)).map_err(api_error)?;
     to_numpy(py, &picture.rendered.image)
 }
 

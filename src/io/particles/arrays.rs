@@ -100,34 +100,23 @@ impl SphereArrays<'_> {
         if let Some(c) = self.colors.filter(|c| c.len() != 3 * n) {
             return whole("colors", format!("{} values for {n} spheres: expected n×3", c.len()));
         }
-        // The spheres are checked in parallel for the first bad one, whose fault is then described.
+        // The first bad sphere, found in parallel: its centre, then its radius, then its colour.
         let in_f32 = |v: f64| v.is_finite() && (v as f32).is_finite();
-        let center = |i: usize| [0, 1, 2].map(|k| self.centers.get(3 * i + k));
-        let center_ok = |i: usize| center(i).iter().all(|&v| in_f32(v));
-        let radius_ok = |i: usize| {
+        let fault = |i: usize| {
+            let c = [0, 1, 2].map(|k| self.centers.get(3 * i + k));
+            if !c.iter().all(|&v| in_f32(v)) {
+                let message = format!("({}, {}, {}) is not finite (or beyond f32's range)", c[0], c[1], c[2]);
+                return Some(ArrayError::at("centers", i, message));
+            }
             let r = self.radii.get(i);
-            in_f32(r) && r > 0.0 && r as f32 > 0.0
+            if !(in_f32(r) && r > 0.0 && r as f32 > 0.0) {
+                return Some(ArrayError::at("radii", i, format!("{r} is not a positive finite radius")));
+            }
+            let rgb = self.colors.map(|colors| [0, 1, 2].map(|k| colors.get(3 * i + k)))?;
+            let message = || format!("({}, {}, {}) has a channel outside [0, 1]", rgb[0], rgb[1], rgb[2]);
+            (!rgb.iter().all(|v| (0.0..=1.0).contains(v))).then(|| ArrayError::at("colors", i, message()))
         };
-        let color = |c: &Floats, i: usize| [0, 1, 2].map(|k| c.get(3 * i + k));
-        let color_ok =
-            |i: usize| self.colors.is_none_or(|c| color(&c, i).iter().all(|v| (0.0..=1.0).contains(v)));
-        let Some(i) =
-            (0..n).into_par_iter().position_first(|i| !(center_ok(i) && radius_ok(i) && color_ok(i)))
-        else {
-            return Ok(());
-        };
-        if !center_ok(i) {
-            let c = center(i);
-            let message = format!("({}, {}, {}) is not finite (or beyond f32's range)", c[0], c[1], c[2]);
-            return Err(ArrayError::at("centers", i, message));
-        }
-        if !radius_ok(i) {
-            let r = self.radii.get(i);
-            return Err(ArrayError::at("radii", i, format!("{r} is not a positive finite radius")));
-        }
-        let rgb = self.colors.map_or([0.0; 3], |c| color(&c, i));
-        let message = format!("({}, {}, {}) has a channel outside [0, 1]", rgb[0], rgb[1], rgb[2]);
-        Err(ArrayError::at("colors", i, message))
+        (0..n).into_par_iter().find_map_first(fault).map_or(Ok(()), Err)
     }
 
     /// The scene of these spheres, as a particle file of them gives it (`particle_scene`): seen from `view`

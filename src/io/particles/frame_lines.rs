@@ -1,8 +1,9 @@
 //! A frame's particle lines, read in one pass or, for a large frame, in pieces on the current rayon pool,
-//! with the same particles and kinds either way. A reader (XYZ, GRO, LAMMPS) gives the read of one line,
-//! which yields a particle and the key of its kind (an element name, a LAMMPS type, a GRO atom and residue
-//! name), and the naming of a key as a kind of the frame. Keys are named once each, in the order one pass
-//! first meets them, so kinds are numbered as one pass numbers them.
+//! with the same particles and kinds either way. A reader (XYZ, GRO, LAMMPS; PDB and PQR through
+//! [`read_pieces`], once `pdb::pieces` has found the frame) gives the read of one line, which yields a
+//! particle and the key of its kind (an element name, a LAMMPS type, a GRO atom and residue name), and the
+//! naming of a key as a kind of the frame. Keys are named once each, in the order one pass first meets
+//! them, so kinds are numbered as one pass numbers them.
 
 use std::collections::HashMap;
 use std::hash::Hash;
@@ -78,10 +79,8 @@ fn one_pass<'a, K: Copy + Eq + Hash>(
 }
 
 /// [`read`] in pieces: `None`, with nothing taken from `lines` and no key named, when the text ends
-/// before `count` lines or a line does not read. Each piece's lines are counted first, so that its
-/// particles are read straight into their places in the one list, each kind as the place of its key among
-/// the piece's keys in order of first sight; the keys are then named piece by piece (the order of one
-/// pass) and the kinds renumbered.
+/// before `count` lines or a line does not read. Each piece's lines are counted, then read by
+/// [`read_pieces`].
 fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     lines: &mut Lines<'a>,
     count: usize,

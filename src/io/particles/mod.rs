@@ -14,7 +14,6 @@ mod frame_lines;
 pub(crate) mod gro;
 pub(crate) mod lammps;
 pub(crate) mod pdb;
-mod pdb_pieces;
 pub(crate) mod scene;
 pub(crate) mod text;
 pub(crate) mod types;

@@ -15,27 +15,22 @@ use glam::DVec3;
 
 use super::elements;
 use super::frame_lines::{self, How};
-use super::pdb_pieces;
 use super::text::{self, columns, Lines};
 use super::{Cell, Frame, Kind, Particle, Unit};
 use crate::io::SceneError;
+
+mod pieces;
 
 /// Reads frame `wanted` (from 0) of a PDB text, or of a PQR text when `pqr`.
 pub(crate) fn parse(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame, SceneError> {
     parse_as(path, source, wanted, pqr, How::Auto)
 }
 
-/// [`parse`], the text read as `how` says: a text of [`pdb_pieces::PIECES_FROM_BYTES`] or more in pieces
+/// [`parse`], the text read as `how` says: a text of [`pieces::PIECES_FROM_BYTES`] or more in pieces
 /// by [`How::Auto`], or again in one pass where the pieces stop (one pass then reports why).
-pub(super) fn parse_as(
-    path: &Path,
-    source: &str,
-    wanted: usize,
-    pqr: bool,
-    how: How,
-) -> Result<Frame, SceneError> {
-    if how == How::Pieces || (how == How::Auto && source.len() >= pdb_pieces::PIECES_FROM_BYTES) {
-        match (pdb_pieces::read(source, wanted, pqr, frame_lines::PIECE_BYTES), how) {
+fn parse_as(path: &Path, source: &str, wanted: usize, pqr: bool, how: How) -> Result<Frame, SceneError> {
+    if how == How::Pieces || (how == How::Auto && source.len() >= pieces::PIECES_FROM_BYTES) {
+        match (pieces::read(source, wanted, pqr, frame_lines::PIECE_BYTES), how) {
             (Some(frame), _) => return Ok(frame),
             (None, How::Pieces) => return Err(SceneError::whole_file(path, "not read in pieces")),
             (None, _) => {}
@@ -88,7 +83,7 @@ fn one_pass(path: &Path, source: &str, wanted: usize, pqr: bool) -> Result<Frame
 
 /// What a record does to frames, by its name (a PDB record's columns 1-6, a PQR record's first word).
 #[derive(Clone, Copy, Debug, PartialEq)]
-pub(super) enum Record {
+enum Record {
     /// `ATOM` or `HETATM`.
     Atom {
         hetatm: bool,
@@ -102,7 +97,7 @@ pub(super) enum Record {
 }
 
 /// The record `line` holds.
-pub(super) fn record(line: &str, pqr: bool) -> Record {
+fn record(line: &str, pqr: bool) -> Record {
     let name = match pqr {
         true => line.split_ascii_whitespace().next().unwrap_or(""),
         false => columns(line, 0, 6).trim_end(),
@@ -119,7 +114,7 @@ pub(super) fn record(line: &str, pqr: bool) -> Record {
 }
 
 /// An atom record: the particle (kind unset) and the key of its kind.
-pub(super) fn atom(line: &str, pqr: bool, hetatm: bool) -> Result<(Particle, (Key<'_>, bool)), String> {
+fn atom(line: &str, pqr: bool, hetatm: bool) -> Result<(Particle, (Key<'_>, bool)), String> {
     let (center, radius, key) = if pqr { pqr_atom(line) } else { pdb_atom(line) }?;
     Ok((Particle { center, kind: 0, radius, color: None }, (key, hetatm)))
 }
@@ -134,13 +129,13 @@ fn finish(lines: &Lines, frame: Frame, wanted: usize) -> Result<Frame, SceneErro
 
 /// What decides an atom's kind: its element columns when they are filled, else its name and residue.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
-pub(super) enum Key<'a> {
+enum Key<'a> {
     Element(&'a str),
     Name(&'a str, &'a str),
 }
 
 /// The kind of an atom, from its key and whether its record is `HETATM`.
-pub(super) fn kind_of(frame: &mut Frame, (key, hetatm): (Key, bool)) -> u32 {
+fn kind_of(frame: &mut Frame, (key, hetatm): (Key, bool)) -> u32 {
     let (name, residue) = match key {
         Key::Name(name, residue) => (name, residue),
         Key::Element(element) => return frame.element_kind(element),
@@ -174,7 +169,7 @@ fn pdb_atom(line: &str) -> Result<(DVec3, Option<f64>, Key<'_>), String> {
 
 /// A `CRYST1` record's box: `None` for the unit cube of 90° that PDB writes when there is no box, and for
 /// zero lengths or angles that close no box, which other writers put there.
-pub(super) fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
+fn cryst1(line: &str, pqr: bool) -> Result<Option<Cell>, String> {
     const FIELDS: [(usize, usize, &str); 6] =
         [(6, 15, "a"), (15, 24, "b"), (24, 33, "c"), (33, 40, "alpha"), (40, 47, "beta"), (47, 54, "gamma")];
     let words: Vec<&str> = line.split_ascii_whitespace().skip(1).collect();

@@ -1,17 +1,17 @@
 //! A large PDB or PQR text's frame read in pieces in parallel, with the particles, kinds and box that one
-//! pass ([`super::pdb`]) reads. A first parallel pass cuts the text into pieces of whole lines and marks in
-//! each the records that shape frames (`MODEL`, `ENDMDL`, `END`, `CRYST1`) with the number of atom records
-//! before each; replaying the marks in order, as one pass steps through the records, finds the byte range of
-//! the wanted frame, its atoms in each piece, and the `CRYST1` records one pass would read. The frame's atom
-//! records are then read piece by piece ([`frame_lines::read_pieces`]: kinds named in the order one pass
-//! meets them). Whatever would stop one pass (a bad record, a missing or empty frame) gives `None`, and one
-//! pass reads the text again to report it at its line.
+//! pass ([`super`]) reads. The text is cut into pieces of whole lines, marked a few pieces at a time in
+//! parallel: in each piece the records that shape frames (`MODEL`, `ENDMDL`, `END`, `CRYST1`) with the number
+//! of atom records before each. The marks are replayed in order as one pass steps through the records (the
+//! `CRYST1` records parsed as it meets them), which gives the wanted frame's byte range and its atoms in each
+//! piece, and stops where the frame ends: the rest of the text is not read, and the marks held are a few
+//! pieces' worth. The frame's atom records are then read piece by piece ([`frame_lines::read_pieces`]: kinds
+//! named in the order one pass meets them). Whatever would stop one pass (a bad record, a missing or empty
+//! frame) gives `None`, and one pass reads the text again to report it at its line.
 
 use rayon::prelude::*;
 
-use super::frame_lines;
-use super::pdb::{self, Record};
-use super::{Frame, Unit};
+use super::super::{frame_lines, Frame, Unit};
+use super::{atom, cryst1, kind_of, record, Record};
 use crate::io::pieces::line_pieces;
 
 /// Texts of at least this many bytes (about 26 000 atom records) are read in pieces.
@@ -26,7 +26,8 @@ struct Mark {
     atoms_before: usize,
 }
 
-/// A piece's marks, and its atom records after the last one.
+/// A piece's marks up to its first `END` (one pass reads nothing after it), and its atom records after the
+/// last mark.
 #[derive(Debug, Default)]
 struct Marks {
     marks: Vec<Mark>,
@@ -37,27 +38,41 @@ struct Marks {
 /// one pass must read it.
 pub(super) fn read<'a>(source: &'a str, wanted: usize, pqr: bool, piece_bytes: usize) -> Option<Frame> {
     let pieces = line_pieces(source, piece_bytes);
-    let marks: Vec<Marks> = pieces.par_iter().map(|p| marks(source, p, pqr)).collect();
-    let found = replay(&marks, wanted)?;
     let mut frame = Frame::new(Unit::Angstrom);
-    for &at in &found.cells {
-        frame.cell = pdb::cryst1(source[at..].lines().next()?, pqr).ok()?;
+    let mut replay = Replay {
+        source,
+        pqr,
+        wanted,
+        current: 0,
+        open: false,
+        range: (0, source.len()),
+        atoms: vec![0; pieces.len()],
+    };
+    let batch = 2 * rayon::current_num_threads();
+    'text: for (b, group) in pieces.chunks(batch).enumerate() {
+        let marks: Vec<Marks> = group.par_iter().map(|p| marks(source, p, pqr)).collect();
+        for (k, piece) in marks.iter().enumerate() {
+            if replay.step(b * batch + k, piece, &mut frame)? {
+                break 'text;
+            }
+        }
     }
-    let start = |p: &str| p.as_ptr() as usize - source.as_ptr() as usize;
+    let ((start, end), atoms) = replay.found()?;
+    let offset = |p: &str| p.as_ptr() as usize - source.as_ptr() as usize;
     let clipped: Vec<&str> = pieces
         .iter()
         .map(|p| {
-            let (from, to) = (start(p).max(found.start), (start(p) + p.len()).min(found.end));
+            let (from, to) = (offset(p).max(start), (offset(p) + p.len()).min(end));
             &source[from..to.max(from)]
         })
         .collect();
-    let keep = |line: &str| matches!(pdb::record(line, pqr), Record::Atom { .. });
-    let read_line = |_: usize, line: &'a str, _: &mut Vec<&'a str>| match pdb::record(line, pqr) {
-        Record::Atom { hetatm } => pdb::atom(line, pqr, hetatm),
+    let keep = |line: &str| matches!(record(line, pqr), Record::Atom { .. });
+    let read_line = |_: usize, line: &'a str, _: &mut Vec<&'a str>| match record(line, pqr) {
+        Record::Atom { hetatm } => atom(line, pqr, hetatm),
         _ => Err(String::new()),
     };
-    let name = |key| pdb::kind_of(&mut frame, key);
-    let particles = frame_lines::read_pieces(&clipped, &found.atoms, keep, &read_line, &mut { name })?;
+    let mut name = |key| kind_of(&mut frame, key);
+    let particles = frame_lines::read_pieces(&clipped, &atoms, keep, &read_line, &mut name)?;
     frame.particles = particles;
     Some(frame)
 }
@@ -66,71 +81,83 @@ pub(super) fn read<'a>(source: &'a str, wanted: usize, pqr: bool, piece_bytes: u
 fn marks(source: &str, piece: &str, pqr: bool) -> Marks {
     let mut out = Marks::default();
     for line in piece.lines() {
-        match pdb::record(line, pqr) {
+        match record(line, pqr) {
             Record::Atom { .. } => out.atoms_after += 1,
             Record::Other => {}
             record => {
                 let at = line.as_ptr() as usize - source.as_ptr() as usize;
                 out.marks.push(Mark { at, record, atoms_before: std::mem::take(&mut out.atoms_after) });
+                if record == Record::End {
+                    break;
+                }
             }
         }
     }
     out
 }
 
-/// Where the wanted frame lies, as [`replay`] finds it.
-#[derive(Debug, PartialEq)]
-struct Found {
-    /// The byte range its atom records lie in (no other frame's atom record inside).
-    start: usize,
-    end: usize,
-    /// Its atom records in each piece.
+/// The marks stepped through as one pass steps through records (`one_pass`).
+struct Replay<'a> {
+    source: &'a str,
+    pqr: bool,
+    wanted: usize,
+    /// The frame the next atoms belong to, and whether it has begun, as in one pass.
+    current: usize,
+    open: bool,
+    /// The byte range the wanted frame's atom records lie in (no other frame's atom record inside).
+    range: (usize, usize),
+    /// The wanted frame's atom records in each piece.
     atoms: Vec<usize>,
-    /// Where the `CRYST1` records one pass reads before the frame ends start, in order.
-    cells: Vec<usize>,
 }
 
-/// The marks stepped through as one pass steps through records (`pdb::one_pass`): frame `wanted`'s range,
-/// its atoms per piece and the `CRYST1` records met; `None` where one pass finds no such frame or an empty one.
-fn replay(pieces: &[Marks], wanted: usize) -> Option<Found> {
-    let mut found = Found { start: 0, end: usize::MAX, atoms: vec![0; pieces.len()], cells: Vec::new() };
-    // The frame the next atoms belong to, and whether it has begun, as in one pass.
-    let (mut current, mut open) = (0usize, false);
-    'text: for (p, piece) in pieces.iter().enumerate() {
+impl Replay<'_> {
+    /// Steps through the marks of piece `p`, the `CRYST1` records' boxes into `frame`: `Some(true)` where the
+    /// wanted frame ends (at the record closing it, or `END`), `None` at a `CRYST1` record one pass stops at.
+    fn step(&mut self, p: usize, piece: &Marks, frame: &mut Frame) -> Option<bool> {
         for mark in &piece.marks {
-            open |= mark.atoms_before > 0;
-            if current == wanted {
-                found.atoms[p] += mark.atoms_before;
-            }
+            self.atoms(p, mark.atoms_before);
             match mark.record {
                 Record::Model | Record::EndModel => {
-                    if open {
-                        if current == wanted {
-                            found.end = mark.at;
-                            break 'text;
+                    if self.open {
+                        if self.current == self.wanted {
+                            self.range.1 = mark.at;
+                            return Some(true);
                         }
-                        current += 1;
-                        if current == wanted {
-                            found.start = mark.at;
+                        self.current += 1;
+                        if self.current == self.wanted {
+                            self.range.0 = mark.at;
                         }
                     }
-                    open = mark.record == Record::Model;
+                    self.open = mark.record == Record::Model;
                 }
-                Record::Cryst1 => found.cells.push(mark.at),
+                Record::Cryst1 => {
+                    frame.cell = cryst1(self.source[mark.at..].lines().next()?, self.pqr).ok()?
+                }
                 Record::End => {
-                    found.end = mark.at;
-                    break 'text;
+                    self.range.1 = mark.at;
+                    return Some(true);
                 }
                 Record::Atom { .. } | Record::Other => unreachable!("not a mark"),
             }
         }
-        open |= piece.atoms_after > 0;
-        if current == wanted {
-            found.atoms[p] += piece.atoms_after;
+        self.atoms(p, piece.atoms_after);
+        Some(false)
+    }
+
+    /// `n` atom records of piece `p` met.
+    fn atoms(&mut self, p: usize, n: usize) {
+        self.open |= n > 0;
+        if self.current == self.wanted {
+            self.atoms[p] += n;
         }
     }
-    let some = open && current == wanted && found.atoms.iter().any(|&n| n > 0);
-    some.then_some(found)
+
+    /// The wanted frame's byte range and atoms per piece; `None` where one pass finds no such frame or an
+    /// empty one.
+    fn found(self) -> Option<((usize, usize), Vec<usize>)> {
+        let some = self.open && self.current == self.wanted && self.atoms.iter().any(|&n| n > 0);
+        some.then_some((self.range, self.atoms))
+    }
 }
 
 #[cfg(test)]
@@ -195,7 +222,9 @@ mod tests {
                             Err(_) => assert_eq!(pieces, None, "frame {wanted}"),
                         }
                     }
-                    assert_eq!(parse_as(path, &text, wanted, false, How::Auto), one);
+                    if one.is_ok() {
+                        assert_eq!(parse_as(path, &text, wanted, false, How::Pieces), one);
+                    }
                 }
                 let frame = read(&text, 3, false, 1 << 10).unwrap();
                 assert_eq!((frame.particles.len(), frame.cell.unwrap().edges[0].x), (1500, 7.0));
@@ -207,17 +236,46 @@ mod tests {
         }
     }
 
-    /// PQR records in pieces: whitespace-separated, radius read from the end.
+    /// PQR records in pieces (whitespace-separated, radius read from the end), in models and with `END`.
     #[test]
     fn pqr_in_pieces() {
         let line = |i: usize| {
             format!("ATOM {i} {} MET {} {}.5 -2 3 0.1 {}.25", ["N", "CA", "OW"][i % 3], i, i % 9, 1 + i % 2)
         };
-        let text: Vec<String> = (0..4000).map(line).collect();
-        let text = format!("CRYST1 5 5 5 90 90 90\n{}\n", text.join("\n"));
+        let atoms = |from: usize, n: usize| (from..from + n).map(line).collect::<Vec<_>>().join("\n");
+        let text = format!("CRYST1 5 5 5 90 90 90\n{}\n", atoms(0, 4000));
         let one = parse_as(Path::new("t.pqr"), &text, 0, true, How::OnePass).unwrap();
         assert_eq!(read(&text, 0, true, 3000), Some(one));
+        let models = format!(
+            "MODEL 1\n{}\nENDMDL\nMODEL 2\n{}\nCRYST1 7 7 7 90 90 90\nENDMDL\nMODEL 3\n{}\nEND\n{}\n",
+            atoms(0, 900),
+            atoms(900, 1100),
+            atoms(2000, 50),
+            atoms(3000, 10)
+        );
+        for wanted in 0..4 {
+            let one = parse_as(Path::new("t.pqr"), &models, wanted, true, How::OnePass).ok();
+            assert_eq!(read(&models, wanted, true, 2000), one, "frame {wanted}");
+            assert_eq!(one.is_some(), wanted < 3);
+        }
     }
+
+    /// A text of 2 MiB or more is read in pieces: the frame one pass reads, or where a record is bad, one
+    /// pass's error at its line.
+    #[test]
+    fn large_texts_are_read_in_pieces_or_again_in_one_pass() {
+        let path = Path::new("t.pdb");
+        let lines: Vec<String> = (0..PIECES_FROM_BYTES / 70).map(|i| atom(i, i % 5 == 0)).collect();
+        let text = lines.join("\n");
+        assert!(text.len() >= PIECES_FROM_BYTES);
+        let pieces = parse_as(path, &text, 0, false, How::Pieces).unwrap();
+        assert_eq!(parse_as(path, &text, 0, false, How::Auto), Ok(pieces.clone()));
+        assert_eq!(Ok(pieces), parse_as(path, &text, 0, false, How::OnePass));
+        let bad = text.replace(&lines[20_000], &lines[20_000].replacen('.', "x", 1));
+        let e = parse_as(path, &bad, 0, false, How::Auto).unwrap_err();
+        assert_eq!((e.line, Err(e.clone())), (20_001, parse_as(path, &bad, 0, false, How::OnePass)));
+    }
+
     /// Texts cut, reordered and salted with frame records at random: wherever one pass reads the frame, the
     /// pieces read the same frame, and where it does not, they give `None`.
     #[test]
