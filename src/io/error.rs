@@ -82,6 +82,44 @@ pub(crate) fn read_text(path: &Path, what: &str) -> Result<Text, SceneError> {
     }
 }
 
+/// Files from this size up are read in parallel pieces ([`read_bytes`]).
+const PARALLEL_READ_BYTES: u64 = 1 << 22;
+
+/// Bytes a thread of [`read_bytes`] reads at a time.
+const READ_PIECE_BYTES: usize = 1 << 21;
+
+/// A file's bytes, as `std::fs::read` gives them. A regular file of [`PARALLEL_READ_BYTES`] or more is read
+/// in pieces at their offsets by the current rayon pool's threads into zeroed memory, so that the new pages'
+/// faults and the copies from the page cache are shared out instead of paid on one thread; what the file
+/// grew by meanwhile is read after, and a file that shrank meanwhile is read again whole.
+pub(crate) fn read_bytes(path: &Path) -> std::io::Result<Vec<u8>> {
+    let file = std::fs::File::open(path)?;
+    let len = file.metadata().ok().filter(|m| m.is_file()).map_or(0, |m| m.len());
+    #[cfg(unix)]
+    if len >= PARALLEL_READ_BYTES {
+        use rayon::prelude::*;
+        use std::io::{Read, Seek, SeekFrom};
+        use std::os::unix::fs::FileExt;
+        let mut bytes = vec![0u8; usize::try_from(len).map_err(std::io::Error::other)?];
+        let read = bytes
+            .par_chunks_mut(READ_PIECE_BYTES)
+            .enumerate()
+            .try_for_each(|(k, piece)| file.read_exact_at(piece, (k * READ_PIECE_BYTES) as u64));
+        match read {
+            Ok(()) => {
+                (&file).seek(SeekFrom::Start(len))?;
+                (&file).read_to_end(&mut bytes)?;
+                return Ok(bytes);
+            }
+            Err(e) if e.kind() == std::io::ErrorKind::UnexpectedEof => return std::fs::read(path),
+            Err(e) => return Err(e),
+        }
+    }
+    let mut bytes = Vec::with_capacity(usize::try_from(len).unwrap_or(0));
+    std::io::Read::read_to_end(&mut &file, &mut bytes)?;
+    Ok(bytes)
+}
+
 /// Whether `bytes` are UTF-8, checked in pieces on the current rayon pool. A piece ends just before an
 /// ASCII byte, which is never inside a character, so the pieces are UTF-8 exactly when the whole is.
 fn is_utf8(bytes: &[u8]) -> bool {
@@ -147,6 +185,22 @@ mod tests {
         let e = read_text(&path, "scene").unwrap_err();
         assert_eq!((e.line, e.column), (2, 10), "{e}");
         assert!(e.to_string().starts_with(&format!("{}:2:10: not UTF-8", path.display())), "{e}");
+    }
+
+    /// Files read in parallel pieces (sizes around the piece and the threshold, a last piece of one byte)
+    /// give `std::fs::read`'s bytes, as do small files and a file that is not regular.
+    #[test]
+    fn files_read_in_pieces_are_their_bytes() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("p.xyz");
+        let (piece, from) = (READ_PIECE_BYTES, PARALLEL_READ_BYTES as usize);
+        for len in [0, 10, from - 1, from, from + 1, 3 * piece, 3 * piece + 1] {
+            let bytes: Vec<u8> = (0..len).map(|i| (i * 7 + i / 4093) as u8).collect();
+            std::fs::write(&path, &bytes).unwrap();
+            assert!(read_bytes(&path).unwrap() == bytes, "{len} bytes");
+        }
+        assert_eq!(read_bytes(Path::new("/dev/null")).unwrap(), b"");
+        assert!(read_bytes(&dir.path().join("missing")).is_err());
     }
 
     /// A file large enough to be mapped reads as the same text, and bad bytes in it give the same error as

@@ -240,7 +240,7 @@ pub(crate) fn load(
 ) -> Result<(SceneDesc, Vec<String>), SceneError> {
     // Read, not mapped as large scene files are: simulations rewrite their dump files as they run, and a
     // mapped file cut short under the reader would stop the process with SIGBUS instead of an error.
-    let bytes = std::fs::read(path)
+    let bytes = crate::io::error::read_bytes(path)
         .map_err(|e| SceneError::whole_file(path, format!("cannot read particle file: {e}")))?;
     let sidecar = match &options.types {
         Some(types) => Some(types::read(types)?),
