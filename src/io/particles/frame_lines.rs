@@ -79,7 +79,7 @@ fn one_pass<'a, K: Copy + Eq + Hash>(
 }
 
 /// [`read`] in pieces: `None`, with nothing taken from `lines` and no key named, when the text ends
-/// before `count` lines or a line does not read. Each piece's lines are counted, then read by
+/// before `count` lines or a line does not read. The frame's pieces ([`frame_pieces`]) are read by
 /// [`read_pieces`].
 fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     lines: &mut Lines<'a>,
@@ -87,16 +87,39 @@ fn in_pieces<'a, K: Copy + Eq + Hash + Send + Sync>(
     read_line: &(impl Fn(usize, &'a str, &mut Vec<&'a str>) -> Result<(Particle, K), String> + Sync),
     name: &mut impl FnMut(K) -> u32,
 ) -> Option<Vec<Particle>> {
-    let rest = lines.rest();
-    let end = frame_end(rest, count.checked_sub(1)?)?;
-    let pieces = line_pieces(&rest[..end], PIECE_BYTES);
-    let counts: Vec<usize> = pieces.par_iter().map(|p| p.lines().count()).collect();
-    if counts.iter().sum::<usize>() != count {
+    let (pieces, counts) = frame_pieces(lines.rest(), count)?;
+    let particles = read_pieces(&pieces, &counts, |_| true, read_line, name)?;
+    lines.skip(pieces.iter().map(|p| p.len()).sum(), count);
+    Some(particles)
+}
+
+/// The pieces of `rest` that hold its first `count` lines, and each one's lines: pieces of
+/// the text have their lines counted a few pieces at a time in parallel until they hold `count`, and the
+/// last is cut after the frame's last line ([`frame_end`], within that piece alone). `None` where the text
+/// has fewer lines, or `count` is 0.
+fn frame_pieces(rest: &str, count: usize) -> Option<(Vec<&str>, Vec<usize>)> {
+    if count == 0 {
         return None;
     }
-    let particles = read_pieces(&pieces, &counts, |_| true, read_line, name)?;
-    lines.skip(end, count);
-    Some(particles)
+    let all = line_pieces(rest, PIECE_BYTES);
+    let batch = 2 * rayon::current_num_threads();
+    let (mut counts, mut before) = (Vec::new(), 0);
+    for group in all.chunks(batch) {
+        let from = counts.len();
+        counts.par_extend(group.par_iter().map(|p| p.lines().count()));
+        for k in from..counts.len() {
+            if before + counts[k] >= count {
+                let need = count - before;
+                let mut pieces = all[..=k].to_vec();
+                pieces[k] = &all[k][..frame_end(all[k], need - 1)?];
+                counts.truncate(k + 1);
+                counts[k] = need;
+                return Some((pieces, counts));
+            }
+            before += counts[k];
+        }
+    }
+    None
 }
 
 /// The particles of `pieces` (whole lines each, in order), read in parallel: piece `p` holds `counts[p]`
@@ -172,6 +195,22 @@ mod tests {
     /// Where line `last` ends: after its `\n`, or at the end of a last line without one; never in a text
     /// with fewer lines (an empty text has none, and a frame asked of it in pieces is an error, not a
     /// particle made up).
+    #[test]
+    fn frame_pieces_hold_the_frame_and_its_lines() {
+        let text = "a\nbb\r\n\nccc\nd\ne".repeat(100_000);
+        let lines: Vec<&str> = text.lines().collect();
+        for count in [1, 2, 3, 5, 99_999, 250_001, 500_000, lines.len()] {
+            let (pieces, counts) = frame_pieces(&text, count).unwrap();
+            assert_eq!(counts.iter().sum::<usize>(), count);
+            assert!(pieces.iter().zip(&counts).all(|(p, &n)| p.lines().count() == n), "{count}");
+            let frame = pieces.concat();
+            assert!(text.starts_with(&frame) && frame.lines().eq(lines[..count].iter().copied()), "{count}");
+        }
+        assert_eq!(frame_pieces(&text, lines.len() + 1), None);
+        assert_eq!(frame_pieces(&text, 0), None);
+        assert_eq!(frame_pieces("", 1), None);
+    }
+
     #[test]
     fn frame_ends_after_the_last_line() {
         assert_eq!(frame_end("", 0), None);
