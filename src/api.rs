@@ -128,21 +128,36 @@ pub fn render_spheres(
     view: Option<DVec3>,
     options: &RenderOptions,
 ) -> Result<Picture, Error> {
-    let desc = arrays.scene(view)?;
-    render_desc(desc, options)
+    let pool = pool(options.threads)?;
+    // The arrays are checked on the render's threads.
+    let desc = pool.install(|| arrays.scene(view))?;
+    render_desc_on(desc, options, &pool)
 }
 
 /// Renders a scene description with `options` applied, its spheres in the BVH or, when the BVH would not
 /// fit in the memory available, in the particle tree.
-pub fn render_desc(mut desc: SceneDesc, options: &RenderOptions) -> Result<Picture, Error> {
-    options.apply(&mut desc)?;
-    let loaded = load::loaded_desc(desc, Accel::Auto, memory::available());
-    render_loaded(loaded, options)
+pub fn render_desc(desc: SceneDesc, options: &RenderOptions) -> Result<Picture, Error> {
+    render_desc_on(desc, options, &pool(options.threads)?)
 }
 
-/// Compiles and renders what [`load::load`] read (`options` already applied to its description).
-fn render_loaded(loaded: Loaded, options: &RenderOptions) -> Result<Picture, Error> {
-    let pool = pool(options.threads)?;
+/// [`render_desc`] on the threads of `pool`.
+fn render_desc_on(
+    mut desc: SceneDesc,
+    options: &RenderOptions,
+    pool: &rayon::ThreadPool,
+) -> Result<Picture, Error> {
+    options.apply(&mut desc)?;
+    let loaded = load::loaded_desc(desc, Accel::Auto, memory::available());
+    render_loaded(loaded, options, pool)
+}
+
+/// Compiles and renders what [`load::load`] read (`options` already applied to its description) on the
+/// threads of `pool`.
+fn render_loaded(
+    loaded: Loaded,
+    options: &RenderOptions,
+    pool: &rayon::ThreadPool,
+) -> Result<Picture, Error> {
     if loaded.accel == Accel::Particles {
         if let Some(why) = load::particles_unsupported(&loaded.desc) {
             return Err(Error::Options(why.to_owned()));
@@ -151,11 +166,16 @@ fn render_loaded(loaded: Loaded, options: &RenderOptions) -> Result<Picture, Err
     let clock = Instant::now();
     let scene = pool.install(|| Scene::compile_loaded(loaded, options.compile_options()))?;
     let build_seconds = clock.elapsed().as_secs_f64();
-    let rendered = render::render_lanes(&scene, options.lanes, &pool, &());
+    let rendered = render::render_lanes(&scene, options.lanes, pool, &());
     Ok(Picture { rendered, build_seconds })
 }
 
+/// A pool of `threads` worker threads (every core for `None`); zero threads is refused, where rayon would take
+/// it for every core.
 fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Error> {
+    if threads == Some(0) {
+        return Err(Error::Options("threads must be at least 1".to_owned()));
+    }
     render::thread_pool(threads).map_err(|e| Error::Other(format!("thread pool: {e}")))
 }
 
@@ -215,7 +235,7 @@ impl FileScene {
 
     /// Renders the scene with `options` applied.
     pub fn render(&self, options: &RenderOptions) -> Result<Picture, Error> {
-        render_loaded(self.loaded(options)?, options)
+        render_loaded(self.loaded(options)?, options, &pool(options.threads)?)
     }
 
     /// Compares the f32 renderer's rays with the f64 twin's (`bareray accuracy`): primary rays at every

@@ -144,6 +144,14 @@ fn arrays_render_as_the_command_line_renders_their_file() {
     let theirs: Vec<u32> = cli.as_raw().iter().map(|v| v.to_bits()).collect();
     assert_eq!((cli.width(), cli.height()), (160, 90));
     assert!(ours == theirs, "the in-memory render differs from the command line's EXR");
+
+    // One thread gives the same image; zero threads are refused before the arrays are read.
+    let one = RenderOptions { threads: Some(1), ..options.clone() };
+    let alone = api::render_spheres(&arrays(&f), None, &one).expect("render on one thread");
+    assert!(alone.rendered.image.pixels == picture.rendered.image.pixels, "one thread's image differs");
+    let none = RenderOptions { threads: Some(0), ..options };
+    let refused = api::render_spheres(&arrays(&f), None, &none);
+    assert!(matches!(refused, Err(api::Error::Options(ref m)) if m.contains("threads")), "{refused:?}");
 }
 
 /// Bad arrays are errors naming the array and the first bad sphere; nothing is rendered.

@@ -137,6 +137,9 @@ fn options(
             return Err(PyValueError::new_err(format!("{name} must be from 1 to 65536")));
         }
     }
+    if threads == Some(0) {
+        return Err(PyValueError::new_err("threads must be at least 1"));
+    }
     if let Some(h) = hfov.filter(|h| !(*h > 0.0 && *h < 180.0)) {
         return Err(PyValueError::new_err(format!("hfov must be in (0, 180) degrees, got {h}")));
     }
@@ -170,7 +173,11 @@ fn api_error(e: api::Error) -> PyErr {
 
 /// The image as a float32 array of shape (height, width, 3).
 fn to_numpy<'py>(py: Python<'py>, image: &Image) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
-    let values = image.rgb_values();
+    rgb_array(py, image.rgb_values(), image)
+}
+
+/// `values` (`image`'s [`Image::rgb_values`]) as an array of shape (height, width, 3).
+fn rgb_array<'py>(py: Python<'py>, values: Vec<f32>, image: &Image) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
     let shape = [image.height as usize, image.width as usize, 3];
     PyArray1::from_vec(py, values).reshape(shape.to_vec())
 }
@@ -237,11 +244,15 @@ fn render<'py>(
         radii: radii.floats(),
         colors: colors.as_ref().map(Array::floats),
     };
+    // The check and the copies out run on `threads` threads too, as the render does.
+    let pool = bareray::render::thread_pool(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     // Checked and read with the GIL held: no Python thread can write an array between its check and its read
-    // (the check and the read run in parallel on threads that do not touch Python).
-    let desc = arrays.scene(view_of(view)?).map_err(|e| PyValueError::new_err(e.to_string()))?;
+    // (the check and the read run in parallel on the pool's threads, which do not touch Python).
+    let view = view_of(view)?;
+    let desc = pool.install(|| arrays.scene(view)).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let picture: Picture = py.detach(|| api::render_desc(desc, &options)).map_err(api_error)?;
-    to_numpy(py, &picture.rendered.image)
+    let values = pool.install(|| picture.rendered.image.rgb_values());
+    rgb_array(py, values, &picture.rendered.image)
 }
 
 /// 8-bit codes of a float image of shape (height, width, 3) as bareray writes PNG and PPM: "linear" clamps to

@@ -109,7 +109,7 @@ def test_bad_arrays_raise_value_error_naming_the_first_bad_index(change, message
 def test_bad_settings_raise_value_error():
     centers, radii, _ = field(10)
     for kwargs in ({"spp": 2}, {"shade": "phong"}, {"lanes": 3}, {"view": "up"}, {"hfov": 180.0},
-                   {"eye": (0, 0)}, {"width": 0}):
+                   {"eye": (0, 0)}, {"width": 0}, {"threads": 0}):
         settings = {"width": 8, "height": 8, **kwargs}
         with pytest.raises(ValueError):
             bareray.render(centers, radii, **settings)
