@@ -49,6 +49,7 @@ mod coverage;
 mod order;
 mod primary;
 mod tile;
+mod tile_rows;
 
 use bands::trace_band;
 pub(crate) use bands::{band_rows, render_window_lanes};

@@ -8,6 +8,7 @@ use rayon::prelude::*;
 use crate::compile::Scene;
 use crate::simd::Lanes;
 
+use super::tile_rows::{self, TileRows};
 use super::{
     column_key, for_each_camera_hit, rows_together, tiles, LargePacket, Offsets, Tile, Window, TILE,
 };
@@ -62,17 +63,6 @@ impl PrimaryHits {
     }
 }
 
-/// Copies the first `dst.len()` values of `src` into `dst`: a whole 4-pixel row as one fixed-size copy (a
-/// `memmove` call per short row showed in a small field's profile: docs/perf-log/2026-11.md,
-/// "Where the time went (before)"), a partial one as a slice.
-#[inline(always)]
-fn copy_row<T: Copy>(dst: &mut [T], src: &[T]) {
-    match (<&mut [T; 4]>::try_from(&mut *dst), src.first_chunk::<4>()) {
-        (Ok(whole), Some(row)) => *whole = *row,
-        _ => dst.copy_from_slice(&src[..dst.len()]),
-    }
-}
-
 /// One camera ray per pixel centre, in packets of `lanes` (1, 4, 8 or 16), into a new frame on the threads
 /// of `pool` ([`trace_primary`]).
 pub(crate) fn primary_hits_lanes(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> PrimaryHits {
@@ -124,8 +114,8 @@ fn trace_primary_rows<F: Lanes>(
     let start = Instant::now();
     let (width, height) = (window.width(), window.height());
     assert_eq!((hits.width, hits.height), (width, height), "frame size differs from the window's");
-    // One band of rows of tiles per task, written in place: no per-tile buffers and no serial merge. Each
-    // band's tiles column by column (`column_key`).
+    // One band of rows of tiles per task, each tile's hits gathered in a buffer and written to the frame in
+    // place (`TileRows`): no serial merge. Each band's tiles column by column (`column_key`).
     let band = width as usize * (TILE * rows) as usize;
     pool.install(|| {
         // One job per band, as for tiles in `render`.
@@ -136,22 +126,18 @@ fn trace_primary_rows<F: Lanes>(
             let mut large = LargePacket::default();
             let mut local = tiles(width, (TILE * rows).min(height - y0));
             local.sort_by_key(|tile| column_key(tile, rows));
+            let mut buffer = TileRows::default();
             for local in local {
-                let first_row = local.y0 as usize;
                 let tile = Tile { x0: window.x0 + local.x0, y0: window.y0 + y0 + local.y0, ..local };
                 for_each_camera_hit::<F>(scene, tile, &Offsets::Shared(0.5, 0.5), &mut large, |_, hit, b| {
                     let (ts, ids) = (hit.t.to_array(), crate::simd::IdLanes::to_array(hit.prim));
-                    // Row by row: each row of the block is a run of pixels in the frame's row.
-                    for r in 0..b.h as usize {
-                        let lane = r * b.bw as usize;
-                        let row = first_row + b.y as usize + r;
-                        let at = row * width as usize + (tile.x0 - window.x0 + b.x) as usize;
-                        let n = b.w as usize;
-                        copy_row(&mut t[at..at + n], &ts.as_ref()[lane..]);
-                        copy_row(&mut prim[at..at + n], &ids.as_ref()[lane..]);
-                    }
+                    buffer.put(&b, ts.as_ref(), ids.as_ref());
                 });
+                let at = local.y0 as usize * width as usize + local.x0 as usize;
+                let size = (local.w as usize, local.h as usize);
+                buffer.write(size, width as usize, &mut t[at..], &mut prim[at..]);
             }
+            tile_rows::fence();
         });
     });
     hits.seconds = start.elapsed().as_secs_f64();
