@@ -12,7 +12,6 @@ use rayon::prelude::*;
 
 use crate::accel::{take_work, Work};
 use crate::compile::Scene;
-use crate::film::Image;
 use crate::math::Rgb;
 use crate::sample::lecture_3x3_pixel;
 use crate::scene::desc::{Pattern, PostFilter};
@@ -77,20 +76,19 @@ pub(super) fn trace_band<F: Lanes>(
     columns: Range<u32>,
     rows: Range<u32>,
     counter: &TileCounter,
-) -> (Vec<Rgb>, RayCounts, Work) {
+    band: &mut Vec<Rgb>,
+) -> (RayCounts, Work) {
     if let Pattern::Adaptive { threshold, depth } = scene.render.pattern {
-        return super::adaptive::adaptive_rows::<F>(
-            scene,
-            pool,
-            (columns, rows),
-            counter,
-            (threshold, depth),
-        );
+        let (pixels, counts, work) =
+            super::adaptive::adaptive_rows::<F>(scene, pool, (columns, rows), counter, (threshold, depth));
+        *band = pixels;
+        return (counts, work);
     }
     let (width, height) = (columns.end - columns.start, rows.end - rows.start);
     let local = tiles(width, height);
-    let mut band = Image::new(width, height);
-    let mut jobs: Vec<_> = local.iter().copied().zip(tile_rows(&mut band.pixels, width, &local)).collect();
+    // Every pixel is written by its tile: what the buffer held before is overwritten.
+    band.resize(width as usize * height as usize, Rgb::default());
+    let mut jobs: Vec<_> = local.iter().copied().zip(tile_rows(band, width, &local)).collect();
     // Rows of tiles column by column (or one by one: `tile_group`); each thread takes its share of jobs in
     // that order.
     let group = tile_group();
@@ -119,7 +117,7 @@ pub(super) fn trace_band<F: Lanes>(
         counts += c;
         work += w;
     }
-    (band.pixels, counts, work)
+    (counts, work)
 }
 
 /// Rows per band for an image `width` pixels wide when a band may take about `budget` bytes of linear
@@ -194,7 +192,10 @@ pub(crate) fn trace_band_lanes(
     let each = EachTile(tile_done);
     let counter = TileCounter::new(&each, bands.tiles());
     let (columns, rows) = (bands.traced.x0..bands.traced.x1, bands.rows_of(i));
-    with_lanes!(lanes, F => trace_band::<F>(scene, pool, columns, rows, &counter))
+    let mut band = Vec::new();
+    let (counts, work) =
+        with_lanes!(lanes, F => trace_band::<F>(scene, pool, columns, rows, &counter, &mut band));
+    (band, counts, work)
 }
 
 /// A [`Progress`] that only counts: a call per finished tile.
@@ -217,7 +218,7 @@ pub(crate) fn render_window_lanes<E>(
     progress: &dyn Progress,
     window: Window,
     band: u32,
-    emit: &mut dyn FnMut(Vec<Rgb>) -> Result<(), E>,
+    emit: &mut dyn FnMut(&[Rgb]) -> Result<(), E>,
 ) -> Result<Traced, E> {
     with_lanes!(lanes, F => render_window::<F, E>(scene, pool, progress, window, band, emit))
 }
@@ -232,7 +233,7 @@ pub(crate) fn render_window<F: Lanes, E>(
     progress: &dyn Progress,
     window: Window,
     band: u32,
-    emit: &mut dyn FnMut(Vec<Rgb>) -> Result<(), E>,
+    emit: &mut dyn FnMut(&[Rgb]) -> Result<(), E>,
 ) -> Result<Traced, E> {
     let start = Instant::now();
     let mut outside = 0.0;
@@ -240,15 +241,18 @@ pub(crate) fn render_window<F: Lanes, E>(
     let counter = TileCounter::new(progress, bands.tiles());
     let mut stage = bands.stage();
     let mut total = Traced::default();
+    // One band's pixels, reused from band to band: a fresh band's pages would each fault on first touch.
+    let mut band = Vec::new();
     for i in 0..bands.count() {
         let columns = bands.traced.x0..bands.traced.x1;
-        let (pixels, counts, work) = trace_band::<F>(scene, pool, columns, bands.rows_of(i), &counter);
+        let (counts, work) = trace_band::<F>(scene, pool, columns, bands.rows_of(i), &counter, &mut band);
         total.counts += counts;
         total.work += work;
-        if let Some(out) = stage.push(pixels) {
+        if let Some(out) = stage.push(std::mem::take(&mut band)) {
             let clock = Instant::now();
-            emit(out)?;
+            emit(&out)?;
             outside += clock.elapsed().as_secs_f64();
+            band = out;
         }
     }
     total.seconds = start.elapsed().as_secs_f64() - outside;

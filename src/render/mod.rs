@@ -231,7 +231,8 @@ pub fn render<F: Lanes>(scene: &Scene, pool: &rayon::ThreadPool, progress: &dyn 
     let start = Instant::now();
     let (width, height) = (scene.camera.width, scene.camera.height);
     let counter = TileCounter::new(progress, tiles(width, height).len() as u64);
-    let (pixels, counts, work) = trace_band::<F>(scene, pool, 0..width, 0..height, &counter);
+    let mut pixels = Vec::new();
+    let (counts, work) = trace_band::<F>(scene, pool, 0..width, 0..height, &counter, &mut pixels);
     let mut image = Image { width, height, pixels };
     if scene.render.postfilter == PostFilter::Lecture3x3 {
         image = lecture_3x3(&image);

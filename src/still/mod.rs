@@ -197,7 +197,7 @@ pub(crate) fn write_bands<T>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     job: &Job,
-    produce: impl FnOnce(&mut dyn FnMut(Vec<Rgb>) -> Result<(), Stop>) -> Result<T, Option<StillError>>,
+    produce: impl FnOnce(&mut dyn FnMut(&[Rgb]) -> Result<(), Stop>) -> Result<T, Option<StillError>>,
 ) -> Result<T, StillError> {
     let job = Job { resume: None, ..job.clone() };
     write_bands_resuming(scene, pool, &job, |emit, _| produce(emit))
@@ -210,7 +210,7 @@ fn write_bands_resuming<T>(
     scene: &Scene,
     pool: &rayon::ThreadPool,
     job: &Job,
-    produce: impl FnOnce(&mut dyn FnMut(Vec<Rgb>) -> Result<(), Stop>, u32) -> Result<T, Option<StillError>>,
+    produce: impl FnOnce(&mut dyn FnMut(&[Rgb]) -> Result<(), Stop>, u32) -> Result<T, Option<StillError>>,
 ) -> Result<T, StillError> {
     let frame = job.frame(scene);
     let (format, window) = (job.format, job.window);
@@ -243,14 +243,13 @@ fn write_bands_resuming<T>(
         let first = window.y0 + resume.as_ref().map_or(0, |r| r.rows);
         let mut y = first;
         let mut record_failure = None;
-        let mut emit = |rows: Vec<Rgb>| -> Result<(), Stop> {
+        let mut emit = |rows: &[Rgb]| -> Result<(), Stop> {
             if INTERRUPTED.load(Ordering::Relaxed) {
                 interrupted = true;
                 return Err(Stop);
             }
             let n = (rows.len() / window.width() as usize) as u32;
-            let samples = pool.install(|| output::to_samples(&rows, window.width(), format, &job.write));
-            drop(rows);
+            let samples = pool.install(|| output::to_samples(rows, window.width(), format, &job.write));
             let aov = aov_tx.as_ref().map(|(which, _)| {
                 let band = Window { y0: y, y1: y + n, ..window };
                 aov::samples(scene, job.lanes, pool, band, which)

@@ -269,7 +269,7 @@ impl Ranks {
         progress: &dyn Progress,
         job: &Job,
         bands: &Bands,
-        emit: &mut dyn FnMut(Vec<Rgb>) -> Result<(), Stop>,
+        emit: &mut dyn FnMut(&[Rgb]) -> Result<(), Stop>,
     ) -> Result<Traced, Option<StillError>> {
         let start = Instant::now();
         let (count, tiles) = (bands.count(), bands.tiles());
@@ -364,7 +364,7 @@ impl Ranks {
                     fed += 1;
                     if let Some(rows) = stage.push(pixels) {
                         let clock = Instant::now();
-                        emit(rows).map_err(|Stop| None)?;
+                        emit(&rows).map_err(|Stop| None)?;
                         outside += clock.elapsed().as_secs_f64();
                     }
                 }
