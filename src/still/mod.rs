@@ -33,8 +33,10 @@ pub(crate) const BAND_BUDGET: usize = 32 << 20;
 
 /// The fewest bands an image is cut into by default, however small: one band is traced while the one before
 /// is encoded, so memory holds about two bands' pixels, not the whole image (measured peaks:
-/// docs/perf-log/2026-11-scale.md, "Peak memory in KiB, and bands").
-pub(crate) const MIN_BANDS: u32 = 4;
+/// docs/perf-log/2026-11-scale.md, "Peak memory in KiB, and bands"); and the render ends by waiting for the
+/// last band's encoding, a sixteenth of the image's rather than a quarter's (PERF.md, Register: "Sixteen
+/// bands").
+pub(crate) const MIN_BANDS: u32 = 16;
 
 /// One still to render: where it goes, how it is written, which part of the image.
 #[derive(Clone, Debug)]
