@@ -171,9 +171,15 @@ fn api_error(e: api::Error) -> PyErr {
     }
 }
 
-/// The image as a float32 array of shape (height, width, 3).
-fn to_numpy<'py>(py: Python<'py>, image: &Image) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
-    rgb_array(py, image.rgb_values(), image)
+/// The image as a float32 array of shape (height, width, 3), copied out on `threads` threads (every core for
+/// `None`), as the render ran.
+fn to_numpy<'py>(
+    py: Python<'py>,
+    image: &Image,
+    threads: Option<usize>,
+) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
+    let pool = bareray::render::thread_pool(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
+    rgb_array(py, pool.install(|| image.rgb_values()), image)
 }
 
 /// `values` (`image`'s [`Image::rgb_values`]) as an array of shape (height, width, 3).
@@ -323,7 +329,7 @@ impl PyScene {
         let options =
             options(width, height, eye, look, up, hfov, shade, spp, threads, lanes.unwrap_or(&sixteen))?;
         let picture = py.detach(|| self.inner.render(&options)).map_err(api_error)?;
-        to_numpy(py, &picture.rendered.image)
+        to_numpy(py, &picture.rendered.image, threads)
     }
 
     /// `bareray accuracy`: every pixel centre's f32 primary ray against the f64 twin's (and with `secondary`

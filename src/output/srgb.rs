@@ -123,14 +123,15 @@ pub(super) fn encode8_row(row: &[Rgb], transfer: Transfer, out: &mut [u8]) {
     }
 }
 
-/// [`linear8`] of 24 values, eight to a vector: the same operations in the same order (a maximum that
-/// gives its second operand for NaN, so NaN becomes 0 as in the scalar clamp; then the minimum, the product,
-/// the sum and the truncation), so the same bytes.
+/// [`linear8`] of 24 values, eight to a vector: the same operations in the same order (NaN to 0, the
+/// clamp, the product, the sum and the truncation), so the same bytes.
 #[inline(always)]
 fn linear8_step(values: &[f32; 24], out: &mut [u8; 24]) {
     use wide::f32x8;
     for (o, v) in out.chunks_exact_mut(8).zip(values.chunks_exact(8)) {
         let v = f32x8::from(<[f32; 8]>::try_from(v).expect("8 values"));
+        // NaN set to 0 first: not every target's maximum drops a NaN operand.
+        let v = v.is_nan().bitselect(f32x8::ZERO, v);
         let c = v.fast_max(f32x8::ZERO).fast_min(f32x8::ONE);
         let codes = (c * f32x8::splat(255.0) + f32x8::splat(0.5)).trunc_int().to_array();
         for (o, code) in o.iter_mut().zip(codes) {
@@ -198,9 +199,15 @@ mod tests {
         let next = &SrgbTable::get().next;
         let boundaries = (1..64).map(|k| next[k * 64]).filter(|t| t.is_finite());
         let special: Vec<f32> =
-            [f32::NAN, -0.0, 0.0, -1.0, 2.0, f32::INFINITY, f32::NEG_INFINITY, 1e-40, 1.0]
+            [f32::NAN, -f32::NAN, f32::from_bits(0x7fc0_1234), f32::from_bits(0xff80_0001), -0.0, 0.0]
                 .into_iter()
+                .chain([-1.0, 2.0, f32::INFINITY, f32::NEG_INFINITY, 1e-40, 1.0])
                 .chain(boundaries.flat_map(|t| [t, f32::from_bits(t.to_bits() - 1)]))
+                // The linear codes' boundaries, (k - 1/2)/255, and their neighbours.
+                .chain((1..256).flat_map(|k| {
+                    let t = (k as f32 - 0.5) / 255.0;
+                    [f32::from_bits(t.to_bits() - 1), t, f32::from_bits(t.to_bits() + 1)]
+                }))
                 .collect();
         let mut state = 7u32;
         let mut random = move || {

@@ -74,11 +74,13 @@ fn stream_line<T: Copy>(dst: &mut [T], src: &[T]) {
     #[cfg(target_arch = "x86_64")]
     {
         use std::arch::x86_64::{__m128i, _mm_loadu_si128, _mm_stream_si128};
-        assert!(dst.len() == src.len() && size_of_val(dst) == 64);
+        assert!(
+            dst.len() == src.len() && size_of_val(dst) == 64 && (dst.as_ptr() as usize).is_multiple_of(64)
+        );
         let (d, s) = (dst.as_mut_ptr().cast::<__m128i>(), src.as_ptr().cast::<__m128i>());
         for k in 0..4 {
-            // SAFETY: both slices hold 64 bytes (checked above); `dst` is 64-byte aligned (the caller's
-            // check), so each 16-byte store is aligned; SSE2 is part of x86-64.
+            // SAFETY: both slices hold 64 bytes and `dst` is 64-byte aligned (checked above), so each
+            // 16-byte store is aligned; SSE2 is part of x86-64.
             unsafe { _mm_stream_si128(d.add(k), _mm_loadu_si128(s.add(k))) };
         }
     }
@@ -117,10 +119,10 @@ mod tests {
             }
             // 64-byte aligned storage, written from each of the first 16 offsets.
             #[repr(align(64))]
-            struct Lines([u32; 16 * 64]);
+            struct Lines<T>([T; 16 * 64]);
             for offset in 0..16 {
-                let (mut t, mut prim) = (vec![-1.0f32; 2048], Box::new(Lines([u32::MAX; 1024])));
-                let (t, prim) = (&mut t[offset..], &mut prim.0[offset..]);
+                let (mut t, mut prim) = (Box::new(Lines([-1.0f32; 1024])), Box::new(Lines([u32::MAX; 1024])));
+                let (t, prim) = (&mut t.0[offset..], &mut prim.0[offset..]);
                 rows.write((w as usize, h as usize), stride, t, prim);
                 fence();
                 for y in 0..h as usize {
