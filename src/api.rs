@@ -74,6 +74,12 @@ impl Default for RenderOptions {
 impl RenderOptions {
     /// Checks the settings and applies the overrides to `desc`.
     pub(crate) fn apply(&self, desc: &mut SceneDesc) -> Result<(), Error> {
+        self.check()?;
+        Ok(self.overrides.apply(desc)?)
+    }
+
+    /// Checks the packet width and the thread count (zero threads, which rayon would take for every core).
+    fn check(&self) -> Result<(), Error> {
         if !LANE_CHOICES.contains(&self.lanes) || (self.scalar && self.lanes != 1) {
             let scalar = if self.scalar { " (the scalar path takes 1)" } else { "" };
             return Err(Error::Options(format!("lanes must be 1, 4, 8 or 16, got {}{scalar}", self.lanes)));
@@ -81,7 +87,7 @@ impl RenderOptions {
         if self.threads == Some(0) {
             return Err(Error::Options("threads must be at least 1".to_owned()));
         }
-        Ok(self.overrides.apply(desc)?)
+        Ok(())
     }
 
     fn compile_options(&self) -> CompileOptions {
@@ -128,7 +134,7 @@ pub fn render_spheres(
     view: Option<DVec3>,
     options: &RenderOptions,
 ) -> Result<Picture, Error> {
-    let pool = pool(options.threads)?;
+    let pool = pool(options)?;
     // The arrays are checked on the render's threads.
     let desc = pool.install(|| arrays.scene(view))?;
     render_desc_on(desc, options, &pool)
@@ -137,7 +143,7 @@ pub fn render_spheres(
 /// Renders a scene description with `options` applied, its spheres in the BVH or, when the BVH would not
 /// fit in the memory available, in the particle tree.
 pub fn render_desc(desc: SceneDesc, options: &RenderOptions) -> Result<Picture, Error> {
-    render_desc_on(desc, options, &pool(options.threads)?)
+    render_desc_on(desc, options, &pool(options)?)
 }
 
 /// [`render_desc`] on the threads of `pool`.
@@ -170,13 +176,10 @@ fn render_loaded(
     Ok(Picture { rendered, build_seconds })
 }
 
-/// A pool of `threads` worker threads (every core for `None`); zero threads is refused, where rayon would take
-/// it for every core.
-fn pool(threads: Option<usize>) -> Result<rayon::ThreadPool, Error> {
-    if threads == Some(0) {
-        return Err(Error::Options("threads must be at least 1".to_owned()));
-    }
-    render::thread_pool(threads).map_err(|e| Error::Other(format!("thread pool: {e}")))
+/// A pool of `options.threads` worker threads (every core for `None`), once the options are checked.
+fn pool(options: &RenderOptions) -> Result<rayon::ThreadPool, Error> {
+    options.check()?;
+    render::thread_pool(options.threads).map_err(|e| Error::Other(format!("thread pool: {e}")))
 }
 
 /// A scene file read once, rendered, compared and timed as often as asked: what `bareray.load` returns.
@@ -235,7 +238,7 @@ impl FileScene {
 
     /// Renders the scene with `options` applied.
     pub fn render(&self, options: &RenderOptions) -> Result<Picture, Error> {
-        render_loaded(self.loaded(options)?, options, &pool(options.threads)?)
+        render_loaded(self.loaded(options)?, options, &pool(options)?)
     }
 
     /// Compares the f32 renderer's rays with the f64 twin's (`bareray accuracy`): primary rays at every
@@ -262,7 +265,7 @@ impl FileScene {
     /// ray kind, as its per-ray-kind report does ([`Bench::by_kind`]).
     pub fn bench(&self, options: &RenderOptions, reps: usize, by_kind: bool) -> Result<Bench, Error> {
         let loaded = self.loaded(options)?;
-        let pool = pool(options.threads)?;
+        let pool = pool(options)?;
         let clock = Instant::now();
         let mut scene = pool.install(|| Scene::compile_loaded(loaded, options.compile_options()))?;
         let build_seconds = clock.elapsed().as_secs_f64();
