@@ -9,6 +9,7 @@
 
 mod ao;
 mod ao_stream;
+mod walks;
 
 use std::marker::PhantomData;
 use std::ops::AddAssign;
@@ -228,7 +229,16 @@ impl<'a, F: Lanes> Tracer<'a, F> {
                 return color;
             }
         }
-        let hit = traced(kind, || self.scene.geometry.intersect_k(rays, from));
+        let geometry = &self.scene.geometry;
+        let hit = match F::K > 1 && walks::scattered::<F>(from.prim, rays.active) {
+            true => {
+                let (scene, live) = (self.scene as *const Scene as usize, lanes_set::<F>(rays.active) as u32);
+                walks::walk_scattered(scene, live, |by_lanes| {
+                    traced(kind, || geometry.intersect_walked(rays, from, by_lanes))
+                })
+            }
+            false => traced(kind, || geometry.intersect_k(rays, from)),
+        };
         self.shade(rays, &hit, depth, weight)
     }
 

@@ -146,13 +146,27 @@ impl Geometry {
     /// # Ok::<(), Box<dyn std::error::Error>>(())
     /// ```
     pub fn intersect_k<F: Lanes>(&self, rays: &RayPacket<F>, from: &DeparturePacket<F>) -> HitPacket<F> {
+        self.intersect_walked(rays, from, false)
+    }
+
+    /// [`Geometry::intersect_k`], the sphere tree walked by each live lane alone when `by_lanes` (the same
+    /// bits).
+    pub(crate) fn intersect_walked<F: Lanes>(
+        &self,
+        rays: &RayPacket<F>,
+        from: &DeparturePacket<F>,
+        by_lanes: bool,
+    ) -> HitPacket<F> {
         let mut best = HitPacket::miss();
         if !rays.active.any() {
             return best;
         }
         if !self.spheres.is_empty() {
             let q = self.sphere_query(rays, from);
-            intersect_items(self.sphere_bvh.as_ref(), &q, self.spheres.len(), rays.active, &mut best);
+            match (by_lanes, self.sphere_bvh.as_ref()) {
+                (true, Some(bvh)) => bvh.intersect_lanes(&q, rays.active, &mut best),
+                (_, bvh) => intersect_items(bvh, &q, self.spheres.len(), rays.active, &mut best),
+            }
         }
         self.intersect_other_kinds(rays, from, true, &mut best);
         let (exits, t) = self.departure_exits_k(rays, from);

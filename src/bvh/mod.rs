@@ -160,6 +160,21 @@ impl Bvh {
         self.intersect_packet(q, live, best)
     }
 
+    /// [`Bvh::intersect_k`] with every live lane walked alone from the root (over the 8-wide tree when the
+    /// scene has one): the same bits, for packets whose lanes go apart at once.
+    pub(crate) fn intersect_lanes<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        q: &Q,
+        live: F::Mask,
+        best: &mut HitPacket<F>,
+    ) {
+        let slab = SlabRay::new(q.ray());
+        match &self.wide {
+            Some(wide) => self.intersect_each(wide, 0, q, &slab, live, best),
+            None => self.intersect_each(&self.nodes, 0, q, &slab, live, best),
+        }
+    }
+
     /// Lanes of `live` blocked by a sphere within their `t_max`, like [`Bvh::intersect_k`]. `blocker` is set
     /// to a sphere that blocked a lane.
     pub(crate) fn occluded_k<F: Lanes, Q: LeafQuery<F>>(

@@ -9,7 +9,7 @@ use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{SceneDesc, SphereDesc};
-use bareray::simd::Lanes;
+use bareray::simd::{IdLanes, Lanes};
 use common::rng::Rng;
 use glam::DVec3;
 use wide::{f32x16, f32x4, f32x8};
@@ -142,6 +142,74 @@ fn single_ray_tree_equals_brute_force() {
     // Without lights or mirrors nothing walks one ray from the root: no single-ray tree.
     let plain = common::compile_with(&field(300, 4), Accel::Bvh).unwrap();
     assert!(plain.geometry.sphere_bvh.as_ref().unwrap().wide.is_none());
+}
+
+/// Scattered secondary packets may walk the sphere tree lane by lane instead of as a packet
+/// (`Geometry::intersect_walked`; the renderer picks whichever is faster): both give every lane's
+/// brute-force hit, bit for bit, over the single-ray tree and without it, at every width.
+#[test]
+fn lanes_walked_alone_equal_the_packet_walk() {
+    use bareray::scene::desc::{Falloff, LightDesc};
+    for (n, seed, lit) in [(300, 21, false), (2000, 22, true), (20_000, 23, true)] {
+        let mut desc = field(n, seed);
+        if lit {
+            let light = LightDesc {
+                position: DVec3::new(0.0, 3.0, -3.0),
+                color: Rgb::all(1.0),
+                falloff: Falloff::None,
+            };
+            desc.lights.push(light);
+        }
+        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let brute = common::compile_with(&desc, Accel::Brute).unwrap();
+        assert_eq!(bvh.geometry.sphere_bvh.as_ref().unwrap().wide.is_some(), lit);
+        let rays = coherent_rays(1600, 16, seed + 100);
+        check_lanes_alone::<f32x4>(&bvh, &brute, &rays);
+        check_lanes_alone::<f32x8>(&bvh, &brute, &rays);
+        check_lanes_alone::<f32x16>(&bvh, &brute, &rays);
+    }
+}
+
+/// Camera packets of `rays`, then their mirror rays leaving the spheres hit, walked both ways.
+fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
+    let mut scattered = 0;
+    for chunk in rays.chunks(F::K) {
+        let packet = RayPacket::<F>::from_rays(chunk, f32::INFINITY);
+        let hits = bvh.geometry.intersect_k(&packet, &DeparturePacket::camera());
+        let from = DeparturePacket::<F> { prim: hits.prim, inward: F::mask_from_bits(0) };
+        let next = RayPacket::<F>::from_fn(|i| {
+            let (r, hit) = (chunk.get(i).copied().unwrap_or(chunk[0]), hits.lane(i.min(chunk.len() - 1)));
+            let live = i < chunk.len() && hit.t.is_finite();
+            if !live {
+                return (r, f32::INFINITY, false);
+            }
+            let p = r.at(hit.t);
+            let sp = bvh.geometry.surface(&r, hit.t, hit.prim);
+            let d = r.dir - sp.normal * (2.0 * r.dir.dot(sp.normal));
+            (Ray::new(p, d), f32::INFINITY, true)
+        });
+        let ids: std::collections::BTreeSet<u32> =
+            (0..chunk.len()).filter(|&i| next.lane(i).2).map(|i| hits.lane(i).prim).collect();
+        scattered += usize::from(ids.len() > 2);
+        let packed = bvh.geometry.intersect_walked(&next, &from, false);
+        let alone = bvh.geometry.intersect_walked(&next, &from, true);
+        for (i, camera_ray) in chunk.iter().enumerate() {
+            let (ray, _, live) = next.lane(i);
+            if !live {
+                continue;
+            }
+            let (a, b) = (packed.lane(i), alone.lane(i));
+            assert_eq!((a.t.to_bits(), a.prim), (b.t.to_bits(), b.prim), "K={} {ray:?}", F::K);
+            assert_eq!(packed.key.lane(i), alone.key.lane(i), "K={} {ray:?}", F::K);
+            let first = brute.geometry.intersect(camera_ray, Departure::CAMERA, f32::INFINITY);
+            let want =
+                brute.geometry.intersect(&ray, Departure { prim: first.prim, inward: false }, f32::INFINITY);
+            assert_eq!(b.t.to_bits(), want.t.to_bits(), "K={} {ray:?}", F::K);
+            assert_eq!(bvh.geometry.file_id(b.prim), brute.geometry.file_id(want.prim), "K={}", F::K);
+        }
+    }
+    // The packets the choice is for: lanes leaving more than two spheres.
+    assert!(scattered > 0, "K={}: no scattered packet", F::K);
 }
 
 #[test]
