@@ -4,7 +4,8 @@
 //! subtree of the 4-wide tree that a packet enters with few live lanes (incoherent secondary rays after a
 //! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
-//! merged back into its lane (Embree's "hybrid" traversal).
+//! merged back into its lane (Embree's "hybrid" traversal). Scattered secondary packets may walk this way
+//! from the root too (`Bvh::intersect_lanes`).
 
 use super::collapse::MAX_WIDTH;
 use super::node::{far_to_near, RayNode};

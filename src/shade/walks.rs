@@ -6,7 +6,7 @@
 //! 0.8x their single-ray speed; on a shallow one (balls L4, 7k) the packet walk still wins
 //! (docs/perf-log/2026-11-xeon167.md, "Scattered secondary packets: the walk chosen by timing"). Neither
 //! the tree's size nor the packet's spread decides it alone, so each thread times both walks on
-//! alternate packets for a while and takes the faster one for the packets that follow, and does so again
+//! interleaved packets for a while and takes the faster one for the packets that follow, and does so again
 //! every [`PERIOD`] packets.
 
 use std::cell::Cell;
@@ -14,15 +14,19 @@ use std::cell::Cell;
 use crate::accel::ticks;
 use crate::simd::{set_bits, IdLanes, Lanes};
 
-/// Scattered packets timed in each round, alternately on each walk.
+/// Scattered packets timed on each walk in each round: the round's first `2 · TRIALS` packets, the walks
+/// interleaved in Thue–Morse order (packet `i` walks lane by lane when `i` has an odd number of set bits),
+/// which no regular pattern of the packets (a first bounce, then a second) lines up with.
 const TRIALS: u32 = 64;
-/// Scattered packets per round: the trials, then the faster walk for the rest.
+/// Scattered packets per round: the trials, then the faster walk for the rest (a power of two, so that
+/// the count may wrap).
 const PERIOD: u32 = 2048;
 
 /// One thread's choice and the round's timings, for one scene.
 #[derive(Clone, Copy, Debug, Default)]
 struct Choice {
-    /// The scene's address: a new scene starts afresh.
+    /// The scene's address: a scene at another address starts afresh (one compiled where a dropped one was
+    /// keeps its choice until the next round's trials: only the time depends on it).
     scene: usize,
     /// Scattered packets walked so far.
     seen: u32,
@@ -35,7 +39,8 @@ struct Choice {
 }
 
 thread_local! {
-    static CHOICE: Cell<Choice> = Cell::new(Choice::default());
+    static CHOICE: Cell<Choice> =
+        const { Cell::new(Choice { scene: 0, seen: 0, ticks: [0; 2], rays: [0; 2], by_lanes: false }) };
 }
 
 /// Whether the live lanes of a secondary packet leave more than two different primitives: the packets
@@ -66,7 +71,7 @@ impl Choice {
         let phase = self.seen % PERIOD;
         self.seen = self.seen.wrapping_add(1);
         match phase < 2 * TRIALS {
-            true => (phase % 2 == 1, true),
+            true => (phase.count_ones() % 2 == 1, true),
             false => (self.by_lanes, false),
         }
     }
@@ -74,8 +79,8 @@ impl Choice {
     /// A trial's time: `ticks` for `rays` live rays walked `by_lanes` or not. The round's last trial
     /// settles the choice: the lower ticks per ray.
     fn record(&mut self, by_lanes: bool, ticks: u64, rays: u32) {
-        self.ticks[usize::from(by_lanes)] += ticks;
-        self.rays[usize::from(by_lanes)] += u64::from(rays);
+        let w = usize::from(by_lanes);
+        (self.ticks[w], self.rays[w]) = (self.ticks[w].saturating_add(ticks), self.rays[w] + u64::from(rays));
         if self.seen.wrapping_sub(1) % PERIOD == 2 * TRIALS - 1 {
             // Ticks per ray, lanes alone against the packet walk, compared without a division.
             let per_ray = |w: usize, other: usize| u128::from(self.ticks[w]) * u128::from(self.rays[other]);
@@ -98,7 +103,8 @@ pub(super) fn walk_scattered<R>(scene: usize, rays: u32, walk: impl FnOnce(bool)
         true => {
             let start = ticks();
             let result = walk(by_lanes);
-            c.record(by_lanes, ticks().wrapping_sub(start), rays);
+            // A thread moved to a core whose counter is behind reads an earlier time: no time, not 2⁶⁴.
+            c.record(by_lanes, ticks().saturating_sub(start), rays);
             result
         }
     };
@@ -139,17 +145,35 @@ mod tests {
     }
 
     #[test]
-    fn each_round_times_both_walks_alternately_then_keeps_the_faster() {
+    fn each_round_times_both_walks_interleaved_then_keeps_the_faster() {
         // Lanes alone slower in the first round, faster in the second, slower again in the third.
         let asked = drive(3, |round| if round == 1 { 60 } else { 140 });
         let (period, trials) = (PERIOD as usize, 2 * TRIALS as usize);
         for (round, lanes_won) in [(0, false), (1, true), (2, false)] {
             let at = round * period;
-            assert!(
-                asked[at..at + trials].iter().enumerate().all(|(i, &l)| l == (i % 2 == 1)),
-                "round {round}"
-            );
+            let tried = &asked[at..at + trials];
+            assert!(tried.iter().enumerate().all(|(i, &l)| l == (i.count_ones() % 2 == 1)), "round {round}");
+            assert_eq!(tried.iter().filter(|&&l| l).count(), TRIALS as usize, "round {round}");
             assert!(asked[at + trials..at + period].iter().all(|&l| l == lanes_won), "round {round}");
         }
+    }
+
+    #[test]
+    fn the_trials_sums_saturate() {
+        // A huge reading cannot wrap a walk's sum around to a small one: one trial of lanes alone took
+        // u64::MAX ticks, the others 1, which a wrapping sum would make 62.
+        let mut c = Choice::default();
+        let mut first = true;
+        for _ in 0..2 * TRIALS {
+            let (by_lanes, _) = c.next();
+            let ticks = match (by_lanes, first) {
+                (false, _) => 100,
+                (true, true) => u64::MAX,
+                (true, false) => 1,
+            };
+            first &= !by_lanes;
+            c.record(by_lanes, ticks, 8);
+        }
+        assert!(!c.by_lanes, "lanes alone took over u64::MAX ticks in all");
     }
 }

@@ -170,8 +170,12 @@ fn lanes_walked_alone_equal_the_packet_walk() {
     }
 }
 
-/// Camera packets of `rays`, then their mirror rays leaving the spheres hit, walked both ways.
+/// Camera packets of `rays`, then their mirror rays leaving the spheres hit, walked both ways; the lanes
+/// walked alone must have had one live ray in every box test.
 fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
+    let _counting = bareray::accel::Probe::counting();
+    let (mut packed_work, mut alone_work) =
+        (bareray::accel::Work::default(), bareray::accel::Work::default());
     let mut scattered = 0;
     for chunk in rays.chunks(F::K) {
         let packet = RayPacket::<F>::from_rays(chunk, f32::INFINITY);
@@ -191,8 +195,11 @@ fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
         let ids: std::collections::BTreeSet<u32> =
             (0..chunk.len()).filter(|&i| next.lane(i).2).map(|i| hits.lane(i).prim).collect();
         scattered += usize::from(ids.len() > 2);
+        let _ = bareray::accel::take_work();
         let packed = bvh.geometry.intersect_walked(&next, &from, false);
+        packed_work += bareray::accel::take_work();
         let alone = bvh.geometry.intersect_walked(&next, &from, true);
+        alone_work += bareray::accel::take_work();
         for (i, camera_ray) in chunk.iter().enumerate() {
             let (ray, _, live) = next.lane(i);
             if !live {
@@ -210,6 +217,9 @@ fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
     }
     // The packets the choice is for: lanes leaving more than two spheres.
     assert!(scattered > 0, "K={}: no scattered packet", F::K);
+    let (p, a) = (&packed_work, &alone_work);
+    assert!(a.box_tests > 0 && a.box_lanes == a.box_tests, "K={}: lanes alone {a:?}", F::K);
+    assert!(p.box_lanes > p.box_tests, "K={}: the packet walk {p:?}", F::K);
 }
 
 #[test]
