@@ -151,17 +151,14 @@ impl Bvh {
             if let Some(nodes) = self.scalar_nodes() {
                 return self.intersect_scalar(nodes, q, live, best);
             }
-            let slab = SlabRay::new(q.ray());
-            return match &self.wide {
-                Some(wide) => self.intersect_each(wide, 0, q, &slab, live, best),
-                None => self.intersect_each(&self.nodes, 0, q, &slab, live, best),
-            };
+            return self.intersect_lanes(q, live, best);
         }
         self.intersect_packet(q, live, best)
     }
 
-    /// [`Bvh::intersect_k`] with every live lane walked alone from the root (over the 8-wide tree when the
-    /// scene has one): the same bits, for packets whose lanes go apart at once.
+    /// Closest hits with every live lane walked alone from the root (over the 8-wide tree when the scene has
+    /// one): K = 1's walk, and for wider packets the same bits as [`Bvh::intersect_k`], for packets whose
+    /// lanes go apart at once.
     pub(crate) fn intersect_lanes<F: Lanes, Q: LeafQuery<F>>(
         &self,
         q: &Q,
