@@ -141,6 +141,7 @@ mod tests {
             pad: 0.0,
             builder: crate::bvh::Builder::SAH_SPHERES,
             single_ray_tree: false,
+            leaf_links: false,
             scalar_tree: false,
             frustum_culling: true,
             single_ray_lanes: 2,

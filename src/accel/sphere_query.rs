@@ -112,6 +112,11 @@ impl<'a, F: Lanes> LeafQuery<F> for SphereQuery<'a, F> {
         }
     }
 
+    #[inline(always)]
+    fn departure(&self, i: usize) -> Option<usize> {
+        Some(self.skip.lane(i) as usize).filter(|&s| s < self.spheres.len())
+    }
+
     /// The first and last entry of each array the sphere test reads.
     #[inline(always)]
     fn prefetch(&self, first: usize, count: usize) {

@@ -15,6 +15,7 @@ use super::median::balanced;
 use super::node::Node;
 use super::scalar::{pair_tree, PairNode};
 use super::slab::STACK;
+use super::upward::Upward;
 use super::wide_node::WideNode;
 use super::{binary, piles, sah, BuildStats, Bvh};
 
@@ -61,6 +62,9 @@ pub(crate) struct BuildOptions {
     pub(crate) builder: Builder,
     /// Whether to build the 8-wide single-ray tree too (scenes that trace secondary rays).
     pub(crate) single_ray_tree: bool,
+    /// Whether to link the trees' nodes to their parents and the items to their leaves ([`Bvh::up`]) when the
+    /// single-ray tree is built: for kinds whose queries name the item a ray leaves (spheres).
+    pub(crate) leaf_links: bool,
     /// Whether to keep the binary tree for the scalar walk ([`Bvh::scalar`]) and have single rays walk it
     /// ([`Bvh::scalar_walk`]).
     pub(crate) scalar_tree: bool,
@@ -79,8 +83,15 @@ pub(crate) fn build<T: Send>(
     options: BuildOptions,
     permute: impl Fn(&[u32]) -> T + Sync,
 ) -> (Bvh, T, BuildStats) {
-    let BuildOptions { pad, builder, single_ray_tree, scalar_tree, frustum_culling, single_ray_lanes } =
-        options;
+    let BuildOptions {
+        pad,
+        builder,
+        single_ray_tree,
+        leaf_links,
+        scalar_tree,
+        frustum_culling,
+        single_ray_lanes,
+    } = options;
     let start = Instant::now();
     // The item boxes as one array: obvhs's input, and the fallbacks'. The SAH builder keeps its own copy.
     let boxes = OnceLock::new();
@@ -129,8 +140,21 @@ pub(crate) fn build<T: Send>(
     let (wide, scalar) = single;
     let (nodes, wide, scalar) = (packet_tree.0, wide.map(|(w, _)| w), scalar.map(|(s, _)| s));
     let extent = extent(&nodes[0]);
-    let tree =
-        Bvh { nodes, single_ray_lanes, frustum_culling, extent, pad, wide, scalar, scalar_walk: scalar_tree };
+    let up = wide
+        .as_ref()
+        .filter(|_| leaf_links)
+        .map(|w| rayon::join(|| Upward::of(&nodes, n), || Upward::of(w, n)));
+    let tree = Bvh {
+        nodes,
+        single_ray_lanes,
+        frustum_culling,
+        extent,
+        pad,
+        wide,
+        up,
+        scalar,
+        scalar_walk: scalar_tree,
+    };
     let stats = BuildStats { seconds: start.elapsed().as_secs_f64(), node_bytes: tree.bytes() };
     (tree, permuted, stats)
 }

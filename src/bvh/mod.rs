@@ -17,7 +17,8 @@
 //! Files: `node` (the 4-wide node layout), `wide_node` (the 8-wide single-ray layout), `build` (the
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
 //! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
-//! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built).
+//! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built),
+//! `upward.rs` (parent links, for occlusion walks that start at the leaf of the item a ray leaves).
 
 mod binary;
 pub(crate) mod build;
@@ -32,6 +33,7 @@ mod sah;
 mod scalar;
 mod single;
 mod slab;
+mod upward;
 pub(crate) mod wide_node;
 pub(crate) mod work;
 
@@ -74,6 +76,12 @@ pub(crate) trait LeafQuery<F: Lanes> {
     /// Lanes of `live` blocked by an item of `items`; `blocker` is set to an item that blocked some lane, if
     /// any did. May stop as soon as every live lane is blocked.
     fn occluded(&self, items: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask;
+    /// The item lane `i`'s ray leaves, when it is one of the tree's: an occlusion walk may then start from
+    /// that item's leaf.
+    #[inline(always)]
+    fn departure(&self, _i: usize) -> Option<usize> {
+        None
+    }
     /// Asks for items `first..first + count` to be brought into cache ahead of their tests (a hint).
     #[inline(always)]
     fn prefetch(&self, _first: usize, _count: usize) {}
@@ -112,6 +120,9 @@ pub struct Bvh {
     /// The same tree in 8-wide nodes for rays walked alone from the root ([`WideNode`]), when the scene traces
     /// secondary rays.
     pub(crate) wide: Option<Vec<WideNode>>,
+    /// Parent links of [`Bvh::nodes`] and of [`Bvh::wide`], and the leaf of every item in each, for
+    /// occlusion walks that start at the leaves of the items their rays leave; built with the single-ray tree.
+    pub(crate) up: Option<(upward::Upward, upward::Upward)>,
     /// The binary tree before the collapse, in nodes of the scalar walk ([`PairNode`]), when the build was
     /// asked for it (`BuildOptions::scalar_tree`).
     pub(crate) scalar: Option<Vec<PairNode>>,
@@ -124,6 +135,7 @@ impl Bvh {
     /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built).
     pub(crate) fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
+        let wide = wide + self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes());
         let scalar = self.scalar.as_ref().map_or(0, |s| s.len() * size_of::<PairNode>());
         self.nodes.len() * size_of::<Node>() + wide + scalar
     }
@@ -185,9 +197,10 @@ impl Bvh {
                 return self.occluded_scalar(nodes, q, live, blocker);
             }
             let slab = SlabRay::new(q.ray());
-            return match &self.wide {
-                Some(wide) => self.occluded_each(wide, 0, q, &slab, live, blocker),
-                None => self.occluded_each(&self.nodes, 0, q, &slab, live, blocker),
+            return match (&self.wide, &self.up) {
+                (Some(wide), Some((_, up))) => self.occluded_each_up(wide, up, q, &slab, live, blocker),
+                (Some(wide), None) => self.occluded_each(wide, 0, q, &slab, live, blocker),
+                (None, _) => self.occluded_each(&self.nodes, 0, q, &slab, live, blocker),
             };
         }
         self.occluded_packet(q, live, blocker)

@@ -19,7 +19,7 @@ use super::work::{add_work, counting, Work};
 use super::{Bvh, LeafQuery};
 use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::{Mask, Real, V3};
-use crate::simd::Lanes;
+use crate::simd::{set_bits, Lanes};
 
 /// A ray packet prepared for slab tests.
 pub(super) struct SlabRays<F: Lanes> {
@@ -274,8 +274,8 @@ impl<F: Lanes> Entry<F> {
 }
 
 impl Bvh {
-    /// Pushes the children of `n` that some lane enters within its `limit`, farthest first, so the nearest
-    /// is popped next. Adds the box tests to `tests`.
+    /// Pushes the children of `n` (but those of `skip`) that some lane enters within its `limit`, farthest
+    /// first, so the nearest is popped next. Adds the box tests to `tests`.
     #[inline(always)]
     fn push_children<F: Lanes>(
         &self,
@@ -284,11 +284,12 @@ impl Bvh {
         limit: F,
         stack: &mut Stack<Entry<F>>,
         tests: &mut usize,
+        skip: u32,
     ) {
         let maybe = match &rays.frustum {
             Some(frustum) => frustum.maybe_entered(n),
             None => u32::MAX,
-        };
+        } & !skip;
         for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
             *tests += 1;
             let near = rays.enter(n, c, limit);
@@ -341,7 +342,7 @@ impl Bvh {
             } else {
                 let n = &self.nodes[e.child as usize];
                 let before = boxes;
-                self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes);
+                self.push_children(n, &rays, limit(lanes, best), &mut stack, &mut boxes, 0);
                 if counting {
                     box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
                 }
@@ -367,37 +368,63 @@ impl Bvh {
         // Live rays are summed only when counting (a mask count per node and leaf otherwise spent).
         let counting = counting();
         let (mut boxes, mut prims, mut box_lanes, mut prim_lanes) = (0, 0, 0, 0);
-        stack.push(Entry::root());
-        while let Some(e) = stack.pop() {
-            let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
-            if !lanes.any() {
-                continue;
-            }
-            if e.count > 0 {
-                let first = e.child as usize;
-                prims += usize::from(e.count);
-                if counting {
-                    prim_lanes += usize::from(e.count) * F::move_mask(lanes).count_ones() as usize;
+        // Where every live lane leaves the same item of the tree (an ambient-occlusion packet of one hit), the
+        // walk starts at the node holding that item's leaf and then climbs to the root, walking each
+        // ancestor's other children: the same nodes as from the root, the blockers around the item first.
+        let up = self.up.as_ref().map(|(packet, _)| packet);
+        let start = up.and_then(|up| Some(up.leaf_of(shared_departure(q, live)?)?.0));
+        let mut below = start.unwrap_or(0);
+        stack.push(Entry { child: below as u32, ..Entry::root() });
+        loop {
+            while let Some(e) = stack.pop() {
+                let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
+                if !lanes.any() {
+                    continue;
                 }
-                blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
-            } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                blocked = blocked | self.occluded_each(&self.nodes, e.child, q, &rays.slab, lanes, blocker);
-            } else {
-                let n = &self.nodes[e.child as usize];
-                let before = boxes;
-                self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes);
-                if counting {
-                    box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
+                if e.count > 0 {
+                    let first = e.child as usize;
+                    prims += usize::from(e.count);
+                    if counting {
+                        prim_lanes += usize::from(e.count) * F::move_mask(lanes).count_ones() as usize;
+                    }
+                    blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
+                } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
+                    blocked =
+                        blocked | self.occluded_each(&self.nodes, e.child, q, &rays.slab, lanes, blocker);
+                } else {
+                    let n = &self.nodes[e.child as usize];
+                    let before = boxes;
+                    self.push_children(n, &rays, limit(lanes), &mut stack, &mut boxes, 0);
+                    if counting {
+                        box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
+                    }
+                    continue;
                 }
-                continue;
+                if (blocked | !live).all() {
+                    break;
+                }
             }
-            if (blocked | !live).all() {
-                break;
+            let (Some(up), false) = (up, (blocked | !live).all() || below == 0) else { break };
+            let (parent, came) = up.parent_of(below);
+            let lanes = live & !blocked;
+            let before = boxes;
+            self.push_children(&self.nodes[parent], &rays, limit(lanes), &mut stack, &mut boxes, 1 << came);
+            if counting {
+                box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
             }
+            below = parent;
         }
         if counting {
             add_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));
         }
         blocked
     }
+}
+
+/// The item every live lane's ray leaves, if they all leave the same item of the tree.
+#[inline(always)]
+fn shared_departure<F: Lanes, Q: LeafQuery<F>>(q: &Q, live: F::Mask) -> Option<usize> {
+    let mut lanes = set_bits(F::move_mask(live));
+    let first = q.departure(lanes.next()?)?;
+    lanes.all(|i| q.departure(i) == Some(first)).then_some(first)
 }

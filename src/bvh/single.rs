@@ -10,6 +10,7 @@
 use super::collapse::MAX_WIDTH;
 use super::node::{far_to_near, RayNode};
 use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
+use super::upward::Upward;
 use super::work::{count_work, Work};
 use super::{Bvh, LeafQuery, SingleLeafQuery};
 use crate::geometry::HitPacket;
@@ -135,28 +136,44 @@ impl Bvh {
         blocker: &mut u32,
     ) -> bool {
         let mut stack = Stack::<u32>::new();
-        let (mut visits, mut prims, mut blocked) = (0, 0, false);
+        let mut work = (0, 0);
         stack.push(root);
-        'walk: while let Some(node) = stack.pop() {
-            visits += 1;
-            let n = &nodes[node as usize];
-            let near = slab.enter(n, q.t_max());
-            // Bit c for each child entered; empty slots (boxes at +inf) never are.
-            let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY)));
-            let leaves = n.leaves();
-            for c in set_bits(entered & leaves) {
-                let (first, count) = n.child(c);
-                prims += usize::from(count);
-                if q.occluded_leaf(first as usize, usize::from(count), blocker) {
-                    blocked = true;
-                    break 'walk;
-                }
+        let blocked = occluded_below(nodes, &mut stack, q, slab, blocker, &mut work);
+        count_work(|| Work::single(work.1, T::WIDTH * work.0));
+        blocked
+    }
+
+    /// [`Bvh::occluded_1`] over the whole tree, for a ray that leaves an item of leaf `leaf` (its node and
+    /// slot): that leaf is tested first, then the rest of its node, then each ancestor's other children
+    /// (each subtree walked down as from the root) up to the root. The same nodes as from the root, each at
+    /// most once, so the answer is the same; the blockers around the item come first.
+    fn occluded_up<T: RayNode, Q: SingleLeafQuery>(
+        &self,
+        nodes: &[T],
+        up: &Upward,
+        leaf: (usize, usize),
+        q: &Q,
+        slab: &SlabRayN<T::Lanes>,
+        blocker: &mut u32,
+    ) -> bool {
+        let mut stack = Stack::<u32>::new();
+        let mut work = (0, 0);
+        let (mut node, slot) = leaf;
+        let (mut first, mut skip) = (1 << slot, 0);
+        let blocked = loop {
+            work.0 += 1;
+            if occluded_visit(&nodes[node], first, skip, q, slab, &mut stack, blocker, &mut work.1)
+                || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work)
+            {
+                break true;
             }
-            for c in set_bits(entered & !leaves) {
-                stack.push(n.child(c).0);
+            if node == 0 {
+                break false;
             }
-        }
-        count_work(|| Work::single(prims, T::WIDTH * visits));
+            let (parent, came) = up.parent_of(node);
+            (node, first, skip) = (parent, 0, 1 << came);
+        };
+        count_work(|| Work::single(work.1, T::WIDTH * work.0));
         blocked
     }
 
@@ -198,4 +215,81 @@ impl Bvh {
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
+
+    /// The lanes of `lanes` blocked within their `t_max` in the whole tree `nodes`, one ray at a time: each
+    /// lane that leaves an item of the tree from that item's leaf up ([`Bvh::occluded_up`]), the others from
+    /// the root.
+    pub(super) fn occluded_each_up<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
+        &self,
+        nodes: &[T],
+        up: &Upward,
+        q: &Q,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        blocker: &mut u32,
+    ) -> F::Mask {
+        let bits = F::move_mask(lanes);
+        let blocked = set_bits(bits)
+            .filter(|&i| {
+                let (one, slab) = (q.lane(i), SlabRayN::lane(slab, i));
+                match one.departure(0).and_then(|item| up.leaf_of(item)) {
+                    Some(leaf) => self.occluded_up(nodes, up, leaf, &one, &slab, blocker),
+                    None => self.occluded_1(nodes, 0, &one, &slab, blocker),
+                }
+            })
+            .fold(0, |b, i| b | 1 << i);
+        F::mask_from_bits(blocked)
+    }
+}
+
+/// Node `n` of an occlusion walk: the leaves among its children the ray enters (but those of `skip`) tested
+/// on the spot, those of `first` before the others, and its entered inner children pushed. Whether a leaf
+/// blocked the ray; `prims` counts the items tested.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn occluded_visit<T: RayNode, Q: SingleLeafQuery>(
+    n: &T,
+    first: u32,
+    skip: u32,
+    q: &Q,
+    slab: &SlabRayN<T::Lanes>,
+    stack: &mut Stack<u32>,
+    blocker: &mut u32,
+    prims: &mut usize,
+) -> bool {
+    let near = slab.enter(n, q.t_max());
+    // Bit c for each child entered; empty slots (boxes at +inf) never are.
+    let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY))) & !skip;
+    let leaves = entered & n.leaves();
+    for c in set_bits(leaves & first).chain(set_bits(leaves & !first)) {
+        let (at, count) = n.child(c);
+        *prims += usize::from(count);
+        if q.occluded_leaf(at as usize, usize::from(count), blocker) {
+            return true;
+        }
+    }
+    for c in set_bits(entered & !n.leaves()) {
+        stack.push(n.child(c).0);
+    }
+    false
+}
+
+/// The occlusion walk of the subtrees on `stack`, until it is empty or a leaf blocks the ray; `work` counts
+/// node visits and items tested.
+#[inline(always)]
+fn occluded_below<T: RayNode, Q: SingleLeafQuery>(
+    nodes: &[T],
+    stack: &mut Stack<u32>,
+    q: &Q,
+    slab: &SlabRayN<T::Lanes>,
+    blocker: &mut u32,
+    work: &mut (usize, usize),
+) -> bool {
+    while let Some(node) = stack.pop() {
+        work.0 += 1;
+        if occluded_visit(&nodes[node as usize], 0, 0, q, slab, stack, blocker, &mut work.1) {
+            return true;
+        }
+    }
+    false
 }

@@ -345,6 +345,7 @@ impl Scene {
                 single_ray_tree: features::casts_shadows(&lights, &materials, desc.render.max_depth)
                     || bounces
                     || matches!(desc.render.shade, Shade::Ao(_)),
+                leaf_links: true,
                 scalar_tree: scalar,
                 frustum_culling,
                 single_ray_lanes,
@@ -392,7 +393,11 @@ impl Scene {
         }
         // The registered kinds' items (triangles, ellipsoids, …) cost more to test than a sphere: their trees
         // split smaller ranges.
-        let dearer = BuildOptions { builder: job.options.builder.for_dearer_items(), ..job.options };
+        let dearer = BuildOptions {
+            builder: job.options.builder.for_dearer_items(),
+            leaf_links: false,
+            ..job.options
+        };
         let build = &mut self.build;
         g.kinds.build_trees(
             |n| wants_tree(job.accel, n),
