@@ -117,8 +117,8 @@ pub struct Bvh {
     pub(crate) extent: f32,
     /// The padding the spheres' boxes were built with ([`padding`]): the frustum's sphere test pads by it too.
     pub(crate) pad: f32,
-    /// The same tree in 8-wide nodes for rays walked alone from the root ([`WideNode`]), when the scene traces
-    /// secondary rays.
+    /// The same tree in 8-wide nodes for rays walked alone ([`WideNode`]), when the scene traces secondary or
+    /// ambient-occlusion rays.
     pub(crate) wide: Option<Vec<WideNode>>,
     /// Parent links of [`Bvh::nodes`] and of [`Bvh::wide`], and the leaf of every item in each, for
     /// occlusion walks that start at the leaves of the items their rays leave; built with the single-ray tree.
@@ -132,7 +132,8 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built).
+    /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built) and of the
+    /// trees' parent and leaf links ([`Bvh::up`], if built).
     pub(crate) fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
         let wide = wide + self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes());

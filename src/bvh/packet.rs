@@ -355,6 +355,8 @@ impl Bvh {
 
     /// Lanes of `live` blocked by a leaf item within their `t_max`, by packet traversal (subtrees entered by at
     /// most [`Bvh::single_ray_lanes`] unblocked lanes one ray at a time); stops as soon as every live lane is.
+    /// A packet whose live lanes all leave one item of the tree starts at the node holding that item's leaf and
+    /// climbs ([`Bvh::up`]); any other from the root.
     pub(super) fn occluded_packet<F: Lanes, Q: LeafQuery<F>>(
         &self,
         q: &Q,
@@ -370,11 +372,13 @@ impl Bvh {
         let (mut boxes, mut prims, mut box_lanes, mut prim_lanes) = (0, 0, 0, 0);
         // Where every live lane leaves the same item of the tree (an ambient-occlusion packet of one hit), the
         // walk starts at the node holding that item's leaf and then climbs to the root, walking each
-        // ancestor's other children: the same nodes as from the root, the blockers around the item first.
+        // ancestor's other children (the ancestors' own boxes untested): every node a walk from the root would
+        // visit, each once, so the same answer; the blockers near the item come sooner.
         let up = self.up.as_ref().map(|(packet, _)| packet);
         let start = up.and_then(|up| Some(up.leaf_of(shared_departure(q, live)?)?.0));
-        let mut below = start.unwrap_or(0);
-        stack.push(Entry { child: below as u32, ..Entry::root() });
+        // The node whose subtree has been walked, once the stack is empty.
+        let mut done = start.unwrap_or(0);
+        stack.push(Entry { child: done as u32, ..Entry::root() });
         loop {
             while let Some(e) = stack.pop() {
                 let lanes = e.near.lt(F::splat_f32(f32::INFINITY)) & live & !blocked;
@@ -404,15 +408,15 @@ impl Bvh {
                     break;
                 }
             }
-            let (Some(up), false) = (up, (blocked | !live).all() || below == 0) else { break };
-            let (parent, came) = up.parent_of(below);
+            let (Some(up), false) = (up, (blocked | !live).all() || done == 0) else { break };
+            let (parent, slot) = up.parent_of(done);
             let lanes = live & !blocked;
             let before = boxes;
-            self.push_children(&self.nodes[parent], &rays, limit(lanes), &mut stack, &mut boxes, 1 << came);
+            self.push_children(&self.nodes[parent], &rays, limit(lanes), &mut stack, &mut boxes, 1 << slot);
             if counting {
                 box_lanes += (boxes - before) * F::move_mask(lanes).count_ones() as usize;
             }
-            below = parent;
+            done = parent;
         }
         if counting {
             add_work(Work::lanes(prims, prim_lanes, boxes, box_lanes));

@@ -1,6 +1,7 @@
 //! Single-ray traversal, SIMD over a node's children: one ray's slab test against all of a node's boxes in one
 //! pass (`f32x4` over the 4-wide packet nodes, `f32x8` over the 8-wide single-ray tree; the walk is generic
-//! over [`RayNode`]). It serves K = 1 from the root (over the 8-wide tree when the scene has one) and every
+//! over [`RayNode`]). It serves K = 1 (over the 8-wide tree when the scene has one: from the root, or for an
+//! occlusion ray leaving an item from that item's leaf up, [`Bvh::occluded_each_up`]) and every
 //! subtree of the 4-wide tree that a packet enters with few live lanes (incoherent secondary rays after a
 //! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
@@ -145,8 +146,9 @@ impl Bvh {
 
     /// [`Bvh::occluded_1`] over the whole tree, for a ray that leaves an item of leaf `leaf` (its node and
     /// slot): that leaf is tested first, then the rest of its node, then each ancestor's other children
-    /// (each subtree walked down as from the root) up to the root. The same nodes as from the root, each at
-    /// most once, so the answer is the same; the blockers around the item come first.
+    /// (each subtree walked down as from the root) up to the root. Every node a walk from the root would
+    /// visit is visited (the ancestors without their own box tests), each once, so the answer is the same;
+    /// the blockers around the item come first.
     fn occluded_up<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
@@ -159,19 +161,27 @@ impl Bvh {
         let mut stack = Stack::<u32>::new();
         let mut work = (0, 0);
         let (mut node, slot) = leaf;
-        let (mut first, mut skip) = (1 << slot, 0);
+        let (mut first_slots, mut skip_slots) = (1 << slot, 0);
         let blocked = loop {
             work.0 += 1;
-            if occluded_visit(&nodes[node], first, skip, q, slab, &mut stack, blocker, &mut work.1)
-                || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work)
+            if occluded_visit(
+                &nodes[node],
+                first_slots,
+                skip_slots,
+                q,
+                slab,
+                &mut stack,
+                blocker,
+                &mut work.1,
+            ) || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work)
             {
                 break true;
             }
             if node == 0 {
                 break false;
             }
-            let (parent, came) = up.parent_of(node);
-            (node, first, skip) = (parent, 0, 1 << came);
+            let (parent, slot) = up.parent_of(node);
+            (node, first_slots, skip_slots) = (parent, 0, 1 << slot);
         };
         count_work(|| Work::single(work.1, T::WIDTH * work.0));
         blocked
@@ -242,15 +252,15 @@ impl Bvh {
     }
 }
 
-/// Node `n` of an occlusion walk: the leaves among its children the ray enters (but those of `skip`) tested
-/// on the spot, those of `first` before the others, and its entered inner children pushed. Whether a leaf
-/// blocked the ray; `prims` counts the items tested.
+/// Node `n` of an occlusion walk: the leaves among its children the ray enters (but the slots of
+/// `skip_slots`) tested on the spot, those of `first_slots` before the others, and its entered inner children
+/// pushed. Whether a leaf blocked the ray; `prims` counts the items tested.
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
 fn occluded_visit<T: RayNode, Q: SingleLeafQuery>(
     n: &T,
-    first: u32,
-    skip: u32,
+    first_slots: u32,
+    skip_slots: u32,
     q: &Q,
     slab: &SlabRayN<T::Lanes>,
     stack: &mut Stack<u32>,
@@ -259,9 +269,9 @@ fn occluded_visit<T: RayNode, Q: SingleLeafQuery>(
 ) -> bool {
     let near = slab.enter(n, q.t_max());
     // Bit c for each child entered; empty slots (boxes at +inf) never are.
-    let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY))) & !skip;
+    let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY))) & !skip_slots;
     let leaves = entered & n.leaves();
-    for c in set_bits(leaves & first).chain(set_bits(leaves & !first)) {
+    for c in set_bits(leaves & first_slots).chain(set_bits(leaves & !first_slots)) {
         let (at, count) = n.child(c);
         *prims += usize::from(count);
         if q.occluded_leaf(at as usize, usize::from(count), blocker) {

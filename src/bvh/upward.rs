@@ -1,8 +1,10 @@
 //! The links that let a walk start at an item's leaf and climb to the root: each node's parent and each
 //! item's leaf. An occlusion ray leaving an item (an ambient-occlusion or shadow ray from a sphere) is often
 //! blocked by the items around it, which a walk from the root reaches only after descending the tree; from the
-//! leaf up, it tests them first and may stop there. Every node is still visited at most once, and the nodes
-//! an unblocked ray visits are those it visits from the root (every ancestor's box holds the ray's start).
+//! leaf up, it tests them first and may stop there. Every node a walk from the root would visit is still
+//! visited, each once (the ancestors without their own box tests), so the answer is the same; and since every
+//! ancestor's box holds the ray's start, a walk from the root visits them all too: an unblocked ray does the
+//! same work either way.
 
 use super::node::RayNode;
 
