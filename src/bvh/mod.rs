@@ -180,8 +180,11 @@ impl Bvh {
     ) {
         let slab = SlabRay::new(q.ray());
         match &self.wide {
-            Some(wide) => self.intersect_each(wide, 0, q, &slab, live, best),
-            None => self.intersect_each(&self.nodes, 0, q, &slab, live, best),
+            Some(wide) => {
+                let up = self.up.as_ref().map(|(_, single)| single);
+                self.intersect_each(wide, up, 0, q, &slab, live, best)
+            }
+            None => self.intersect_each(&self.nodes, None, 0, q, &slab, live, best),
         }
     }
 

@@ -338,7 +338,7 @@ impl Bvh {
                     None => q.intersect(items, lanes, best),
                 }
             } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                self.intersect_each(&self.nodes, e.child, q, &rays.slab, lanes, best);
+                self.intersect_each(&self.nodes, None, e.child, q, &rays.slab, lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
                 let before = boxes;

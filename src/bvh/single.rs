@@ -53,8 +53,8 @@ impl<L: Lanes> SlabRayN<L> {
 }
 
 impl Bvh {
-    /// Of the children of `n` the ray enters within `limit`, pushes all but the nearest (farthest first) and
-    /// returns that one, to be visited next.
+    /// Of the children of `n` (but the slots of `skip_slots`) the ray enters within `limit`, pushes all but
+    /// the nearest (farthest first) and returns that one, to be visited next.
     #[inline(always)]
     fn push_but_nearest<T: RayNode>(
         &self,
@@ -62,10 +62,11 @@ impl Bvh {
         ray: &SlabRayN<T::Lanes>,
         limit: f32,
         stack: &mut Stack<Entry>,
+        skip_slots: u32,
     ) -> Option<Entry> {
         let near = ray.enter(n, limit);
         // Bit c for each child entered; empty slots (boxes at +inf) never are.
-        let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY)));
+        let entered = T::Lanes::move_mask(near.lt(T::Lanes::splat_f32(f32::INFINITY))) & !skip_slots;
         let near = near.to_array();
         let near = near.as_ref();
         let entry = |c: usize| {
@@ -106,23 +107,70 @@ impl Bvh {
         best: &mut HitPacket<f32>,
     ) {
         let mut stack = Stack::<Entry>::new();
-        let mut next = self.push_but_nearest(&nodes[root as usize], slab, best.t.min(q.t_max()), &mut stack);
-        let (mut visits, mut prims) = (1, 0);
+        let next = self.push_but_nearest(&nodes[root as usize], slab, best.t.min(q.t_max()), &mut stack, 0);
+        let mut work = (1, 0);
+        self.intersect_below(nodes, next, &mut stack, q, slab, best, &mut work);
+        count_work(|| Work::single(work.1, T::WIDTH * work.0));
+    }
+
+    /// [`Bvh::intersect_1`] over the whole tree for a ray that leaves an item of the leaves of node `start`:
+    /// that node's children first, then each ancestor's other children (each subtree walked down as from the
+    /// root) up to the root. No node that could hold a nearer hit than the best so far is left out, so the
+    /// answer is the same.
+    #[allow(clippy::too_many_arguments)]
+    fn intersect_up<T: RayNode, Q: SingleLeafQuery>(
+        &self,
+        nodes: &[T],
+        up: &Upward,
+        start: usize,
+        q: &Q,
+        slab: &SlabRayN<T::Lanes>,
+        best: &mut HitPacket<f32>,
+    ) {
+        let mut stack = Stack::<Entry>::new();
+        let (mut node, mut skip_slots, mut work) = (start, 0, (0, 0));
+        loop {
+            work.0 += 1;
+            let limit = best.t.min(q.t_max());
+            let next = self.push_but_nearest(&nodes[node], slab, limit, &mut stack, skip_slots);
+            self.intersect_below(nodes, next, &mut stack, q, slab, best, &mut work);
+            if node == 0 {
+                break;
+            }
+            let (parent, slot) = up.parent_of(node);
+            (node, skip_slots) = (parent, 1 << slot);
+        }
+        count_work(|| Work::single(work.1, T::WIDTH * work.0));
+    }
+
+    /// The closest-hit walk from `next` and the subtrees on `stack`, nearest first, until both are done;
+    /// `work` counts node visits and items tested.
+    #[allow(clippy::too_many_arguments)]
+    #[inline(always)]
+    fn intersect_below<T: RayNode, Q: SingleLeafQuery>(
+        &self,
+        nodes: &[T],
+        mut next: Option<Entry>,
+        stack: &mut Stack<Entry>,
+        q: &Q,
+        slab: &SlabRayN<T::Lanes>,
+        best: &mut HitPacket<f32>,
+        work: &mut (usize, usize),
+    ) {
         while let Some(e) = next.take().or_else(|| stack.pop()) {
             if e.near > best.t {
                 continue;
             }
             if e.count > 0 {
                 let first = e.child as usize;
-                prims += usize::from(e.count);
+                work.1 += usize::from(e.count);
                 q.intersect_leaf(first, usize::from(e.count), best);
             } else {
-                visits += 1;
+                work.0 += 1;
                 let n = &nodes[e.child as usize];
-                next = self.push_but_nearest(n, slab, best.t.min(q.t_max()), &mut stack);
+                next = self.push_but_nearest(n, slab, best.t.min(q.t_max()), stack, 0);
             }
         }
-        count_work(|| Work::single(prims, T::WIDTH * visits));
     }
 
     /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
@@ -189,9 +237,11 @@ impl Bvh {
 
     /// The lanes of `lanes` walk the subtree of `nodes[root]` one ray at a time; their hits are merged into
     /// `best`. `slab` is the packet prepared for slab tests.
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn intersect_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
+        up: Option<&Upward>,
         root: u32,
         q: &Q,
         slab: &SlabRay<F>,
@@ -201,7 +251,11 @@ impl Bvh {
         let bits = F::move_mask(lanes);
         for i in set_bits(bits) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
-            self.intersect_1(nodes, root, &q.lane(i), &SlabRayN::lane(slab, i), &mut hit);
+            let (one, ray) = (q.lane(i), SlabRayN::lane(slab, i));
+            match up.filter(|_| root == 0).and_then(|up| Some((up, up.leaf_of(one.departure(0)?)?.0))) {
+                Some((up, start)) => self.intersect_up(nodes, up, start, &one, &ray, &mut hit),
+                None => self.intersect_1(nodes, root, &one, &ray, &mut hit),
+            }
             let at = F::mask_from_bits(1 << i);
             best.t = F::select(at, F::splat_f32(hit.t), best.t);
             best.prim = F::select_ids(at, F::Ids::splat(hit.prim), best.prim);

@@ -146,7 +146,9 @@ fn single_ray_tree_equals_brute_force() {
 
 /// Scattered secondary packets may walk the sphere tree lane by lane instead of as a packet
 /// (`Geometry::intersect_walked`; the renderer picks whichever is faster): both give every lane's
-/// brute-force hit, bit for bit, over the single-ray tree and without it, at every width.
+/// brute-force hit, bit for bit, over the single-ray tree and without it, at every width. Over the single-ray
+/// tree each lane starts at the node of the leaf of the sphere it leaves (`bvh/upward.rs`): the same hits as
+/// from the root, by another order of visits.
 #[test]
 fn lanes_walked_alone_equal_the_packet_walk() {
     use bareray::scene::desc::{Falloff, LightDesc};
@@ -163,19 +165,24 @@ fn lanes_walked_alone_equal_the_packet_walk() {
         let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         assert_eq!(bvh.geometry.sphere_bvh.as_ref().unwrap().wide.is_some(), lit);
+        assert_eq!(bvh.geometry.sphere_bvh.as_ref().unwrap().up.is_some(), lit);
+        let mut root = bvh.clone();
+        root.geometry.sphere_bvh.as_mut().unwrap().up = None;
         let rays = coherent_rays(1600, 16, seed + 100);
-        check_lanes_alone::<f32x4>(&bvh, &brute, &rays);
-        check_lanes_alone::<f32x8>(&bvh, &brute, &rays);
-        check_lanes_alone::<f32x16>(&bvh, &brute, &rays);
+        check_lanes_alone::<f32x4>(&bvh, &root, &brute, &rays);
+        check_lanes_alone::<f32x8>(&bvh, &root, &brute, &rays);
+        check_lanes_alone::<f32x16>(&bvh, &root, &brute, &rays);
     }
 }
 
 /// Camera packets of `rays`, then their mirror rays leaving the spheres hit, walked both ways; the lanes
-/// walked alone must have had one live ray in every box test.
-fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
+/// walked alone must have had one live ray in every box test. `root` is `bvh` without the leaf links: its
+/// lanes walked alone start at the root, and must find the same hits; where `bvh` has links, its walks visit
+/// in another order, so their work differs (closest hits prune by the best so far: not always less).
+fn check_lanes_alone<F: Lanes>(bvh: &Scene, root: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
     let _counting = bareray::accel::Probe::counting();
-    let (mut packed_work, mut alone_work) =
-        (bareray::accel::Work::default(), bareray::accel::Work::default());
+    let (mut packed_work, mut alone_work, mut root_work) =
+        (bareray::accel::Work::default(), bareray::accel::Work::default(), bareray::accel::Work::default());
     let mut scattered = 0;
     for chunk in rays.chunks(F::K) {
         let packet = RayPacket::<F>::from_rays(chunk, f32::INFINITY);
@@ -200,13 +207,16 @@ fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
         packed_work += bareray::accel::take_work();
         let alone = bvh.geometry.intersect_walked(&next, &from, true);
         alone_work += bareray::accel::take_work();
+        let from_root = root.geometry.intersect_walked(&next, &from, true);
+        root_work += bareray::accel::take_work();
         for (i, camera_ray) in chunk.iter().enumerate() {
             let (ray, _, live) = next.lane(i);
             if !live {
                 continue;
             }
-            let (a, b) = (packed.lane(i), alone.lane(i));
+            let (a, b, c) = (packed.lane(i), alone.lane(i), from_root.lane(i));
             assert_eq!((a.t.to_bits(), a.prim), (b.t.to_bits(), b.prim), "K={} {ray:?}", F::K);
+            assert_eq!((c.t.to_bits(), c.prim), (b.t.to_bits(), b.prim), "K={} {ray:?}", F::K);
             assert_eq!(packed.key.lane(i), alone.key.lane(i), "K={} {ray:?}", F::K);
             let first = brute.geometry.intersect(camera_ray, Departure::CAMERA, f32::INFINITY);
             let want =
@@ -220,6 +230,10 @@ fn check_lanes_alone<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>]) {
     let (p, a) = (&packed_work, &alone_work);
     assert!(a.box_tests > 0 && a.box_lanes == a.box_tests, "K={}: lanes alone {a:?}", F::K);
     assert!(p.box_lanes > p.box_tests, "K={}: the packet walk {p:?}", F::K);
+    let linked = bvh.geometry.sphere_bvh.as_ref().unwrap().up.is_some();
+    let r = &root_work;
+    let differs = (a.box_tests, a.prim_tests) != (r.box_tests, r.prim_tests);
+    assert_eq!(linked, differs, "K={}: {a:?}, {r:?}", F::K);
 }
 
 /// Occlusion rays leaving a sphere walk from that sphere's leaf up to the root (`bvh/upward.rs`): at K = 1,
