@@ -1,7 +1,7 @@
 //! Single-ray traversal, SIMD over a node's children: one ray's slab test against all of a node's boxes in one
 //! pass (`f32x4` over the 4-wide packet nodes, `f32x8` over the 8-wide single-ray tree; the walk is generic
-//! over [`RayNode`]). It serves K = 1 (over the 8-wide tree when the scene has one: from the root, or for an
-//! occlusion ray leaving an item from that item's leaf up, [`Bvh::occluded_each_up`]) and every
+//! over [`RayNode`]). It serves K = 1 (over the 8-wide tree when the scene has one: from the root, or for a
+//! ray leaving an item from that item's leaf up, [`Bvh::intersect_up`], [`Bvh::occluded_up`]) and every
 //! subtree of the 4-wide tree that a packet enters with few live lanes (incoherent secondary rays after a
 //! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
