@@ -18,7 +18,7 @@
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
 //! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
 //! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built),
-//! `upward.rs` (parent links, for occlusion walks that start at the leaf of the item a ray leaves).
+//! `upward.rs` (parent links, for walks that start at the leaf of the item a ray leaves).
 
 mod binary;
 pub(crate) mod build;
@@ -76,8 +76,8 @@ pub(crate) trait LeafQuery<F: Lanes> {
     /// Lanes of `live` blocked by an item of `items`; `blocker` is set to an item that blocked some lane, if
     /// any did. May stop as soon as every live lane is blocked.
     fn occluded(&self, items: std::ops::Range<usize>, live: F::Mask, blocker: &mut u32) -> F::Mask;
-    /// The item lane `i`'s ray leaves, when it is one of the tree's: an occlusion walk may then start from
-    /// that item's leaf.
+    /// The item lane `i`'s ray leaves, when it is one of the tree's: the walk may then start from that item's
+    /// leaf.
     #[inline(always)]
     fn departure(&self, _i: usize) -> Option<usize> {
         None
@@ -120,8 +120,8 @@ pub struct Bvh {
     /// The same tree in 8-wide nodes for rays walked alone ([`WideNode`]), when the scene traces secondary or
     /// ambient-occlusion rays.
     pub(crate) wide: Option<Vec<WideNode>>,
-    /// Parent links of [`Bvh::nodes`] and of [`Bvh::wide`], and the leaf of every item in each, for
-    /// occlusion walks that start at the leaves of the items their rays leave; built with the single-ray tree.
+    /// Parent links of [`Bvh::nodes`] and of [`Bvh::wide`], and the leaf of every item in each, for walks
+    /// that start at the leaves of the items their rays leave; built with the single-ray tree.
     pub(crate) up: Option<(upward::Upward, upward::Upward)>,
     /// The binary tree before the collapse, in nodes of the scalar walk ([`PairNode`]), when the build was
     /// asked for it (`BuildOptions::scalar_tree`).
@@ -139,6 +139,11 @@ impl Bvh {
         let wide = wide + self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes());
         let scalar = self.scalar.as_ref().map_or(0, |s| s.len() * size_of::<PairNode>());
         self.nodes.len() * size_of::<Node>() + wide + scalar
+    }
+
+    /// The links of the single-ray tree ([`Bvh::up`]), when built.
+    fn single_links(&self) -> Option<&upward::Upward> {
+        self.up.as_ref().map(|(_, single)| single)
     }
 
     /// Whether single rays walk the scalar tree ([`Bvh::scalar_walk`]): one item at a time.
@@ -169,9 +174,9 @@ impl Bvh {
         self.intersect_packet(q, live, best)
     }
 
-    /// Closest hits with every live lane walked alone from the root (over the 8-wide tree when the scene has
-    /// one): K = 1's walk, and for wider packets the same bits as [`Bvh::intersect_k`], for packets whose
-    /// lanes go apart at once.
+    /// Closest hits with every live lane walked alone (over the 8-wide tree when the scene has one: from the
+    /// leaf of the item a lane leaves where the tree has links, else from the root): K = 1's walk, and for
+    /// wider packets the same bits as [`Bvh::intersect_k`], for packets whose lanes go apart at once.
     pub(crate) fn intersect_lanes<F: Lanes, Q: LeafQuery<F>>(
         &self,
         q: &Q,
@@ -180,10 +185,7 @@ impl Bvh {
     ) {
         let slab = SlabRay::new(q.ray());
         match &self.wide {
-            Some(wide) => {
-                let up = self.up.as_ref().map(|(_, single)| single);
-                self.intersect_each(wide, up, 0, q, &slab, live, best)
-            }
+            Some(wide) => self.intersect_each(wide, self.single_links(), 0, q, &slab, live, best),
             None => self.intersect_each(&self.nodes, None, 0, q, &slab, live, best),
         }
     }
@@ -201,10 +203,9 @@ impl Bvh {
                 return self.occluded_scalar(nodes, q, live, blocker);
             }
             let slab = SlabRay::new(q.ray());
-            return match (&self.wide, &self.up) {
-                (Some(wide), Some((_, up))) => self.occluded_each_up(wide, up, q, &slab, live, blocker),
-                (Some(wide), None) => self.occluded_each(wide, 0, q, &slab, live, blocker),
-                (None, _) => self.occluded_each(&self.nodes, 0, q, &slab, live, blocker),
+            return match &self.wide {
+                Some(wide) => self.occluded_each(wide, self.single_links(), 0, q, &slab, live, blocker),
+                None => self.occluded_each(&self.nodes, None, 0, q, &slab, live, blocker),
             };
         }
         self.occluded_packet(q, live, blocker)

@@ -393,8 +393,8 @@ impl Bvh {
                     }
                     blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
                 } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                    blocked =
-                        blocked | self.occluded_each(&self.nodes, e.child, q, &rays.slab, lanes, blocker);
+                    blocked = blocked
+                        | self.occluded_each(&self.nodes, None, e.child, q, &rays.slab, lanes, blocker);
                 } else {
                     let n = &self.nodes[e.child as usize];
                     let before = boxes;

@@ -6,7 +6,7 @@
 //! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
 //! merged back into its lane (Embree's "hybrid" traversal). Scattered secondary packets may walk this way
-//! from the root too (`Bvh::intersect_lanes`).
+//! over the whole tree too (`Bvh::intersect_lanes`).
 
 use super::collapse::MAX_WIDTH;
 use super::node::{far_to_near, RayNode};
@@ -115,8 +115,9 @@ impl Bvh {
 
     /// [`Bvh::intersect_1`] over the whole tree for a ray that leaves an item of the leaves of node `start`:
     /// that node's children first, then each ancestor's other children (each subtree walked down as from the
-    /// root) up to the root. No node that could hold a nearer hit than the best so far is left out, so the
-    /// answer is the same.
+    /// root) up to the root. An entry is dropped only when its box is entered beyond the best hit so far, so no
+    /// node that could hold the closest hit, or a hit at the same t with a lower key, is left out: whatever the
+    /// start, the answer is the same; the start decides the order of visits and the work.
     #[allow(clippy::too_many_arguments)]
     fn intersect_up<T: RayNode, Q: SingleLeafQuery>(
         &self,
@@ -236,7 +237,9 @@ impl Bvh {
     }
 
     /// The lanes of `lanes` walk the subtree of `nodes[root]` one ray at a time; their hits are merged into
-    /// `best`. `slab` is the packet prepared for slab tests.
+    /// `best`. `slab` is the packet prepared for slab tests. Over the whole tree (`root` 0) with `up`, the
+    /// links of `nodes`, a lane that leaves an item of the tree starts at that item's leaf
+    /// ([`Bvh::intersect_up`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn intersect_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
@@ -248,6 +251,7 @@ impl Bvh {
         lanes: F::Mask,
         best: &mut HitPacket<F>,
     ) {
+        debug_assert!(up.is_none_or(|up| up.nodes() == nodes.len()), "the links of another tree");
         let bits = F::move_mask(lanes);
         for i in set_bits(bits) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
@@ -263,42 +267,28 @@ impl Bvh {
         }
     }
 
-    /// The lanes of `lanes` blocked within their `t_max` in the subtree of `nodes[root]`, one ray at a time.
+    /// The lanes of `lanes` blocked within their `t_max` in the subtree of `nodes[root]`, one ray at a time;
+    /// over the whole tree (`root` 0) with its links `up`, each lane that leaves an item of the tree from that
+    /// item's leaf up ([`Bvh::occluded_up`]).
+    #[allow(clippy::too_many_arguments)]
     pub(super) fn occluded_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
+        up: Option<&Upward>,
         root: u32,
         q: &Q,
         slab: &SlabRay<F>,
         lanes: F::Mask,
         blocker: &mut u32,
     ) -> F::Mask {
-        let bits = F::move_mask(lanes);
-        let blocked = set_bits(bits)
-            .filter(|&i| self.occluded_1(nodes, root, &q.lane(i), &SlabRayN::lane(slab, i), blocker))
-            .fold(0, |b, i| b | 1 << i);
-        F::mask_from_bits(blocked)
-    }
-
-    /// The lanes of `lanes` blocked within their `t_max` in the whole tree `nodes`, one ray at a time: each
-    /// lane that leaves an item of the tree from that item's leaf up ([`Bvh::occluded_up`]), the others from
-    /// the root.
-    pub(super) fn occluded_each_up<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
-        &self,
-        nodes: &[T],
-        up: &Upward,
-        q: &Q,
-        slab: &SlabRay<F>,
-        lanes: F::Mask,
-        blocker: &mut u32,
-    ) -> F::Mask {
+        debug_assert!(up.is_none_or(|up| up.nodes() == nodes.len()), "the links of another tree");
         let bits = F::move_mask(lanes);
         let blocked = set_bits(bits)
             .filter(|&i| {
-                let (one, slab) = (q.lane(i), SlabRayN::lane(slab, i));
-                match one.departure(0).and_then(|item| up.leaf_of(item)) {
-                    Some(leaf) => self.occluded_up(nodes, up, leaf, &one, &slab, blocker),
-                    None => self.occluded_1(nodes, 0, &one, &slab, blocker),
+                let (one, ray) = (q.lane(i), SlabRayN::lane(slab, i));
+                match up.filter(|_| root == 0).and_then(|up| Some((up, up.leaf_of(one.departure(0)?)?))) {
+                    Some((up, leaf)) => self.occluded_up(nodes, up, leaf, &one, &ray, blocker),
+                    None => self.occluded_1(nodes, root, &one, &ray, blocker),
                 }
             })
             .fold(0, |b, i| b | 1 << i);

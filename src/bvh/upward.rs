@@ -4,7 +4,9 @@
 //! leaf up, it tests them first and may stop there. Every node a walk from the root would visit is still
 //! visited, each once (the ancestors without their own box tests), so the answer is the same; and since every
 //! ancestor's box holds the ray's start, a walk from the root visits them all too: an unblocked ray does the
-//! same work either way.
+//! same work either way. A closest-hit walk from the leaf up drops a box only when it is entered beyond the
+//! best hit so far, as from the root, so its answer is the same too; its work differs (the hits near the start
+//! come first and prune the rest, which pays where rays meet the neighbours of what they leave).
 
 use super::node::RayNode;
 
@@ -51,6 +53,11 @@ impl Upward {
     #[inline(always)]
     pub(crate) fn parent_of(&self, node: usize) -> (usize, usize) {
         split(self.parent[node])
+    }
+
+    /// The number of nodes of the tree these links are of.
+    pub(crate) fn nodes(&self) -> usize {
+        self.parent.len()
     }
 
     /// Bytes of the links.
