@@ -136,9 +136,9 @@ impl Bvh {
     /// trees' parent and leaf links ([`Bvh::up`], if built).
     pub(crate) fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
-        let wide = wide + self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes());
+        let links = self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes());
         let scalar = self.scalar.as_ref().map_or(0, |s| s.len() * size_of::<PairNode>());
-        self.nodes.len() * size_of::<Node>() + wide + scalar
+        self.nodes.len() * size_of::<Node>() + wide + links + scalar
     }
 
     /// The links of the single-ray tree ([`Bvh::up`]), when built.

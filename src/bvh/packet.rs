@@ -274,7 +274,7 @@ impl<F: Lanes> Entry<F> {
 }
 
 impl Bvh {
-    /// Pushes the children of `n` (but those of `skip`) that some lane enters within its `limit`, farthest
+    /// Pushes the children of `n` (but the slots of `skip_slots`) that some lane enters within its `limit`, farthest
     /// first, so the nearest is popped next. Adds the box tests to `tests`.
     #[inline(always)]
     fn push_children<F: Lanes>(
@@ -284,12 +284,12 @@ impl Bvh {
         limit: F,
         stack: &mut Stack<Entry<F>>,
         tests: &mut usize,
-        skip: u32,
+        skip_slots: u32,
     ) {
         let maybe = match &rays.frustum {
             Some(frustum) => frustum.maybe_entered(n),
             None => u32::MAX,
-        } & !skip;
+        } & !skip_slots;
         for c in n.slots_far_to_near(rays.octant).filter(|c| maybe >> c & 1 == 1) {
             *tests += 1;
             let near = rays.enter(n, c, limit);

@@ -113,8 +113,8 @@ impl Bvh {
         count_work(|| Work::single(work.1, T::WIDTH * work.0));
     }
 
-    /// [`Bvh::intersect_1`] over the whole tree for a ray that leaves an item of the leaves of node `start`:
-    /// that node's children first, then each ancestor's other children (each subtree walked down as from the
+    /// [`Bvh::intersect_1`] over the whole tree for a ray that leaves an item of leaf `leaf` (its node and
+    /// slot): that node's children first, then each ancestor's other children (each subtree walked down as from the
     /// root) up to the root. An entry is dropped only when its box is entered beyond the best hit so far, so no
     /// node that could hold the closest hit, or a hit at the same t with a lower key, is left out: whatever the
     /// start, the answer is the same; the start decides the order of visits and the work.
@@ -123,13 +123,13 @@ impl Bvh {
         &self,
         nodes: &[T],
         up: &Upward,
-        start: usize,
+        leaf: (usize, usize),
         q: &Q,
         slab: &SlabRayN<T::Lanes>,
         best: &mut HitPacket<f32>,
     ) {
         let mut stack = Stack::<Entry>::new();
-        let (mut node, mut skip_slots, mut work) = (start, 0, (0, 0));
+        let (mut node, mut skip_slots, mut work) = (leaf.0, 0, (0, 0));
         loop {
             work.0 += 1;
             let limit = best.t.min(q.t_max());
@@ -256,8 +256,8 @@ impl Bvh {
         for i in set_bits(bits) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
             let (one, ray) = (q.lane(i), SlabRayN::lane(slab, i));
-            match up.filter(|_| root == 0).and_then(|up| Some((up, up.leaf_of(one.departure(0)?)?.0))) {
-                Some((up, start)) => self.intersect_up(nodes, up, start, &one, &ray, &mut hit),
+            match departure_leaf(up, root, &one) {
+                Some((up, leaf)) => self.intersect_up(nodes, up, leaf, &one, &ray, &mut hit),
                 None => self.intersect_1(nodes, root, &one, &ray, &mut hit),
             }
             let at = F::mask_from_bits(1 << i);
@@ -286,7 +286,7 @@ impl Bvh {
         let blocked = set_bits(bits)
             .filter(|&i| {
                 let (one, ray) = (q.lane(i), SlabRayN::lane(slab, i));
-                match up.filter(|_| root == 0).and_then(|up| Some((up, up.leaf_of(one.departure(0)?)?))) {
+                match departure_leaf(up, root, &one) {
                     Some((up, leaf)) => self.occluded_up(nodes, up, leaf, &one, &ray, blocker),
                     None => self.occluded_1(nodes, root, &one, &ray, blocker),
                 }
@@ -294,6 +294,18 @@ impl Bvh {
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
+}
+
+/// Where a lane walked over the whole tree (`root` 0) starts when the tree has links `up` and the lane's ray
+/// leaves one of its items: that item's leaf (node and slot), with the links. `None`: from `root`.
+#[inline(always)]
+fn departure_leaf<'a, Q: SingleLeafQuery>(
+    up: Option<&'a Upward>,
+    root: u32,
+    one: &Q,
+) -> Option<(&'a Upward, (usize, usize))> {
+    let up = up.filter(|_| root == 0)?;
+    Some((up, up.leaf_of(one.departure(0)?)?))
 }
 
 /// Node `n` of an occlusion walk: the leaves among its children the ray enters (but the slots of
