@@ -17,6 +17,7 @@ use super::scalar::{pair_tree, PairNode};
 use super::slab::STACK;
 use super::upward::Upward;
 use super::wide_node::WideNode;
+use super::wide_starts::WideStarts;
 use super::{binary, piles, sah, BuildStats, Bvh};
 
 /// Which builder makes the binary tree that is collapsed into the wide nodes.
@@ -140,10 +141,14 @@ pub(crate) fn build<T: Send>(
     let (wide, scalar) = single;
     let (nodes, wide, scalar) = (packet_tree.0, wide.map(|(w, _)| w), scalar.map(|(s, _)| s));
     let extent = extent(&nodes[0]);
-    let up = wide
-        .as_ref()
-        .filter(|_| leaf_links)
-        .map(|w| rayon::join(|| Upward::of(&nodes, n), || Upward::of(w, n)));
+    let (up, wide_starts) = rayon::join(
+        || {
+            wide.as_ref()
+                .filter(|_| leaf_links)
+                .map(|w| rayon::join(|| Upward::of(&nodes, n), || Upward::of(w, n)))
+        },
+        || wide.as_ref().and_then(|w| WideStarts::of(&nodes, w)),
+    );
     let tree = Bvh {
         nodes,
         single_ray_lanes,
@@ -152,6 +157,7 @@ pub(crate) fn build<T: Send>(
         pad,
         wide,
         up,
+        wide_starts,
         scalar,
         scalar_walk: scalar_tree,
     };

@@ -35,6 +35,7 @@ mod single;
 mod slab;
 mod upward;
 pub(crate) mod wide_node;
+mod wide_starts;
 pub(crate) mod work;
 
 pub(crate) use build::{build, BuildOptions, Builder};
@@ -46,6 +47,7 @@ pub(crate) use wide_node::WideNode;
 use crate::geometry::{HitPacket, Pyramid, Ray};
 use crate::math::Vec3f;
 use crate::simd::Lanes;
+use single::Subtree;
 use slab::SlabRay;
 
 // The slab test and the frustum, shared with the particle tree's walk (`crate::accel::pkd`).
@@ -123,6 +125,9 @@ pub struct Bvh {
     /// Parent links of [`Bvh::nodes`] and of [`Bvh::wide`], and the leaf of every item in each, for walks
     /// that start at the leaves of the items their rays leave; built with the single-ray tree.
     pub(crate) up: Option<(upward::Upward, upward::Upward)>,
+    /// Where each subtree of [`Bvh::nodes`] lies in [`Bvh::wide`], so that a packet walk's lanes walk a sparse
+    /// subtree alone over the 8-wide nodes; built with the single-ray tree.
+    pub(crate) wide_starts: Option<wide_starts::WideStarts>,
     /// The binary tree before the collapse, in nodes of the scalar walk ([`PairNode`]), when the build was
     /// asked for it (`BuildOptions::scalar_tree`).
     pub(crate) scalar: Option<Vec<PairNode>>,
@@ -136,7 +141,8 @@ impl Bvh {
     /// trees' parent and leaf links ([`Bvh::up`], if built).
     pub(crate) fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
-        let links = self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes());
+        let links = self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes())
+            + self.wide_starts.as_ref().map_or(0, |w| w.bytes());
         let scalar = self.scalar.as_ref().map_or(0, |s| s.len() * size_of::<PairNode>());
         self.nodes.len() * size_of::<Node>() + wide + links + scalar
     }
@@ -185,8 +191,10 @@ impl Bvh {
     ) {
         let slab = SlabRay::new(q.ray());
         match &self.wide {
-            Some(wide) => self.intersect_each(wide, self.single_links(), 0, q, &slab, live, best),
-            None => self.intersect_each(&self.nodes, None, 0, q, &slab, live, best),
+            Some(wide) => {
+                self.intersect_each(wide, self.single_links(), Subtree::WHOLE, q, &slab, live, best)
+            }
+            None => self.intersect_each(&self.nodes, None, Subtree::WHOLE, q, &slab, live, best),
         }
     }
 
@@ -204,8 +212,10 @@ impl Bvh {
             }
             let slab = SlabRay::new(q.ray());
             return match &self.wide {
-                Some(wide) => self.occluded_each(wide, self.single_links(), 0, q, &slab, live, blocker),
-                None => self.occluded_each(&self.nodes, None, 0, q, &slab, live, blocker),
+                Some(wide) => {
+                    self.occluded_each(wide, self.single_links(), Subtree::WHOLE, q, &slab, live, blocker)
+                }
+                None => self.occluded_each(&self.nodes, None, Subtree::WHOLE, q, &slab, live, blocker),
             };
         }
         self.occluded_packet(q, live, blocker)

@@ -107,6 +107,10 @@ macro_rules! slot_access {
         fn leaves(&self) -> u32 {
             u32::from(self.leaves)
         }
+        #[inline(always)]
+        fn occupied(&self) -> usize {
+            usize::from(self.slots)
+        }
     };
 }
 pub(super) use slot_access;
@@ -126,6 +130,8 @@ pub(super) trait RayNode: Copy + Send + Sync {
     fn child(&self, c: usize) -> (u32, u8);
     /// Bit c set for each leaf child.
     fn leaves(&self) -> u32;
+    /// Occupied slots (they come first).
+    fn occupied(&self) -> usize;
 }
 
 impl RayNode for Node {

@@ -338,7 +338,7 @@ impl Bvh {
                     None => q.intersect(items, lanes, best),
                 }
             } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                self.intersect_each(&self.nodes, None, e.child, q, &rays.slab, lanes, best);
+                self.intersect_subtree(e.child, q, &rays.slab, lanes, best);
             } else {
                 let n = &self.nodes[e.child as usize];
                 let before = boxes;
@@ -393,8 +393,7 @@ impl Bvh {
                     }
                     blocked = blocked | q.occluded(first..first + usize::from(e.count), lanes, blocker);
                 } else if F::move_mask(lanes).count_ones() <= self.single_ray_lanes {
-                    blocked = blocked
-                        | self.occluded_each(&self.nodes, None, e.child, q, &rays.slab, lanes, blocker);
+                    blocked = blocked | self.occluded_subtree(e.child, q, &rays.slab, lanes, blocker);
                 } else {
                     let n = &self.nodes[e.child as usize];
                     let before = boxes;

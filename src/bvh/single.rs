@@ -14,6 +14,7 @@ use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
 use super::upward::Upward;
 use super::work::{count_work, Work};
 use super::{Bvh, LeafQuery, SingleLeafQuery};
+use super::{Node, WideNode};
 use crate::geometry::HitPacket;
 use crate::math::{Real, V3};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -24,6 +25,24 @@ struct Entry {
     child: u32,
     count: u8,
     near: f32,
+}
+
+/// Where a single-ray walk starts: a node and the slots of it to walk (all of them, or those that hold a subtree
+/// of the packet tree, [`super::wide_starts`]).
+#[derive(Clone, Copy, PartialEq, Eq)]
+pub(super) struct Subtree {
+    pub(super) node: u32,
+    pub(super) slots: u32,
+}
+
+impl Subtree {
+    /// The whole tree.
+    pub(super) const WHOLE: Subtree = Subtree { node: 0, slots: u32::MAX };
+
+    /// All of node `node`'s subtree.
+    pub(super) fn node(node: u32) -> Self {
+        Subtree { node, slots: u32::MAX }
+    }
 }
 
 /// One ray prepared for slab tests against a node's boxes at once (one per lane of `L`): lane `i` of a
@@ -97,17 +116,18 @@ impl Bvh {
         Some(entry(nearest.1))
     }
 
-    /// The closest hit of one ray in the subtree of node `root` (which the ray enters), merged into `best`.
+    /// The closest hit of one ray in the subtree `root` (whose node the ray enters), merged into `best`.
     fn intersect_1<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
-        root: u32,
+        root: Subtree,
         q: &Q,
         slab: &SlabRayN<T::Lanes>,
         best: &mut HitPacket<f32>,
     ) {
         let mut stack = Stack::<Entry>::new();
-        let next = self.push_but_nearest(&nodes[root as usize], slab, best.t.min(q.t_max()), &mut stack, 0);
+        let limit = best.t.min(q.t_max());
+        let next = self.push_but_nearest(&nodes[root.node as usize], slab, limit, &mut stack, !root.slots);
         let mut work = (1, 0);
         self.intersect_below(nodes, next, &mut stack, q, slab, best, &mut work);
         count_work(|| Work::single(work.1, T::WIDTH * work.0));
@@ -174,21 +194,22 @@ impl Bvh {
         }
     }
 
-    /// Whether one ray is blocked within `t_max` in the subtree of node `root`; stops at the first blocker
-    /// found, left in `blocker`. Any hit will do, so a node's entered leaves are tested on the spot, before
-    /// its entered inner children are pushed, and nothing is ordered by distance.
+    /// Whether one ray is blocked within `t_max` in the subtree `root`; stops at the first blocker found, left
+    /// in `blocker`. Any hit will do, so a node's entered leaves are tested on the spot, before its entered
+    /// inner children are pushed, and nothing is ordered by distance.
     fn occluded_1<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
-        root: u32,
+        root: Subtree,
         q: &Q,
         slab: &SlabRayN<T::Lanes>,
         blocker: &mut u32,
     ) -> bool {
         let mut stack = Stack::<u32>::new();
-        let mut work = (0, 0);
-        stack.push(root);
-        let blocked = occluded_below(nodes, &mut stack, q, slab, blocker, &mut work);
+        let mut work = (1, 0);
+        let n = &nodes[root.node as usize];
+        let blocked = occluded_visit(n, 0, !root.slots, q, slab, &mut stack, blocker, &mut work.1)
+            || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work);
         count_work(|| Work::single(work.1, T::WIDTH * work.0));
         blocked
     }
@@ -236,16 +257,16 @@ impl Bvh {
         blocked
     }
 
-    /// The lanes of `lanes` walk the subtree of `nodes[root]` one ray at a time; their hits are merged into
-    /// `best`. `slab` is the packet prepared for slab tests. Over the whole tree (`root` 0) with `up`, the
-    /// links of `nodes`, a lane that leaves an item of the tree starts at that item's leaf
+    /// The lanes of `lanes` walk the subtree `root` of `nodes` one ray at a time; their hits are merged into
+    /// `best`. `slab` is the packet prepared for slab tests. Over the whole tree ([`Subtree::WHOLE`]) with
+    /// `up`, the links of `nodes`, a lane that leaves an item of the tree starts at that item's leaf
     /// ([`Bvh::intersect_up`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn intersect_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
         up: Option<&Upward>,
-        root: u32,
+        root: Subtree,
         q: &Q,
         slab: &SlabRay<F>,
         lanes: F::Mask,
@@ -267,15 +288,15 @@ impl Bvh {
         }
     }
 
-    /// The lanes of `lanes` blocked within their `t_max` in the subtree of `nodes[root]`, one ray at a time;
-    /// over the whole tree (`root` 0) with its links `up`, each lane that leaves an item of the tree from that
-    /// item's leaf up ([`Bvh::occluded_up`]).
+    /// The lanes of `lanes` blocked within their `t_max` in the subtree `root` of `nodes`, one ray at a time;
+    /// over the whole tree ([`Subtree::WHOLE`]) with its links `up`, each lane that leaves an item of the tree
+    /// from that item's leaf up ([`Bvh::occluded_up`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn occluded_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
         nodes: &[T],
         up: Option<&Upward>,
-        root: u32,
+        root: Subtree,
         q: &Q,
         slab: &SlabRay<F>,
         lanes: F::Mask,
@@ -296,15 +317,68 @@ impl Bvh {
     }
 }
 
-/// Where a lane walked over the whole tree (`root` 0) starts when the tree has links `up` and the lane's ray
-/// leaves one of its items: that item's leaf (node and slot), with the links. `None`: from `root`.
+impl Bvh {
+    /// Where the subtree of packet node `node` is walked one ray at a time: in the single-ray tree where it is
+    /// built ([`Bvh::wide_starts`]), else in the packet tree.
+    #[inline(always)]
+    fn subtree_nodes(&self, node: u32) -> SubtreeIn<'_> {
+        match (&self.wide, &self.wide_starts) {
+            (Some(wide), Some(starts)) => {
+                let (node, slots) = starts.of_node(node);
+                SubtreeIn::Single(wide, Subtree { node, slots })
+            }
+            _ => SubtreeIn::Packet(&self.nodes, Subtree::node(node)),
+        }
+    }
+
+    /// The lanes of `lanes` walk the subtree of packet node `node` one ray at a time ([`Bvh::intersect_each`]),
+    /// over 8-wide nodes where the single-ray tree is built.
+    pub(super) fn intersect_subtree<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        node: u32,
+        q: &Q,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        best: &mut HitPacket<F>,
+    ) {
+        match self.subtree_nodes(node) {
+            SubtreeIn::Single(nodes, root) => self.intersect_each(nodes, None, root, q, slab, lanes, best),
+            SubtreeIn::Packet(nodes, root) => self.intersect_each(nodes, None, root, q, slab, lanes, best),
+        }
+    }
+
+    /// The lanes of `lanes` blocked in the subtree of packet node `node`, one ray at a time
+    /// ([`Bvh::occluded_each`]), over 8-wide nodes where the single-ray tree is built.
+    pub(super) fn occluded_subtree<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        node: u32,
+        q: &Q,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        blocker: &mut u32,
+    ) -> F::Mask {
+        match self.subtree_nodes(node) {
+            SubtreeIn::Single(nodes, root) => self.occluded_each(nodes, None, root, q, slab, lanes, blocker),
+            SubtreeIn::Packet(nodes, root) => self.occluded_each(nodes, None, root, q, slab, lanes, blocker),
+        }
+    }
+}
+
+/// A subtree of the packet tree, in the tree whose nodes walk it.
+enum SubtreeIn<'a> {
+    Single(&'a [WideNode], Subtree),
+    Packet(&'a [Node], Subtree),
+}
+
+/// Where a lane walked over the whole tree starts when the tree has links `up` and the lane's ray leaves one
+/// of its items: that item's leaf (node and slot), with the links. `None`: from `root`.
 #[inline(always)]
 fn departure_leaf<'a, Q: SingleLeafQuery>(
     up: Option<&'a Upward>,
-    root: u32,
+    root: Subtree,
     one: &Q,
 ) -> Option<(&'a Upward, (usize, usize))> {
-    let up = up.filter(|_| root == 0)?;
+    let up = up.filter(|_| root == Subtree::WHOLE)?;
     Some((up, up.leaf_of(one.departure(0)?)?))
 }
 
