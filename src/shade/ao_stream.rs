@@ -32,7 +32,8 @@ impl<F: Lanes> Tracer<'_, F> {
             shift[i] = rotation(rays.ray.dir.x.lane(i), rays.ray.dir.y.lane(i), rays.ray.dir.z.lane(i));
         }
         let mut stream = std::mem::take(&mut self.ao_stream);
-        stream.fill::<F>(s, bits, &shift, ao);
+        let prims = std::array::from_fn(|i| if i < F::K { hit.prim.lane(i) } else { 0 });
+        stream.fill::<F>(s, bits, &prims, &shift, ao);
         self.counts.ao += stream.len as u64;
         let inside = F::move_mask(s.inside);
         let mut open = [0u32; 16];
@@ -71,33 +72,53 @@ pub(crate) struct AoStream {
     lane: Vec<u8>,
     /// Rays before the padding.
     len: usize,
-    /// Each ray before sorting: its cell, its lane and its direction.
-    unsorted: Vec<(u8, u8, [f32; 3])>,
+    /// Each ray before sorting: its key, its lane and its direction.
+    unsorted: Vec<(u16, u8, [f32; 3])>,
+    /// Rays per key.
+    count: Vec<u32>,
 }
 
 impl AoStream {
     /// Every sample of every lane of `bits` (their directions computed as by-pixel packets compute them,
-    /// sample by sample in lanes), sorted by cell by a counting sort.
-    fn fill<F: Lanes>(&mut self, s: &Surface<F>, bits: u32, shift: &[(f64, f64); 16], ao: Ao) {
+    /// sample by sample in lanes), sorted by a counting sort by the primitive they leave (`prims`, per lane),
+    /// then by cell: most packets then leave one primitive, and their walks start at its leaf.
+    fn fill<F: Lanes>(
+        &mut self,
+        s: &Surface<F>,
+        bits: u32,
+        prims: &[u32; 16],
+        shift: &[(f64, f64); 16],
+        ao: Ao,
+    ) {
         self.unsorted.clear();
-        let mut count = [0u32; CELLS];
+        let (mut group, mut distinct, mut groups) = ([0u16; 16], [0u32; 16], 0);
+        for i in set_bits(bits) {
+            let g = distinct[..groups].iter().position(|&p| p == prims[i]).unwrap_or_else(|| {
+                distinct[groups] = prims[i];
+                groups += 1;
+                groups - 1
+            });
+            group[i] = (g * CELLS) as u16;
+        }
+        let count = &mut self.count;
+        count.clear();
+        count.resize(groups * CELLS, 0);
         for k in 0..ao.samples {
             let local = local_directions::<F>(set_bits(bits).map(|i| (i, shift[i], k)), ao.samples);
             let d = around(s.normal, local);
             let (x, y, z) = (d.x.to_array(), d.y.to_array(), d.z.to_array());
             for i in set_bits(bits) {
                 let v = [x.as_ref()[i], y.as_ref()[i], z.as_ref()[i]];
-                let cell = direction_cell(v);
-                count[usize::from(cell)] += 1;
-                self.unsorted.push((cell, i as u8, v));
+                let key = group[i] + u16::from(direction_cell(v));
+                count[usize::from(key)] += 1;
+                self.unsorted.push((key, i as u8, v));
             }
         }
-        let mut next = [0u32; CELLS];
         let mut sum = 0;
-        for (c, n) in count.iter().zip(next.iter_mut()) {
-            *n = sum;
-            sum += c;
+        for c in count.iter_mut() {
+            (*c, sum) = (sum, sum + *c);
         }
+        let next = count;
         self.len = self.unsorted.len();
         let padded = self.len.div_ceil(F::K) * F::K;
         let lanes = |v: &F| {
