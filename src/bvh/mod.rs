@@ -18,7 +18,8 @@
 //! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
 //! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
 //! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built),
-//! `upward.rs` (parent links, for walks that start at the leaf of the item a ray leaves).
+//! `upward.rs` (parent links, for walks that start at the leaf of the item a ray leaves), `wide_starts.rs`
+//! (where each packet subtree lies in the 8-wide tree, for its lanes walked alone).
 
 mod binary;
 pub(crate) mod build;
@@ -137,8 +138,8 @@ pub struct Bvh {
 }
 
 impl Bvh {
-    /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built) and of the
-    /// trees' parent and leaf links ([`Bvh::up`], if built).
+    /// Bytes of the node arrays (the packet tree, and the single-ray and scalar trees, if built), of the
+    /// trees' parent and leaf links ([`Bvh::up`]) and of [`Bvh::wide_starts`], if built.
     pub(crate) fn bytes(&self) -> usize {
         let wide = self.wide.as_ref().map_or(0, |w| w.len() * size_of::<WideNode>());
         let links = self.up.as_ref().map_or(0, |(packet, single)| packet.bytes() + single.bytes())

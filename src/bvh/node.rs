@@ -130,7 +130,7 @@ pub(super) trait RayNode: Copy + Send + Sync {
     fn child(&self, c: usize) -> (u32, u8);
     /// Bit c set for each leaf child.
     fn leaves(&self) -> u32;
-    /// Occupied slots (they come first).
+    /// The number of occupied slots (they come first).
     fn occupied(&self) -> usize;
 }
 

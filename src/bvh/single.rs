@@ -5,8 +5,9 @@
 //! subtree of the 4-wide tree that a packet enters with few live lanes (incoherent secondary rays after a
 //! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
-//! merged back into its lane (Embree's "hybrid" traversal). Scattered secondary packets may walk this way
-//! over the whole tree too (`Bvh::intersect_lanes`).
+//! merged back into its lane (Embree's "hybrid" traversal). Such a subtree is walked in the 8-wide tree where
+//! the scene has one and [`super::wide_starts`] places it there, else in the 4-wide tree. Scattered secondary
+//! packets may walk this way over the whole tree too (`Bvh::intersect_lanes`).
 
 use super::collapse::MAX_WIDTH;
 use super::node::{far_to_near, RayNode};
@@ -31,7 +32,9 @@ struct Entry {
 /// of the packet tree, [`super::wide_starts`]).
 #[derive(Clone, Copy, PartialEq, Eq)]
 pub(super) struct Subtree {
+    /// The node the walk starts at.
     pub(super) node: u32,
+    /// Bit c set for each of its slots to walk; `u32::MAX` for all of them.
     pub(super) slots: u32,
 }
 
@@ -40,7 +43,7 @@ impl Subtree {
     pub(super) const WHOLE: Subtree = Subtree { node: 0, slots: u32::MAX };
 
     /// All of node `node`'s subtree.
-    pub(super) fn node(node: u32) -> Self {
+    pub(super) fn whole_of(node: u32) -> Self {
         Subtree { node, slots: u32::MAX }
     }
 }
@@ -327,7 +330,7 @@ impl Bvh {
                 let (node, slots) = starts.of_node(node);
                 SubtreeIn::Single(wide, Subtree { node, slots })
             }
-            _ => SubtreeIn::Packet(&self.nodes, Subtree::node(node)),
+            _ => SubtreeIn::Packet(&self.nodes, Subtree::whole_of(node)),
         }
     }
 

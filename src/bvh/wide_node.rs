@@ -1,7 +1,8 @@
 //! The single-ray tree: the same binary tree collapsed into 8-wide nodes, so one `f32x8` slab test covers a
 //! node's children (one AVX2 register) and a ray walks about half as many levels as in the 4-wide tree.
 //! Built beside the 4-wide packet tree only for scenes that trace secondary rays (shadow, mirror or
-//! transmitted), whose lanes the K = 1 tracer walks one ray at a time from the root.
+//! transmitted, ambient occlusion), whose lanes the K = 1 tracer walks one ray at a time, as do the lanes of
+//! a packet in a subtree it enters with few of them ([`super::wide_starts`]).
 
 use wide::f32x8;
 

@@ -2,8 +2,9 @@
 //! from one binary tree, so every packet node is some binary node; in the single-ray tree that binary node is
 //! either a node of its own or one collapsed inside a node, whose children under it then make up the same
 //! subtree. A packet walk that hands a sparse subtree to its lanes one ray at a time
-//! (`Bvh::single_ray_lanes`) can so walk it over 8-wide nodes, about half as many levels as the 4-wide
-//! subtree, visiting the same leaves: the same answers.
+//! (`Bvh::single_ray_lanes`) can so walk it over 8-wide nodes (about three binary levels a node against the
+//! 4-wide tree's two), over the same leaves; which of them a ray tests depends on the order of visits, its
+//! answer does not (the `LeafQuery` contract).
 //!
 //! Subtrees are matched by their item ranges. Where the binary tree's leaves hold the items in depth-first
 //! order (bareray's SAH builder partitions them in place, and so does the balanced fallback), a binary node's
@@ -122,7 +123,7 @@ mod tests {
 
     /// Every packet node's start holds exactly its items, from the deepest single-ray node that holds them
     /// all: all of that node's slots exactly where the two nodes are the same binary node.
-    /// Whether the table was built (the items of every subtree one range).
+    /// Checks the table, if built, and returns whether it was (the items of every subtree one range).
     fn check(src: &[obvhs::bvh2::node::Bvh2Node]) -> bool {
         let (packet, _) = collapse::<Node>(src);
         let (single, _) = collapse::<WideNode>(src);
@@ -150,8 +151,9 @@ mod tests {
             assert!(slots.count_ones() > 1 || packet.len() == 1, "packet node {p}: one slot {slots:#b}");
             (partial, whole) = if own { (partial, whole + 1) } else { (partial + 1, whole) };
         }
-        // Both cases occur in trees deeper than a node or two.
-        assert!(packet.len() < 8 || partial > 0 && whole > 0, "{partial} partial, {whole} whole starts");
+        // Both cases occur in trees deeper than a node or two (the root always starts whole).
+        assert!(whole > 0, "the root starts whole");
+        assert!(packet.len() < 8 || partial > 0, "{partial} partial starts of {} nodes", packet.len());
         true
     }
 
@@ -182,5 +184,24 @@ mod tests {
                 check(&binary::build_binary(&boxes, params).nodes);
             }
         }
+    }
+
+    /// A tree whose leaves do not hold their items in depth-first order (the left half's leaves hold the even
+    /// items, the right half's the odd ones) gets no table; the same tree with its leaves in order gets one.
+    #[test]
+    fn leaves_out_of_order_get_no_table() {
+        use obvhs::bvh2::node::Bvh2Node;
+        // obvhs's layout: inner node i's children at nodes 2i + 1 and 2i + 2 here; leaves 7 to 14.
+        let tree = |items: [u32; 8]| -> Vec<Bvh2Node> {
+            let unit = Aabb { min: glam::Vec3A::ZERO, max: glam::Vec3A::ONE };
+            let inner = (0..7).map(|i| Bvh2Node::new(unit, 0, 2 * i + 1));
+            inner.chain(items.map(|item| Bvh2Node::new(unit, 1, item))).collect()
+        };
+        let src = tree([0, 2, 4, 6, 1, 3, 5, 7]);
+        let (packet, _) = collapse::<Node>(&src);
+        let (single, _) = collapse::<WideNode>(&src);
+        assert!(packet.len() > 1, "the packet tree has nodes below the root");
+        assert!(WideStarts::of(&packet, &single).is_none(), "items out of order taken as ranges");
+        assert!(check(&tree([0, 1, 2, 3, 4, 5, 6, 7])), "leaves in order get a table");
     }
 }

@@ -4,8 +4,9 @@
 //! point, skipping the departure primitive); the colour is the surface's times the share that nothing blocks.
 //! With K or more samples a packet holds K directions of one hit (one origin: coherent walks), unless the
 //! camera packet's hits lie within a sphere's diameter of each other; then, and with fewer samples than K,
-//! all the camera packet's rays are regrouped by direction into full packets (`ao_stream.rs`). Each ray is
-//! the same in both, and each ray's answer is exact, so the counts are the same bits either way.
+//! all the camera packet's rays are regrouped by the primitive they leave and by direction into full packets
+//! (`ao_stream.rs`). Each ray is the same in both, and each ray's answer is exact, so the counts are the same
+//! bits either way.
 //!
 //! The directions of a hit are a Fibonacci lattice over the unit square (`((k + ½)/n, k/φ)` mod 1, φ the
 //! golden ratio: evenly spread in both coordinates, so in radius and in azimuth) shifted by a random

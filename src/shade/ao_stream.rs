@@ -1,9 +1,11 @@
 //! Ambient occlusion with fewer samples than K, or with hits close together: every sample of every found
 //! lane of a camera packet, regrouped by direction, then traced K at a time. The rays come from
-//! neighbouring hit points; sorted by the cell of their direction, each packet holds rays running nearly
-//! parallel from nearby origins, which walk the tree together, where one sample of each of K pixels (random
-//! directions) split at once. Each ray is the one [`super::ao`]'s lattice gives its pixel and sample, and
-//! each ray's answer is exact, so the counts are the same bits in any grouping (PERF.md, Register).
+//! neighbouring hit points; sorted by the primitive they leave, then by the cell of their direction, each
+//! packet holds rays running nearly parallel from nearby origins, which walk the tree together, where one
+//! sample of each of K pixels (random directions) split at once; a packet whose rays all leave one sphere
+//! starts its walk at that sphere's leaf. Each ray is the one [`super::ao`]'s lattice gives its pixel and
+//! sample, and each ray's answer is exact, so the counts are the same bits in any grouping (PERF.md,
+//! Register).
 
 use crate::accel::{traced, RayKind};
 use crate::geometry::{DeparturePacket, HitPacket, RayPacket};
@@ -62,9 +64,10 @@ impl<F: Lanes> Tracer<'_, F> {
     }
 }
 
-/// A packet's ambient occlusion rays in structure-of-arrays form, ordered by the cell of their direction
-/// ([`direction_cell`]): origins, directions and the lane each came from, padded to whole packets (the
-/// padding's lanes are never live). Kept by the tracer and reused from packet to packet.
+/// A packet's ambient occlusion rays in structure-of-arrays form, ordered by the primitive they leave, then
+/// by the cell of their direction ([`direction_cell`]): origins, directions and the lane each came from,
+/// padded to whole packets (the padding's lanes are never live). Kept by the tracer and reused from packet to
+/// packet.
 #[derive(Default)]
 pub(crate) struct AoStream {
     origin: [Vec<f32>; 3],
@@ -74,14 +77,15 @@ pub(crate) struct AoStream {
     len: usize,
     /// Each ray before sorting: its key, its lane and its direction.
     unsorted: Vec<(u16, u8, [f32; 3])>,
-    /// Rays per key.
+    /// Rays per key, then (after the prefix sums) where the next ray of each key goes.
     count: Vec<u32>,
 }
 
 impl AoStream {
     /// Every sample of every lane of `bits` (their directions computed as by-pixel packets compute them,
     /// sample by sample in lanes), sorted by a counting sort by the primitive they leave (`prims`, per lane),
-    /// then by cell: most packets then leave one primitive, and their walks start at its leaf.
+    /// then by cell: packets then leave one primitive wherever a primitive's rays fill them (K or more
+    /// samples over the lanes that leave it).
     fn fill<F: Lanes>(
         &mut self,
         s: &Surface<F>,
@@ -91,15 +95,7 @@ impl AoStream {
         ao: Ao,
     ) {
         self.unsorted.clear();
-        let (mut group, mut distinct, mut groups) = ([0u16; 16], [0u32; 16], 0);
-        for i in set_bits(bits) {
-            let g = distinct[..groups].iter().position(|&p| p == prims[i]).unwrap_or_else(|| {
-                distinct[groups] = prims[i];
-                groups += 1;
-                groups - 1
-            });
-            group[i] = (g * CELLS) as u16;
-        }
+        let (group, groups) = groups(bits, prims);
         let count = &mut self.count;
         count.clear();
         count.resize(groups * CELLS, 0);
@@ -132,9 +128,9 @@ impl AoStream {
         }
         self.lane.clear();
         self.lane.resize(padded, self.unsorted.first().map_or(0, |r| r.1));
-        for &(cell, i, v) in &self.unsorted {
-            let at = next[usize::from(cell)] as usize;
-            next[usize::from(cell)] += 1;
+        for &(key, i, v) in &self.unsorted {
+            let at = next[usize::from(key)] as usize;
+            next[usize::from(key)] += 1;
             for a in 0..3 {
                 self.origin[a][at] = point[a][usize::from(i)];
                 self.dir[a][at] = v[a];
@@ -142,6 +138,21 @@ impl AoStream {
             self.lane[at] = i;
         }
     }
+}
+
+/// Each lane of `bits` numbered by the primitive it leaves (`prims`), in the order the lanes first name them,
+/// times [`CELLS`]: the first part of its rays' sort keys; and the number of primitives.
+fn groups(bits: u32, prims: &[u32; 16]) -> ([u16; 16], usize) {
+    let (mut group, mut distinct, mut groups) = ([0u16; 16], [0u32; 16], 0);
+    for i in set_bits(bits) {
+        let g = distinct[..groups].iter().position(|&p| p == prims[i]).unwrap_or_else(|| {
+            distinct[groups] = prims[i];
+            groups += 1;
+            groups - 1
+        });
+        group[i] = (g * CELLS) as u16;
+    }
+    (group, groups)
 }
 
 /// Cells of [`direction_cell`]: an 8×8 grid.

@@ -121,8 +121,9 @@ fn bvh_equals_brute_force_at_every_width() {
     }
 }
 
-/// A scene that traces shadow rays gets the 8-wide single-ray tree, which K = 1 walks from the root; packets
-/// keep the 4-wide tree. Both give brute force's answer, bit for bit.
+/// A scene that traces shadow rays gets the 8-wide single-ray tree, which K = 1 walks from the root, and in
+/// which packets walk the subtrees they enter with few lanes one ray at a time; packets walk the 4-wide tree.
+/// All give brute force's answer, bit for bit.
 #[test]
 fn single_ray_tree_equals_brute_force() {
     use bareray::scene::desc::{Falloff, LightDesc};
@@ -448,12 +449,20 @@ fn frustum_culling_keeps_grazing_rays_from_near_and_far() {
 }
 
 /// Packets walk sparse subtrees one ray at a time (`Bvh::single_ray_lanes`): at every threshold, from never
-/// to always, the answer is brute force's.
+/// to always, the answer is brute force's; unlit, in the 4-wide tree, and lit, in the 8-wide single-ray tree
+/// (`bvh/wide_starts.rs`).
 #[test]
 fn single_ray_switch_keeps_the_brute_force_answer() {
-    for (n, seed) in [(300, 9), (2000, 10)] {
-        let desc = field(n, seed);
+    use bareray::scene::desc::{Falloff, LightDesc};
+    for (n, seed, lit) in [(300, 9, false), (2000, 10, false), (300, 11, true), (2000, 12, true)] {
+        let mut desc = field(n, seed);
+        if lit {
+            let position = DVec3::new(0.0, 3.0, -3.0);
+            desc.lights.push(LightDesc { position, color: Rgb::all(1.0), falloff: Falloff::None });
+        }
         let mut bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
+        let tree = bvh.geometry.sphere_bvh.as_ref().unwrap();
+        assert_eq!(tree.wide_starts.is_some(), lit, "{n} spheres: subtrees placed in the 8-wide tree");
         let brute = common::compile_with(&desc, Accel::Brute).unwrap();
         let packets = coherent_rays(2000, 16, seed + 100);
         // Full packets start above the threshold: a difference can only come from switching inside the tree.
