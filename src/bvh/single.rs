@@ -15,7 +15,6 @@ use super::slab::{near_side, slab_entry_ordered, SlabRay, Stack};
 use super::upward::Upward;
 use super::work::{count_work, Work};
 use super::{Bvh, LeafQuery, SingleLeafQuery};
-use super::{Node, WideNode};
 use crate::geometry::HitPacket;
 use crate::math::{Real, V3};
 use crate::simd::{set_bits, IdLanes, Lanes};
@@ -318,59 +317,6 @@ impl Bvh {
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
-}
-
-impl Bvh {
-    /// Where the subtree of packet node `node` is walked one ray at a time: in the single-ray tree where it is
-    /// built ([`Bvh::wide_starts`]), else in the packet tree.
-    #[inline(always)]
-    fn subtree_nodes(&self, node: u32) -> SubtreeIn<'_> {
-        match (&self.wide, &self.wide_starts) {
-            (Some(wide), Some(starts)) => {
-                let (node, slots) = starts.of_node(node);
-                SubtreeIn::Single(wide, Subtree { node, slots })
-            }
-            _ => SubtreeIn::Packet(&self.nodes, Subtree::whole_of(node)),
-        }
-    }
-
-    /// The lanes of `lanes` walk the subtree of packet node `node` one ray at a time ([`Bvh::intersect_each`]),
-    /// over 8-wide nodes where the single-ray tree is built.
-    pub(super) fn intersect_subtree<F: Lanes, Q: LeafQuery<F>>(
-        &self,
-        node: u32,
-        q: &Q,
-        slab: &SlabRay<F>,
-        lanes: F::Mask,
-        best: &mut HitPacket<F>,
-    ) {
-        match self.subtree_nodes(node) {
-            SubtreeIn::Single(nodes, root) => self.intersect_each(nodes, None, root, q, slab, lanes, best),
-            SubtreeIn::Packet(nodes, root) => self.intersect_each(nodes, None, root, q, slab, lanes, best),
-        }
-    }
-
-    /// The lanes of `lanes` blocked in the subtree of packet node `node`, one ray at a time
-    /// ([`Bvh::occluded_each`]), over 8-wide nodes where the single-ray tree is built.
-    pub(super) fn occluded_subtree<F: Lanes, Q: LeafQuery<F>>(
-        &self,
-        node: u32,
-        q: &Q,
-        slab: &SlabRay<F>,
-        lanes: F::Mask,
-        blocker: &mut u32,
-    ) -> F::Mask {
-        match self.subtree_nodes(node) {
-            SubtreeIn::Single(nodes, root) => self.occluded_each(nodes, None, root, q, slab, lanes, blocker),
-            SubtreeIn::Packet(nodes, root) => self.occluded_each(nodes, None, root, q, slab, lanes, blocker),
-        }
-    }
-}
-
-/// A subtree of the packet tree, in the tree whose nodes walk it.
-enum SubtreeIn<'a> {
-    Single(&'a [WideNode], Subtree),
-    Packet(&'a [Node], Subtree),
 }
 
 /// Where a lane walked over the whole tree starts when the tree has links `up` and the lane's ray leaves one

@@ -2,9 +2,9 @@
 //! from one binary tree, so every packet node is some binary node; in the single-ray tree that binary node is
 //! either a node of its own or one collapsed inside a node, whose children under it then make up the same
 //! subtree. A packet walk that hands a sparse subtree to its lanes one ray at a time
-//! (`Bvh::single_ray_lanes`) can so walk it over 8-wide nodes (about three binary levels a node against the
-//! 4-wide tree's two), over the same leaves; which of them a ray tests depends on the order of visits, its
-//! answer does not (the `LeafQuery` contract).
+//! (`Bvh::single_ray_lanes`; [`Bvh::intersect_subtree`], [`Bvh::occluded_subtree`]) can so walk it over
+//! 8-wide nodes (about three binary levels a node against the 4-wide tree's two), over the same leaves; which
+//! of them a ray tests depends on the order of visits, its answer does not (the `LeafQuery` contract).
 //!
 //! Subtrees are matched by their item ranges. Where the binary tree's leaves hold the items in depth-first
 //! order (bareray's SAH builder partitions them in place, and so does the balanced fallback), a binary node's
@@ -15,6 +15,11 @@
 use rayon::prelude::*;
 
 use super::node::RayNode;
+use super::single::Subtree;
+use super::slab::SlabRay;
+use super::{Bvh, LeafQuery, Node, WideNode};
+use crate::geometry::HitPacket;
+use crate::simd::Lanes;
 
 /// For each node of a packet tree, the node of the single-ray tree and its slots that hold the same subtree.
 #[derive(Clone, Debug, Default)]
@@ -99,6 +104,59 @@ fn start<S: RayNode>(single: &[S], ranges: &[(u32, u32)], range: (u32, u32)) -> 
             }
         }
     }
+}
+
+impl Bvh {
+    /// Where the subtree of packet node `node` is walked one ray at a time: in the single-ray tree where it is
+    /// built ([`Bvh::wide_starts`]), else in the packet tree.
+    #[inline(always)]
+    fn subtree_nodes(&self, node: u32) -> SubtreeIn<'_> {
+        match (&self.wide, &self.wide_starts) {
+            (Some(wide), Some(starts)) => {
+                let (node, slots) = starts.of_node(node);
+                SubtreeIn::Single(wide, Subtree { node, slots })
+            }
+            _ => SubtreeIn::Packet(&self.nodes, Subtree::whole_of(node)),
+        }
+    }
+
+    /// The lanes of `lanes` walk the subtree of packet node `node` one ray at a time ([`Bvh::intersect_each`]),
+    /// over 8-wide nodes where the single-ray tree is built.
+    pub(super) fn intersect_subtree<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        node: u32,
+        q: &Q,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        best: &mut HitPacket<F>,
+    ) {
+        match self.subtree_nodes(node) {
+            SubtreeIn::Single(nodes, root) => self.intersect_each(nodes, None, root, q, slab, lanes, best),
+            SubtreeIn::Packet(nodes, root) => self.intersect_each(nodes, None, root, q, slab, lanes, best),
+        }
+    }
+
+    /// The lanes of `lanes` blocked in the subtree of packet node `node`, one ray at a time
+    /// ([`Bvh::occluded_each`]), over 8-wide nodes where the single-ray tree is built.
+    pub(super) fn occluded_subtree<F: Lanes, Q: LeafQuery<F>>(
+        &self,
+        node: u32,
+        q: &Q,
+        slab: &SlabRay<F>,
+        lanes: F::Mask,
+        blocker: &mut u32,
+    ) -> F::Mask {
+        match self.subtree_nodes(node) {
+            SubtreeIn::Single(nodes, root) => self.occluded_each(nodes, None, root, q, slab, lanes, blocker),
+            SubtreeIn::Packet(nodes, root) => self.occluded_each(nodes, None, root, q, slab, lanes, blocker),
+        }
+    }
+}
+
+/// A subtree of the packet tree, in the tree whose nodes walk it.
+enum SubtreeIn<'a> {
+    Single(&'a [WideNode], Subtree),
+    Packet(&'a [Node], Subtree),
 }
 
 #[cfg(test)]
