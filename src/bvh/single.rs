@@ -1,7 +1,7 @@
 //! Single-ray traversal, SIMD over a node's children: one ray's slab test against all of a node's boxes in one
 //! pass (`f32x4` over the 4-wide packet nodes, `f32x8` over the 8-wide single-ray tree; the walk is generic
 //! over [`RayNode`]). It serves K = 1 (over the 8-wide tree when the scene has one: from the root, or for a
-//! ray leaving an item from that item's leaf up, [`Bvh::intersect_up`], [`Bvh::occluded_up`]) and every
+//! ray leaving an item from that item's leaf up, [`Bvh::intersect_from`], [`Bvh::occluded_from`]) and every
 //! subtree of the 4-wide tree that a packet enters with few live lanes (incoherent secondary rays after a
 //! bounce, and camera packets that have spread over many small spheres deep in the tree), where the packet
 //! traversal would carry mostly dead lanes: each live lane then walks the subtree alone, and its result is
@@ -118,48 +118,28 @@ impl Bvh {
         Some(entry(nearest.1))
     }
 
-    /// The closest hit of one ray in the subtree `root` (whose node the ray enters), merged into `best`.
-    fn intersect_1<T: RayNode, Q: SingleLeafQuery>(
-        &self,
-        nodes: &[T],
-        root: Subtree,
-        q: &Q,
-        slab: &SlabRayN<T::Lanes>,
-        best: &mut HitPacket<f32>,
-    ) {
-        let mut stack = Stack::<Entry>::new();
-        let limit = best.t.min(q.t_max());
-        let next = self.push_but_nearest(&nodes[root.node as usize], slab, limit, &mut stack, !root.slots);
-        let mut work = (1, 0);
-        self.intersect_below(nodes, next, &mut stack, q, slab, best, &mut work);
-        count_work(|| Work::single(work.1, T::WIDTH * work.0));
-    }
-
-    /// [`Bvh::intersect_1`] over the whole tree for a ray that leaves an item of leaf `leaf` (its node and
-    /// slot): that node's children first, then each ancestor's other children (each subtree walked down as from the
-    /// root) up to the root. An entry is dropped only when its box is entered beyond the best hit so far, so no
-    /// node that could hold the closest hit, or a hit at the same t with a lower key, is left out: whatever the
+    /// The closest hit of one ray from `start` (whose node the ray enters), merged into `best`: the slots of
+    /// its node, then, with links, each ancestor's other children (each subtree walked down as from the root)
+    /// up to the root. An entry is dropped only when its box is entered beyond the best hit so far, so no node
+    /// that could hold the closest hit, or a hit at the same t with a lower key, is left out: whatever the
     /// start, the answer is the same; the start decides the order of visits and the work.
-    #[allow(clippy::too_many_arguments)]
-    fn intersect_up<T: RayNode, Q: SingleLeafQuery>(
+    #[inline(always)]
+    fn intersect_from<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
-        up: &Upward,
-        leaf: (usize, usize),
+        start: Start,
         q: &Q,
         slab: &SlabRayN<T::Lanes>,
         best: &mut HitPacket<f32>,
     ) {
         let mut stack = Stack::<Entry>::new();
-        let (mut node, mut skip_slots, mut work) = (leaf.0, 0, (0, 0));
+        let (mut node, mut skip_slots, mut work) = (start.root.node as usize, !start.root.slots, (0, 0));
         loop {
             work.0 += 1;
             let limit = best.t.min(q.t_max());
             let next = self.push_but_nearest(&nodes[node], slab, limit, &mut stack, skip_slots);
             self.intersect_below(nodes, next, &mut stack, q, slab, best, &mut work);
-            if node == 0 {
-                break;
-            }
+            let Some(up) = start.up.filter(|_| node != 0) else { break };
             let (parent, slot) = up.parent_of(node);
             (node, skip_slots) = (parent, 1 << slot);
         }
@@ -196,62 +176,35 @@ impl Bvh {
         }
     }
 
-    /// Whether one ray is blocked within `t_max` in the subtree `root`; stops at the first blocker found, left
-    /// in `blocker`. Any hit will do, so a node's entered leaves are tested on the spot, before its entered
-    /// inner children are pushed, and nothing is ordered by distance.
-    fn occluded_1<T: RayNode, Q: SingleLeafQuery>(
+    /// Whether one ray is blocked within `t_max`, walked from `start`: the slots of its node (those of
+    /// `start.first_slots` first), then, with links, each ancestor's other children (each subtree walked down
+    /// as from the root) up to the root. Stops at the first blocker found, left in `blocker`. Any hit will do,
+    /// so a node's entered leaves are tested on the spot, before its entered inner children are pushed, and
+    /// nothing is ordered by distance. From a leaf up, every node a walk from the root would visit is visited
+    /// (the ancestors without their own box tests), each once, so the answer is the same; the blockers around
+    /// the item come first.
+    #[inline(always)]
+    fn occluded_from<T: RayNode, Q: SingleLeafQuery>(
         &self,
         nodes: &[T],
-        root: Subtree,
-        q: &Q,
-        slab: &SlabRayN<T::Lanes>,
-        blocker: &mut u32,
-    ) -> bool {
-        let mut stack = Stack::<u32>::new();
-        let mut work = (1, 0);
-        let n = &nodes[root.node as usize];
-        let blocked = occluded_visit(n, 0, !root.slots, q, slab, &mut stack, blocker, &mut work.1)
-            || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work);
-        count_work(|| Work::single(work.1, T::WIDTH * work.0));
-        blocked
-    }
-
-    /// [`Bvh::occluded_1`] over the whole tree, for a ray that leaves an item of leaf `leaf` (its node and
-    /// slot): that leaf is tested first, then the rest of its node, then each ancestor's other children
-    /// (each subtree walked down as from the root) up to the root. Every node a walk from the root would
-    /// visit is visited (the ancestors without their own box tests), each once, so the answer is the same;
-    /// the blockers around the item come first.
-    fn occluded_up<T: RayNode, Q: SingleLeafQuery>(
-        &self,
-        nodes: &[T],
-        up: &Upward,
-        leaf: (usize, usize),
+        start: Start,
         q: &Q,
         slab: &SlabRayN<T::Lanes>,
         blocker: &mut u32,
     ) -> bool {
         let mut stack = Stack::<u32>::new();
         let mut work = (0, 0);
-        let (mut node, slot) = leaf;
-        let (mut first_slots, mut skip_slots) = (1 << slot, 0);
+        let (mut node, mut first_slots, mut skip_slots) =
+            (start.root.node as usize, start.first_slots, !start.root.slots);
         let blocked = loop {
             work.0 += 1;
-            if occluded_visit(
-                &nodes[node],
-                first_slots,
-                skip_slots,
-                q,
-                slab,
-                &mut stack,
-                blocker,
-                &mut work.1,
-            ) || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work)
+            let n = &nodes[node];
+            if occluded_visit(n, first_slots, skip_slots, q, slab, &mut stack, blocker, &mut work.1)
+                || occluded_below(nodes, &mut stack, q, slab, blocker, &mut work)
             {
                 break true;
             }
-            if node == 0 {
-                break false;
-            }
+            let Some(up) = start.up.filter(|_| node != 0) else { break false };
             let (parent, slot) = up.parent_of(node);
             (node, first_slots, skip_slots) = (parent, 0, 1 << slot);
         };
@@ -262,7 +215,7 @@ impl Bvh {
     /// The lanes of `lanes` walk the subtree `root` of `nodes` one ray at a time; their hits are merged into
     /// `best`. `slab` is the packet prepared for slab tests. Over the whole tree ([`Subtree::WHOLE`]) with
     /// `up`, the links of `nodes`, a lane that leaves an item of the tree starts at that item's leaf
-    /// ([`Bvh::intersect_up`]).
+    /// ([`Bvh::intersect_from`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn intersect_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
@@ -279,10 +232,7 @@ impl Bvh {
         for i in set_bits(bits) {
             let mut hit = HitPacket { t: best.t.lane(i), prim: best.prim.lane(i), key: best.key.lane(i) };
             let (one, ray) = (q.lane(i), SlabRayN::lane(slab, i));
-            match departure_leaf(up, root, &one) {
-                Some((up, leaf)) => self.intersect_up(nodes, up, leaf, &one, &ray, &mut hit),
-                None => self.intersect_1(nodes, root, &one, &ray, &mut hit),
-            }
+            self.intersect_from(nodes, Start::of(up, root, &one), &one, &ray, &mut hit);
             let at = F::mask_from_bits(1 << i);
             best.t = F::select(at, F::splat_f32(hit.t), best.t);
             best.prim = F::select_ids(at, F::Ids::splat(hit.prim), best.prim);
@@ -292,7 +242,7 @@ impl Bvh {
 
     /// The lanes of `lanes` blocked within their `t_max` in the subtree `root` of `nodes`, one ray at a time;
     /// over the whole tree ([`Subtree::WHOLE`]) with its links `up`, each lane that leaves an item of the tree
-    /// from that item's leaf up ([`Bvh::occluded_up`]).
+    /// from that item's leaf up ([`Bvh::occluded_from`]).
     #[allow(clippy::too_many_arguments)]
     pub(super) fn occluded_each<F: Lanes, T: RayNode, Q: LeafQuery<F>>(
         &self,
@@ -309,26 +259,36 @@ impl Bvh {
         let blocked = set_bits(bits)
             .filter(|&i| {
                 let (one, ray) = (q.lane(i), SlabRayN::lane(slab, i));
-                match departure_leaf(up, root, &one) {
-                    Some((up, leaf)) => self.occluded_up(nodes, up, leaf, &one, &ray, blocker),
-                    None => self.occluded_1(nodes, root, &one, &ray, blocker),
-                }
+                self.occluded_from(nodes, Start::of(up, root, &one), &one, &ray, blocker)
             })
             .fold(0, |b, i| b | 1 << i);
         F::mask_from_bits(blocked)
     }
 }
 
-/// Where a lane walked over the whole tree starts when the tree has links `up` and the lane's ray leaves one
-/// of its items: that item's leaf (node and slot), with the links. `None`: from `root`.
-#[inline(always)]
-fn departure_leaf<'a, Q: SingleLeafQuery>(
-    up: Option<&'a Upward>,
+/// Where one ray's walk starts: a subtree, the slots of its node to test first (occlusion), and the links to
+/// climb by once the subtree is walked (none: the walk ends there).
+#[derive(Clone, Copy)]
+struct Start<'a> {
     root: Subtree,
-    one: &Q,
-) -> Option<(&'a Upward, (usize, usize))> {
-    let up = up.filter(|_| root == Subtree::WHOLE)?;
-    Some((up, up.leaf_of(one.departure(0)?)?))
+    first_slots: u32,
+    up: Option<&'a Upward>,
+}
+
+impl<'a> Start<'a> {
+    /// A lane walked over the whole tree starts at the leaf of the item its ray leaves, when the tree has links
+    /// `up` and the item is one of the tree's; any other walk at `root`, without climbing.
+    #[inline(always)]
+    fn of<Q: SingleLeafQuery>(up: Option<&'a Upward>, root: Subtree, one: &Q) -> Self {
+        let leaf =
+            up.filter(|_| root == Subtree::WHOLE).and_then(|up| Some((up, up.leaf_of(one.departure(0)?)?)));
+        match leaf {
+            Some((up, (node, slot))) => {
+                Start { root: Subtree::whole_of(node as u32), first_slots: 1 << slot, up: Some(up) }
+            }
+            None => Start { root, first_slots: 0, up: None },
+        }
+    }
 }
 
 /// Node `n` of an occlusion walk: the leaves among its children the ray enters (but the slots of
