@@ -65,7 +65,7 @@ impl<F: Lanes> Tracer<'_, F> {
 }
 
 /// A packet's ambient occlusion rays in structure-of-arrays form, ordered by the primitive they leave, then
-/// by the cell of their direction ([`direction_cell`]): origins, directions and the lane each came from,
+/// by the cell of their direction ([`direction_cells`]): origins, directions and the lane each came from,
 /// padded to whole packets (the padding's lanes are never live). Kept by the tracer and reused from packet to
 /// packet.
 #[derive(Default)]
@@ -103,9 +103,10 @@ impl AoStream {
             let local = local_directions::<F>(set_bits(bits).map(|i| (i, shift[i], k)), ao.samples);
             let d = around(s.normal, local);
             let (x, y, z) = (d.x.to_array(), d.y.to_array(), d.z.to_array());
+            let cells = direction_cells([x.as_ref(), y.as_ref(), z.as_ref()]);
             for i in set_bits(bits) {
                 let v = [x.as_ref()[i], y.as_ref()[i], z.as_ref()[i]];
-                let key = group[i] + u16::from(direction_cell(v));
+                let key = group[i] + u16::from(cells[i]);
                 count[usize::from(key)] += 1;
                 self.unsorted.push((key, i as u8, v));
             }
@@ -155,28 +156,71 @@ fn groups(bits: u32, prims: &[u32; 16]) -> ([u16; 16], usize) {
     (group, groups)
 }
 
-/// Cells of [`direction_cell`]: an 8×8 grid.
+/// Cells of [`direction_cells`]: an 8×8 grid.
 const CELLS: usize = 64;
 
-/// A unit direction's cell in an 8×8 grid over its octahedral map (the sphere folded onto the square
-/// `|u| + |v| ≤ 1`, the lower half unfolded into the corners), numbered in Z-order so that neighbouring cells
-/// mostly come together.
-fn direction_cell(d: [f32; 3]) -> u8 {
-    let l1 = d[0].abs() + d[1].abs() + d[2].abs();
-    let (mut u, mut v) = (d[0] / l1, d[1] / l1);
-    if d[2] < 0.0 {
-        (u, v) = ((1.0 - v.abs()) * u.signum(), (1.0 - u.abs()) * v.signum());
+/// Each lane's unit direction's cell in an 8×8 grid over its octahedral map (the sphere folded onto the
+/// square `|u| + |v| ≤ 1`, the lower half unfolded into the corners), numbered in Z-order so that
+/// neighbouring cells mostly come together; below [`CELLS`] for any input, NaN included. Lane arithmetic
+/// over all K lanes at once (the compiler vectorises the loops): a cell is only a sort key, so it need not
+/// match any other computation's bits.
+fn direction_cells(d: [&[f32]; 3]) -> [u8; 16] {
+    let ([x, y, z], k) = (d, d[0].len().min(16));
+    let (mut u, mut v) = ([0.0f32; 16], [0.0f32; 16]);
+    for i in 0..k {
+        let l1 = x[i].abs() + y[i].abs() + z[i].abs();
+        let (a, b) = (x[i] / l1, y[i] / l1);
+        let lower = z[i] < 0.0;
+        u[i] = if lower { (1.0 - b.abs()).copysign(a) } else { a };
+        v[i] = if lower { (1.0 - a.abs()).copysign(b) } else { b };
     }
-    let q = |x: f32| (((x + 1.0) * 4.0) as u32).min(7);
-    let spread = |x: u32| (x & 1) | (x & 2) << 1 | (x & 4) << 2;
-    (spread(q(u)) | spread(q(v)) << 1) as u8
+    let mut cells = [0u8; 16];
+    for i in 0..16 {
+        cells[i] = (spread(eighth(u[i])) | spread(eighth(v[i])) << 1) as u8;
+    }
+    cells
+}
+
+/// `⌊(x + 1)·4⌋` for x in [−1, 1], clamped to 0..=7, without a float-to-integer conversion: `(x + 3)/2`
+/// lies in [1, 2), whose three leading mantissa bits are that eighth. Any input gives a value below 8.
+#[inline(always)]
+fn eighth(x: f32) -> u32 {
+    let t = (x * 0.5 + 1.5).clamp(1.0, 1.999_999_9);
+    t.to_bits() >> 20 & 7
+}
+
+/// The three bits of `q` spread to bits 0, 2 and 4 (Z-order's interleaving).
+#[inline(always)]
+fn spread(q: u32) -> u32 {
+    (q & 1) | (q & 2) << 1 | (q & 4) << 2
 }
 
 #[cfg(test)]
 mod tests {
     use super::*;
 
-    /// Every direction gets a cell below 64; opposite directions and the six axes get six different cells.
+    /// One direction's cell.
+    fn direction_cell(d: [f32; 3]) -> u8 {
+        direction_cells([&d[0..1], &d[1..2], &d[2..3]])[0]
+    }
+
+    /// The octahedral map's cell by the textbook steps in f64: `⌊(u + 1)·4⌋` clamped to 7, Z-order.
+    fn reference_cell(d: [f64; 3], near_edge: &mut bool) -> u8 {
+        let l1 = d[0].abs() + d[1].abs() + d[2].abs();
+        let (mut u, mut v) = (d[0] / l1, d[1] / l1);
+        if d[2] < 0.0 {
+            (u, v) = ((1.0 - v.abs()) * u.signum(), (1.0 - u.abs()) * v.signum());
+        }
+        let mut q = |x: f64| {
+            let e = (x + 1.0) * 4.0;
+            *near_edge |= (e - e.round()).abs() < 1e-4;
+            (e.floor() as u32).min(7)
+        };
+        (spread(q(u)) | spread(q(v)) << 1) as u8
+    }
+
+    /// Every direction gets a cell below 64; opposite directions and the six axes get six different cells;
+    /// away from the cells' edges the lanes give the textbook map's cell.
     #[test]
     fn cells_cover_the_sphere() {
         let axes = [
@@ -190,11 +234,38 @@ mod tests {
         let cells: std::collections::BTreeSet<u8> = axes.iter().map(|&d| direction_cell(d)).collect();
         assert_eq!(cells.len(), 6, "{cells:?}");
         let mut rng = crate::math::SplitMix64::new(3);
-        let mut seen = [false; CELLS];
+        let (mut seen, mut compared) = ([false; CELLS], 0);
         for _ in 0..100_000 {
             let d = V3::new(rng.unit() - 0.5, rng.unit() - 0.5, rng.unit() - 0.5).normalize().to_f32();
-            seen[usize::from(direction_cell([d.x, d.y, d.z]))] = true;
+            let cell = direction_cell([d.x, d.y, d.z]);
+            seen[usize::from(cell)] = true;
+            let mut near_edge = false;
+            let reference = reference_cell([d.x, d.y, d.z].map(f64::from), &mut near_edge);
+            if !near_edge {
+                assert_eq!(cell, reference, "{d:?}");
+                compared += 1;
+            }
         }
+        assert!(compared > 99_000, "{compared}");
         assert!(seen.iter().filter(|&&s| s).count() >= 56, "cells hit: {:?}", seen);
+    }
+
+    /// Sixteen lanes at once give each lane's own cell, and NaN, zero and infinite directions a cell below 64.
+    #[test]
+    fn lanes_are_independent_and_any_input_has_a_cell() {
+        let odd = [f32::NAN, 0.0, -0.0, f32::INFINITY, f32::NEG_INFINITY, 1e-40, -1.0, 1.0];
+        let mut rng = crate::math::SplitMix64::new(4);
+        for _ in 0..1000 {
+            let mut pick = || match rng.next_u64() % 3 {
+                0 => odd[(rng.next_u64() % 8) as usize],
+                _ => rng.unit() as f32 * 2.0 - 1.0,
+            };
+            let d: [[f32; 16]; 3] = std::array::from_fn(|_| std::array::from_fn(|_| pick()));
+            let cells = direction_cells([&d[0], &d[1], &d[2]]);
+            for i in 0..16 {
+                assert!(usize::from(cells[i]) < CELLS);
+                assert_eq!(cells[i], direction_cell([d[0][i], d[1][i], d[2][i]]));
+            }
+        }
     }
 }
