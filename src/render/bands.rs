@@ -102,11 +102,7 @@ pub(super) fn trace_band<F: Lanes>(
                 take_work();
                 let mut tracer = Tracer::<F>::new(scene);
                 let at = Tile { x0: tile.x0 + columns.start, y0: tile.y0 + rows.start, ..tile };
-                let pixels = trace_tile(scene, &mut tracer, at);
-                debug_assert_eq!(pixels.len(), part.len() * tile.w as usize, "tile {tile:?}");
-                for (row, traced) in part.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
-                    row.copy_from_slice(traced);
-                }
+                trace_tile(scene, &mut tracer, at, &mut part);
                 counter.tile_done();
                 (tracer.counts, take_work())
             })

@@ -13,25 +13,47 @@ use crate::simd::Lanes;
 use super::{for_each_camera_hit, lane_rgb, LargePacket, Offsets, Tile};
 
 /// The pixels of one tile, row by row.
-pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile) -> Vec<Rgb> {
+pub(super) fn trace_tile<F: Lanes>(
+    scene: &Scene,
+    tracer: &mut Tracer<F>,
+    tile: Tile,
+    rows: &mut [&mut [Rgb]],
+) {
+    debug_assert!(
+        rows.len() == tile.h as usize && rows.iter().all(|r| r.len() == tile.w as usize),
+        "{tile:?}"
+    );
     let pattern = scene.render.pattern;
-    match pattern {
-        Pattern::HalfPixel => return half_pixel_tile(scene, tracer, tile),
+    let pixels = match pattern {
+        Pattern::HalfPixel => half_pixel_tile(scene, tracer, tile),
         Pattern::Adaptive { .. } => unreachable!("adaptive sampling traces whole bands (adaptive.rs)"),
-        Pattern::Coverage => return super::coverage::coverage_tile(scene, tracer, tile),
-        Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => {}
+        Pattern::Coverage => super::coverage::coverage_tile(scene, tracer, tile),
+        Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => {
+            match scene.render.filter {
+                Some(filter) => filtered_tile(scene, tracer, tile, filter),
+                None => return sampled_tile(scene, tracer, tile, rows),
+            }
+        }
+    };
+    for (row, traced) in rows.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
+        row.copy_from_slice(traced);
     }
-    if let Some(filter) = scene.render.filter {
-        return filtered_tile(scene, tracer, tile, filter);
+}
+
+/// The pixels of one tile under a sampling pattern without a reconstruction filter (the mean of each
+/// pixel's samples), summed in place in `rows`, its rows.
+fn sampled_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile, rows: &mut [&mut [Rgb]]) {
+    let pattern = scene.render.pattern;
+    for row in rows.iter_mut() {
+        row.fill(Rgb::default());
     }
-    let mut sum = vec![Rgb::default(); (tile.w * tile.h) as usize];
     let mut large = LargePacket::default();
     let mut pass = |offsets: &Offsets| {
         for_each_camera_hit(scene, tile, offsets, &mut large, |rays, hit, block| {
             let c = tracer.primary_from(rays, hit);
             for (i, x, y) in block.pixels() {
-                let p = (y * tile.w + x) as usize;
-                sum[p] = sum[p] + lane_rgb(&c, i);
+                let p = &mut rows[y as usize][x as usize];
+                *p = *p + lane_rgb(&c, i);
             }
         });
     };
@@ -45,7 +67,9 @@ pub(super) fn trace_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: 
         }
     }
     let scale = 1.0 / count as f32;
-    sum.into_iter().map(|s| s * scale).collect()
+    for p in rows.iter_mut().flat_map(|row| row.iter_mut()) {
+        *p = *p * scale;
+    }
 }
 
 /// The regular grid's offsets for [`sample_offset`] (empty for the other patterns).
