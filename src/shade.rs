@@ -131,6 +131,25 @@ struct Surface<F: Lanes> {
 }
 
 impl<F: Lanes> Surface<F> {
+    /// `a` in the lanes of `m`, `b` in the others.
+    fn select(m: F::Mask, a: Self, b: Self) -> Self {
+        let pick = |x: F, y: F| F::select(m, x, y);
+        Self {
+            point: V3::select(m, a.point, b.point),
+            normal: V3::select(m, a.normal, b.normal),
+            inside: (m & a.inside) | (!m & b.inside),
+            base: V3::select(m, a.base, b.base),
+            ambient: pick(a.ambient, b.ambient),
+            diffuse: pick(a.diffuse, b.diffuse),
+            specular: pick(a.specular, b.specular),
+            shininess: pick(a.shininess, b.shininess),
+            reflect: pick(a.reflect, b.reflect),
+            transmit: pick(a.transmit, b.transmit),
+            ior: pick(a.ior, b.ior),
+            fresnel: (m & a.fresnel) | (!m & b.fresnel),
+        }
+    }
+
     /// The surface of a packet whose found lanes (`found`, as bits) all have material `m`: the normal turned
     /// toward the rays and the lanes hit from inside ([`facing`]), and the material's constants in every lane.
     fn of_material(
@@ -286,13 +305,46 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask, camera: bool) -> Surface<F> {
         self.sphere_surface(rays, hit, found, camera)
             .or_else(|| self.kind_surface(rays, hit, found, camera))
+            .or_else(|| self.split_surface(rays, hit, found, camera))
             .unwrap_or_else(|| self.surface_by_lane(rays, hit, found, camera))
+    }
+
+    /// [`Tracer::surface`] for packets whose found lanes hit spheres of one plain material and one item of a
+    /// registered kind with a lane form and a plain material (a flake's spheres and the floor under them):
+    /// each part by its own lane form, merged by selects, so every lane has the bits the lane-by-lane path
+    /// would give it. `None` for any other packet, and for a checkered item, whose colours are lane by lane
+    /// in either form (the split was slower there: PERF.md, Register).
+    #[inline(never)]
+    fn split_surface(
+        &self,
+        rays: &RayPacket<F>,
+        hit: &HitPacket<F>,
+        found: F::Mask,
+        camera: bool,
+    ) -> Option<Surface<F>> {
+        if F::K == 1 || !self.scene.split_surfaces {
+            return None;
+        }
+        let spheres = F::Ids::splat(self.scene.geometry.spheres.len() as u32);
+        let on_spheres = found & F::ids_lt(hit.prim, spheres);
+        let rest = found & !on_spheres;
+        let geometry = &self.scene.geometry;
+        let item = hit.prim.lane(set_bits(F::move_mask(rest)).next()?);
+        let PrimRef::Kind(k) = geometry.prim(item) else { return None };
+        let material = geometry.kinds.material(k)?;
+        if !on_spheres.any() || self.scene.materials[material as usize].checker.is_some() {
+            return None;
+        }
+        let sphere = self.sphere_surface(rays, hit, on_spheres, camera)?;
+        let item = self.kind_surface(rays, hit, rest, camera)?;
+        Some(Surface::select(on_spheres, sphere, item))
     }
 
     /// [`Tracer::surface`] for packets whose found lanes all hit one item of a registered kind that has a
     /// lane form of its surface ([`crate::kinds::Kind::surface_k`]: a ground plane, most often, or an
     /// ellipsoid): object point and normal in lanes, the checker's colour lane by lane. `None` for any
     /// other packet.
+    #[inline(always)]
     fn kind_surface(
         &self,
         rays: &RayPacket<F>,
@@ -344,6 +396,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     /// point and normal from the SoA sphere arrays in lanes, by [`crate::accel::Geometry::surface`]'s
     /// operations in its order (so each lane gets the scalar bits), and the material splatted. `None` for
     /// any other packet.
+    #[inline(always)]
     fn sphere_surface(
         &self,
         rays: &RayPacket<F>,
@@ -663,6 +716,90 @@ mod tests {
             }
         }
         assert!(checked > 1000, "only {checked} lanes checked");
+    }
+
+    /// Packets mixing spheres of one plain material and a flat polygon floor get the lane-by-lane surface's
+    /// bits from the split form, at K = 8 and 16, for camera rays and for rays leaving the spheres; a floor
+    /// with a checker, or with vertex normals, is never split.
+    #[test]
+    fn split_surfaces_give_the_lane_by_lane_bits() {
+        use crate::kinds::polygon::PolygonDesc;
+        use crate::scene::desc::{Checker, SceneDesc, SphereDesc};
+        use glam::DVec3;
+        let floor = |normals: Option<Vec<DVec3>>| PolygonDesc {
+            vertices: [(-4.0, -4.0), (4.0, -4.0), (4.0, 4.0), (-4.0, 4.0)]
+                .map(|(x, z)| DVec3::new(x, -1.0, z))
+                .to_vec(),
+            normals,
+            material: 1,
+        };
+        let mut desc = SceneDesc::default();
+        let mirror = Material { reflect: 0.5, specular: 0.3, ..Material::default() };
+        desc.materials.extend([mirror, Material { color: Rgb::new(0.9, 0.7, 0.5), ..Material::default() }]);
+        let mut rng = crate::math::SplitMix64::new(21);
+        for _ in 0..60 {
+            let center = DVec3::new(rng.unit() * 4.0 - 2.0, rng.unit() * 0.8 - 0.6, rng.unit() * 4.0 + 1.0);
+            desc.spheres.push(SphereDesc { center, radius: 0.05 + 0.2 * rng.unit(), material: 0 });
+        }
+        desc.kinds.polygons.push(floor(None));
+        let split = Scene::compile(&desc).expect("scene");
+        assert!(split.split_surfaces);
+        let mut checked = desc.clone();
+        checked.materials[1].checker = Some(Checker { color: Rgb::new(0.1, 0.2, 0.3), size: 0.5 });
+        assert!(!Scene::compile(&checked).expect("scene").split_surfaces);
+        let mut smooth = desc.clone();
+        smooth.kinds.polygons[0] = floor(Some(vec![DVec3::Y; 4]));
+        let smooth = Scene::compile(&smooth).expect("scene");
+        let (mut compared, mut none) = (check_split::<wide::f32x8>(&split), 0);
+        compared += check_split::<wide::f32x16>(&split);
+        none += check_split::<wide::f32x8>(&smooth);
+        assert!(compared > 2000, "only {compared} lanes compared");
+        assert_eq!(none, 0, "a floor with vertex normals was split");
+    }
+
+    /// Lanes of split surfaces compared with [`Tracer::surface_by_lane`] over packets aimed at the scene's
+    /// spheres and floor, from the eye and from the spheres' hits.
+    fn check_split<F: Lanes>(scene: &Scene) -> usize {
+        use crate::geometry::Ray;
+        let tracer = Tracer::<F>::new(scene);
+        let mut rng = crate::math::SplitMix64::new(22);
+        let mut compared = 0;
+        for p in 0..1500 {
+            let camera = p % 2 == 0;
+            let rays = RayPacket::<F>::from_fn(|_| {
+                let dir = V3::new(rng.unit() * 1.6 - 0.8, rng.unit() * 0.9 - 0.7, 1.0).to_f32();
+                (Ray::new(V3::all(0.0), dir), f32::INFINITY, rng.unit() < 0.9)
+            });
+            let mut hit = scene.geometry.intersect_k(&rays, &DeparturePacket::camera());
+            let mut rays = rays;
+            if !camera {
+                // Mirror rays from the camera rays' hits: they leave spheres and the floor.
+                let found = hit.found() & rays.active;
+                let s = tracer.surface_by_lane(&rays, &hit, found, true);
+                let d = rays.ray.dir - s.normal * (F::splat_f32(2.0) * s.normal.dot(rays.ray.dir));
+                rays = RayPacket::new(s.point, d, F::splat_f32(f32::INFINITY), found);
+                let from = DeparturePacket { prim: hit.prim, inward: s.inside };
+                hit = scene.geometry.intersect_k(&rays, &from);
+            }
+            let found = hit.found() & rays.active;
+            let Some(lanes) = tracer.split_surface(&rays, &hit, found, camera) else { continue };
+            let scalar = tracer.surface_by_lane(&rays, &hit, found, camera);
+            let bits = |v: V3<F>, i: usize| [v.x, v.y, v.z].map(|c| c.lane(i).to_bits());
+            for i in (0..F::K).filter(|&i| F::mask_lane(found, i)) {
+                assert_eq!(bits(lanes.point, i), bits(scalar.point, i), "packet {p} lane {i}");
+                assert_eq!(bits(lanes.normal, i), bits(scalar.normal, i), "packet {p} lane {i}");
+                assert_eq!(bits(lanes.base, i), bits(scalar.base, i), "packet {p} lane {i}");
+                assert_eq!(F::mask_lane(lanes.inside, i), F::mask_lane(scalar.inside, i));
+                assert_eq!(F::mask_lane(lanes.fresnel, i), F::mask_lane(scalar.fresnel, i));
+                let fields = |s: &Surface<F>| {
+                    [s.ambient, s.diffuse, s.specular, s.shininess, s.reflect, s.transmit, s.ior]
+                        .map(|f| f.lane(i).to_bits())
+                };
+                assert_eq!(fields(&lanes), fields(&scalar), "packet {p} lane {i}");
+                compared += 1;
+            }
+        }
+        compared
     }
 
     /// Camera rays grazing a unit sphere, and an ellipsoid, 1e6 away: the rounded hit point often puts the

@@ -526,7 +526,13 @@ macro_rules! per_kind {
                     Some((normal, object, K::item_material(&items.store, k)))
                 }; $($field: $kind),*)
             }
-            /// [`Kind::surface_k`] of item `id`, with its material.
+            /// The material of item `id`.
+            pub(crate) fn material(&self, id: usize) -> Option<u32> {
+                dispatch!(self, id, None, |items, K, k| Some(K::item_material(&items.store, k)); $($field: $kind),*)
+            }
+            /// [`Kind::surface_k`] of item `id`, with its material (inlined: its result is returned in
+            /// registers, not through memory).
+            #[inline(always)]
             pub(crate) fn surface_k<F: Lanes>(
                 &self,
                 id: usize,

@@ -157,6 +157,12 @@ impl Kind for Polygon {
         (store.shading_normal(k, point), on_plane + store.origin)
     }
 
+    /// Flat polygons only (no vertex normals): the plane's normal in every lane, the point moved onto the
+    /// plane as [`Kind::surface`] moves it, in the same operations.
+    fn surface_k<F: Lanes>(store: &Polygons, k: usize, ray: &Ray<F>, t: F) -> Option<(V3<F>, V3<F>)> {
+        flat_surface_k(store, k, ray, t)
+    }
+
     fn item_material(store: &Polygons, k: usize) -> u32 {
         store.material[k]
     }
@@ -190,6 +196,19 @@ impl Kind for Polygon {
     fn near64(p: &Polygon64, point: V3<f64>, tol: f64, slack: f64) -> bool {
         p.near(point, tol, slack)
     }
+}
+
+/// [`Kind::surface_k`] of polygon `k` when it is flat, out of line: the loop over kinds that dispatches to it
+/// stays as small as without it.
+#[inline(never)]
+fn flat_surface_k<F: Lanes>(store: &Polygons, k: usize, ray: &Ray<F>, t: F) -> Option<(V3<F>, V3<F>)> {
+    if !store.is_flat(k) {
+        return None;
+    }
+    let point = ray.at(t);
+    let (normal, anchor) = (F::splat_v3(store.normal[k]), F::splat_v3(store.anchor[k]));
+    let on_plane = point - normal * normal.dot(point - anchor);
+    Some((normal, on_plane + F::splat_v3(store.origin)))
 }
 
 #[cfg(test)]

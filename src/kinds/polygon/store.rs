@@ -96,6 +96,12 @@ impl Polygons {
         (pick(f32::min), pick(f32::max))
     }
 
+    /// Whether polygon `k` has no vertex normals (its shading normal is its plane's everywhere).
+    pub(crate) fn is_flat(&self, k: usize) -> bool {
+        let members = &self.members[self.first[k] as usize..self.first[k + 1] as usize];
+        members.iter().all(|&j| self.vertex_normals[j as usize].is_none())
+    }
+
     /// The shading normal of polygon `k` at `point`: interpolated over the triangle that contains the point
     /// (the one whose smallest barycentric is largest, robust to rounding at shared edges; the first of equal
     /// ones, as the f64 twin chooses), else geometric.
