@@ -299,7 +299,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     }
 
     /// Each found lane's surface point and material: by lane arithmetic when every found lane hit a sphere
-    /// of one plain material (most packets), else lane by lane with the scalar code. `camera`: the rays are
+    /// of one plain material (most packets), or one item of a kind with a lane form, or a mix of the two
+    /// ([`Tracer::split_surface`]); else lane by lane with the scalar code. `camera`: the rays are
     /// camera rays (departing from nothing); those that start at the eye take their sphere or ellipsoid
     /// hit's side from the eye term.
     fn surface(&self, rays: &RayPacket<F>, hit: &HitPacket<F>, found: F::Mask, camera: bool) -> Surface<F> {
@@ -325,14 +326,20 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         if F::K == 1 || !self.scene.split_surfaces {
             return None;
         }
-        let spheres = F::Ids::splat(self.scene.geometry.spheres.len() as u32);
-        let on_spheres = found & F::ids_lt(hit.prim, spheres);
-        let rest = found & !on_spheres;
         let geometry = &self.scene.geometry;
-        let item = hit.prim.lane(set_bits(F::move_mask(rest)).next()?);
-        let PrimRef::Kind(k) = geometry.prim(item) else { return None };
-        let material = geometry.kinds.material(k)?;
-        if !on_spheres.any() || self.scene.materials[material as usize].checker.is_some() {
+        let on_spheres = found & F::ids_lt(hit.prim, F::Ids::splat(geometry.spheres.len() as u32));
+        let rest = found & !on_spheres;
+        if !on_spheres.any() {
+            return None;
+        }
+        // The cheap tests first: the other lanes on one item of a kind, its material plain.
+        let prim = hit.prim.lane(set_bits(F::move_mask(rest)).next()?);
+        if !set_bits(F::move_mask(rest)).all(|i| hit.prim.lane(i) == prim) {
+            return None;
+        }
+        let PrimRef::Kind(k) = geometry.prim(prim) else { return None };
+        let material = geometry.kinds.material_in_lanes(k)?;
+        if self.scene.materials[material as usize].checker.is_some() {
             return None;
         }
         let sphere = self.sphere_surface(rays, hit, on_spheres, camera)?;
@@ -718,14 +725,16 @@ mod tests {
         assert!(checked > 1000, "only {checked} lanes checked");
     }
 
-    /// Packets mixing spheres of one plain material and a flat polygon floor get the lane-by-lane surface's
-    /// bits from the split form, at K = 8 and 16, for camera rays and for rays leaving the spheres; a floor
-    /// with a checker, or with vertex normals, is never split.
+    /// Packets mixing spheres of one plain material and a flat polygon floor, or an ellipsoid, get the
+    /// lane-by-lane surface's bits from the split form, at K = 4, 8 and 16, for camera rays and for rays
+    /// leaving the hits, with the materials apart in every field and with spheres' own colours; a floor with a
+    /// checker, or with vertex normals, is never split.
     #[test]
     fn split_surfaces_give_the_lane_by_lane_bits() {
         use crate::kinds::polygon::PolygonDesc;
+        use crate::math::Rgb8;
         use crate::scene::desc::{Checker, SceneDesc, SphereDesc};
-        use glam::DVec3;
+        use glam::{DAffine3, DVec3};
         let floor = |normals: Option<Vec<DVec3>>| PolygonDesc {
             vertices: [(-4.0, -4.0), (4.0, -4.0), (4.0, 4.0), (-4.0, 4.0)]
                 .map(|(x, z)| DVec3::new(x, -1.0, z))
@@ -734,27 +743,58 @@ mod tests {
             material: 1,
         };
         let mut desc = SceneDesc::default();
-        let mirror = Material { reflect: 0.5, specular: 0.3, ..Material::default() };
-        desc.materials.extend([mirror, Material { color: Rgb::new(0.9, 0.7, 0.5), ..Material::default() }]);
+        let glass = Material {
+            color: Rgb::new(0.3, 0.6, 0.9),
+            ambient: 0.15,
+            diffuse: 0.7,
+            specular: 0.3,
+            shininess: 20.0,
+            reflect: 0.25,
+            transmit: 0.5,
+            ior: 1.33,
+            fresnel: true,
+            checker: None,
+        };
+        let matte = Material {
+            color: Rgb::new(0.9, 0.7, 0.5),
+            ambient: 0.05,
+            shininess: 64.0,
+            ..Material::default()
+        };
+        desc.materials.extend([glass, matte]);
         let mut rng = crate::math::SplitMix64::new(21);
         for _ in 0..60 {
             let center = DVec3::new(rng.unit() * 4.0 - 2.0, rng.unit() * 0.8 - 0.6, rng.unit() * 4.0 + 1.0);
             desc.spheres.push(SphereDesc { center, radius: 0.05 + 0.2 * rng.unit(), material: 0 });
         }
         desc.kinds.polygons.push(floor(None));
-        let split = Scene::compile(&desc).expect("scene");
-        assert!(split.split_surfaces);
+        let mut colored = desc.clone();
+        colored.sphere_colors = (0..60u8).map(|i| Rgb8([i * 4, 255 - i * 4, 128])).collect();
+        let mut ellipsoid = desc.clone();
+        ellipsoid.kinds.polygons.clear();
+        let stretch = DAffine3::from_scale_rotation_translation(
+            DVec3::new(3.0, 0.6, 2.0),
+            glam::DQuat::from_rotation_y(0.4),
+            DVec3::new(0.0, -1.2, 3.5),
+        );
+        ellipsoid.kinds.push_shape(crate::geometry::ShapeKind::Sphere, stretch);
+        ellipsoid.kinds.ellipsoids[0].material = 1;
+        for (name, d) in [("floor", &desc), ("own colours", &colored), ("ellipsoid", &ellipsoid)] {
+            let scene = Scene::compile(d).expect("scene");
+            assert!(scene.split_surfaces, "{name}");
+            let compared = check_split::<wide::f32x4>(&scene)
+                + check_split::<wide::f32x8>(&scene)
+                + check_split::<wide::f32x16>(&scene);
+            assert!(compared > 500, "{name}: only {compared} lanes compared");
+        }
         let mut checked = desc.clone();
         checked.materials[1].checker = Some(Checker { color: Rgb::new(0.1, 0.2, 0.3), size: 0.5 });
         assert!(!Scene::compile(&checked).expect("scene").split_surfaces);
         let mut smooth = desc.clone();
         smooth.kinds.polygons[0] = floor(Some(vec![DVec3::Y; 4]));
         let smooth = Scene::compile(&smooth).expect("scene");
-        let (mut compared, mut none) = (check_split::<wide::f32x8>(&split), 0);
-        compared += check_split::<wide::f32x16>(&split);
-        none += check_split::<wide::f32x8>(&smooth);
-        assert!(compared > 2000, "only {compared} lanes compared");
-        assert_eq!(none, 0, "a floor with vertex normals was split");
+        assert!(!smooth.split_surfaces);
+        assert_eq!(check_split::<wide::f32x8>(&smooth), 0, "a floor with vertex normals was split");
     }
 
     /// Lanes of split surfaces compared with [`Tracer::surface_by_lane`] over packets aimed at the scene's

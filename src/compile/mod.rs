@@ -75,7 +75,8 @@ pub struct Scene {
     pub build: BuildStats,
     /// Why the spheres are in the particle tree, when `--accel auto` put them there for lack of memory.
     pub(crate) accel_note: Option<String>,
-    /// The scene has spheres and some item of a registered kind with a plain (unchecked) material: only
+    /// The scene has spheres and some item of a registered kind with a lane form of its surface and a plain
+    /// (unchecked) material: only
     /// then can a packet's surface be split into its spheres' and that item's lane forms
     /// (`shade::Tracer::split_surface`); elsewhere shading does not look for such packets.
     pub(crate) split_surfaces: bool,
@@ -355,8 +356,10 @@ impl Scene {
                 single_ray_lanes,
             },
         };
-        let plain =
-            |k: usize| geometry.kinds.material(k).is_some_and(|m| materials[m as usize].checker.is_none());
+        let plain = |k: usize| {
+            let material = geometry.kinds.material_in_lanes(k).and_then(|m| materials.get(m as usize));
+            material.is_some_and(|m| m.checker.is_none())
+        };
         let split_surfaces = !geometry.spheres.is_empty() && (0..geometry.kinds.len()).any(plain);
         let scene = Scene {
             camera: camera_f64.to_f32(),

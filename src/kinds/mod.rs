@@ -153,11 +153,16 @@ pub(crate) trait Kind: Clone + Debug + Default + Send + Sync + 'static {
     /// point in the item's own frame (for solid textures).
     fn surface(store: &Self::Store, k: usize, ray: &Ray<f32>, t: f32, point: Vec3f) -> (Vec3f, Vec3f);
     /// [`Kind::surface`] for the lanes of a packet that all hit item `k`, in lane arithmetic with the
-    /// same operations in the same order (every lane the bits of the scalar call); `None` (the default)
-    /// where the kind has no such form, and shading then asks lane by lane.
+    /// same operations in the same order (every lane the bits of the scalar call); `None` where item `k`
+    /// has no such form ([`Kind::has_surface_k`] false; the default), and shading then asks lane by lane.
     fn surface_k<F: Lanes>(store: &Self::Store, k: usize, ray: &Ray<F>, t: F) -> Option<(V3<F>, V3<F>)> {
         let _ = (store, k, ray, t);
         None
+    }
+    /// Whether [`Kind::surface_k`] gives item `k` a lane form (false by default).
+    fn has_surface_k(store: &Self::Store, k: usize) -> bool {
+        let _ = (store, k);
+        false
     }
     /// The exact eye term of a solid item whose side a camera ray's hit takes from it (negative when the
     /// eye is inside, [`crate::geometry::eye_side`]); `None` (the default) for the rest.
@@ -526,9 +531,11 @@ macro_rules! per_kind {
                     Some((normal, object, K::item_material(&items.store, k)))
                 }; $($field: $kind),*)
             }
-            /// The material of item `id`.
-            pub(crate) fn material(&self, id: usize) -> Option<u32> {
-                dispatch!(self, id, None, |items, K, k| Some(K::item_material(&items.store, k)); $($field: $kind),*)
+            /// The material of item `id`, when [`Kind::surface_k`] gives it a lane form.
+            pub(crate) fn material_in_lanes(&self, id: usize) -> Option<u32> {
+                dispatch!(self, id, None, |items, K, k| {
+                    K::has_surface_k(&items.store, k).then(|| K::item_material(&items.store, k))
+                }; $($field: $kind),*)
             }
             /// [`Kind::surface_k`] of item `id`, with its material (inlined: its result is returned in
             /// registers, not through memory).

@@ -12,7 +12,7 @@ use crate::simd::Lanes;
 
 use super::{for_each_camera_hit, lane_rgb, LargePacket, Offsets, Tile};
 
-/// The pixels of one tile, row by row.
+/// Traces one tile into `rows`, its rows of the band (each `tile.w` pixels): every pixel is written.
 pub(super) fn trace_tile<F: Lanes>(
     scene: &Scene,
     tracer: &mut Tracer<F>,
@@ -35,6 +35,7 @@ pub(super) fn trace_tile<F: Lanes>(
             }
         }
     };
+    debug_assert_eq!(pixels.len(), rows.len() * tile.w as usize, "{tile:?}");
     for (row, traced) in rows.iter_mut().zip(pixels.chunks_exact(tile.w as usize)) {
         row.copy_from_slice(traced);
     }

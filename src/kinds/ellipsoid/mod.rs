@@ -119,6 +119,10 @@ impl Kind for Ellipsoid {
         (s.world_normal(object_point), object_point)
     }
 
+    fn has_surface_k(_store: &Placed, _k: usize) -> bool {
+        true
+    }
+
     fn surface_k<F: Lanes>(store: &Placed, k: usize, ray: &Ray<F>, t: F) -> Option<(V3<F>, V3<F>)> {
         let s = store.shapes[k].to_lanes::<F>();
         let object_point = s.to_object(ray).at(t);

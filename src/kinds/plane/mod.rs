@@ -95,6 +95,10 @@ impl Kind for Plane {
         (s.world_normal(object_point), object_point)
     }
 
+    fn has_surface_k(_store: &Placed, _k: usize) -> bool {
+        true
+    }
+
     fn surface_k<F: Lanes>(store: &Placed, k: usize, ray: &Ray<F>, t: F) -> Option<(V3<F>, V3<F>)> {
         let s = &store.shapes[k];
         let mut object_point = s.to_lanes::<F>().to_object(ray).at(t);

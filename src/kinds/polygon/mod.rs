@@ -163,6 +163,10 @@ impl Kind for Polygon {
         flat_surface_k(store, k, ray, t)
     }
 
+    fn has_surface_k(store: &Polygons, k: usize) -> bool {
+        store.is_flat(k)
+    }
+
     fn item_material(store: &Polygons, k: usize) -> u32 {
         store.material[k]
     }
