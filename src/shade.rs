@@ -333,11 +333,7 @@ impl<'a, F: Lanes> Tracer<'a, F> {
             return None;
         }
         // The cheap tests first: the other lanes on one item of a kind, its material plain.
-        let prim = hit.prim.lane(set_bits(F::move_mask(rest)).next()?);
-        if !set_bits(F::move_mask(rest)).all(|i| hit.prim.lane(i) == prim) {
-            return None;
-        }
-        let PrimRef::Kind(k) = geometry.prim(prim) else { return None };
+        let k = self.kind_item(hit, rest)?;
         let material = geometry.kinds.material_in_lanes(k)?;
         if self.scene.materials[material as usize].checker.is_some() {
             return None;
@@ -345,6 +341,16 @@ impl<'a, F: Lanes> Tracer<'a, F> {
         let sphere = self.sphere_surface(rays, hit, on_spheres, camera)?;
         let item = self.kind_surface(rays, hit, rest, camera)?;
         Some(Surface::select(on_spheres, sphere, item))
+    }
+
+    /// The item (numbered among the registered kinds' primitives) that every lane of `lanes` hit, if they
+    /// all hit one item of a registered kind (not a sphere or a particle); `None` for no lanes.
+    #[inline(always)]
+    fn kind_item(&self, hit: &HitPacket<F>, lanes: F::Mask) -> Option<usize> {
+        let bits = F::move_mask(lanes);
+        let prim = hit.prim.lane(set_bits(bits).next()?);
+        let PrimRef::Kind(k) = self.scene.geometry.prim(prim) else { return None };
+        set_bits(bits).all(|i| hit.prim.lane(i) == prim).then_some(k)
     }
 
     /// [`Tracer::surface`] for packets whose found lanes all hit one item of a registered kind that has a
@@ -361,12 +367,8 @@ impl<'a, F: Lanes> Tracer<'a, F> {
     ) -> Option<Surface<F>> {
         let geometry = &self.scene.geometry;
         let bits = F::move_mask(found);
+        let k = self.kind_item(hit, found)?;
         let prim = hit.prim.lane(set_bits(bits).next()?);
-        let (PrimRef::Kind(k), true) =
-            (geometry.prim(prim), set_bits(bits).all(|i| hit.prim.lane(i) == prim))
-        else {
-            return None;
-        };
         let ray = rays.ray();
         let (normal, object_point, material) = geometry.kinds.surface_k(k, ray, hit.t)?;
         let m = &self.scene.materials[material as usize];
