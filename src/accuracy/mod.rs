@@ -261,7 +261,7 @@ fn len(v: V3<f64>) -> f64 {
     v.dot(v).sqrt()
 }
 
-/// `normal` turned toward rays along `dir`, and whether it was flipped (hit from inside): shade.rs's
+/// `normal` turned toward rays along `dir`, and whether it was flipped (hit from inside): shade/surface.rs's
 /// `facing`, which is private, replicated with the same operations: the side `eye_inside` gives where it is
 /// known (a camera ray's sphere hit), else `n·d > 0` flips.
 fn facing<F: crate::math::Real>(normal: V3<F>, dir: V3<F>, eye_inside: Option<bool>) -> (V3<F>, bool)
@@ -333,7 +333,7 @@ impl Comparer<'_> {
         let g = &self.scene.geometry;
         let ray32 = self.scene.camera_f64.ray_f32(x as f32 + 0.5, y as f32 + 0.5);
         let sp = g.surface(&ray32, t32, storage);
-        // The side from the exact eye term only for rays that start at the eye, as shade.rs rules.
+        // The side from the exact eye term only for rays that start at the eye, as shade/surface.rs rules.
         let from_eye32 = at_eye(ray32.origin);
         let (n32, inside32) = facing(sp.normal, ray32.dir, g.eye_inside(storage).filter(|_| from_eye32));
         let (p64, outward64) = self.twin.surface(&ray64, h64.t, h64.prim);

@@ -1,5 +1,5 @@
 //! The secondary rays of one pixel whose two primary hits agree: shadow rays, the mirror ray and the
-//! refraction ray, each built by each precision from its own hit point and facing normal, with shade.rs's
+//! refraction ray, each built by each precision from its own hit point and facing normal, with the shade module's
 //! constructions replicated operation for operation.
 
 use super::report::Reason;
@@ -38,7 +38,7 @@ pub(super) struct Start {
     pub(crate) material: Material,
 }
 
-/// One shadow ray toward `light` from `point` with the facing `normal`: shade.rs's `Tracer::direct`
+/// One shadow ray toward `light` from `point` with the facing `normal`: shade/direct.rs's `Tracer::direct`
 /// construction (private there), replicated with the same operations in the same order: `to_light = light −
 /// point`, `dist = sqrt(to_light·to_light)`, unit `l = to_light · (1 / dist)`, `cos = normal·l`; a ray is
 /// traced only where `cos > 0`, over `[0, dist)`.
@@ -50,14 +50,14 @@ fn shadow_ray<F: Real>(point: V3<F>, normal: V3<F>, light: V3<F>) -> (Ray<F>, F,
     (Ray::new(point, l), dist, normal.dot(l))
 }
 
-/// The mirror ray's direction: shade.rs's `Tracer::secondary` construction (private there), replicated:
+/// The mirror ray's direction: shade/secondary.rs's `Tracer::secondary` construction (private there), replicated:
 /// `normalize(d − n·(2·(d·n)))` with the facing normal.
 fn mirror<F: Real>(d: V3<F>, n: V3<F>) -> V3<F> {
     (d - n * (F::splat(2.0) * d.dot(n))).normalize()
 }
 
 /// Snell refraction of unit `d` through the facing unit normal `n` with `eta = n_incident / n_transmitted`:
-/// shade.rs's `refract` (private there), replicated with the same operations: whether the ray passes (no
+/// shade/secondary.rs's `refract` (private there), replicated with the same operations: whether the ray passes (no
 /// total internal reflection), its unit direction, and `sin²` of the transmitted angle (1 at the critical
 /// angle).
 fn refract<F: Real>(d: V3<F>, n: V3<F>, eta: F) -> (bool, V3<F>, F)
@@ -157,7 +157,7 @@ impl Comparer<'_> {
     }
 
     /// The refraction ray of a hit on a transmitting material (`transmit > 0`) where both precisions
-    /// refract, leaving into the other side (shade.rs: `eta` is `ior` from inside, `1/ior` from outside),
+    /// refract, leaving into the other side (shade/secondary.rs: `eta` is `ior` from inside, `1/ior` from outside),
     /// compared like a camera ray. Where one precision refracts and the other reflects totally, the ray is
     /// traced in neither and the disagreement is counted (`tir_disagree`): explained as a graze when `sin²`
     /// of the f64 transmitted angle is within `K_GRAZE·ε32` of 1 (the critical angle), as a divergence
