@@ -1,6 +1,6 @@
 //! One tile's pixels under each sampling pattern: the shared-offset and per-pixel passes, the reconstruction
 //! filters (with an apron of neighbouring pixels traced again), the lecture's half-pixel grid and the
-//! coverage pattern (`coverage.rs`); adaptive subdivision traces whole bands (`adaptive.rs`). Every pixel's value depends only on its own samples (and, under a filter, its
+//! coverage pattern (`coverage/`); adaptive subdivision traces whole bands (`adaptive.rs`). Every pixel's value depends only on its own samples (and, under a filter, its
 //! neighbours'), never on where the tile starts, so any cut of the image into tiles gives the same bits.
 
 use crate::compile::Scene;

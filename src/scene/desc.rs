@@ -163,7 +163,7 @@ pub enum Pattern {
     /// The lecture's prefiltering: the exact area of the pixel each sphere's silhouette covers (an ellipse
     /// under perspective), the shares shaded by one ray each through their centroids and the uncovered rest
     /// by one more. Exact for the weights where silhouettes do not overlap inside a pixel; overlaps, other
-    /// primitives, shading across a part and secondary rays are approximated (`render/coverage.rs` says
+    /// primitives, shading across a part and secondary rays are approximated (`render/coverage/mod.rs` says
     /// how). One ray in a pixel covered by one sphere or by none. Reconstruction filters do not apply.
     Coverage,
 }

@@ -46,17 +46,25 @@
 //! - Walk cut-offs: the walk ends when a sphere covering the whole pixel is nearer everywhere in it than the
 //!   next sphere can be (exact), or when every grid point is covered, the areas found sum to at least 1 and
 //!   the next sphere lies beyond the farthest grid point's depth; and after 64 spheres.
+//!
+//! Files: `silhouette.rs` (the camera's frame in f64, a sphere's depth and silhouette), `pixel.rs` (one
+//! pixel's spheres, grid, depths and parts); here the tile's walk and binning and the tile's rays.
 
 use crate::accel::NearFirst;
 use crate::bvh::Frustum;
-use crate::camera::Camera;
 use crate::compile::Scene;
-use crate::geometry::{Ellipse, RayPacket, Spheres};
+use crate::geometry::RayPacket;
 use crate::math::Rgb;
 use crate::shade::Tracer;
 use crate::simd::Lanes;
 
 use super::{lane_rgb, Tile};
+
+mod pixel;
+mod silhouette;
+
+use pixel::{resolve, Found, Near, Pixel};
+use silhouette::{spheres_extent, Ball, View};
 
 /// Points per side of the grid that resolves overlaps and finds the remainder's point.
 const SIDE: usize = 8;
@@ -78,241 +86,6 @@ pub(crate) struct CoveragePart {
     pub(crate) weight: f64,
     /// Where the ray goes through, in pixel-space coordinates (column j's centre at j + ½).
     pub(crate) at: (f32, f32),
-}
-
-/// A vector of the camera's frame coordinates: x along the image's columns, y up, z forward.
-type V = [f64; 3];
-
-fn dot(a: V, b: V) -> f64 {
-    a[0] * b[0] + a[1] * b[1] + a[2] * b[2]
-}
-
-/// The camera as coverage needs it: the frame, and pixel space ↔ window.
-struct View {
-    /// The eye in rendering space (the origin but in a far scene, `crate::compile::RenderingFrame`).
-    eye: V,
-    right: V,
-    up: V,
-    forward: V,
-    /// Window `u = sx·au + bu`, `v = sy·av + bv` (directions `(u, v, 1)` in the frame).
-    au: f64,
-    bu: f64,
-    av: f64,
-    bv: f64,
-}
-
-impl View {
-    fn new(camera: &Camera<f64>) -> View {
-        let v = |p: crate::math::V3<f64>| [p.x, p.y, p.z];
-        View {
-            eye: v(camera.eye),
-            right: v(camera.right),
-            up: v(camera.up),
-            forward: v(camera.forward),
-            au: camera.u_scale * camera.half_w,
-            bu: camera.u_offset * camera.half_w,
-            av: camera.v_scale * camera.half_h,
-            bv: camera.v_offset * camera.half_h,
-        }
-    }
-
-    /// The direction (in the frame, not unit) toward pixel-space point `p`.
-    fn dir(&self, p: [f64; 2]) -> V {
-        [p[0] * self.au + self.bu, p[1] * self.av + self.bv, 1.0]
-    }
-
-    /// A rendering-space point as a vector from the eye, in f64.
-    fn eye_to(&self, p: [f32; 3]) -> V {
-        [0, 1, 2].map(|a| f64::from(p[a]) - self.eye[a])
-    }
-
-    /// A rendering-space vector in the frame.
-    fn to_frame(&self, c: V) -> V {
-        [dot(c, self.right), dot(c, self.up), dot(c, self.forward)]
-    }
-}
-
-/// The largest coordinate magnitude of `spheres`' boxes (a tree's `extent`, for spheres kept without one).
-fn spheres_extent(spheres: &Spheres) -> f32 {
-    (0..spheres.len())
-        .map(|i| {
-            let (c, r) = (spheres.center(i), spheres.r[i]);
-            c.x.abs().max(c.y.abs()).max(c.z.abs()) + r
-        })
-        .fold(0.0, f32::max)
-}
-
-/// A sphere in the camera's frame (from the eye), in f64 from its stored f32 values.
-#[derive(Clone, Copy, Debug)]
-struct Ball {
-    c: V,
-    r: f64,
-    /// `|C|² − r²`, as `(|C| − r)(|C| + r)`: positive when the eye is outside.
-    k: f64,
-    /// `|C|`.
-    dist: f64,
-    /// `|C|·cos(α + CLEARANCE)` (sin α = r/|C|): a direction `t` with `t·C ≤ |t|·rim` passes outside the
-    /// silhouette by at least [`CLEARANCE`]; −∞ for a sphere holding the eye.
-    rim: f64,
-}
-
-impl Ball {
-    fn new(c: V, r: f64) -> Ball {
-        let dist = dot(c, c).sqrt();
-        let k = (dist - r) * (dist + r);
-        let (sin, cos) = CLEARANCE.sin_cos();
-        let rim = if k > 0.0 { k.sqrt() * cos - r * sin } else { f64::NEG_INFINITY };
-        Ball { c, r, k, dist, rim }
-    }
-
-    /// Whether `t` (of length `len`) passes outside the silhouette by at least [`CLEARANCE`].
-    fn clear_of(&self, t: V, len: f64) -> bool {
-        dot(t, self.c) <= len * self.rim
-    }
-
-    /// The distance (along the unit direction) to the surface the eye sees along `t`: the entry point, or
-    /// the exit point from inside; `None` where the ray misses.
-    fn depth(&self, t: V) -> Option<f64> {
-        let (b, tt) = (dot(t, self.c), dot(t, t));
-        let disc = b * b - tt * self.k;
-        if self.k > 0.0 {
-            (b > 0.0 && disc >= 0.0).then(|| self.k / (b + disc.sqrt()) * tt.sqrt())
-        } else {
-            Some((b + disc.max(0.0).sqrt()) / tt.sqrt())
-        }
-    }
-
-    /// The silhouette in pixel space when the sphere lies wholly in front of the eye's plane.
-    fn ellipse(&self, view: &View) -> Option<Ellipse> {
-        let [cu, cv, cz] = self.c;
-        if !(self.k > 0.0 && cz > self.r) || view.au == 0.0 || view.av == 0.0 {
-            return None;
-        }
-        // In the window (u, v): centre cz·c/(cz² − r²), semi-axes r√k/(cz² − r²) along c = (cu, cv) and
-        // r/√(cz² − r²) across it.
-        let g = (cz - self.r) * (cz + self.r);
-        let m = [cz * cu / g, cz * cv / g];
-        let (along, across) = (self.r * self.k.sqrt() / g, self.r / g.sqrt());
-        let len = cu.hypot(cv);
-        let (ex, ey) = if len > 0.0 { (cu / len, cv / len) } else { (1.0, 0.0) };
-        // Rows of the map onto the unit disc, composed with window = (au·sx + bu, av·sy + bv).
-        let to_unit =
-            [[ex / along * view.au, ey / along * view.av], [-ey / across * view.au, ex / across * view.av]];
-        let centre = [(m[0] - view.bu) / view.au, (m[1] - view.bv) / view.av];
-        Some(Ellipse { centre, to_unit })
-    }
-}
-
-/// A sphere found in a pixel.
-#[derive(Clone, Copy, Debug)]
-struct Found {
-    item: u32,
-    ball: Ball,
-    /// The covered area (exact for ellipses; estimated from the grid for spheres crossing the eye's plane).
-    area: f64,
-    centroid: [f64; 2],
-    /// The grid points inside the silhouette, once computed.
-    mask: Option<u64>,
-    /// The silhouette's bounding box in pixel space (unbounded without an ellipse): grid points outside
-    /// it are outside the silhouette.
-    lo: [f64; 2],
-    hi: [f64; 2],
-}
-
-/// The grid of one pixel: its points and their directions.
-struct Grid {
-    points: [[f64; 2]; POINTS],
-    dirs: [V; POINTS],
-}
-
-impl Grid {
-    fn new(view: &View, x: f64, y: f64) -> Grid {
-        let points = std::array::from_fn(|i| {
-            let (col, row) = ((i % SIDE) as f64, (i / SIDE) as f64);
-            [x + (col + 0.5) / SIDE as f64, y + (row + 0.5) / SIDE as f64]
-        });
-        Grid { dirs: points.map(|p| view.dir(p)), points }
-    }
-}
-
-/// A sphere that meets a tile's pyramid, prepared for the tile's pixels.
-#[derive(Clone, Copy, Debug)]
-struct Near {
-    item: u32,
-    /// `|C| − r` (0 from inside): no point of the sphere is nearer the eye.
-    key: f64,
-    ball: Ball,
-    ellipse: Option<Ellipse>,
-    /// The silhouette's bounding box in pixel space; unbounded for spheres without an ellipse.
-    lo: [f64; 2],
-    hi: [f64; 2],
-}
-
-/// A pixel's working state, reused from pixel to pixel: the spheres found, the grid and its depth buffer.
-struct Pixel {
-    lo: [f64; 2],
-    found: Vec<Found>,
-    grid: Grid,
-    /// Whether `grid` is this pixel's.
-    grid_ready: bool,
-    /// Per grid point, the nearest depth found so far and whose it is (`u8::MAX`: no one's).
-    zbuf: [(f64, u8); POINTS],
-    /// Whether `zbuf` holds every sphere found (kept from the second sphere on; cleared then).
-    zbuf_live: bool,
-}
-
-impl Pixel {
-    fn new() -> Pixel {
-        Pixel {
-            lo: [0.0; 2],
-            found: Vec::new(),
-            grid: Grid { points: [[0.0; 2]; POINTS], dirs: [[0.0; 3]; POINTS] },
-            grid_ready: false,
-            zbuf: [(f64::INFINITY, u8::MAX); POINTS],
-            zbuf_live: false,
-        }
-    }
-
-    fn start(&mut self, lo: [f64; 2]) {
-        self.lo = lo;
-        self.found.clear();
-        self.grid_ready = false;
-        self.zbuf_live = false;
-    }
-
-    fn grid(&mut self, view: &View) -> &Grid {
-        if !self.grid_ready {
-            self.grid = Grid::new(view, self.lo[0], self.lo[1]);
-            self.grid_ready = true;
-        }
-        &self.grid
-    }
-
-    /// Enters sphere `j` into the per-point depth buffer (nearer wins; a tie keeps the one found first).
-    fn enter(&mut self, view: &View, j: usize) {
-        let Found { ball, lo, hi, .. } = self.found[j];
-        self.grid(view);
-        // The grid's columns and rows whose points may lie in the box (point k of a row at k + ½ of 1/SIDE).
-        let range = |lo: f64, hi: f64, origin: f64| {
-            let at = |v: f64| (v - origin) * SIDE as f64 - 0.5;
-            let first = at(lo).ceil().max(0.0).min(SIDE as f64) as usize;
-            let end = (at(hi).floor() + 1.0).max(0.0).min(SIDE as f64) as usize;
-            first..end.max(first)
-        };
-        let (cols, rows) = (range(lo[0], hi[0], self.lo[0]), range(lo[1], hi[1], self.lo[1]));
-        let mut mask = 0u64;
-        for row in rows {
-            for i in cols.clone().map(|col| row * SIDE + col) {
-                if let Some(d) = ball.depth(self.grid.dirs[i]) {
-                    mask |= 1 << i;
-                    if d < self.zbuf[i].0 {
-                        self.zbuf[i] = (d, j as u8);
-                    }
-                }
-            }
-        }
-        self.found[j].mask = Some(mask);
-    }
 }
 
 /// The scene's spheres and camera, ready for per-pixel coverage: the spheres of one tile at a time.
@@ -547,127 +320,6 @@ impl<'a> Coverage<'a> {
         }
         resolve(px, view, centre, out);
     }
-}
-
-/// The parts of a pixel from the spheres its walk found.
-fn resolve(px: &mut Pixel, view: &View, centre: [f64; 2], out: &mut Vec<CoveragePart>) {
-    let n = px.found.len();
-    let to32 = |p: [f64; 2]| (p[0] as f32, p[1] as f32);
-    let first = out.len();
-    let mut overlap = false;
-    if n == 1 {
-        let f = px.found[0];
-        out.push(CoveragePart { sphere: Some(f.item), weight: f.area, at: to32(f.centroid) });
-    } else if n > 1 {
-        // Who owns each grid point.
-        let mut owned = [0u64; MAX_SPHERES];
-        for (i, z) in px.zbuf.iter().enumerate() {
-            if z.1 != u8::MAX {
-                owned[usize::from(z.1)] |= 1 << i;
-            }
-        }
-        for (j, &owned) in owned.iter().enumerate().take(n) {
-            let f = px.found[j];
-            let mask = f.mask.expect("every sphere found is in the depth buffer");
-            overlap |= owned != mask;
-            // The nearest sphere along the ray through `p`, by depth (ties to the one found first).
-            let nearest = |p: [f64; 2]| {
-                let t = view.dir(p);
-                let own = f.ball.depth(t).unwrap_or(f64::INFINITY);
-                (0..n).all(|m| {
-                    m == j || px.found[m].ball.depth(t).is_none_or(|d| d > own || (d == own && m > j))
-                })
-            };
-            let (weight, at) = if mask == 0 {
-                // Too thin for the grid: all or nothing, by its centroid.
-                if nearest(f.centroid) {
-                    (f.area, f.centroid)
-                } else {
-                    (0.0, f.centroid)
-                }
-            } else {
-                let share = f64::from(owned.count_ones()) / f64::from(mask.count_ones());
-                let at = if owned == mask || nearest(f.centroid) {
-                    f.centroid
-                } else {
-                    closest(&px.grid.points, owned, f.centroid).unwrap_or(f.centroid)
-                };
-                (f.area * share, at)
-            };
-            if weight > 0.0 {
-                out.push(CoveragePart { sphere: Some(f.item), weight, at: to32(at) });
-            }
-        }
-    }
-    let total: f64 = out[first..].iter().map(|p| p.weight).sum();
-    if total > 1.0 {
-        for p in &mut out[first..] {
-            p.weight /= total;
-        }
-        return;
-    }
-    let rest = 1.0 - total;
-    if rest <= 1e-12 {
-        return;
-    }
-    // The remainder's centroid: exact when the silhouettes do not overlap (the pixel's moment less theirs).
-    let target = if overlap {
-        let covered = (0..n).fold(0u64, |m, j| m | px.found[j].mask.unwrap_or(0));
-        let grid = px.grid(view);
-        let free: Vec<usize> = (0..POINTS).filter(|&k| covered >> k & 1 == 0).collect();
-        match free.len() {
-            0 => centre,
-            f => {
-                let s = free
-                    .iter()
-                    .fold([0.0, 0.0], |s, &k| [s[0] + grid.points[k][0], s[1] + grid.points[k][1]]);
-                [s[0] / f as f64, s[1] / f as f64]
-            }
-        }
-    } else {
-        let m = px.found.iter().fold([centre[0], centre[1]], |m, f| {
-            [m[0] - f.area * f.centroid[0], m[1] - f.area * f.centroid[1]]
-        });
-        let r = 1.0 - px.found.iter().map(|f| f.area).sum::<f64>();
-        let p = [m[0] / r, m[1] / r];
-        if r > 0.0 && p.iter().all(|v| v.is_finite()) {
-            p
-        } else {
-            centre
-        }
-    };
-    let target = [target[0].clamp(px.lo[0], px.lo[0] + 1.0), target[1].clamp(px.lo[1], px.lo[1] + 1.0)];
-    let at = remainder_point(px, view, target);
-    out.push(CoveragePart { sphere: None, weight: rest, at: (at[0] as f32, at[1] as f32) });
-}
-
-/// Of the grid points in `mask`, the one nearest `p` (the first in grid order among equals).
-fn closest(points: &[[f64; 2]; POINTS], mask: u64, p: [f64; 2]) -> Option<[f64; 2]> {
-    let d = |q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
-    (0..POINTS).filter(|&k| mask >> k & 1 == 1).map(|k| points[k]).min_by(|a, b| d(*a).total_cmp(&d(*b)))
-}
-
-/// The point the remainder's ray goes through: `target` (rounded to f32, as the ray will be) when it lies
-/// outside every silhouette by [`CLEARANCE`], else the grid point nearest it that does among those no
-/// silhouette holds, else the nearest of those, else `target` (every grid point is covered: the remainder is
-/// what the grid cannot see).
-fn remainder_point(px: &mut Pixel, view: &View, target: [f64; 2]) -> [f64; 2] {
-    let rounded = |p: [f64; 2]| [f64::from(p[0] as f32), f64::from(p[1] as f32)];
-    let clear = |px: &Pixel, p: [f64; 2]| {
-        let t = view.dir(p);
-        let len = dot(t, t).sqrt();
-        px.found.iter().all(|f| f.ball.clear_of(t, len))
-    };
-    let target = rounded(target);
-    if clear(px, target) {
-        return target;
-    }
-    let covered = px.found.iter().fold(0u64, |m, f| m | f.mask.unwrap_or(0));
-    let points = px.grid(view).points.map(rounded);
-    let d = |q: [f64; 2]| (q[0] - target[0]).powi(2) + (q[1] - target[1]).powi(2);
-    let mut free: Vec<usize> = (0..POINTS).filter(|&k| covered >> k & 1 == 0).collect();
-    free.sort_unstable_by(|&a, &b| d(points[a]).total_cmp(&d(points[b])).then(a.cmp(&b)));
-    free.iter().find(|&&k| clear(px, points[k])).or(free.first()).map_or(target, |&k| points[k])
 }
 
 /// The parts of pixel (x, y) of `scene` under the coverage pattern: the rays its value is the weighted sum
