@@ -10,8 +10,8 @@ use crate::simd::Lanes;
 
 use super::{count_work, Geometry, LightBuffer, Work};
 
-/// Lanes of `live` blocked by one of the `n` items of one kind, like [`intersect_items`]; `blocker` is set to
-/// an item that blocked a lane.
+/// Lanes of `live` blocked by one of the `n` items of one kind, like intersect.rs's `intersect_items`;
+/// `blocker` is set to an item that blocked a lane.
 #[inline(always)]
 fn occluded_items<F: Lanes, Q: LeafQuery<F>>(
     bvh: Option<&Bvh>,
@@ -161,7 +161,7 @@ impl<F: Lanes> VisitItems for OccludedKinds<'_, F> {
 }
 
 /// The lanes of `open` one kind blocks: a function of each kind's own, its tree walk another, as for
-/// [`intersect_kind`].
+/// intersect.rs's `intersect_kind`.
 #[inline(never)]
 fn occluded_kind<F: Lanes, K: Kind>(
     items: &KindItems<K>,

@@ -1,6 +1,6 @@
 //! The secondary rays of one pixel whose two primary hits agree: shadow rays, the mirror ray and the
-//! refraction ray, each built by each precision from its own hit point and facing normal, with the shade module's
-//! constructions replicated operation for operation.
+//! refraction ray, each built by each precision from its own hit point and facing normal, with the shade
+//! module's constructions replicated operation for operation.
 
 use super::report::Reason;
 use super::{is_self_hit, len, Acc, Comparer, EPS32, K_GRAZE, K_START};
@@ -50,16 +50,16 @@ fn shadow_ray<F: Real>(point: V3<F>, normal: V3<F>, light: V3<F>) -> (Ray<F>, F,
     (Ray::new(point, l), dist, normal.dot(l))
 }
 
-/// The mirror ray's direction: shade/secondary.rs's `Tracer::secondary` construction (private there), replicated:
-/// `normalize(d − n·(2·(d·n)))` with the facing normal.
+/// The mirror ray's direction: shade/secondary.rs's `Tracer::secondary` construction (private there),
+/// replicated: `normalize(d − n·(2·(d·n)))` with the facing normal.
 fn mirror<F: Real>(d: V3<F>, n: V3<F>) -> V3<F> {
     (d - n * (F::splat(2.0) * d.dot(n))).normalize()
 }
 
 /// Snell refraction of unit `d` through the facing unit normal `n` with `eta = n_incident / n_transmitted`:
-/// shade/secondary.rs's `refract` (private there), replicated with the same operations: whether the ray passes (no
-/// total internal reflection), its unit direction, and `sin²` of the transmitted angle (1 at the critical
-/// angle).
+/// shade/secondary.rs's `refract` (private there), replicated with the same operations: whether the ray
+/// passes (no total internal reflection), its unit direction, and `sin²` of the transmitted angle (1 at the
+/// critical angle).
 fn refract<F: Real>(d: V3<F>, n: V3<F>, eta: F) -> (bool, V3<F>, F)
 where
     F::Mask: Into<bool>,
@@ -156,12 +156,12 @@ impl Comparer<'_> {
         self.secondary_ray(s, acc, "reflection", (r32, s.from32), (r64, s.from64));
     }
 
-    /// The refraction ray of a hit on a transmitting material (`transmit > 0`) where both precisions
-    /// refract, leaving into the other side (shade/secondary.rs: `eta` is `ior` from inside, `1/ior` from outside),
+    /// The refraction ray of a hit on a transmitting material (`transmit > 0`) where both precisions refract,
+    /// leaving into the other side (shade/secondary.rs: `eta` is `ior` from inside, `1/ior` from outside),
     /// compared like a camera ray. Where one precision refracts and the other reflects totally, the ray is
     /// traced in neither and the disagreement is counted (`tir_disagree`): explained as a graze when `sin²`
-    /// of the f64 transmitted angle is within `K_GRAZE·ε32` of 1 (the critical angle), as a divergence
-    /// when within that plus `2·eta²` times how far the f32 direction and normal stray from the f64 ones.
+    /// of the f64 transmitted angle is within `K_GRAZE·ε32` of 1 (the critical angle), as a divergence when
+    /// within that plus `2·eta²` times how far the f32 direction and normal stray from the f64 ones.
     pub(super) fn refraction(&self, s: &Start, acc: &mut Acc) {
         let (transmit, ior) = (s.material.transmit, s.material.ior);
         if transmit <= 0.0 {

@@ -7,6 +7,9 @@
 //! Adding a kind: a folder here with a type implementing `Kind`, and its name in `registry!`. Its
 //! primitive ids follow the spheres' (and the particle tree's) in the list's order.
 //!
+//! Files: `kind.rs` (the `Kind` trait), `items.rs` (one kind's compiled items and tree), `registered.rs` (the
+//! structures and loops generated over the list); one folder per kind.
+//!
 //! ```
 //! use bareray::kinds::{KindDescs, COUNT, NAMES};
 //! // Every registered kind has a list of descriptions, empty by default, and a name.
@@ -26,14 +29,17 @@ pub(crate) mod polygon;
 mod registered;
 pub(crate) mod torus;
 
-pub(crate) use items::{Ids, KindItems, VisitItems};
-pub(crate) use kind::{nudge, Kind, KindError, Stray};
+use items::Ids;
+pub(crate) use items::{KindItems, VisitItems};
+use kind::nudge;
+pub(crate) use kind::{Kind, KindError, Stray};
 pub use registered::{KindDescs, COUNT, NAMES};
 pub(crate) use registered::{KindStores, KindTwins};
 
 /// The registry: every kind, as `field: type`, the field naming its TOML array of tables and its list in
-/// the description. Called with the name of a macro, it calls that macro with the list; the structures
-/// below and the TOML reader are generated that way, so this line is the only place a kind is registered.
+/// the description. Called with the name of a macro, it calls that macro with the list; the structures of
+/// `registered.rs` and the TOML reader are generated that way, so this list is the only place a kind is
+/// registered.
 macro_rules! registry {
     ($then:ident) => {
         $then! {

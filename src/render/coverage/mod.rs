@@ -10,8 +10,9 @@
 //! 2. **How much of the pixel each covers.** The perspective image of a sphere wholly in front of the eye's
 //!    plane (`C·Z > r`) is an ellipse: the directions `t` toward it satisfy `(t·C)² ≥ |t|²(|C|² − r²)`, a
 //!    quadratic form in the window coordinates (u, v), and pixel space is an affine image of the window. Its
-//!    exact area and centroid inside the pixel square come from [`Ellipse::clip`], in f64, for the sphere as
-//!    the renderer stores it (f32 centre and radius).
+//!    exact area and centroid inside the pixel square come from
+//!    [`Ellipse::clip`](crate::geometry::Ellipse::clip), in f64, for the sphere as the renderer stores it (f32
+//!    centre and radius).
 //! 3. **Who is in front.** Where more than one sphere reaches into the pixel, an 8×8 grid of points in the
 //!    pixel decides: each point belongs to the sphere whose surface is nearest along its ray (depths in f64),
 //!    and a sphere's exact area is scaled by the share of its points it keeps (a sphere too thin to hold a
@@ -53,7 +54,7 @@
 use crate::accel::NearFirst;
 use crate::bvh::Frustum;
 use crate::compile::Scene;
-use crate::geometry::RayPacket;
+use crate::geometry::{Ellipse, RayPacket};
 use crate::math::Rgb;
 use crate::shade::Tracer;
 use crate::simd::Lanes;
@@ -63,7 +64,7 @@ use super::{lane_rgb, Tile};
 mod pixel;
 mod silhouette;
 
-use pixel::{resolve, Found, Near, Pixel};
+use pixel::{resolve, Found, Pixel};
 use silhouette::{spheres_extent, Ball, View};
 
 /// Points per side of the grid that resolves overlaps and finds the remainder's point.
@@ -86,6 +87,19 @@ pub(crate) struct CoveragePart {
     pub(crate) weight: f64,
     /// Where the ray goes through, in pixel-space coordinates (column j's centre at j + ½).
     pub(crate) at: (f32, f32),
+}
+
+/// A sphere that meets a tile's pyramid, prepared for the tile's pixels.
+#[derive(Clone, Copy, Debug)]
+struct Near {
+    item: u32,
+    /// `|C| − r` (0 from inside): no point of the sphere is nearer the eye.
+    key: f64,
+    ball: Ball,
+    ellipse: Option<Ellipse>,
+    /// The silhouette's bounding box in pixel space; unbounded for spheres without an ellipse.
+    lo: [f64; 2],
+    hi: [f64; 2],
 }
 
 /// The scene's spheres and camera, ready for per-pixel coverage: the spheres of one tile at a time.

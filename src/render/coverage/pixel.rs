@@ -1,8 +1,6 @@
 //! One pixel under the coverage pattern: the spheres found in it, its grid of points and their depths, and
 //! the parts its value is the weighted sum of ([`resolve`]).
 
-use crate::geometry::Ellipse;
-
 use super::silhouette::{dot, Ball, View, V};
 use super::{CoveragePart, MAX_SPHERES, POINTS, SIDE};
 
@@ -29,7 +27,7 @@ pub(super) struct Grid {
 }
 
 impl Grid {
-    pub(super) fn new(view: &View, x: f64, y: f64) -> Grid {
+    fn new(view: &View, x: f64, y: f64) -> Grid {
         let points = std::array::from_fn(|i| {
             let (col, row) = ((i % SIDE) as f64, (i / SIDE) as f64);
             [x + (col + 0.5) / SIDE as f64, y + (row + 0.5) / SIDE as f64]
@@ -38,24 +36,11 @@ impl Grid {
     }
 }
 
-/// A sphere that meets a tile's pyramid, prepared for the tile's pixels.
-#[derive(Clone, Copy, Debug)]
-pub(super) struct Near {
-    pub(super) item: u32,
-    /// `|C| − r` (0 from inside): no point of the sphere is nearer the eye.
-    pub(super) key: f64,
-    pub(super) ball: Ball,
-    pub(super) ellipse: Option<Ellipse>,
-    /// The silhouette's bounding box in pixel space; unbounded for spheres without an ellipse.
-    pub(super) lo: [f64; 2],
-    pub(super) hi: [f64; 2],
-}
-
 /// A pixel's working state, reused from pixel to pixel: the spheres found, the grid and its depth buffer.
 pub(super) struct Pixel {
-    pub(super) lo: [f64; 2],
+    lo: [f64; 2],
     pub(super) found: Vec<Found>,
-    pub(super) grid: Grid,
+    grid: Grid,
     /// Whether `grid` is this pixel's.
     grid_ready: bool,
     /// Per grid point, the nearest depth found so far and whose it is (`u8::MAX`: no one's).
@@ -211,16 +196,16 @@ pub(super) fn resolve(px: &mut Pixel, view: &View, centre: [f64; 2], out: &mut V
 }
 
 /// Of the grid points in `mask`, the one nearest `p` (the first in grid order among equals).
-pub(super) fn closest(points: &[[f64; 2]; POINTS], mask: u64, p: [f64; 2]) -> Option<[f64; 2]> {
+fn closest(points: &[[f64; 2]; POINTS], mask: u64, p: [f64; 2]) -> Option<[f64; 2]> {
     let d = |q: [f64; 2]| (q[0] - p[0]).powi(2) + (q[1] - p[1]).powi(2);
     (0..POINTS).filter(|&k| mask >> k & 1 == 1).map(|k| points[k]).min_by(|a, b| d(*a).total_cmp(&d(*b)))
 }
 
 /// The point the remainder's ray goes through: `target` (rounded to f32, as the ray will be) when it lies
-/// outside every silhouette by [`CLEARANCE`], else the grid point nearest it that does among those no
-/// silhouette holds, else the nearest of those, else `target` (every grid point is covered: the remainder is
-/// what the grid cannot see).
-pub(super) fn remainder_point(px: &mut Pixel, view: &View, target: [f64; 2]) -> [f64; 2] {
+/// outside every silhouette by [`CLEARANCE`](super::CLEARANCE), else the grid point nearest it that does
+/// among those no silhouette holds, else the nearest of those, else `target` (every grid point is covered:
+/// the remainder is what the grid cannot see).
+fn remainder_point(px: &mut Pixel, view: &View, target: [f64; 2]) -> [f64; 2] {
     let rounded = |p: [f64; 2]| [f64::from(p[0] as f32), f64::from(p[1] as f32)];
     let clear = |px: &Pixel, p: [f64; 2]| {
         let t = view.dir(p);

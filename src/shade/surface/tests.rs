@@ -1,3 +1,6 @@
+//! The surfaces' lane forms (spheres, kinds, the split of a packet between them) against the lane-by-lane
+//! path, bit for bit, the sides of grazing and eye-on-surface hits, and the checker.
+
 use super::*;
 use crate::compile::Scene;
 use crate::geometry::DeparturePacket;
