@@ -1,5 +1,5 @@
 //! Measuring renders, as `bareray bench` reports them: repeated timed runs of one setting (`measure`) and
-//! the split of a render by ray kind ([`profile`]).
+//! the split of a render by ray kind ([`profile()`]).
 //!
 //! Times come from runs with every probe off. The per-kind figures come from two extra runs: one with the
 //! work counters on (tests and live rays per kind), one that reads the time-stamp counter around each
@@ -110,13 +110,13 @@ pub fn min_median_max(values: &[f64]) -> (f64, f64, f64) {
 pub struct Setting {
     /// The timed runs.
     pub measured: Measured,
-    /// The split by ray kind ([`profile`]), whose runs gave the timed runs' checksum.
+    /// The split by ray kind ([`profile()`]), whose runs gave the timed runs' checksum.
     pub kinds: Option<Profile>,
 }
 
 /// `measure`s `scene` at `lanes` rays per packet, on the scalar path when `scalar` (the geometry then
 /// walks its binary trees, which the scene must have been compiled with), and with `split` also
-/// [`profile`]s it, checking that the probed runs traced the timed runs' bits.
+/// [`profile()`]s it, checking that the probed runs traced the timed runs' bits.
 pub fn measure_setting(
     scene: &mut Scene,
     trace: Trace,

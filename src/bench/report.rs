@@ -78,7 +78,7 @@ pub struct KindRow {
     pub threads: usize,
     /// Median seconds of the setting's clean runs.
     pub seconds: f64,
-    /// The setting's split ([`super::profile`]).
+    /// The setting's split ([`super::profile()`]).
     pub profile: Profile,
 }
 

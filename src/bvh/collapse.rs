@@ -9,10 +9,11 @@ use super::node::{ChildRef, RayNode, EMPTY};
 use super::slab::STACK;
 use super::wide_node::WIDE_N;
 
-/// bareray's nodes (4-wide [`Node`] or 8-wide [`WideNode`]) from a binary tree in obvhs's layout, in
-/// depth-first order, and the stack entries a walk of them may need ([`stack_need`]; `usize::MAX` for a tree
-/// deeper than [`MAX_COLLAPSE_LEVELS`], whose nodes are then incomplete). The top [`PARALLEL_LEVELS`] levels
-/// flatten their subtrees in parallel; the layout is the serial one ([`flatten`]) node for node.
+/// bareray's nodes (4-wide [`Node`](super::node::Node) or 8-wide [`WideNode`](super::wide_node::WideNode))
+/// from a binary tree in obvhs's layout, in depth-first order, and the stack entries a walk of them may need
+/// ([`stack_need`]; `usize::MAX` for a tree deeper than [`MAX_COLLAPSE_LEVELS`], whose nodes are then
+/// incomplete). The top [`PARALLEL_LEVELS`] levels flatten their subtrees in parallel; the layout is the
+/// serial one ([`flatten`]) node for node.
 pub(super) fn collapse<T: RayNode>(src: &[Bvh2Node]) -> (Vec<T>, usize) {
     if src[0].prim_count > 0 {
         let mut nodes = Vec::with_capacity(1);

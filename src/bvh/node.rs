@@ -116,7 +116,8 @@ macro_rules! slot_access {
 pub(super) use slot_access;
 
 /// A node as the collapse builds it and the single-ray walk reads it: up to `WIDTH` children, one per lane of
-/// `Lanes` in the walk's slab test. Implemented by the 4-wide packet [`Node`] and the 8-wide [`WideNode`].
+/// `Lanes` in the walk's slab test. Implemented by the 4-wide packet [`Node`] and the 8-wide
+/// [`WideNode`](super::wide_node::WideNode).
 pub(super) trait RayNode: Copy + Send + Sync {
     /// Children per node.
     const WIDTH: usize;

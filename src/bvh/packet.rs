@@ -26,7 +26,8 @@ pub(super) struct SlabRays<F: Lanes> {
     slab: SlabRay<F>,
     /// The octant of the first live lane's direction, which orders the children.
     pub(super) octant: usize,
-    /// Per axis, the side of the near plane ([`near_side`]), when every live lane's is the same.
+    /// Per axis, the side of the near plane ([`near_side`](super::slab::near_side)), when every live lane's
+    /// is the same.
     near: Option<[usize; 3]>,
     /// The whole-packet pyramid, when asked for and the live lanes share an origin.
     pub(super) frustum: Option<Frustum>,

@@ -8,9 +8,9 @@ use crate::simd::Lanes;
 /// distance `fma(lo, 1/d, −o·(1/d))` (see [`slab_entry`]) is `(lo − o − o·δ)·(1/d)` rounded, |δ| ≤ u = ε/2:
 /// the box plane moved by at most u·|o| and then relative errors (the rounded `1/d` and the final rounding),
 /// at most γ₂ on every distance. Where |o| ≤ 2·reach the move is at most 2u·reach, inside the boxes'
-/// [`padding`]; where |o| > 2·reach every box plane is more than |o|/2 away, so the move is at most a further
-/// relative 2u. Entry and exit each err by at most γ₂ + 2u(1 + γ₂) < 4.01u; widening the exit by 6ε = 12u
-/// (rounded up, and itself rounded) covers both sides.
+/// [`padding`](super::padding); where |o| > 2·reach every box plane is more than |o|/2 away, so the move is
+/// at most a further relative 2u. Entry and exit each err by at most γ₂ + 2u(1 + γ₂) < 4.01u; widening the
+/// exit by 6ε = 12u (rounded up, and itself rounded) covers both sides.
 pub(crate) const WIDEN: f32 = 1.0 + 6.0 * f32::EPSILON;
 
 /// `1/d` with a zero component replaced by ±1e-30 first, so no slab product is 0·inf = NaN.
@@ -44,7 +44,8 @@ impl<F: Lanes> SlabRay<F> {
 
 /// The slab test both traversals run, in either layout: lanes = rays (one box, corners splatted; packet
 /// traversal) or lanes = boxes (one ray splatted; single-ray traversal). Returns each lane's entry distance,
-/// `inf` where it misses the box or enters beyond `limit`. Conservative by [`WIDEN`] and [`padding`].
+/// `inf` where it misses the box or enters beyond `limit`. Conservative by [`WIDEN`] and
+/// [`padding`](super::padding).
 #[inline(always)]
 pub(crate) fn slab_entry<F: Lanes>(lo: [F; 3], hi: [F; 3], ray: &SlabRay<F>, limit: F) -> F {
     let slab = |lo: F, hi: F, inv: F, neg_o_inv: F| {

@@ -229,7 +229,7 @@ pub fn write_atomic(path: &Path, write: impl FnOnce(&Path) -> Result<(), BoxErro
     Ok(())
 }
 
-/// The temporary files being written, for [`remove_temporaries`].
+/// The temporary files being written, for `remove_temporaries` (built with the `mpi` feature).
 static PENDING: std::sync::Mutex<Vec<PathBuf>> = std::sync::Mutex::new(Vec::new());
 
 /// A temporary file being written: removed when dropped (an error or a panic unwinding past it; after the

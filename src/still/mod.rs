@@ -1,6 +1,6 @@
 //! Stills of any size: the image (or a region of it) is rendered band by band and each finished band is
 //! encoded and let go while the next is traced, so memory is the scene plus a few bands whatever the
-//! image's height ([`render`]); before that, [`check`] refuses what cannot work — a size past a format's or
+//! image's height ([`render`]); before that, [`check()`] refuses what cannot work — a size past a format's or
 //! bareray's limits, a render whose bands would not fit in memory, a file that would not fit on its disk —
 //! with the reason and what would fit. Regions written separately are pasted back together by [`merge`].
 
@@ -205,9 +205,10 @@ pub(crate) fn write_bands<T>(
     write_bands_resuming(scene, pool, &job, |emit, _| produce(emit))
 }
 
-/// [`write_bands`], resumable when `job.resume` is set: the side file's rows (if its hash matches) are
-/// replayed into the writers first, `produce` is told the first window row still to make, and every chunk
-/// of rows is recorded before it is written; the side file goes once the files are in place.
+/// `write_bands` (built with the `mpi` feature), resumable when `job.resume` is set: the side file's rows (if
+/// its hash matches) are replayed into the writers first, `produce` is told the first window row still to
+/// make, and every chunk of rows is recorded before it is written; the side file goes once the files are in
+/// place.
 fn write_bands_resuming<T>(
     scene: &Scene,
     pool: &rayon::ThreadPool,

@@ -31,8 +31,9 @@ pub(crate) use super::hit64::Hit64;
 
 mod tolerance;
 
-/// The roundings, beyond the contact band's own [`CONTACT_ROUNDINGS`], by which the f32 renderer's `c = |oc|²
-/// − r²` can differ from the exact `c` of the same origin and the scene's sphere ([`Twin::contact_entry`]).
+/// The roundings, beyond the contact band's own [`CONTACT_ROUNDINGS`](crate::geometry::CONTACT_ROUNDINGS), by
+/// which the f32 renderer's `c = |oc|² − r²` can differ from the exact `c` of the same origin and the scene's
+/// sphere ([`Twin::contact_entry`]).
 const CONTACT_C_ROUNDINGS: f64 = 8.0;
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
