@@ -127,7 +127,7 @@ impl<F: Lanes> Tracer<'_, F> {
             return None;
         }
         // The cheap tests first: the other lanes on one item of a kind, its material plain.
-        let k = self.kind_item(hit, rest)?;
+        let (k, _) = self.kind_item(hit, rest)?;
         let material = geometry.kinds.material_in_lanes(k)?;
         if self.scene.materials[material as usize].checker.is_some() {
             return None;
@@ -137,14 +137,15 @@ impl<F: Lanes> Tracer<'_, F> {
         Some(Surface::select(on_spheres, sphere, item))
     }
 
-    /// The item (numbered among the registered kinds' primitives) that every lane of `lanes` hit, if they
-    /// all hit one item of a registered kind (not a sphere or a particle); `None` for no lanes.
+    /// The item that every lane of `lanes` hit, if they all hit one item of a registered kind (not a sphere
+    /// or a particle): its index among the registered kinds' primitives and its primitive id; `None` for no
+    /// lanes.
     #[inline(always)]
-    fn kind_item(&self, hit: &HitPacket<F>, lanes: F::Mask) -> Option<usize> {
+    fn kind_item(&self, hit: &HitPacket<F>, lanes: F::Mask) -> Option<(usize, u32)> {
         let bits = F::move_mask(lanes);
         let prim = hit.prim.lane(set_bits(bits).next()?);
         let PrimRef::Kind(k) = self.scene.geometry.prim(prim) else { return None };
-        set_bits(bits).all(|i| hit.prim.lane(i) == prim).then_some(k)
+        set_bits(bits).all(|i| hit.prim.lane(i) == prim).then_some((k, prim))
     }
 
     /// [`Tracer::surface`] for packets whose found lanes all hit one item of a registered kind that has a
@@ -161,8 +162,7 @@ impl<F: Lanes> Tracer<'_, F> {
     ) -> Option<Surface<F>> {
         let geometry = &self.scene.geometry;
         let bits = F::move_mask(found);
-        let k = self.kind_item(hit, found)?;
-        let prim = hit.prim.lane(set_bits(bits).next()?);
+        let (k, prim) = self.kind_item(hit, found)?;
         let ray = rays.ray();
         let (normal, object_point, material) = geometry.kinds.surface_k(k, ray, hit.t)?;
         let m = &self.scene.materials[material as usize];
