@@ -1,7 +1,8 @@
 //! One tile's pixels under each sampling pattern: the shared-offset and per-pixel passes, the reconstruction
 //! filters (with an apron of neighbouring pixels traced again), the lecture's half-pixel grid and the
-//! coverage pattern (`coverage/`); adaptive subdivision traces whole bands (`adaptive.rs`). Every pixel's value depends only on its own samples (and, under a filter, its
-//! neighbours'), never on where the tile starts, so any cut of the image into tiles gives the same bits.
+//! coverage pattern (`coverage/`); adaptive subdivision traces whole bands (`adaptive/`). Every pixel's value
+//! depends only on its own samples (and, under a filter, its neighbours'), never on where the tile starts, so
+//! any cut of the image into tiles gives the same bits.
 
 use crate::compile::Scene;
 use crate::math::Rgb;
@@ -26,7 +27,7 @@ pub(super) fn trace_tile<F: Lanes>(
     let pattern = scene.render.pattern;
     let pixels = match pattern {
         Pattern::HalfPixel => half_pixel_tile(scene, tracer, tile),
-        Pattern::Adaptive { .. } => unreachable!("adaptive sampling traces whole bands (adaptive.rs)"),
+        Pattern::Adaptive { .. } => unreachable!("adaptive sampling traces whole bands (adaptive/)"),
         Pattern::Coverage => super::coverage::coverage_tile(scene, tracer, tile),
         Pattern::Grid(_) | Pattern::Stratified(_) | Pattern::R2(_) | Pattern::Sobol(_) => {
             match scene.render.filter {
