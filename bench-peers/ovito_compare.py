@@ -22,8 +22,11 @@ cosine-weighted.
 OVITO's time is that of `Viewport.render_image` (its scene preparation, Tachyon's or OSPRay's build and the
 trace); bareray's is the wall time of the whole `bareray render` process (reading the list, the BVH build, the
 trace and writing the PNG), with the parse, build and render (tracing with the PNG) seconds of its summary
-line beside it. Each is the median of --reps runs, the renders taken in turn in each round. The object mask of
-each image (bareray: a pixel not the black background; OVITO: alpha > 0, the image rendered with a transparent
+line beside it. Where the bareray Python module imports (`pip install ./python` in the same environment),
+the same renders are also timed in this process through `bareray.render(centers, radii, ...)`: the arrays in
+memory, as OVITO's pipeline holds them, and no file or PNG on either side (the rows `bareray-py-*`; the Whitted
+image's object mask is compared with the command's). Each is the median of --reps runs, the renders taken
+in turn in each round. The object mask of each image (bareray: a pixel not the black background; OVITO: alpha > 0, the image rendered with a transparent
 background) is compared with OVITO Tachyon's without AO, as intersection over union; not bareray's AO image,
 which is black where a hit is fully occluded.
 
@@ -137,6 +140,28 @@ def run_bareray(binary, xyzr, out, cam, shade):
     return wall, stats, " ".join(cmd), text
 
 
+def python_module():
+    """The bareray Python module, or None where it is not installed in this environment."""
+    try:
+        import bareray
+    except ImportError:
+        return None
+    return bareray if hasattr(bareray, "render") else None
+
+
+def run_python(module, centers, radii, cam, shade):
+    """`bareray.render` of the arrays with the command's camera and shading, timed in this process; the
+    8-bit image as the command writes it."""
+    eye, _, up, hfov, _, look = cam
+    # Mid grey, so that no lit pixel saturates to the white background.
+    grey = np.full((len(radii), 3), 0.5)
+    start = time.perf_counter()
+    image = module.render(centers, radii, grey, width=WIDTH, height=HEIGHT, eye=eye, look=look, up=up,
+                          hfov=hfov, shade=shade)
+    seconds = time.perf_counter() - start
+    return seconds, module.to_uint8(image)
+
+
 def ovito_scene(centers, radii):
     from ovito.data import DataCollection
     from ovito.pipeline import Pipeline, StaticSource
@@ -234,6 +259,8 @@ def main():
         return
     import ovito
 
+    module = python_module()
+    print(f"bareray Python module: {module.__file__ if module else 'not installed, its rows skipped'}")
     sets = []
     if args.random:
         sets.append((f"random-{args.random}", *random_spheres(args.random)))
@@ -251,6 +278,7 @@ def main():
         print(f"== {name}: {len(radii)} spheres, eye {vec(cam[0])}, look {vec(cam[1])}", flush=True)
         pipeline = ovito_scene(centers, radii)
         jobs = {}
+        ious = {}
         lo, hi = bounds(centers, radii)
         reach = float(np.linalg.norm(hi - lo))
         res["ao_reach"] = reach
@@ -258,6 +286,10 @@ def main():
             key = f"bareray-{shade}" if "," not in shade else f"bareray-ao:{args.ao},diagonal"
             png = os.path.join(args.out, f"{name}-{key}.png".replace(":", "").replace(",", "-"))
             jobs[key] = (png, lambda png=png, shade=shade: run_bareray(binary, xyzr, png, cam, shade))
+            if module is not None:
+                py_key = key.replace("bareray-", "bareray-py-")
+                jobs[py_key] = (None, lambda png=png, shade=shade, py_key=py_key: python_job(
+                    module, centers, radii, cam, shade, png, ious.setdefault(py_key, [])))
         for key, make in renderers(args.ao).items():
             if key not in skip:
                 png = os.path.join(args.out, f"{name}-{key}.png")
@@ -272,14 +304,17 @@ def main():
         for key, (png, _) in jobs.items():
             times = [r[0] for r in runs[key]]
             entry = {"seconds": statistics.median(times), "runs": times, "png": png}
-            if key.startswith("bareray"):
+            if key.startswith("bareray-py-"):
+                if ious.get(key):
+                    entry["iou_vs_command"] = min(ious[key])
+            elif key.startswith("bareray"):
                 entry.update(stats=runs[key][-1][1], command=runs[key][-1][2])
             res["renders"][key] = entry
         pipeline.remove_from_scene()
         ref = mask(res["renders"]["tachyon"]["png"], True) if "tachyon" in res["renders"] else None
         for key, entry in res["renders"].items():
             # bareray's AO image is black where a hit is fully occluded, so its mask is not the objects'.
-            if ref is not None and not key.startswith("bareray-ao"):
+            if ref is not None and entry["png"] and not key.startswith("bareray-ao"):
                 entry["iou_vs_tachyon"] = iou(mask(entry["png"], key.startswith(("tachyon", "ospray"))), ref)
         if ref is not None and args.pixel_shift:
             # The same camera without the half-pixel turn, for the record.
@@ -292,23 +327,41 @@ def main():
         json.dump(results, f, indent=1)
 
 
+def python_job(module, centers, radii, cam, shade, png, ious):
+    """One in-process render, timed. For Whitted, appends to `ious` its object mask's IoU against the
+    command's PNG `png` (written earlier in the round): the module renders particles mid grey on white, the
+    command an .xyzr list in its default material on black, so the masks are compared, not the pixels."""
+    seconds, image = run_python(module, centers, radii, cam, shade)
+    if shade == "whitted":
+        ours = (np.asarray(image) != 255).any(axis=2)
+        ious.append(iou(ours, mask(png, False)))
+    return seconds, {}, "", ""
+
+
 def fmt(xs):
     return ", ".join(f"{x:.3f}" for x in xs)
 
 
 def summary(name, res, ao):
     """Each render's median and its ratio to bareray's at the same shading: Whitted for Tachyon and OSPRay at
-    1 sample; for the AO renders both bareray AO lengths, the diagonal (Tachyon's reach) first."""
+    1 sample; for the AO renders both bareray AO lengths, the diagonal (Tachyon's reach) first. The ratios to
+    the command's wall time come first, then, where the Python module ran, to its in-process time."""
     r = res["renders"]
-    print(f"-- {name}: seconds, ratio to bareray at the same shading, mask IoU against OVITO Tachyon")
+    print(f"-- {name}: seconds, ratio to bareray at the same shading (command; in process), mask IoU against "
+          "OVITO Tachyon")
     for key, entry in r.items():
         if "ao" not in key and key != f"ospray-{ao}":
-            bases = [r["bareray-whitted"]]
+            keys = ["bareray-whitted"]
         else:
-            bases = [r[k] for k in (f"bareray-ao:{ao},diagonal", f"bareray-ao:{ao}") if k in r]
-        ratios = " / ".join(f"{entry['seconds'] / b['seconds']:.1f}x" for b in bases)
-        print(f"   {key:24s} {entry['seconds']:8.3f} s  {ratios:>13s}  "
-              f"IoU {entry.get('iou_vs_tachyon', float('nan')):.4f}")
+            keys = [f"bareray-ao:{ao},diagonal", f"bareray-ao:{ao}"]
+        cells = []
+        for prefix in ("bareray-", "bareray-py-"):
+            bases = [r[k.replace("bareray-", prefix)] for k in keys if k.replace("bareray-", prefix) in r]
+            if bases:
+                cells.append(" / ".join(f"{entry['seconds'] / b['seconds']:.1f}x" for b in bases))
+        extra = f"  IoU {entry['iou_vs_command']:.4f} against the command's" if "iou_vs_command" in entry else ""
+        print(f"   {key:27s} {entry['seconds']:8.3f} s  {'; '.join(cells):>24s}  "
+              f"IoU {entry.get('iou_vs_tachyon', float('nan')):.4f}{extra}")
 
 
 def cpu():
