@@ -28,22 +28,23 @@ impl Image {
     }
 
     /// The pixels' channels, `r, g, b` per pixel in row order (what an array of shape (height, width, 3)
-    /// holds), copied in parallel into zeroed memory.
+    /// holds): the pixel buffer itself, taken over without a copy.
     ///
     /// ```
     /// let image = bareray::film::Image::new(2, 1);
-    /// assert_eq!(image.rgb_values(), [0.0; 6]);
+    /// assert_eq!(image.into_rgb_values(), [0.0; 6]);
     /// ```
-    pub fn rgb_values(&self) -> Vec<f32> {
-        use rayon::prelude::*;
-        const PIXELS: usize = 1 << 14;
-        let mut values = vec![0.0f32; 3 * self.pixels.len()];
-        values.par_chunks_mut(3 * PIXELS).zip(self.pixels.par_chunks(PIXELS)).for_each(|(out, pixels)| {
-            for (o, p) in out.chunks_exact_mut(3).zip(pixels) {
-                o.copy_from_slice(&[p.x, p.y, p.z]);
-            }
-        });
-        values
+    pub fn into_rgb_values(self) -> Vec<f32> {
+        const _: () =
+            assert!(size_of::<Rgb>() == 3 * size_of::<f32>() && align_of::<Rgb>() == align_of::<f32>());
+        let mut pixels = std::mem::ManuallyDrop::new(self.pixels);
+        let (block, len, capacity) = (pixels.as_mut_ptr(), pixels.len(), pixels.capacity());
+        // SAFETY: `Rgb` is `#[repr(C)]` with three `f32` fields, of three `f32`s' size and an `f32`'s
+        // alignment (asserted above): no padding, so the block of `capacity` pixels is the block of
+        // `3 · capacity` floats, of the same size and alignment, from the same (global) allocator, and its
+        // first `3 · len` floats are the initialised pixels' channels in order. With `capacity` 0 the pointer
+        // is a dangling one aligned for `Rgb`, so for `f32`, and nothing is freed. `pixels` is not dropped.
+        unsafe { Vec::from_raw_parts(block.cast::<f32>(), 3 * len, 3 * capacity) }
     }
 }
 
@@ -64,5 +65,28 @@ fn black_pixels(n: usize) -> Vec<Rgb> {
             std::alloc::handle_alloc_error(layout);
         }
         Vec::from_raw_parts(block, n, n)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// The channels come out in pixel order, and a buffer with spare capacity (freed as floats) and an empty
+    /// one are handed over too.
+    #[test]
+    fn rgb_values_are_the_pixels_channels_in_order() {
+        let mut pixels = Vec::with_capacity(5);
+        pixels.extend([Rgb::new(1.0, 2.0, 3.0), Rgb::new(4.0, 5.0, 6.0)]);
+        let capacity = pixels.capacity();
+        let mut values = Image { width: 2, height: 1, pixels }.into_rgb_values();
+        assert_eq!(values, [1.0, 2.0, 3.0, 4.0, 5.0, 6.0]);
+        assert_eq!(values.capacity(), 3 * capacity);
+        values.push(7.0);
+        assert_eq!(values[6], 7.0);
+        assert!(Image::new(0, 3).into_rgb_values().is_empty());
+        let image = Image::new(3, 2);
+        assert_eq!(image.clone().into_rgb_values().len(), 18);
+        assert!(image.into_rgb_values().iter().all(|&v| v == 0.0));
     }
 }

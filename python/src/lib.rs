@@ -171,21 +171,11 @@ fn api_error(e: api::Error) -> PyErr {
     }
 }
 
-/// The image as a float32 array of shape (height, width, 3), copied out on `threads` threads (every core for
-/// `None`), as the render ran.
-fn to_numpy<'py>(
-    py: Python<'py>,
-    image: &Image,
-    threads: Option<usize>,
-) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
-    let pool = bareray::render::thread_pool(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
-    rgb_array(py, pool.install(|| image.rgb_values()), image)
-}
-
-/// `values` (`image`'s [`Image::rgb_values`]) as an array of shape (height, width, 3).
-fn rgb_array<'py>(py: Python<'py>, values: Vec<f32>, image: &Image) -> PyResult<Bound<'py, PyArrayDyn<f32>>> {
-    let shape = [image.height as usize, image.width as usize, 3];
-    PyArray1::from_vec(py, values).reshape(shape.to_vec())
+/// The image as a float32 array of shape (height, width, 3): its pixel buffer, handed to NumPy without a
+/// copy ([`Image::into_rgb_values`]).
+fn to_numpy(py: Python<'_>, image: Image) -> PyResult<Bound<'_, PyArrayDyn<f32>>> {
+    let shape = vec![image.height as usize, image.width as usize, 3];
+    PyArray1::from_vec(py, image.into_rgb_values()).reshape(shape)
 }
 
 /// Renders spheres: `centers` of shape (n, 3), `radii` of shape (n,) or one number, `colors` of shape
@@ -250,15 +240,14 @@ fn render<'py>(
         radii: radii.floats(),
         colors: colors.as_ref().map(Array::floats),
     };
-    // The check and the copies out run on `threads` threads too, as the render does.
+    // The check and the spheres' copies run on `threads` threads too, as the render does.
     let pool = bareray::render::thread_pool(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     // Checked and read with the GIL held: no Python thread can write an array between its check and its read
     // (the check and the read run in parallel on the pool's threads, which do not touch Python).
     let view = view_of(view)?;
     let desc = pool.install(|| arrays.scene(view)).map_err(|e| PyValueError::new_err(e.to_string()))?;
     let picture: Picture = py.detach(|| api::render_desc(desc, &options)).map_err(api_error)?;
-    let values = pool.install(|| picture.rendered.image.rgb_values());
-    rgb_array(py, values, &picture.rendered.image)
+    to_numpy(py, picture.rendered.image)
 }
 
 /// 8-bit codes of a float image of shape (height, width, 3) as bareray writes PNG and PPM: "linear" clamps to
@@ -329,7 +318,7 @@ impl PyScene {
         let options =
             options(width, height, eye, look, up, hfov, shade, spp, threads, lanes.unwrap_or(&sixteen))?;
         let picture = py.detach(|| self.inner.render(&options)).map_err(api_error)?;
-        to_numpy(py, &picture.rendered.image, threads)
+        to_numpy(py, picture.rendered.image)
     }
 
     /// `bareray accuracy`: every pixel centre's f32 primary ray against the f64 twin's (and with `secondary`

@@ -7,8 +7,10 @@
 use super::real::Real;
 use std::ops::{Add, Mul, Neg, Sub};
 
-/// A vector, a point or an RGB colour.
+/// A vector, a point or an RGB colour. Laid out as C lays out its three fields, in order: an image of
+/// [`Rgb`] is its channels' `f32`s one after another ([`crate::film::Image::into_rgb_values`]).
 #[derive(Clone, Copy, Debug, PartialEq, Default)]
+#[repr(C)]
 pub struct V3<F> {
     /// First component (red for colours).
     pub x: F,
