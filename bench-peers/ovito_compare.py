@@ -2,8 +2,8 @@
 """bareray against OVITO (PyPI `ovito`, its Tachyon and OSPRay renderers) on the same spheres and camera.
 
 For each data set (1e5 random particles; a real molecule, a PDB file such as MDAnalysisTests' adk_oplsaa.pdb,
-read in place) the script writes the spheres as an .xyzr list (x y z r: the radii passed explicitly to both
-renderers), chooses one perspective camera (bareray's particle framing from +z: the bounding sphere fills 95% of
+read in place) the script writes the spheres as an .xyzr list (x y z r: the radii passed explicitly to every
+renderer), chooses one perspective camera (bareray's particle framing from +z: the bounding sphere fills 95% of
 the vertical half-angle at 1920x1080, horizontal angle 45 degrees) and renders it
 
   - with OVITO's TachyonRenderer: direct light with shadows, no ambient occlusion, no antialiasing;
@@ -11,24 +11,27 @@ the vertical half-angle at 1920x1080, horizontal angle 45 degrees) and renders i
   - with OVITO's OSPRayRenderer: 1 sample, 1 refinement (as issue 39 timed it), and N samples per pixel
     (its path tracer's ambient light then takes N samples a pixel, the nearest it has to N AO rays);
   - with `bareray render` at Whitted (a point light at the eye, 1 sample at the pixel centre; its visible hits
-    see that light without a shadow ray, since the camera ray found the way back clear) and `--shade ao:N,L` (N occlusion rays a hit, no light), with L the diagonal of
-    the spheres' box, so that an occlusion ray reaches every sphere as Tachyon's do (its shader sets their
-    `maxdist` to FHUGE, unbounded), and with bareray's default L (a quarter of that diagonal).
+    see that light without a shadow ray, since the camera ray found the way back clear) and `--shade ao:N,L`
+    (N occlusion rays a hit, no light), with L the diagonal of the spheres' box, so that an occlusion ray
+    reaches every sphere as Tachyon's do (its shader sets their `maxdist` to FHUGE, unbounded), and with
+    bareray's default L (a quarter of that diagonal).
 
 Tachyon's AO render still does more per hit than bareray's: its direct light and shadow ray (one more ray a
 hit) besides the N occlusion rays, which it samples uniformly over the hemisphere where bareray's are
 cosine-weighted.
 
 OVITO's time is that of `Viewport.render_image` (its scene preparation, Tachyon's or OSPRay's build and the
-trace); bareray's is the wall time of the whole `bareray render` process (reading the list, the BVH build, the
-trace and writing the PNG), with the parse, build and render (tracing with the PNG) seconds of its summary
-line beside it. Where the bareray Python module imports (`pip install ./python` in the same environment),
-the same renders are also timed in this process through `bareray.render(centers, radii, ...)`: the arrays in
-memory, as OVITO's pipeline holds them, and no file or PNG on either side (the rows `bareray-py-*`; the Whitted
-image's object mask is compared with the command's). Each is the median of --reps runs, the renders taken
-in turn in each round. The object mask of each image (bareray: a pixel not the black background; OVITO: alpha > 0, the image rendered with a transparent
-background) is compared with OVITO Tachyon's without AO, as intersection over union; not bareray's AO image,
-which is black where a hit is fully occluded.
+trace); bareray's is the wall time of the whole `bareray render` process (reading the list, the BVH build,
+the trace and writing the PNG), with the parse, build and render (tracing with the PNG) seconds of its
+summary line beside it. Where the bareray Python module imports (`pip install ./python` in the same
+environment), the same renders are also timed in this process through `bareray.render(centers, radii, ...)`
+(rows `bareray-py-*`): the arrays in memory, as OVITO's pipeline holds them, and no file or PNG on either
+side. Each time is the median of --reps runs, the renders taken in turn in each round. The object mask of
+each image written to a PNG (bareray: a pixel not the black background; OVITO: alpha > 0, the image rendered
+with a transparent background) is compared with OVITO Tachyon's without AO, as intersection over union; not
+bareray's AO image, which is black where a hit is fully occluded. The module's Whitted image (mid-grey
+particles on white) is compared with the command's instead: its JSON field `iou_vs_command` is the lowest
+IoU over the rounds.
 
 The camera: OVITO's `Viewport.fov` is the vertical angle of a perspective view (its documentation; for an image
 wider than tall), bareray's `--hfov` the horizontal angle across the outer pixel edges, so the script passes
@@ -150,8 +153,8 @@ def python_module():
 
 
 def run_python(module, centers, radii, cam, shade):
-    """`bareray.render` of the arrays with the command's camera and shading, timed in this process; the
-    8-bit image as the command writes it."""
+    """`bareray.render` of the arrays with the command's camera and shading, timed in this process, and its
+    8-bit codes (`to_uint8`: linear, as the command encodes an .xyzr render)."""
     eye, _, up, hfov, _, look = cam
     # Mid grey, so that no lit pixel saturates to the white background.
     grey = np.full((len(radii), 3), 0.5)
@@ -322,7 +325,7 @@ def main():
             run_bareray(binary, xyzr, png, cam[:5] + (cam[1],), "whitted")
             res["iou_unshifted_vs_tachyon"] = iou(mask(png, False), ref)
             print(f"bareray whitted without the pixel shift: IoU {res['iou_unshifted_vs_tachyon']:.4f}")
-        summary(name, res, args.ao)
+        summary(name, res, args.ao, module)
     with open(os.path.join(args.out, "results.json"), "w") as f:
         json.dump(results, f, indent=1)
 
@@ -342,13 +345,13 @@ def fmt(xs):
     return ", ".join(f"{x:.3f}" for x in xs)
 
 
-def summary(name, res, ao):
+def summary(name, res, ao, module):
     """Each render's median and its ratio to bareray's at the same shading: Whitted for Tachyon and OSPRay at
     1 sample; for the AO renders both bareray AO lengths, the diagonal (Tachyon's reach) first. The ratios to
     the command's wall time come first, then, where the Python module ran, to its in-process time."""
     r = res["renders"]
-    print(f"-- {name}: seconds, ratio to bareray at the same shading (command; in process), mask IoU against "
-          "OVITO Tachyon")
+    bases = "(command; in process)" if module is not None else "(command)"
+    print(f"-- {name}: seconds, ratio to bareray at the same shading {bases}, mask IoU against OVITO Tachyon")
     for key, entry in r.items():
         if "ao" not in key and key != f"ospray-{ao}":
             keys = ["bareray-whitted"]
@@ -359,8 +362,10 @@ def summary(name, res, ao):
             bases = [r[k.replace("bareray-", prefix)] for k in keys if k.replace("bareray-", prefix) in r]
             if bases:
                 cells.append(" / ".join(f"{entry['seconds'] / b['seconds']:.1f}x" for b in bases))
-        extra = f"  IoU {entry['iou_vs_command']:.4f} against the command's" if "iou_vs_command" in entry else ""
-        print(f"   {key:27s} {entry['seconds']:8.3f} s  {'; '.join(cells):>24s}  "
+        extra = ""
+        if "iou_vs_command" in entry:
+            extra = f"  IoU {entry['iou_vs_command']:.4f} against the command's"
+        print(f"   {key:27s} {entry['seconds']:8.3f} s  {'; '.join(cells):>29s}  "
               f"IoU {entry.get('iou_vs_tachyon', float('nan')):.4f}{extra}")
 
 

@@ -1,5 +1,9 @@
 //! bareray's own scene format, in TOML. Every key is optional but the shapes; unknown keys are errors; every
-//! error names the file, the line and what was expected. The format is documented in README.md.
+//! error names the file, the line and what was expected. The format is documented in docs/scene-format.md.
+//!
+//! This file: `load` and `parse`, the file's tables with the spheres and the registered kinds, the `Reader`
+//! with its checks, and `grid_side`; the camera and render tables are read in `camera_render.rs`, the
+//! materials and lights in `materials_lights.rs`.
 
 mod camera_render;
 mod materials_lights;

@@ -11,7 +11,7 @@ use crate::simd::{IdLanes, Lanes};
 
 use super::Point;
 
-/// The pixel corners of a band of `size` whose corner is `origin` in the image, `(width + 1) × (height + 1)`
+/// The pixel corners of a band of `width` × `height` pixels whose corner is `origin` in the image, `(width + 1) × (height + 1)`
 /// row-major, each traced once: every tile of `local` traces its inside and its top and left edges, and the
 /// band's right and bottom edges where it lies on them, as camera blocks, one job per tile on `pool`.
 pub(super) fn band_corners<F: Lanes>(

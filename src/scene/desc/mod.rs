@@ -1,5 +1,9 @@
 //! `SceneDesc`: a scene as plain, validated data in f64, whatever file format it came from.
 //! Compile (`crate::compile`) turns it into the immutable [`crate::compile::Scene`] the renderer reads.
+//!
+//! This file holds `SceneDesc`, the spheres' `SphereDesc` and the bounds of a list of them; the camera, the
+//! render settings, the shading and the materials and lights have a file each, their items all named
+//! `scene::desc::Name`.
 
 mod camera;
 mod materials_lights;
