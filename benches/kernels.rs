@@ -9,8 +9,9 @@
 use std::hint::black_box;
 
 use bareray::camera::Camera;
-use bareray::geometry::{intersect_spheres_1, intersect_spheres_k, Ray, RayPacket, Spheres};
+use bareray::geometry::{Ray, RayPacket};
 use bareray::io::generate::FieldParams;
+use bareray::kinds::sphere::{intersect_spheres_1, intersect_spheres_k, Spheres};
 use bareray::math::V3;
 use bareray::scene::desc::{Aim, CameraDesc};
 use bareray::simd::{IdLanes, Lanes};

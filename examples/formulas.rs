@@ -32,10 +32,9 @@ use std::time::Instant;
 
 use bareray::accuracy::Percentiles;
 use bareray::compile::{Accel, CompileOptions, Scene};
-use bareray::geometry::{
-    first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, Spheres, NO_PRIM,
-};
+use bareray::geometry::{first_root, intersect_sphere, sphere_approach, Approach, Ray, SphereRay, NO_PRIM};
 use bareray::io;
+use bareray::kinds::sphere::Spheres;
 use bareray::math::V3;
 
 /// Cap on pixel × sphere tests per pass before pixels are subsampled.

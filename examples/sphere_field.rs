@@ -6,10 +6,9 @@
 use std::path::PathBuf;
 
 use bareray::compile::Scene;
+use bareray::kinds::sphere::SphereDesc;
 use bareray::math::{Rgb, SplitMix64};
-use bareray::scene::desc::{
-    Aim, CameraDesc, Field, LightDesc, Material, Pattern, RenderDesc, SceneDesc, SphereDesc,
-};
+use bareray::scene::desc::{Aim, CameraDesc, Field, LightDesc, Material, Pattern, RenderDesc, SceneDesc};
 use bareray::{output, render};
 use glam::DVec3;
 

@@ -15,7 +15,7 @@ const LAYERS: &[(&str, u32)] = &[
     ("math", 0),
     // Lane types over math.
     ("simd", 1),
-    // Primitives, rays, packets, Spheres and their intersection kernels.
+    // Rays, packets and the intersection kernels the kinds share (the ray/sphere kernel among them).
     ("geometry", 2),
     // The generic tree: boxes and item ranges, its walks over a leaf-query trait, the probes that count them.
     ("bvh", 3),

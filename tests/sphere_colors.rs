@@ -6,9 +6,10 @@
 use bareray::api::{self, RenderOptions};
 use bareray::compile::{Accel, CompileOptions, Scene};
 use bareray::io::particles::arrays::{Floats, SphereArrays};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::math::{Rgb8, SplitMix64};
 use bareray::render::render_lanes;
-use bareray::scene::desc::{Ao, CameraOverrides, Material, Shade, SphereDesc};
+use bareray::scene::desc::{Ao, CameraOverrides, Material, Shade};
 use bareray::scene::SceneDesc;
 use glam::DVec3;
 

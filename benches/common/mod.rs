@@ -1,7 +1,8 @@
 //! Helpers shared by the benchmarks.
 
 use bareray::io::generate::FieldParams;
-use bareray::scene::desc::{SceneDesc, SphereDesc};
+use bareray::kinds::sphere::SphereDesc;
+use bareray::scene::desc::SceneDesc;
 use glam::DVec3;
 
 /// The contract field of `count` spheres, from bareray's own generator, as a description with the default

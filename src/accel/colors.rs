@@ -1,5 +1,5 @@
 //! The per-sphere colour of a hit primitive, from the BVH's sphere store or the particle tree, whichever
-//! holds the spheres (each keeps its colours in its own order, [`crate::geometry::Spheres::color`]).
+//! holds the spheres (each keeps its colours in its own order, [`crate::kinds::sphere::Spheres::color`]).
 
 use super::{Geometry, PrimRef};
 use crate::math::Rgb8;

@@ -13,7 +13,7 @@
 
 use super::{count_work, SphereQuery, Work};
 use crate::bvh::LeafQuery;
-use crate::geometry::Spheres;
+use crate::kinds::sphere::Spheres;
 use crate::math::{Mask, Vec3f, V3};
 use crate::simd::{set_bits, Lanes};
 use glam::DVec3;

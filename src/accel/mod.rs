@@ -15,22 +15,22 @@ mod light_buffer;
 mod near_first;
 mod occluded;
 pub(crate) mod pkd;
-mod sphere_query;
 pub(crate) use crate::bvh::item_query::{ItemQuery, ItemTest};
 pub(crate) use crate::bvh::work::{add_work, count_work, counting, traced};
 pub(crate) use crate::bvh::work::{
     probe_overhead, take_kind_work, take_work, ticks, KindWork, KIND_SLOTS, UNTAGGED,
 };
 pub use crate::bvh::work::{Probe, RayKind, Work};
+pub(crate) use crate::kinds::sphere::SphereQuery;
 pub(crate) use light_buffer::LightBuffer;
 pub(crate) use near_first::NearFirst;
 pub(crate) use pkd::Particles;
-pub(crate) use sphere_query::SphereQuery;
 
 use crate::bvh::Bvh;
 use crate::kinds::KindStores;
 
-use crate::geometry::{DeparturePacket, Ray, RayPacket, Spheres, NO_PRIM};
+use crate::geometry::{DeparturePacket, Ray, RayPacket, NO_PRIM};
+use crate::kinds::sphere::Spheres;
 use crate::math::Vec3f;
 use crate::simd::Lanes;
 

@@ -11,8 +11,8 @@ use super::render_run::load_scene;
 use super::usage;
 use super::values::parse_threads;
 use bareray::io::{f32r, xyzr, SceneFormat};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::output::{write_atomic, write_atomic_with};
-use bareray::scene::desc::SphereDesc;
 
 /// Arguments of `bareray convert`.
 #[derive(Args, Debug)]

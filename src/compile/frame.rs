@@ -20,7 +20,9 @@
 
 use glam::DVec3;
 
-use crate::scene::desc::{box_union, sphere_bounds, SceneDesc};
+use crate::geometry::box_union;
+use crate::kinds::sphere::sphere_bounds;
+use crate::scene::desc::SceneDesc;
 
 /// The eye must be this many bounding radii from the geometry's centre for the frame to move there: the
 /// gain in resolution is about this over 3 (the origin's and the direction's roundings above), so the frame
@@ -78,7 +80,7 @@ pub(crate) fn bounded_box(desc: &SceneDesc, extra: Option<[DVec3; 2]>) -> Option
 mod tests {
     use super::*;
     use crate::geometry::ShapeKind;
-    use crate::scene::desc::SphereDesc;
+    use crate::kinds::sphere::SphereDesc;
 
     /// Two touching unit spheres at `centre ± (1, 0, 0)` seen from `eye`.
     fn pair(eye: DVec3, centre: DVec3) -> SceneDesc {

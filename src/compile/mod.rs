@@ -18,15 +18,16 @@ pub mod memory;
 use crate::accel::{Geometry, LightBuffer, Particles};
 use crate::bvh::{self, BuildOptions, BuildStats, Builder, Bvh, SINGLE_RAY_MAX_LANES};
 use crate::camera::{Camera, CameraError};
-use crate::geometry::Spheres;
 use crate::io::f32r::MappedRecords;
+use crate::kinds::sphere::SphereDesc;
+use crate::kinds::sphere::Spheres;
 use crate::math::{Rgb, Vec3f, V3};
 use glam::Vec3A;
 use obvhs::aabb::Aabb;
 use obvhs::BvhBuildParams;
 use rayon::prelude::*;
 
-use crate::scene::desc::{Ao, Falloff, Material, RenderDesc, SceneDesc, Shade, SphereDesc};
+use crate::scene::desc::{Ao, Falloff, Material, RenderDesc, SceneDesc, Shade};
 pub(crate) use frame::RenderingFrame;
 
 /// A point light ready for shading.
@@ -219,8 +220,9 @@ impl Scene {
     ///
     /// ```
     /// use bareray::compile::Scene;
+    /// use bareray::kinds::sphere::SphereDesc;
     /// use bareray::math::Rgb;
-    /// use bareray::scene::desc::{LightDesc, Material, SceneDesc, SphereDesc};
+    /// use bareray::scene::desc::{LightDesc, Material, SceneDesc};
     /// use glam::DVec3;
     ///
     /// let desc = SceneDesc {
@@ -505,7 +507,7 @@ mod tests {
         let borrowed = Scene::compile_with_options(&desc, CompileOptions::default()).expect("compile");
         let owned = Scene::compile_owned(desc, CompileOptions::default()).expect("compile");
         let (a, b) = (&borrowed.geometry, &owned.geometry);
-        let arrays = |s: &crate::geometry::Spheres| {
+        let arrays = |s: &Spheres| {
             (s.cx.clone(), s.cy.clone(), s.cz.clone(), s.r.clone(), s.material.clone(), s.key.clone())
         };
         assert!(a.spheres.len() > 90, "a level-2 flake has 91 spheres");

@@ -9,25 +9,27 @@ mod ray;
 mod round;
 mod shape;
 mod sphere;
-mod spheres;
+
+use glam::DVec3;
 
 pub(crate) use ellipse::Ellipse;
 pub(crate) use frame::Frame;
 pub(crate) use packet::HitPacket;
 pub(crate) use packet::Pyramid;
-pub use packet::{intersect_spheres_1, intersect_spheres_k, DeparturePacket, RayPacket};
+pub use packet::{DeparturePacket, RayPacket};
 pub(crate) use plane::intersect_plane;
 pub use ray::{Departure, Hit, Ray, NO_PRIM};
 pub(crate) use round::{round_down, round_up};
 pub(crate) use shape::{Shape, ShapeKind};
-pub(crate) use sphere::{at_eye, far_root, sphere_roots, sphere_roots_of, EyeLanes, CONTACT_ROUNDINGS};
+pub(crate) use sphere::{
+    at_eye, eye_side, eye_term, far_root, sphere_roots, sphere_roots_of, EyeLanes, CONTACT_ROUNDINGS,
+};
 pub use sphere::{first_root, intersect_sphere, sphere_approach, Approach, Roots, SphereRay};
-pub use spheres::Spheres;
-pub(crate) use spheres::{eye_side, eye_term};
 
-/// `v` in a new order, `order[j]` being the old index of new item `j`: how the kinds' stores follow their
-/// BVH's leaf order. Large stores are gathered on the thread pool.
-fn gathered<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
-    use rayon::prelude::*;
-    order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
+/// The union of two boxes `(lo, hi)`, component by component with `f64::min` and `f64::max`: exact,
+/// associative and commutative, a NaN ignored (glam's `min` and `max` are neither for NaN), so a reduction
+/// gives the same box in any order.
+pub(crate) fn box_union((lo, hi): (DVec3, DVec3), (l, h): (DVec3, DVec3)) -> (DVec3, DVec3) {
+    let min = DVec3::new(lo.x.min(l.x), lo.y.min(l.y), lo.z.min(l.z));
+    (min, DVec3::new(hi.x.max(h.x), hi.y.max(h.y), hi.z.max(h.z)))
 }

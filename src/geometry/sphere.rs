@@ -187,8 +187,8 @@ impl<F: Real> Approach<F> {
     }
 
     /// The two roots with `c = |oc|² − r²` computed directly (ellipsoids in object space, and spheres in
-    /// scenes where the eye term cannot help: [`super::Spheres::eye_terms_help`]). The perpendicular
-    /// discriminant: with this `c` its bound is always the smaller one, so this is
+    /// scenes where the eye term cannot help: [`crate::kinds::sphere::Spheres::eye_terms_help`]). The
+    /// perpendicular discriminant: with this `c` its bound is always the smaller one, so this is
     /// [`Approach::roots_with_eye_term`]'s result whenever that one takes the direct `c`.
     #[inline(always)]
     pub(crate) fn roots(&self) -> Roots<F> {
@@ -217,7 +217,7 @@ impl<F: Real> Approach<F> {
     }
 
     /// The two roots for a ray that starts exactly at the eye: `c = c_eye`. `choose` (the scene's
-    /// `super::Spheres::eye_terms_help`) lets each lane take `proj² − c/(d·d)` where its bound is
+    /// `Spheres::eye_terms_help`) lets each lane take `proj² − c/(d·d)` where its bound is
     /// the smaller; without a sphere that near the eye the perpendicular form always is (the textbook bound
     /// `ε·|c_eye|` alone exceeds `ε·|C|·r` once the eye is 1.6 radii from the centre). No contact rule: the
     /// eye is a point the scene places, not a rounded hit point.
@@ -358,6 +358,24 @@ pub(crate) fn far_root<F: Real>(roots: &Roots<F>, t_max: F) -> (F::Mask, F) {
 #[inline(always)]
 pub fn intersect_sphere<F: Real>(centre: V3<F>, radius: F, ray: &Ray<F>, t_max: F) -> (F::Mask, F) {
     first_root(&sphere_roots(centre, radius, ray), t_max)
+}
+
+/// `|centre|² − r²` for a sphere in rendering space (the eye at the origin), as
+/// `(|centre| − r)(|centre| + r)` in f64: no cancellation between two large squares when the eye is close
+/// to a large sphere.
+pub(crate) fn eye_term(center: V3<f64>, radius: f64) -> f64 {
+    let d = center.length();
+    (d - radius) * (d + radius)
+}
+
+/// Whether the eye is inside a solid by the sign of its eye term: `Some(true)` below 0, `Some(false)` above,
+/// `None` at 0 (the eye on the surface) and for NaN, as the shader's lanes decide it.
+pub(crate) fn eye_side(c_eye: f64) -> Option<bool> {
+    match c_eye.partial_cmp(&0.0)? {
+        std::cmp::Ordering::Less => Some(true),
+        std::cmp::Ordering::Greater => Some(false),
+        std::cmp::Ordering::Equal => None,
+    }
 }
 
 #[cfg(test)]

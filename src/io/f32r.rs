@@ -18,6 +18,7 @@
 //! record with a value that is not finite or a radius that is not positive (naming the first such record
 //! and its byte offset; the rules of the `.xyzr` reader).
 
+use crate::kinds::sphere::SphereDesc;
 use std::io::{self, Write};
 use std::path::Path;
 
@@ -25,7 +26,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::error::SceneError;
-use crate::scene::desc::{SceneDesc, SphereDesc};
+use crate::scene::desc::SceneDesc;
 
 /// The file's first 8 bytes.
 pub(crate) const MAGIC: [u8; 8] = *b"\x89F32R\r\n\x1a";

@@ -118,7 +118,7 @@ fn check_options(
 /// A sphere list's scene, seen from `options.view` when one is chosen.
 fn viewed(mut desc: SceneDesc, options: &LoadOptions) -> SceneDesc {
     if let Some(view) = options.view {
-        let (lo, hi) = crate::scene::desc::sphere_bounds(&desc.spheres);
+        let (lo, hi) = crate::kinds::sphere::sphere_bounds(&desc.spheres);
         let framed = xyzr::scene_framing(lo, hi, Some(view));
         (desc.camera, desc.lights) = (framed.camera, framed.lights);
     }

@@ -39,6 +39,7 @@
 //! of the difference, and the ambient term the rest, which SPD's values (`--ambient 0.2,0`) take away
 //! (measured: docs/scene-format.md, "NFF (SPD)"). `render --transfer srgb` still chooses the curve.
 
+use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use glam::DVec3;

@@ -34,9 +34,9 @@ macro_rules! dispatch {
 macro_rules! per_kind {
     ($($field:ident: $kind:ty),* $(,)?) => {
         /// The registered kinds' TOML names, in id order.
-        pub const NAMES: &[&str] = &[$(<$kind as Kind>::PLURAL),*];
+        pub(crate) const NAMES: &[&str] = &[$(<$kind as Kind>::PLURAL),*];
         /// The number of registered kinds.
-        pub const COUNT: usize = NAMES.len();
+        pub(crate) const COUNT: usize = NAMES.len();
 
         /// Every registered kind's descriptions, in file order (ids in the registry's order).
         #[derive(Clone, Debug, Default, PartialEq)]

@@ -1,5 +1,5 @@
 //! [`Rgb8`]: a colour in three bytes, the form of the per-sphere colour store
-//! ([`crate::geometry::Spheres::color`]).
+//! ([`crate::kinds::sphere::Spheres::color`]).
 
 use super::Rgb;
 

@@ -12,6 +12,7 @@
 //!    planes move by 1/|cos| of the move), and the sphere contact rule's entry at t = 0, which is no self-hit.
 
 use super::common;
+use crate::kinds::sphere::SphereDesc;
 
 use std::path::{Path, PathBuf};
 
@@ -21,7 +22,7 @@ use bareray::kinds::cone::ConeDesc;
 use bareray::kinds::KindDescs;
 use bareray::math::SplitMix64;
 use bareray::math::V3;
-use bareray::scene::desc::{LightDesc, Material, SceneDesc, SphereDesc};
+use bareray::scene::desc::{LightDesc, Material, SceneDesc};
 use common::camera;
 use glam::{DAffine3, DMat3, DVec3};
 

@@ -10,10 +10,10 @@ use super::common;
 use bareray::accel::Geometry;
 use bareray::camera::Camera;
 use bareray::geometry::{
-    intersect_plane, intersect_sphere, intersect_spheres_1, intersect_spheres_k, sphere_roots, Departure,
-    Hit, Ray, RayPacket, Shape, ShapeKind, Spheres,
+    intersect_plane, intersect_sphere, sphere_roots, Departure, Hit, Ray, RayPacket, Shape, ShapeKind,
 };
 use bareray::kinds::cone::{intersect_cone, Cone};
+use bareray::kinds::sphere::{intersect_spheres_1, intersect_spheres_k, Spheres};
 use bareray::math::{Vec3f, V3};
 use bareray::scene::desc::CameraDesc;
 use bareray::simd::{IdLanes, Lanes};

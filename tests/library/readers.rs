@@ -1,6 +1,7 @@
 //! Scene readers (NFF, xyzr, f32r), generators (contract field, SPD sphereflake) and the polygon primitive, through
 //! the library API.
 
+use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use bareray::accel::Geometry;
@@ -11,7 +12,7 @@ use bareray::io::{f32r, nff, xyzr, SceneError, SceneFormat};
 use bareray::kinds::polygon::{intersect_triangle, triangulate, PolygonDesc};
 use bareray::kinds::KindDescs;
 use bareray::math::{Rgb, V3};
-use bareray::scene::desc::{Aim, Field, SphereDesc, Sweep};
+use bareray::scene::desc::{Aim, Field, Sweep};
 use bareray::scene::SceneDesc;
 
 use glam::DVec3;

@@ -150,7 +150,7 @@ pub(crate) struct Particles {
     /// The material of every sphere when `material` is empty.
     material0: u32,
     /// Colour of the sphere at each position, replacing its material's; empty when the spheres have none
-    /// of their own ([`crate::geometry::Spheres::color`]).
+    /// of their own ([`crate::kinds::sphere::Spheres::color`]).
     color: Vec<Rgb8>,
     /// The rendering space's origin (the eye) in world space.
     origin: DVec3,
@@ -160,7 +160,8 @@ pub(crate) struct Particles {
     bounds: [[f32; 3]; 2],
     /// The culling padding (the BVH's, [`crate::bvh::padding`]).
     pad: f32,
-    /// Some sphere has the eye within about its radius of its surface ([`crate::geometry::Spheres`]'s flag).
+    /// Some sphere has the eye within about its radius of its surface (the flag of
+    /// [`crate::kinds::sphere::Spheres`]).
     eye_terms_help: bool,
     /// Camera packets cull by their pyramids and tiles walk as large packets
     /// ([`crate::bvh::Bvh::frustum_culling`]'s setting for the tree).
@@ -330,7 +331,7 @@ impl Particles {
 }
 
 /// A record's centre in rendering space (`centre − origin` in f64, rounded once) and its radius in f32:
-/// the values compile gives a BVH's sphere ([`crate::geometry::Spheres::push_exact`]).
+/// the values compile gives a BVH's sphere ([`crate::kinds::sphere::Spheres::push_exact`]).
 #[inline(always)]
 pub(crate) fn place<R: Record>(rec: &R, origin: DVec3) -> (Vec3f, f32) {
     let c = V3::new(rec.value(0) - origin.x, rec.value(1) - origin.y, rec.value(2) - origin.z);

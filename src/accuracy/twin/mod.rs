@@ -21,8 +21,8 @@ use glam::DVec3;
 
 use crate::camera::{Camera, CameraError};
 use crate::compile::RenderingFrame;
-use crate::geometry::{far_root, first_root, intersect_sphere, sphere_roots, Departure, Ray, NO_PRIM};
-use crate::kinds::KindTwins;
+use crate::geometry::{intersect_sphere, Departure, Ray, NO_PRIM};
+use crate::kinds::{sphere, KindTwins};
 use crate::math::V3;
 use crate::scene::desc::SceneDesc;
 
@@ -30,11 +30,6 @@ use super::bvh64::Bvh64;
 pub(crate) use super::hit64::Hit64;
 
 mod tolerance;
-
-/// The roundings, beyond the contact band's own [`CONTACT_ROUNDINGS`](crate::geometry::CONTACT_ROUNDINGS), by
-/// which the f32 renderer's `c = |oc|² − r²` can differ from the exact `c` of the same origin and the scene's
-/// sphere ([`Twin::contact_entry`]).
-const CONTACT_C_ROUNDINGS: f64 = 8.0;
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
 pub(crate) const EPS32: f64 = f32::EPSILON as f64 / 2.0;
@@ -182,8 +177,7 @@ impl Twin {
     /// The exit root in `[0, t_max)` of a ray leaving sphere `prim` toward its inside.
     fn exit(&self, prim: u32, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
         let &(centre, radius) = self.spheres.get(prim as usize)?;
-        let (hit, t) = far_root(&sphere_roots(centre, radius, ray), t_max);
-        hit.then_some(t)
+        sphere::twin::exit(centre, radius, ray, t_max)
     }
 
     /// Where `ray` (leaving `from`) hits primitive `prim` alone, in `[0, inf)`.
@@ -199,8 +193,7 @@ impl Twin {
             return self.kinds.hit_of(k, ray);
         }
         let (centre, radius) = self.spheres[i];
-        let (hit, t) = first_root(&sphere_roots(centre, radius, ray), f64::INFINITY);
-        hit.then_some(t)
+        sphere::twin::hit(centre, radius, ray, f64::INFINITY)
     }
 
     /// Whether a camera ray meets primitive `prim` from inside, where that is known exactly (a sphere or a
@@ -220,7 +213,7 @@ impl Twin {
     pub(crate) fn surface(&self, ray: &Ray<f64>, t: f64, prim: u32) -> (V3<f64>, V3<f64>) {
         let point = ray.at(t);
         let normal = match self.spheres.get(prim as usize) {
-            Some(&(centre, _)) => (point - centre).normalize(),
+            Some(&(centre, _)) => sphere::twin::normal(centre, point),
             None => self.kind(prim).and_then(|k| self.kinds.normal(k, ray, t, point)).expect("a primitive"),
         };
         (point, normal)

@@ -1,8 +1,9 @@
 //! The twin's tolerances: how far f32 rounding can move a ray near a primitive, and the rules that
 //! explain an f32/f64 disagreement by it (grazing, ties in t, contact entries, starts near a surface).
 
-use super::{len, Hit64, Slack, Twin, CONTACT_C_ROUNDINGS, EPS32};
-use crate::geometry::{Departure, Ray, CONTACT_ROUNDINGS, NO_PRIM};
+use super::{len, Hit64, Slack, Twin, EPS32};
+use crate::geometry::{Departure, Ray, NO_PRIM};
+use crate::kinds::sphere;
 use crate::math::V3;
 
 impl Twin {
@@ -27,19 +28,8 @@ impl Twin {
             return false;
         }
         let tol = k * EPS32;
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        let near_tangent = |c: V3<f64>, r: f64, ray: &Ray<f64>, scale: f64, slack: f64| {
-            let cc = c - ray.origin;
-            let d = ray.dir;
-            let proj = cc.dot(d) / d.dot(d);
-            let l = len(cc - d * proj);
-            (l - r).abs() <= tol * scale + slack
-        };
-        if i < ns {
-            let (c, r) = self.spheres[i];
-            let dist = len(c - ray.origin);
-            return near_tangent(c, r, ray, dist + r, slack.at(dist));
+        if let Some(&(c, r)) = self.spheres.get(prim as usize) {
+            return sphere::twin::grazing(c, r, ray, tol, slack);
         }
         match self.kind(prim) {
             Some(k) => self.kinds.grazing(k, ray, tol, slack).unwrap_or(false),
@@ -75,29 +65,12 @@ impl Twin {
     }
 
     /// True when the f32 renderer's `hit` along its own f32 `ray` is the sphere contact rule's entry
-    /// (ARCHITECTURE.md, "Self-intersection"; `geometry/sphere.rs`): a sphere met at exactly `t = 0`
-    /// by a ray heading toward its centre from within the rule's band of its surface. Such a hit is the
-    /// renderer treating the origin as on that sphere, not a re-hit of the surface the ray leaves.
-    ///
-    /// The band is `|c| ≤ CONTACT_ROUNDINGS·ε32·(bound + 2r·|o|∞)`, `c = |oc|² − r²` in f32, `bound =
-    /// |oc|² + r²` (the eye-term form, taken only where its bound is smaller, has a narrower band). This
-    /// checks the exact `c` of the f32 origin and the scene's sphere against `CONTACT_C_ROUNDINGS` more:
-    /// the f32 `c` is off from it by the centre's rounding to f32 (`2|oc|·ε32·|C|`, `|C| ≤ |oc| + √3·|o|∞`),
-    /// `oc`'s subtraction (`2ε32·|oc|²`), its square (`3ε32·|oc|²`) and `r²` (`3ε32·r²`): at most
-    /// `7ε32·(bound + 2r·|o|∞)` near the surface. The heading, `oc·d ≥ 0` in f32, is allowed what the
-    /// centre's rounding (`ε32·|C|`), `oc`'s and the dot product's (`4ε32·|oc|`) can move it by.
+    /// ([`sphere::twin::contact_entry`]): a sphere met at exactly `t = 0` by a ray heading toward its centre
+    /// from within the rule's band of its surface. Such a hit is the renderer treating the origin as on that
+    /// sphere, not a re-hit of the surface the ray leaves.
     pub(crate) fn contact_entry(&self, hit: Hit64, ray: &Ray<f32>) -> bool {
         let Some(&(centre, r)) = self.spheres.get(hit.prim as usize) else { return false };
-        if hit.t != 0.0 {
-            return false;
-        }
-        let (o, d) = (ray.origin.to_f64(), ray.dir.to_f64());
-        let oc = centre - o;
-        let c = (len(oc) - r) * (len(oc) + r);
-        let reach = o.x.abs().max(o.y.abs()).max(o.z.abs());
-        let band = (CONTACT_ROUNDINGS + CONTACT_C_ROUNDINGS) * EPS32 * (oc.dot(oc) + r * r + 2.0 * r * reach);
-        let heading_in = oc.dot(d) >= -EPS32 * (4.0 * len(oc) + len(centre)) * len(d);
-        heading_in && c.abs() <= band
+        hit.t == 0.0 && sphere::twin::contact_entry(centre, r, ray.origin.to_f64(), ray.dir.to_f64())
     }
 
     /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
@@ -111,12 +84,8 @@ impl Twin {
             return false;
         }
         let tol = k * EPS32;
-        let i = prim as usize;
-        let ns = self.spheres.len();
-        if i < ns {
-            let (c, r) = self.spheres[i];
-            // The magnitudes the kernel's f32 operations round: |p|, the centre's distance and the radius.
-            return (len(p - c) - r).abs() <= tol * (len(p) + len(c - p) + r) + slack;
+        if let Some(&(c, r)) = self.spheres.get(prim as usize) {
+            return sphere::twin::near(c, r, p, tol, slack);
         }
         self.kind(prim).and_then(|k| self.kinds.near(k, p, tol, slack)).unwrap_or(false)
     }

@@ -4,12 +4,13 @@
 //! The arrays are read where they are, as f32 or f64 ([`Floats`]); the description holds each sphere in
 //! f64 (40 bytes) and its colour in 3 bytes.
 
+use crate::kinds::sphere::SphereDesc;
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::scene::{particle_scene, DEFAULT_VIEW};
 use crate::math::{Rgb, Rgb8};
-use crate::scene::desc::{SceneDesc, SphereDesc};
+use crate::scene::desc::SceneDesc;
 
 /// A flat array of numbers, borrowed as it is: f32 or f64.
 #[derive(Clone, Copy, Debug)]

@@ -16,6 +16,7 @@
 //! With [`ParticleOptions::draw_box`], the frame's periodic box is drawn as twelve open cylinders with a
 //! sphere at each corner to close the joints, all of radius `box_radius` and the grey `BOX_COLOR`.
 
+use crate::kinds::sphere::SphereDesc;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -25,7 +26,7 @@ use super::{Cell, Frame, Kind, Particle, ParticleOptions, Unit};
 use crate::io::xyzr;
 use crate::kinds::cone::ConeDesc;
 use crate::math::{Rgb, Rgb8};
-use crate::scene::desc::{Material, SceneDesc, SphereDesc};
+use crate::scene::desc::{Material, SceneDesc};
 
 /// Colours of LAMMPS types 1, 2, … (repeating): red, blue, yellow, green, orange, violet, cyan, grey.
 pub(crate) const TYPE_COLORS: [u32; 8] =
@@ -249,7 +250,7 @@ fn by_flag<T: Copy>(
 /// a headlight), on a white background, with one material ([`material_of`] bareray's default grey, which
 /// shows only without colours).
 pub(crate) fn particle_scene(spheres: Vec<SphereDesc>, colors: Vec<Rgb8>, view: DVec3) -> SceneDesc {
-    let (lo, hi) = crate::scene::desc::sphere_bounds(&spheres);
+    let (lo, hi) = crate::kinds::sphere::sphere_bounds(&spheres);
     let mut desc = xyzr::scene_framing(lo, hi, Some(view));
     desc.render.background = Rgb::all(1.0);
     desc.materials = vec![material_of(Material::default().color)];

@@ -10,6 +10,7 @@ mod materials_lights;
 #[cfg(test)]
 mod tests;
 
+use crate::kinds::sphere::SphereDesc;
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::Path;
@@ -26,7 +27,7 @@ use crate::kinds::{Kind, KindDescs, KindError};
 use crate::math::Rgb;
 
 use super::error::SceneError;
-use crate::scene::desc::{SceneDesc, SphereDesc};
+use crate::scene::desc::SceneDesc;
 
 type Vec3 = [f64; 3];
 

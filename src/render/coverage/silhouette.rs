@@ -2,7 +2,8 @@
 //! its silhouette as an ellipse in pixel space ([`Ball`]).
 
 use crate::camera::Camera;
-use crate::geometry::{Ellipse, Spheres};
+use crate::geometry::Ellipse;
+use crate::kinds::sphere::Spheres;
 
 use super::CLEARANCE;
 

@@ -4,6 +4,7 @@
 use super::*;
 use crate::compile::Scene;
 use crate::geometry::DeparturePacket;
+use crate::kinds::sphere::SphereDesc;
 
 /// The lane-arithmetic sphere surface is the scalar one, bit for bit, in every found lane: point,
 /// normal, side and material, for rays from outside and from inside the spheres and from the eye.
@@ -11,7 +12,7 @@ use crate::geometry::DeparturePacket;
 fn sphere_lanes_give_the_scalar_surface() {
     use crate::geometry::Ray;
     use crate::math::SplitMix64;
-    use crate::scene::desc::{SceneDesc, SphereDesc};
+    use crate::scene::desc::SceneDesc;
     use wide::f32x8;
     let mut rng = SplitMix64::new(11);
     let mut unit = move || rng.unit() * 2.0 - 1.0;
@@ -63,7 +64,7 @@ fn sphere_lanes_give_the_scalar_surface() {
 fn split_surfaces_give_the_lane_by_lane_bits() {
     use crate::kinds::polygon::PolygonDesc;
     use crate::math::Rgb8;
-    use crate::scene::desc::{Checker, SceneDesc, SphereDesc};
+    use crate::scene::desc::{Checker, SceneDesc};
     use glam::{DAffine3, DVec3};
     let floor = |normals: Option<Vec<DVec3>>| PolygonDesc {
         vertices: [(-4.0, -4.0), (4.0, -4.0), (4.0, 4.0), (-4.0, 4.0)]
@@ -175,7 +176,7 @@ fn check_split<F: Lanes>(scene: &Scene) -> usize {
 fn grazing_camera_hits_on_a_distant_sphere_are_outside() {
     use crate::geometry::ShapeKind;
     use crate::math::SplitMix64;
-    use crate::scene::desc::{SceneDesc, SphereDesc};
+    use crate::scene::desc::SceneDesc;
     use wide::f32x8;
     let centre = glam::DVec3::new(0.0, 0.0, 1e6);
     // Semi-axes: 1 and 1 for the sphere, 1 and 1.5 across the view for the ellipsoid.
@@ -238,7 +239,7 @@ fn grazing_camera_hits_on_a_distant_sphere_are_outside() {
 /// the normal there, not from the eye term's sign.
 #[test]
 fn eye_on_a_sphere_takes_the_side_from_the_normal() {
-    use crate::scene::desc::{SceneDesc, SphereDesc};
+    use crate::scene::desc::SceneDesc;
     use wide::f32x8;
     let mut desc = SceneDesc::default();
     // The default eye is (0, 0, −5): on this sphere, exactly.

@@ -13,6 +13,7 @@ pub mod wide;
 
 pub use files::scene_files;
 
+use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use bareray::camera::CameraError;
@@ -22,7 +23,7 @@ use bareray::geometry::ShapeKind;
 use bareray::io::toml;
 use bareray::kinds::KindDescs;
 use bareray::render::{render_lanes, thread_pool};
-use bareray::scene::desc::{CameraDesc, SceneDesc, SphereDesc};
+use bareray::scene::desc::{CameraDesc, SceneDesc};
 use glam::{DAffine3, DVec3};
 
 /// f32 unit roundoff (half an ulp of 1).

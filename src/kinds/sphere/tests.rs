@@ -1,4 +1,4 @@
-//! Tests of the description's shared pieces: the bounds of a list of spheres.
+//! Tests of the sphere descriptions' bounds.
 
 use super::*;
 

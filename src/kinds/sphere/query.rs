@@ -1,9 +1,12 @@
 //! Spheres as the items of BVH leaves ([`LeafQuery`]) and of brute force: the sphere kernel over a range of
-//! spheres, generic over the lane type (lanes = rays; the K = 1 instance tests one sphere at a time, the scalar walk's leaf test), and
-//! the single-ray leaf test with the spheres across the lanes. Hits are combined by [`HitPacket::update`]'s
-//! (t, id) order, so the result does not depend on the order of the loops.
+//! spheres, generic over the lane type (lanes = rays; the K = 1 instance tests one sphere at a time, the
+//! scalar walk's leaf test), and the single-ray leaf test with the spheres across the lanes. Hits are
+//! combined by [`HitPacket::update`]'s (t, id) order, so the result does not depend on the order of the
+//! loops.
 
-use crate::geometry::{first_root, sphere_approach, EyeLanes, HitPacket, Pyramid, Ray, SphereRay, Spheres};
+use crate::geometry::{first_root, sphere_approach, EyeLanes, HitPacket, Pyramid, Ray, SphereRay};
+
+use super::Spheres;
 use crate::math::{Mask, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};
 

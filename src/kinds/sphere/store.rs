@@ -1,6 +1,7 @@
 //! Spheres in structure-of-arrays layout, the form every sphere kernel and traversal reads, and the exact eye
 //! term each sphere carries.
 
+use crate::geometry::eye_term;
 use crate::math::{Rgb8, Vec3f, V3};
 
 /// Spheres in structure-of-arrays layout: one array per coordinate, so lanes load contiguous values.
@@ -62,7 +63,6 @@ impl Spheres {
     }
     /// The spheres in a new order: `order[j]` is the old index of new sphere `j`.
     pub(crate) fn permuted(&self, order: &[u32]) -> Spheres {
-        use super::gathered;
         Spheres {
             cx: gathered(&self.cx, order),
             cy: gathered(&self.cy, order),
@@ -127,21 +127,11 @@ impl Spheres {
     }
 }
 
-/// `|centre|² − r²` for a sphere in rendering space (the eye at the origin), as `(|centre| − r)(|centre| + r)`
-/// in f64: no cancellation between two large squares when the eye is close to a large sphere.
-pub(crate) fn eye_term(center: V3<f64>, radius: f64) -> f64 {
-    let d = center.length();
-    (d - radius) * (d + radius)
-}
-
-/// Whether the eye is inside a solid by the sign of its eye term: `Some(true)` below 0, `Some(false)` above,
-/// `None` at 0 (the eye on the surface) and for NaN, as the shader's lanes decide it.
-pub(crate) fn eye_side(c_eye: f64) -> Option<bool> {
-    match c_eye.partial_cmp(&0.0)? {
-        std::cmp::Ordering::Less => Some(true),
-        std::cmp::Ordering::Greater => Some(false),
-        std::cmp::Ordering::Equal => None,
-    }
+/// `v` in a new order, `order[j]` being the old index of new item `j`: how the store follows its BVH's leaf
+/// order. Large stores are gathered on the thread pool.
+fn gathered<T: Copy + Send + Sync>(v: &[T], order: &[u32]) -> Vec<T> {
+    use rayon::prelude::*;
+    order.par_iter().with_min_len(1 << 14).map(|&i| v[i as usize]).collect()
 }
 
 #[cfg(test)]
