@@ -3,12 +3,13 @@
 //! measures against the f32 path is the f32 arithmetic of the kernels, not the rounding of the scene
 //! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, then the registered
 //! kinds' primitives: polygons, ellipsoids, planes, cones, tori), as `Geometry::intersect` reports them. The
-//! registered kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a kind
-//! is covered here as soon as it is registered.
+//! registered kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a
+//! kind is covered here as soon as it is registered; spheres take their kind's f64 rules
+//! (`bareray::kinds::sphere::twin`), as the accuracy twin does.
 
 use bareray::accel::Geometry;
 use bareray::geometry::{intersect_sphere, sphere_roots, Ray, NO_PRIM};
-use bareray::kinds::{KindTwins, Stray};
+use bareray::kinds::{sphere, KindTwins, Stray};
 use bareray::math::V3;
 
 use super::wide::{dv, wide};
@@ -46,8 +47,7 @@ impl Oracle {
             return self.kinds.hit_of(k, ray);
         }
         let &(centre, radius) = self.spheres.get(i)?;
-        let (hit, t) = intersect_sphere(centre, radius, ray, f64::INFINITY);
-        hit.then_some(t)
+        sphere::twin::hit(centre, radius, ray, f64::INFINITY)
     }
 
     /// Closest hit `(prim, t)`, skipping `skip` entirely (an outward departure), `NO_PRIM` on a miss.
@@ -94,10 +94,6 @@ impl Oracle {
             return self.kinds.grazing(item, ray, k * EPS32, Stray::default()).unwrap_or(false);
         }
         let Some(&(c, r)) = self.spheres.get(prim as usize) else { return false };
-        let cc = dv(c) - dv(ray.origin);
-        let d = dv(ray.dir);
-        let proj = cc.dot(d) / d.dot(d);
-        let l = (cc - d * proj).length();
-        (l - r).abs() <= k * EPS32 * (cc.length() + r)
+        sphere::twin::grazing(c, r, ray, k * EPS32, Stray::default())
     }
 }
