@@ -1,5 +1,7 @@
-//! Primitives and their intersection kernels. Each kernel is generic over [`crate::math::Real`]: the f32
-//! instance serves single rays (K = 1, the scalar path among them), the f64 instance the accuracy oracle.
+//! Rays, packets and the intersection kernels the kinds share (the ray/sphere kernel and its exact eye
+//! terms, planes, placed shapes, ellipses for coverage), and `box_union` for world boxes. Each kernel is
+//! generic over [`crate::math::Real`]: the f32 instance serves single rays (K = 1, the scalar path among
+//! them), the f64 instance the accuracy oracle.
 
 mod ellipse;
 mod frame;

@@ -1,4 +1,5 @@
-//! Ray/sphere intersection: the lecture's five cases in a numerically stable form.
+//! Ray/sphere intersection: the lecture's five cases in a numerically stable form, and the exact eye terms
+//! of spheres (`eye_term`, `eye_side`: the sign that says whether the eye is inside).
 //!
 //! With `oc = centre − origin`, `proj = (oc·d)/(d·d)` is the parameter of the point on the line closest to
 //! the centre and `l² = |oc − proj·d|²` its squared distance. The line misses when `l² > r²` (case 1),
@@ -30,9 +31,9 @@
 //!   origin`, which the fused `perp` does not remove).
 //!
 //! For rays that do not start at the eye, a sphere whose surface passes within `c`'s rounding bound of the
-//! ray's origin is treated as touching it there (the **contact rule**): a ray heading into it enters at `t = 0`, a ray heading away misses it. At
-//! the contact point of touching spheres the origin is then on the neighbour's surface, never a few ulps
-//! inside it.
+//! ray's origin is treated as touching it there (the **contact rule**): a ray heading into it enters at
+//! `t = 0`, a ray heading away misses it. At the contact point of touching spheres the origin is then on the
+//! neighbour's surface, never a few ulps inside it.
 
 use crate::math::{Real, V3};
 
@@ -261,8 +262,8 @@ impl<F: Real> Approach<F> {
     }
 
     /// The contact rule's two facts: the origin is on the surface within `c`'s rounding (`bound`, and
-    /// `reach2` = 2·|origin|∞ of the origin `c` was computed from), and the ray heads toward the centre's side
-    /// (`proj ≥ 0`).
+    /// `reach2` = 2·|origin|∞ of the origin `c` was computed from), and the ray heads toward the centre's
+    /// side (`proj ≥ 0`).
     #[inline(always)]
     fn contact(&self, c: F, bound: F, reach2: F) -> (F::Mask, F::Mask) {
         let tol = self.contact * (bound + self.r * reach2);
@@ -442,7 +443,7 @@ mod tests {
 
     #[test]
     fn small_distant_sphere_survives_in_f32() {
-        // 1e5 radii away: the textbook discriminant loses this sphere in f32, the perpendicular form keeps it.
+        // 1e5 radii away: lost in f32 by the textbook discriminant, kept by the perpendicular form.
         let c = V3::new(0.0f32, 0.0, 1.0e5);
         let r = Ray::new(V3::new(0.0f32, 0.5, 0.0), V3::new(0.0, 0.0, 1.0));
         let (hit, t) = intersect_sphere(c, 1.0, &r, f32::INFINITY);

@@ -18,7 +18,6 @@
 //! record with a value that is not finite or a radius that is not positive (naming the first such record
 //! and its byte offset; the rules of the `.xyzr` reader).
 
-use crate::kinds::sphere::SphereDesc;
 use std::io::{self, Write};
 use std::path::Path;
 
@@ -26,6 +25,7 @@ use glam::DVec3;
 use rayon::prelude::*;
 
 use super::error::SceneError;
+use crate::kinds::sphere::SphereDesc;
 use crate::scene::desc::SceneDesc;
 
 /// The file's first 8 bytes.

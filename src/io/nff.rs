@@ -39,7 +39,6 @@
 //! of the difference, and the ambient term the rest, which SPD's values (`--ambient 0.2,0`) take away
 //! (measured: docs/scene-format.md, "NFF (SPD)"). `render --transfer srgb` still chooses the curve.
 
-use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use glam::DVec3;
@@ -50,6 +49,7 @@ use crate::math::Rgb;
 use super::error::SceneError;
 use crate::kinds::cone::ConeDesc;
 use crate::kinds::polygon::{triangulate, PolygonDesc};
+use crate::kinds::sphere::SphereDesc;
 use crate::scene::desc::*;
 
 mod chunks;

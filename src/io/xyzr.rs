@@ -9,14 +9,13 @@
 //! left of the eye so that shading shows the spheres' shape. The CLI overrides the camera. Values go to 8-bit
 //! images with [`Transfer::Linear`], as NFF's do (the benchmark's peers read sphere lists as NFF spheres).
 
-use crate::kinds::sphere::SphereDesc;
 use std::io::{self, Write};
 use std::path::Path;
 
 use glam::DVec3;
 use rayon::prelude::*;
 
-use crate::kinds::sphere::sphere_bounds;
+use crate::kinds::sphere::{sphere_bounds, SphereDesc};
 use crate::math::Rgb;
 
 use super::error::SceneError;

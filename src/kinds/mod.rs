@@ -1,4 +1,4 @@
-//! The primitive kinds of the registry: each kind lives in one folder that holds everything about it (its
+//! The primitive kinds: each registered kind lives in one folder that holds everything about it (its
 //! description and TOML form, its f32 store, its kernel generic over lanes, bounds, surface, departure rule
 //! and its f64 form for the accuracy twin), behind the `Kind` trait. One list, `registry!`, names the
 //! kinds; the scene description ([`KindDescs`]), the TOML reader, compile, the queries over the geometry

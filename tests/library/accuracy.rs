@@ -12,13 +12,13 @@
 //!    planes move by 1/|cos| of the move), and the sphere contact rule's entry at t = 0, which is no self-hit.
 
 use super::common;
-use crate::kinds::sphere::SphereDesc;
 
 use std::path::{Path, PathBuf};
 
 use bareray::accuracy::{run, Hit64, Options, Slack, Twin, EPS32, K_TIE};
 use bareray::geometry::{first_root, sphere_roots, Departure, Ray, ShapeKind, NO_PRIM};
 use bareray::kinds::cone::ConeDesc;
+use bareray::kinds::sphere::SphereDesc;
 use bareray::kinds::KindDescs;
 use bareray::math::SplitMix64;
 use bareray::math::V3;

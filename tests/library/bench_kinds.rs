@@ -3,12 +3,12 @@
 //! own count), single-ray paths make one query per secondary ray and the probes change no bits; the
 //! command line's table and JSON are tested in `tests/bench_kinds.rs`.
 
-use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use bareray::accel::{RayKind, Work};
 use bareray::bench::{measure, profile, Profile, Trace};
 use bareray::compile::{Accel, CompileOptions, Scene};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::render::thread_pool;
 use bareray::scene::desc::SceneDesc;
 use glam::DVec3;

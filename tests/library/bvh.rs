@@ -3,11 +3,11 @@
 //! spheres, grazing rays and axis-parallel rays), and through whole renders.
 
 use super::common;
-use crate::kinds::sphere::SphereDesc;
 
 use bareray::bvh::Bvh;
 use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, Ray, RayPacket};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::SceneDesc;
 use bareray::simd::{IdLanes, Lanes};

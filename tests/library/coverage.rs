@@ -3,10 +3,10 @@
 //! overlapping silhouettes against a 32×32 stratified reference on its edge pixels.
 
 use super::common;
-use crate::kinds::sphere::SphereDesc;
 
 use bareray::compile::Scene;
 use bareray::film::Image;
+use bareray::kinds::sphere::SphereDesc;
 use bareray::math::{Rgb, SplitMix64};
 use bareray::render::{coverage_parts, primary_hits_lanes, render_lanes, thread_pool, CoveragePart};
 use bareray::scene::desc::{Falloff, LightDesc, Material, Pattern};

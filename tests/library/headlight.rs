@@ -9,10 +9,10 @@
 //! 3. The twin agrees: every camera hit's ray toward the eye, traced in f64, meets nothing.
 
 use super::common;
-use crate::kinds::sphere::SphereDesc;
 
 use bareray::accuracy::{run, Options};
 use bareray::compile::{CompileOptions, Scene};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::math::{SplitMix64, V3};
 use bareray::render::{render_lanes, thread_pool, Rendered};
 use bareray::scene::desc::{LightDesc, Material, SceneDesc};

@@ -4,10 +4,10 @@
 //! for camera rays, rays from outside and inside the field, and secondary rays leaving a sphere's surface.
 
 use super::common;
-use crate::kinds::sphere::SphereDesc;
 
 use bareray::compile::{Accel, Scene};
 use bareray::geometry::{Departure, DeparturePacket, HitPacket, Ray, RayPacket, NO_PRIM};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::math::V3;
 use bareray::scene::desc::{Material, SceneDesc};
 use bareray::simd::{IdLanes, Lanes};

@@ -1,7 +1,6 @@
 //! Scene readers (NFF, xyzr, f32r), generators (contract field, SPD sphereflake) and the polygon primitive, through
 //! the library API.
 
-use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use bareray::accel::Geometry;
@@ -10,6 +9,7 @@ use bareray::geometry::{Departure, Ray, NO_PRIM};
 use bareray::io::generate::{flake, flake_count, flake_nff, FieldParams};
 use bareray::io::{f32r, nff, xyzr, SceneError, SceneFormat};
 use bareray::kinds::polygon::{intersect_triangle, triangulate, PolygonDesc};
+use bareray::kinds::sphere::SphereDesc;
 use bareray::kinds::KindDescs;
 use bareray::math::{Rgb, V3};
 use bareray::scene::desc::{Aim, Field, Sweep};

@@ -10,12 +10,12 @@
 //! in each test's comment; `STRESS_MEASURE=1` prints the measurements without asserting the bounds.
 
 use super::common;
-use crate::kinds::sphere::SphereDesc;
 
 use bareray::compile::Scene;
 use bareray::geometry::{far_root, sphere_roots, Departure, Ray, ShapeKind, NO_PRIM};
 use bareray::io::generate::flake;
 use bareray::kinds::polygon::PolygonDesc;
+use bareray::kinds::sphere::SphereDesc;
 use bareray::kinds::KindDescs;
 use bareray::scene::desc::SceneDesc;
 use common::oracle::Oracle;

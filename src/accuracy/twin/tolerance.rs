@@ -16,8 +16,8 @@ impl Twin {
     ///   `k·ε32·(|o| + |p|)` (plus slack, over the cosine of incidence) of the outline;
     /// - cones: a nudge of the line by `δ = k·ε32·(|o| + |B − o| + h + max(r0, r1))` plus slack can change
     ///   hit or miss, in one of two ways (`cone_grazing`): the line is within `δ` of tangency with the
-    ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets the
-    ///   quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
+    ///   quadric where its roots would lie between the end planes (two roots merge or appear), or it meets
+    ///   the quadric in front of the origin within `δ` (over the cosine of incidence) of an end plane (a root
     ///   crosses the rim, as a polygon's hit crosses an edge);
     /// - the other registered kinds: their own rules ([`crate::kinds::Kind::grazing64`]; ellipsoids: the
     ///   sphere's test in object space, with the scale `Σ|L_i|·(|o_i| + |c_i|) + 1`, L the object-from-world
@@ -76,9 +76,9 @@ impl Twin {
     /// True when point `p` lies within tolerance of `prim`'s surface: `k·ε32·(|p| + |c − p| + r)` plus
     /// `slack` for spheres, the distance to the plane for polygons, and each registered kind's own rule
     /// ([`crate::kinds::Kind::near64`]: the object-space equivalent for ellipsoids and planes; for cones the
-    /// distance to the lateral surface within `k·ε32` of their scale). This is where a ray that starts at `p` (a secondary ray's origin on another
-    /// primitive, explanation "start"), or a shadow ray that ends there (the light, explanation "light"), can
-    /// find or miss `prim` by rounding.
+    /// distance to the lateral surface within `k·ε32` of their scale). This is where a ray that starts at `p`
+    /// (a secondary ray's origin on another primitive, explanation "start"), or a shadow ray that ends there
+    /// (the light, explanation "light"), can find or miss `prim` by rounding.
     pub(crate) fn near_surface(&self, prim: u32, p: V3<f64>, k: f64, slack: f64) -> bool {
         if prim == NO_PRIM || prim as usize >= self.len() {
             return false;

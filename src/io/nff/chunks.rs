@@ -9,7 +9,6 @@
 //! Whenever a piece fails to read or the pieces do not join (a second view), the file is read again in one
 //! pass, which reports the file's first error, with its line, exactly.
 
-use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use rayon::prelude::*;
@@ -17,6 +16,7 @@ use rayon::prelude::*;
 use super::{parse_sequential, Reader};
 use crate::io::error::SceneError;
 use crate::io::pieces::{after_newline, cuts};
+use crate::kinds::sphere::SphereDesc;
 use crate::scene::desc::SceneDesc;
 
 /// Bytes of text per piece.

@@ -4,11 +4,11 @@
 //! The arrays are read where they are, as f32 or f64 ([`Floats`]); the description holds each sphere in
 //! f64 (40 bytes) and its colour in 3 bytes.
 
-use crate::kinds::sphere::SphereDesc;
 use glam::DVec3;
 use rayon::prelude::*;
 
 use super::scene::{particle_scene, DEFAULT_VIEW};
+use crate::kinds::sphere::SphereDesc;
 use crate::math::{Rgb, Rgb8};
 use crate::scene::desc::SceneDesc;
 

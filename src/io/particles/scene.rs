@@ -16,7 +16,6 @@
 //! With [`ParticleOptions::draw_box`], the frame's periodic box is drawn as twelve open cylinders with a
 //! sphere at each corner to close the joints, all of radius `box_radius` and the grey `BOX_COLOR`.
 
-use crate::kinds::sphere::SphereDesc;
 use glam::DVec3;
 use rayon::prelude::*;
 
@@ -25,6 +24,7 @@ use super::types::Types;
 use super::{Cell, Frame, Kind, Particle, ParticleOptions, Unit};
 use crate::io::xyzr;
 use crate::kinds::cone::ConeDesc;
+use crate::kinds::sphere::SphereDesc;
 use crate::math::{Rgb, Rgb8};
 use crate::scene::desc::{Material, SceneDesc};
 

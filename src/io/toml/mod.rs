@@ -10,7 +10,6 @@ mod materials_lights;
 #[cfg(test)]
 mod tests;
 
-use crate::kinds::sphere::SphereDesc;
 use std::collections::BTreeMap;
 use std::ops::Range;
 use std::path::Path;
@@ -27,6 +26,7 @@ use crate::kinds::{Kind, KindDescs, KindError};
 use crate::math::Rgb;
 
 use super::error::SceneError;
+use crate::kinds::sphere::SphereDesc;
 use crate::scene::desc::SceneDesc;
 
 type Vec3 = [f64; 3];

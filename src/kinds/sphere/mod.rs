@@ -1,8 +1,8 @@
-//! The sphere kind: its description ([`SphereDesc`]), its store in structure-of-arrays layout ([`Spheres`]),
-//! the brute-force kernels over the store (`brute.rs`), its leaf query for the trees (`query.rs`) and its f64
-//! form for the accuracy twin (`twin.rs`). The ray/sphere kernel itself is [`crate::geometry`]'s, shared with
-//! the kinds that reduce to a sphere (an ellipsoid in its own frame, a torus's bounding shells) and with the
-//! f64 twin.
+//! The sphere kind: its description ([`SphereDesc`]) and the bounds of a list of them, its store in
+//! structure-of-arrays layout ([`Spheres`]), the brute-force kernels over the store (`brute.rs`), its leaf
+//! query for the trees (`query.rs`) and its f64 form for the accuracy twin (`twin.rs`). The ray/sphere kernel
+//! itself is [`crate::geometry`]'s, shared with the kinds that reduce to a sphere (an ellipsoid in its own
+//! frame, a torus's bounding shells) and with the f64 twin.
 //!
 //! Spheres are not in the registry's list ([`crate::kinds`]): their compiled form and queries are the
 //! scene's own paths, which the registered kinds' generated loops do not have — a BVH or the particle tree

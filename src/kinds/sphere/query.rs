@@ -4,13 +4,12 @@
 //! combined by [`HitPacket::update`]'s (t, id) order, so the result does not depend on the order of the
 //! loops.
 
+use crate::bvh::{LeafQuery, SingleLeafQuery};
 use crate::geometry::{first_root, sphere_approach, EyeLanes, HitPacket, Pyramid, Ray, SphereRay};
-
-use super::Spheres;
 use crate::math::{Mask, Vec3f};
 use crate::simd::{set_bits, IdLanes, Lanes};
 
-use crate::bvh::{LeafQuery, SingleLeafQuery};
+use super::Spheres;
 
 /// A sphere query as every kernel and traversal takes it: the spheres, the rays, each ray's exclusive end
 /// `t_max`, and the sphere each ray leaves (`skip`, never reported).
@@ -235,14 +234,15 @@ impl SphereQuery<'_, f32> {
 }
 
 /// The lane type of a single ray's leaf test, one sphere per lane: leaves hold at most 8 spheres (the SAH
-/// builder's `MAX_LEAF`, obvhs's `max_prims_per_leaf` in every preset bareray uses), so one pass covers a leaf.
+/// builder's `MAX_LEAF`, obvhs's `max_prims_per_leaf` in every preset bareray uses), so one pass covers a
+/// leaf.
 pub(crate) type LeafLanes = wide::f32x8;
 
 impl SphereQuery<'_, f32> {
     /// Spheres `at..at + min(count, L::K)` against the one ray (lanes = spheres, the transpose of
-    /// [`SphereQuery::sphere`]; each lane computes that kernel's bits): bit j set where sphere `at + j` is hit
-    /// within `t_max` (the departure sphere excluded), with each lane's t. `None` when the ray's line meets
-    /// none of them, which skips the roots' division and square root for the whole chunk.
+    /// [`SphereQuery::sphere`]; each lane computes that kernel's bits): bit j set where sphere `at + j` is
+    /// hit within `t_max` (the departure sphere excluded), with each lane's t. `None` when the ray's line
+    /// meets none of them, which skips the roots' division and square root for the whole chunk.
     #[inline(always)]
     fn leaf_chunk<L: Lanes>(&self, at: usize, count: usize) -> Option<(u32, L)> {
         // Lanes past the array's end read a zero sphere at the origin; `valid` drops them.

@@ -139,8 +139,8 @@ mod tests {
     use super::*;
 
     /// Built in slices on a pool of three threads, the arrays hold what appending each sphere gives: centres
-    /// and radii rounded once, eye terms from the f64 values, file order as keys; the flag for eye terms set by
-    /// the one sphere near the eye (or by none).
+    /// and radii rounded once, eye terms from the f64 values, file order as keys; the flag for eye terms set
+    /// by the one sphere near the eye (or by none).
     #[test]
     fn spheres_built_in_slices_are_the_appended_ones() {
         let pool = rayon::ThreadPoolBuilder::new().num_threads(3).build().unwrap();

@@ -1,24 +1,20 @@
-//! The sphere in f64, for the accuracy twin: its hits, its exit, its normal, and the rules that say where
-//! f32 rounding can change the renderer's answer (a grazing line, a point near the surface, the contact
-//! rule's entry). A sphere here is `(centre, radius)` in the twin's camera-relative space. The hits run
-//! the kernel of [`crate::geometry`] at f64, the same formula as the f32 path: what the twin measures is
+//! The sphere in f64, for the accuracy twin: its hits, its exit, its normal, and the rules that say where f32
+//! rounding can change the renderer's answer (a grazing line, a point near the surface, the contact rule's
+//! entry). A sphere here is `(centre, radius)` in the twin's rendering space (`p − origin` in f64). The hits
+//! run the kernel of [`crate::geometry`] at f64, the same formula as the f32 path: what the twin measures is
 //! the f32 rounding, not a difference of method.
 
 use crate::geometry::{far_root, first_root, sphere_roots, Ray, CONTACT_ROUNDINGS};
 use crate::kinds::Stray;
-use crate::math::V3;
+use crate::math::{Real, V3};
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff.
-const EPS32: f64 = f32::EPSILON as f64 / 2.0;
+const EPS32: f64 = <f32 as Real>::UNIT_ROUNDOFF;
 
 /// The roundings, beyond the contact band's own [`CONTACT_ROUNDINGS`], by which the f32 renderer's
 /// `c = |oc|² − r²` can differ from the exact `c` of the same origin and the scene's sphere
 /// ([`contact_entry`]).
 const CONTACT_C_ROUNDINGS: f64 = 8.0;
-
-fn len(p: V3<f64>) -> f64 {
-    p.dot(p).sqrt()
-}
 
 /// The first root of `ray` on the sphere in `[0, t_max)`.
 pub(crate) fn hit(centre: V3<f64>, radius: f64, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
@@ -43,15 +39,15 @@ pub(crate) fn grazing(centre: V3<f64>, radius: f64, ray: &Ray<f64>, tol: f64, st
     let oc = centre - ray.origin;
     let d = ray.dir;
     let proj = oc.dot(d) / d.dot(d);
-    let l = len(oc - d * proj);
-    let dist = len(oc);
+    let l = (oc - d * proj).length();
+    let dist = oc.length();
     (l - radius).abs() <= tol * (dist + radius) + stray.at(dist)
 }
 
 /// Whether point `p` lies within `tol·(|p| + |c − p| + r)` plus `slack` of the surface: the magnitudes the
 /// kernel's f32 operations round are `|p|`, the centre's distance and the radius.
 pub(crate) fn near(centre: V3<f64>, radius: f64, p: V3<f64>, tol: f64, slack: f64) -> bool {
-    (len(p - centre) - radius).abs() <= tol * (len(p) + len(centre - p) + radius) + slack
+    ((p - centre).length() - radius).abs() <= tol * (p.length() + (centre - p).length() + radius) + slack
 }
 
 /// True when a hit at exactly `t = 0` of the f32 ray from `origin` along `dir` (both as f32 values, widened)
@@ -68,10 +64,10 @@ pub(crate) fn near(centre: V3<f64>, radius: f64, p: V3<f64>, tol: f64, slack: f6
 /// (`ε32·|C|`), `oc`'s and the dot product's (`4ε32·|oc|`) can move it by.
 pub(crate) fn contact_entry(centre: V3<f64>, radius: f64, origin: V3<f64>, dir: V3<f64>) -> bool {
     let oc = centre - origin;
-    let c = (len(oc) - radius) * (len(oc) + radius);
+    let c = (oc.length() - radius) * (oc.length() + radius);
     let reach = origin.x.abs().max(origin.y.abs()).max(origin.z.abs());
     let bound = oc.dot(oc) + radius * radius + 2.0 * radius * reach;
     let band = (CONTACT_ROUNDINGS + CONTACT_C_ROUNDINGS) * EPS32 * bound;
-    let heading_in = oc.dot(dir) >= -EPS32 * (4.0 * len(oc) + len(centre)) * len(dir);
+    let heading_in = oc.dot(dir) >= -EPS32 * (4.0 * oc.length() + centre.length()) * dir.length();
     heading_in && c.abs() <= band
 }

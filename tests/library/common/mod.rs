@@ -13,7 +13,6 @@ pub mod wide;
 
 pub use files::scene_files;
 
-use crate::kinds::sphere::SphereDesc;
 use std::path::Path;
 
 use bareray::camera::CameraError;
@@ -21,6 +20,7 @@ use bareray::compile::{Accel, CompileOptions, Scene};
 use bareray::film::Image;
 use bareray::geometry::ShapeKind;
 use bareray::io::toml;
+use bareray::kinds::sphere::SphereDesc;
 use bareray::kinds::KindDescs;
 use bareray::render::{render_lanes, thread_pool};
 use bareray::scene::desc::{CameraDesc, SceneDesc};

@@ -3,8 +3,8 @@
 //! measures against the f32 path is the f32 arithmetic of the kernels, not the rounding of the scene
 //! description. Primitive ids are indices into `Geometry`'s arrays in id order (spheres, then the registered
 //! kinds' primitives: polygons, ellipsoids, planes, cones, tori), as `Geometry::intersect` reports them. The
-//! registered kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms), so a
-//! kind is covered here as soon as it is registered; spheres take their kind's f64 rules
+//! registered kinds come from the kind registry ([`bareray::kinds::Kind::widen`] and the kinds' f64 forms),
+//! so a kind is covered here as soon as it is registered; spheres take their kind's f64 rules
 //! (`bareray::kinds::sphere::twin`), as the accuracy twin does.
 
 use bareray::accel::Geometry;
@@ -63,10 +63,11 @@ impl Oracle {
         best
     }
 
-    /// True when `ray` starts within `k` f32 roundings of the surface of solid `prim` (its near root is within
-    /// `k·ε·(|c − o| + r)/|d|` of zero): at the contact point of touching spheres a ray leaving one sphere
-    /// starts on the other, and whether it enters at t ≈ 0 or is already inside is decided by rounding.
-    /// For a registered kind's item: the origin lies within `k` roundings of its scale of the surface.
+    /// True when `ray` starts within `k` f32 roundings of the surface of solid `prim` (its near root is
+    /// within `k·ε·(|c − o| + r)/|d|` of zero): at the contact point of touching spheres a ray leaving one
+    /// sphere starts on the other, and whether it enters at t ≈ 0 or is already inside is decided by
+    /// rounding. For a registered kind's item: the origin lies within `k` roundings of its scale of the
+    /// surface.
     pub fn starts_on(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
         if let Some(item) = self.kind(prim) {
             return self.kinds.near(item, ray.origin, k * EPS32, 0.0).unwrap_or(false);
@@ -82,8 +83,8 @@ impl Oracle {
     }
 
     /// True when `ray` passes within `k` f32 roundings (of the coordinates involved) of tangency with `prim`:
-    /// for a sphere, the line's distance l from the centre differs from the radius by at most `k·ε·(|c| +
-    /// r)`; a registered kind's item (ellipsoids and planes among them): its own rule
+    /// for a sphere, the line's distance l from the centre differs from the radius by at most
+    /// `k·ε·(|c − o| + r)`; a registered kind's item (ellipsoids and planes among them): its own rule
     /// ([`bareray::kinds::Kind::grazing64`]) for `k` roundings. That is where the f32 and f64 kernels may
     /// legitimately disagree on hit or miss.
     pub fn grazing(&self, prim: u32, ray: &Ray<f64>, k: f64) -> bool {
