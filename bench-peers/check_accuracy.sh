@@ -5,6 +5,11 @@
 #
 # usage: check_accuracy.sh [path/to/bareray]       env: COUNTS="1e3 1e5 1e6"
 set -euo pipefail
+# The dump converter and the comparison read EXR images and dumps with numpy and OpenEXR: say so before any run.
+python3 -c 'import numpy, OpenEXR' 2>/dev/null || {
+  echo "check_accuracy.sh: python3 needs numpy and OpenEXR (a virtual environment with them first on PATH)" >&2
+  exit 1
+}
 here="$(cd "$(dirname "$0")" && pwd)"
 bareray="${1:-$here/../target/native/release/bareray}"
 make -s -C "$here/embree"
