@@ -137,21 +137,19 @@ pub fn render_spheres(
     let pool = pool(options)?;
     // The arrays are checked on the render's threads.
     let desc = pool.install(|| arrays.scene(view))?;
-    render_desc_on(desc, options, &pool)
+    render_desc(desc, options, &pool)
 }
 
-/// Renders a scene description with `options` applied, its spheres in the BVH or, when the BVH would not
-/// fit in the memory available, in the particle tree.
-pub fn render_desc(desc: SceneDesc, options: &RenderOptions) -> Result<Picture, Error> {
-    render_desc_on(desc, options, &pool(options)?)
-}
-
-/// [`render_desc`] on the threads of `pool`.
-fn render_desc_on(
+/// Renders a scene description with `options` applied, on the threads of `pool`
+/// ([`crate::render::thread_pool`] with `options`' thread count: a caller that made one to read its input
+/// renders on the same threads), its spheres in the BVH or, when the BVH would not fit in the memory
+/// available, in the particle tree.
+pub fn render_desc(
     mut desc: SceneDesc,
     options: &RenderOptions,
     pool: &rayon::ThreadPool,
 ) -> Result<Picture, Error> {
+    options.check()?;
     options.apply(&mut desc)?;
     let loaded = load::loaded_desc(desc, Accel::Auto, memory::available());
     render_loaded(loaded, options, pool)

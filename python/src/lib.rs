@@ -240,13 +240,14 @@ fn render<'py>(
         radii: radii.floats(),
         colors: colors.as_ref().map(Array::floats),
     };
-    // The check and the spheres' copies run on `threads` threads too, as the render does.
+    // The check and the spheres' copies run on the render's `threads` threads.
     let pool = bareray::render::thread_pool(threads).map_err(|e| PyRuntimeError::new_err(e.to_string()))?;
     // Checked and read with the GIL held: no Python thread can write an array between its check and its read
     // (the check and the read run in parallel on the pool's threads, which do not touch Python).
     let view = view_of(view)?;
     let desc = pool.install(|| arrays.scene(view)).map_err(|e| PyValueError::new_err(e.to_string()))?;
-    let picture: Picture = py.detach(|| api::render_desc(desc, &options)).map_err(api_error)?;
+    // Rendered on the threads that read the arrays.
+    let picture: Picture = py.detach(|| api::render_desc(desc, &options, &pool)).map_err(api_error)?;
     to_numpy(py, picture.rendered.image)
 }
 
