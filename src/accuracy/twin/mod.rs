@@ -6,7 +6,7 @@
 //! is stored as `p − origin`, computed in f64 (sphere centres, polygon vertices, the registered kinds'
 //! items, lights), and camera rays start where the renderer's do (at exactly 0, or a far scene's start
 //! distance along the ray) with f64 unit directions from [`Camera<f64>::ray`], not rounded to f32.
-//! Intersections run the sphere kernel of [`crate::geometry`] instantiated at f64 ([`intersect_sphere`])
+//! Intersections run the sphere kernel of [`crate::geometry`] instantiated at f64 ([`sphere::twin::hit`])
 //! and each registered kind's f64 form ([`crate::kinds::Kind::intersect64`]), with
 //! the renderer's rules: closest hit by the total order (smaller t, then lower id), and a ray that leaves a
 //! primitive ([`Departure`]) never hits it again except, for a solid left toward its inside, at its exit
@@ -21,7 +21,7 @@ use glam::DVec3;
 
 use crate::camera::{Camera, CameraError};
 use crate::compile::RenderingFrame;
-use crate::geometry::{intersect_sphere, Departure, Ray, NO_PRIM};
+use crate::geometry::{Departure, Ray, NO_PRIM};
 use crate::kinds::{sphere, KindTwins};
 use crate::math::V3;
 use crate::scene::desc::SceneDesc;
@@ -139,8 +139,7 @@ impl Twin {
             None => {
                 for (i, &(c, r)) in self.spheres.iter().enumerate() {
                     if i as u32 != from.prim {
-                        let (hit, t) = intersect_sphere(c, r, ray, t_max);
-                        if hit {
+                        if let Some(t) = sphere::twin::hit(c, r, ray, t_max) {
                             best.update(i as u32, t);
                         }
                     }

@@ -4,7 +4,7 @@
 //! run the kernel of [`crate::geometry`] at f64, the same formula as the f32 path: what the twin measures is
 //! the f32 rounding, not a difference of method.
 
-use crate::geometry::{far_root, first_root, sphere_roots, Ray, CONTACT_ROUNDINGS};
+use crate::geometry::{far_root, intersect_sphere, sphere_roots, Ray, CONTACT_ROUNDINGS};
 use crate::kinds::Stray;
 use crate::math::{Real, V3};
 
@@ -16,9 +16,9 @@ const EPS32: f64 = <f32 as Real>::UNIT_ROUNDOFF;
 /// ([`contact_entry`]).
 const CONTACT_C_ROUNDINGS: f64 = 8.0;
 
-/// The first root of `ray` on the sphere in `[0, t_max)`.
+/// The first root of `ray` on the sphere in `[0, t_max)`: the kernel's [`intersect_sphere`] at f64.
 pub(crate) fn hit(centre: V3<f64>, radius: f64, ray: &Ray<f64>, t_max: f64) -> Option<f64> {
-    let (hit, t) = first_root(&sphere_roots(centre, radius, ray), t_max);
+    let (hit, t) = intersect_sphere(centre, radius, ray, t_max);
     hit.then_some(t)
 }
 

@@ -8,7 +8,7 @@
 //! (`bareray::kinds::sphere::twin`), as the accuracy twin does.
 
 use bareray::accel::Geometry;
-use bareray::geometry::{intersect_sphere, sphere_roots, Ray, NO_PRIM};
+use bareray::geometry::{sphere_roots, Ray, NO_PRIM};
 use bareray::kinds::{sphere, KindTwins, Stray};
 use bareray::math::V3;
 
@@ -54,9 +54,9 @@ impl Oracle {
     pub fn closest(&self, ray: &Ray<f64>, skip: u32) -> (u32, f64) {
         let mut best = (NO_PRIM, f64::INFINITY);
         for (i, &(c, r)) in self.spheres.iter().enumerate() {
-            let (h, t) = intersect_sphere(c, r, ray, best.1);
-            if h && i as u32 != skip {
-                best = (i as u32, t);
+            match sphere::twin::hit(c, r, ray, best.1) {
+                Some(t) if i as u32 != skip => best = (i as u32, t),
+                _ => {}
             }
         }
         self.kinds.intersect(self.kinds_base, skip, ray, f64::INFINITY, &mut best);
