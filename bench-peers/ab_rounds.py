@@ -5,7 +5,12 @@ every (lanes, threads) row the per-round ratio is B's median time over A's (belo
 stops if a row's checksums differ. It prints each round's ratios and, per row, the median ratio with its
 quartiles and both builds' median times.
 
-usage: ab_rounds.py ROUNDS BIN_A BIN_B -- SCENE [bench options]
+A run's time is its median of `--reps` by default. With `--min` it is the run's fastest rep instead: on a
+host whose speed jumps between two levels from one moment to the next (a shared VM), the fastest of a dozen
+reps lands on the fast level every time, where a median lands on either; the ratio of two minima then
+resolves a few per cent that medians cannot.
+
+usage: ab_rounds.py [--min] ROUNDS BIN_A BIN_B -- SCENE [bench options]
 """
 import re
 import statistics
@@ -15,8 +20,9 @@ import sys
 ROW = re.compile(r"^\s*(scalar|\d+)\s+(\d+)\s+(\d+)\s+([\d.]+)\s+([\d.]+)\s+([\d.]+)\s+.*\s([0-9a-f]{16})$")
 
 
-def run(binary, args):
-    """The rows of one `bench` run: (lanes, threads) to (median seconds, checksum)."""
+def run(binary, args, column):
+    """The rows of one `bench` run: (lanes, threads) to (seconds, checksum), the seconds from `column` (4: the
+    fastest rep, 5: the median)."""
     out = subprocess.run([binary, "bench", *args, "--by-kind", "false"], capture_output=True, text=True)
     if out.returncode != 0:
         sys.exit(f"{binary} bench failed:\n{out.stderr}")
@@ -24,18 +30,21 @@ def run(binary, args):
     for line in out.stdout.splitlines():
         m = ROW.match(line)
         if m:
-            rows[(m.group(1), m.group(2))] = (float(m.group(5)), m.group(7))
+            rows[(m.group(1), m.group(2))] = (float(m.group(column)), m.group(7))
     return rows
 
 
 def main():
-    if len(sys.argv) < 6 or sys.argv[4] != "--":
+    argv = sys.argv[1:]
+    column = 4 if argv[:1] == ["--min"] else 5
+    argv = argv[1:] if column == 4 else argv
+    if len(argv) < 5 or argv[3] != "--":
         sys.exit(__doc__)
-    rounds, a, b, args = int(sys.argv[1]), sys.argv[2], sys.argv[3], sys.argv[5:]
+    rounds, a, b, args = int(argv[0]), argv[1], argv[2], argv[4:]
     ratios, times_a, times_b = {}, {}, {}
     for r in range(rounds):
         order = [(a, "A"), (b, "B")] if r % 2 == 0 else [(b, "B"), (a, "A")]
-        res = {tag: run(binary, args) for binary, tag in order}
+        res = {tag: run(binary, args, column) for binary, tag in order}
         for k, (seconds_a, sum_a) in res["A"].items():
             if k not in res["B"]:
                 continue
