@@ -149,7 +149,6 @@ pub fn render_desc(
     options: &RenderOptions,
     pool: &rayon::ThreadPool,
 ) -> Result<Picture, Error> {
-    options.check()?;
     options.apply(&mut desc)?;
     let loaded = load::loaded_desc(desc, Accel::Auto, memory::available());
     render_loaded(loaded, options, pool)

@@ -32,7 +32,7 @@ pub(crate) use super::hit64::Hit64;
 mod tolerance;
 
 /// ε32 = 2⁻²⁴, the f32 unit roundoff: every tolerance of the accuracy report is a multiple of it.
-pub(crate) const EPS32: f64 = f32::EPSILON as f64 / 2.0;
+pub(crate) const EPS32: f64 = <f32 as crate::math::Real>::UNIT_ROUNDOFF;
 
 /// From this many spheres on the twin searches them through its own BVH; below, brute force.
 pub(crate) const TWIN_BVH_MIN_SPHERES: usize = 16;
