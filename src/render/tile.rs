@@ -46,21 +46,28 @@ pub(super) fn trace_tile<F: Lanes>(
 /// pixel's samples), summed in place in `rows`, its rows.
 fn sampled_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile, rows: &mut [&mut [Rgb]]) {
     let pattern = scene.render.pattern;
-    for row in rows.iter_mut() {
-        row.fill(Rgb::default());
+    let count = pattern.rays_per_pixel() as u32;
+    // One pass writes each pixel once: `0 + c` (so a −0 channel is +0, as the sum from zero gives) and no
+    // scaling by one, the same bits without clearing the rows first or reading them twice more.
+    let single = count == 1;
+    if !single {
+        rows.iter_mut().for_each(|row| row.fill(Rgb::default()));
     }
     let mut large = LargePacket::default();
     let mut pass = |offsets: &Offsets| {
         for_each_camera_hit(scene, tile, offsets, &mut large, |rays, hit, block| {
             let c = tracer.primary_from(rays, hit);
+            // The lanes read from arrays taken once: `lane` on the packet stored it again for every pixel.
+            let (r, g, b) = (c.x.to_array(), c.y.to_array(), c.z.to_array());
+            let (r, g, b) = (r.as_ref(), g.as_ref(), b.as_ref());
             for (i, x, y) in block.pixels() {
                 let p = &mut rows[y as usize][x as usize];
-                *p = *p + lane_rgb(&c, i);
+                let sum = if single { Rgb::default() } else { *p };
+                *p = sum + Rgb::new(r[i], g[i], b[i]);
             }
         });
     };
     let grid = grid_of(pattern);
-    let count = pattern.rays_per_pixel() as u32;
     for k in 0..count {
         match pattern {
             // The regular grid's offset is the same in every pixel: splatted, not computed per lane.
@@ -68,9 +75,9 @@ fn sampled_tile<F: Lanes>(scene: &Scene, tracer: &mut Tracer<F>, tile: Tile, row
             _ => pass(&Offsets::PerPixel(&|x, y| sample_offset(pattern, &grid, k, x, y))),
         }
     }
-    let scale = 1.0 / count as f32;
-    for p in rows.iter_mut().flat_map(|row| row.iter_mut()) {
-        *p = *p * scale;
+    if !single {
+        let scale = 1.0 / count as f32;
+        rows.iter_mut().flat_map(|row| row.iter_mut()).for_each(|p| *p = *p * scale);
     }
 }
 
