@@ -280,7 +280,7 @@ impl FileScene {
             mrays_per_s: m.mrays_per_s(),
             threads: pool.current_num_threads(),
             lanes: options.lanes,
-            by_kind: setting.kinds.map(|p| crate::bench::ByKind::of(&p, m.seconds)),
+            by_kind: setting.kinds.map(|p| crate::bench::ByKind::of(&p)),
         })
     }
 }

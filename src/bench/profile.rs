@@ -26,8 +26,11 @@ pub(crate) struct KindProfile {
     pub(crate) queries: u64,
     /// Their box and primitive tests and the live rays those served (the counting run).
     pub(crate) work: Work,
-    /// Thread-seconds inside their queries in the timed run, the probe's own ticks taken off.
+    /// Thread-seconds inside their queries in the timed runs (the median of them), the probe's own ticks
+    /// taken off.
     pub(crate) seconds: f64,
+    /// The share of the fastest timed run's thread time spent in these queries ([`Profile::share`]).
+    pub(crate) share: f64,
 }
 
 impl KindProfile {
@@ -77,17 +80,19 @@ pub struct Profile {
 }
 
 impl Profile {
-    /// The share of a clean render's thread time (`seconds` × threads, `seconds` its median wall time) that
-    /// `kind` spends in its queries: the timed run's time for the kind with the probe's ticks taken off, so
-    /// what the probes add elsewhere (their calls, the counter reads) does not count.
-    pub(crate) fn share(&self, kind: &KindProfile, seconds: f64) -> f64 {
-        kind.seconds / (seconds * self.threads as f64)
+    /// The share of a render's thread time that `kind` spends in its queries, both times from one run: the
+    /// fastest timed run, its wall time × threads with every query's probe ticks taken off, and the kind's
+    /// query time in it, its probe ticks taken off. Taken from one run, the shares hold on a host whose speed
+    /// jumps between levels from one run to the next, where a share over another run's time did not
+    /// (docs/perf-log/2026-11-zen3.md, "Per-kind shares from one run").
+    pub(crate) fn share(&self, kind: &KindProfile) -> f64 {
+        kind.share
     }
 
-    /// The share of a clean render taking `seconds` outside every query: shading, sampling, the film, and
-    /// threads waiting.
-    pub(crate) fn rest_share(&self, seconds: f64) -> f64 {
-        1.0 - self.kinds.iter().map(|k| self.share(k, seconds)).sum::<f64>()
+    /// The share of the same run's thread time outside every query: shading, sampling, the film, and threads
+    /// waiting.
+    pub(crate) fn rest_share(&self) -> f64 {
+        1.0 - self.kinds.iter().map(|k| self.share(k)).sum::<f64>()
     }
 
     /// The kind's millions of rays per second on all the pool's threads: its rays over its time per thread.
@@ -115,8 +120,9 @@ pub fn profile(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> Profile
     drop(counting);
     let counted = take_all();
     let probe_ticks = probe_overhead(10_001);
-    // Timed runs, each kind's time the median of them: one run on a shared host is too noisy to split.
-    let runs: Vec<([KindWork; KIND_SLOTS], f64, u64)> = (0..TIMED_RUNS)
+    // Timed runs, each kind's time the median of them: one run on a shared host is too noisy to split. Each
+    // holds the kinds' work, seconds per tick, the image checksum and the run's wall seconds.
+    let runs: Vec<([KindWork; KIND_SLOTS], f64, u64, f64)> = (0..TIMED_RUNS)
         .map(|_| {
             take_all();
             let timing = Probe::timing();
@@ -124,20 +130,24 @@ pub fn profile(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> Profile
             let run = render_lanes(scene, lanes, pool, &());
             let (wall, spent) = (clock.elapsed().as_secs_f64(), ticks().wrapping_sub(start));
             drop(timing);
-            (take_all(), wall / spent.max(1) as f64, image_checksum(&run.image))
+            (take_all(), wall / spent.max(1) as f64, image_checksum(&run.image), wall)
         })
         .collect();
     let timed_checksum = runs.iter().map(|r| r.2).find(|&c| c != runs[0].2).unwrap_or(runs[0].2);
+    let seconds_in = |(k, per_tick, ..): &([KindWork; KIND_SLOTS], f64, u64, f64), slot: usize| {
+        k[slot].ticks.saturating_sub(k[slot].queries * probe_ticks) as f64 * per_tick
+    };
     let median_seconds = |slot: usize| {
-        let mut s: Vec<f64> = runs
-            .iter()
-            .map(|(k, per_tick, _)| {
-                k[slot].ticks.saturating_sub(k[slot].queries * probe_ticks) as f64 * per_tick
-            })
-            .collect();
+        let mut s: Vec<f64> = runs.iter().map(|run| seconds_in(run, slot)).collect();
         s.sort_by(f64::total_cmp);
         s[s.len() / 2]
     };
+    let threads = pool.current_num_threads();
+    let fastest = runs.iter().min_by(|a, b| a.3.total_cmp(&b.3)).expect("timed runs");
+    // The probes' ticks as each kind's time had them taken off (never more than its time), so that the kinds'
+    // times never sum past the run's.
+    let probes: u64 = fastest.0.iter().map(|k| k.ticks.min(k.queries * probe_ticks)).sum();
+    let thread_seconds = (fastest.3 * threads as f64 - probes as f64 * fastest.1).max(f64::MIN_POSITIVE);
     let kinds = RayKind::ALL
         .iter()
         .map(|&kind| {
@@ -148,13 +158,14 @@ pub fn profile(scene: &Scene, lanes: usize, pool: &rayon::ThreadPool) -> Profile
                 queries: c.queries,
                 work: c.work,
                 seconds: median_seconds(kind as usize),
+                share: seconds_in(fastest, kind as usize) / thread_seconds,
             }
         })
         .filter(|k| k.rays > 0 || k.queries > 0)
         .collect();
     Profile {
         kinds,
-        threads: pool.current_num_threads(),
+        threads,
         untagged: counted[UNTAGGED].work,
         total: counted_run.work,
         probe_ticks,

@@ -9,12 +9,11 @@ use serde::Serialize;
 use super::profile::{KindProfile, Profile};
 use crate::accel::RayKind;
 
-/// A render split by ray kind, for a setting whose clean runs' median is known: what `bench --json` writes
-/// in each line's `by_kind` field.
+/// A render split by ray kind: what `bench --json` writes in each line's `by_kind` field.
 #[derive(Clone, Debug, Serialize)]
 pub struct ByKind {
     kinds: Vec<KindRecord>,
-    /// Share of the median run's thread time outside every kind's queries (shading, sampling, film,
+    /// Share of the fastest timed run's thread time outside every kind's queries (shading, sampling, film,
     /// waiting).
     rest_share: f64,
     /// Ticks one probe reads, taken off each query's time.
@@ -27,7 +26,7 @@ struct KindRecord {
     kind: &'static str,
     rays: u64,
     queries: u64,
-    /// This kind's query time in the timed run over the row's median seconds × threads.
+    /// This kind's query time in the fastest timed run over that run's seconds × threads.
     share: f64,
     /// The kind's rays over its query time per thread.
     mrays_per_s: f64,
@@ -41,8 +40,8 @@ struct KindRecord {
 }
 
 impl ByKind {
-    /// The record of `profile` for a setting whose clean runs' median is `seconds`.
-    pub fn of(profile: &Profile, seconds: f64) -> ByKind {
+    /// The record of `profile`.
+    pub fn of(profile: &Profile) -> ByKind {
         let kinds = profile
             .kinds
             .iter()
@@ -50,7 +49,7 @@ impl ByKind {
                 kind: k.kind.name(),
                 rays: k.rays,
                 queries: k.queries,
-                share: profile.share(k, seconds),
+                share: profile.share(k),
                 mrays_per_s: profile.mrays_per_s(k),
                 box_tests: k.work.box_tests,
                 prim_tests: k.work.prim_tests,
@@ -60,7 +59,7 @@ impl ByKind {
                 rays_per_prim_test: k.rays_per_prim_test(),
             })
             .collect();
-        ByKind { kinds, rest_share: profile.rest_share(seconds), probe_ticks: profile.probe_ticks }
+        ByKind { kinds, rest_share: profile.rest_share(), probe_ticks: profile.probe_ticks }
     }
 
     /// The record as one JSON object.
@@ -70,14 +69,12 @@ impl ByKind {
 }
 
 /// One measured setting of [`write_kind_table`]: its packet width as printed (`scalar`, `1`, `8`, …), its
-/// threads, its clean runs' median seconds and its split.
+/// threads and its split.
 pub struct KindRow {
     /// The packet width as the table prints it.
     pub lanes: String,
     /// Threads.
     pub threads: usize,
-    /// Median seconds of the setting's clean runs.
-    pub seconds: f64,
     /// The setting's split ([`super::profile()`]).
     pub profile: Profile,
 }
@@ -93,7 +90,7 @@ pub fn write_kind_table(
     writeln!(
         out,
         "\nby ray kind (four more runs per row: one counting tests, three timing each query; share: the kind's \
-         query time over the\nmedian's thread time; Mrays/s: the kind's rays over its query time per thread; \
+         query time over the\nthread time of the fastest timing run; Mrays/s: the kind's rays over its query time per thread; \
          rays/box, rays/prim: live rays per test)"
     )?;
     writeln!(
@@ -114,7 +111,7 @@ pub fn write_kind_table(
         }
     }
     for r in rows {
-        let rest = 100.0 * r.profile.rest_share(r.seconds);
+        let rest = 100.0 * r.profile.rest_share();
         writeln!(out, " {:<10} {:>6} {:7} {:>11} {:>5.1}%", "rest", r.lanes, r.threads, "-", rest)?;
     }
     if let Some(first) = rows.first() {
@@ -133,7 +130,7 @@ fn write_kind(out: &mut impl Write, r: &KindRow, k: &KindProfile, base_mrays: Op
         r.lanes,
         r.threads,
         k.rays,
-        100.0 * r.profile.share(k, r.seconds),
+        100.0 * r.profile.share(k),
         mrays,
         base_mrays.map_or("-".to_owned(), |b| format!("{:.2}x", mrays / b)),
         opt(k.box_tests_per_ray(), 1),

@@ -270,12 +270,7 @@ fn measure_rows(
                 print_row(out, lanes, t, row, base_mrays)?;
             }
             if let Some(profile) = setting.kinds {
-                split_rows.push(KindRow {
-                    lanes: lanes.to_string(),
-                    threads: t,
-                    seconds: row.seconds,
-                    profile,
-                });
+                split_rows.push(KindRow { lanes: lanes.to_string(), threads: t, profile });
             }
         }
     }

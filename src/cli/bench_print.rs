@@ -150,7 +150,7 @@ pub(super) fn print_json(
         frustum_culling: run.frustum_culling,
         bvh_preset: run.bvh_preset.clone(),
         host: run.host,
-        by_kind: kinds.map(|p| ByKind::of(p, row.seconds)),
+        by_kind: kinds.map(ByKind::of),
         compare: run.old.map(|o| CompareField {
             file: o.path.display().to_string(),
             old_mrays_per_s: old_mrays.map(|(m, _)| m),

@@ -113,6 +113,10 @@ fn every_query_has_a_kind_and_the_probes_change_no_bits() {
                 }
             }
             assert!(p.kinds.iter().all(|k| k.seconds >= 0.0 && k.queries > 0), "{at}: {p:?}");
+            // The shares come from one run, so they and the rest lie in [0, 1] whatever the host's speed
+            // did between runs.
+            let rest = p.rest_share();
+            assert!(p.kinds.iter().all(|k| k.share >= 0.0) && (0.0..=1.0).contains(&rest), "{at}: {p:?}");
         }
     }
 }
