@@ -90,8 +90,8 @@ pub fn write_kind_table(
     writeln!(
         out,
         "\nby ray kind (four more runs per row: one counting tests, three timing each query; share: the kind's \
-         query time over the\nthread time of the fastest timing run; Mrays/s: the kind's rays over its query time per thread; \
-         rays/box, rays/prim: live rays per test)"
+         query time in the\nfastest timing run over that run's thread time; Mrays/s: the kind's rays over its \
+         query time per thread;\nrays/box, rays/prim: live rays per test)"
     )?;
     writeln!(
         out,
