@@ -60,7 +60,7 @@ const FAILED: i32 = 6;
 /// Bands each other rank holds at a time: the one it traces and the next, so it never waits for work.
 const IN_FLIGHT: u32 = 2;
 /// Bands handed out past the first one not yet written, per rank.
-pub(crate) const AHEAD: u32 = 4;
+const AHEAD: u32 = 4;
 /// Bands per rank the image is cut into at least, so that ranks of unequal speed finish together.
 const BANDS_PER_RANK: u32 = 8;
 /// How long a rank with nothing to do sleeps between looks for a message: MPI's blocking calls spin.
@@ -73,7 +73,7 @@ const FAIL_BAND: &str = "BAREARAY_MPI_FAIL_BAND";
 /// `mpirun` sets `OMPI_COMM_WORLD_SIZE`; MPICH's and Intel MPI's Hydra and `srun --mpi=pmi2` set
 /// `PMI_SIZE`; Slurm's `srun` sets `SLURM_STEP_NUM_TASKS` for the tasks of a job step (and not in a batch
 /// script itself, where `SLURM_NTASKS` is set without any other rank having been started).
-pub(crate) const SIZE_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS"];
+const SIZE_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_STEP_NUM_TASKS"];
 
 /// The variables that hold this process's rank, in the order of [`SIZE_VARIABLES`].
 const RANK_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "SLURM_PROCID"];
@@ -89,7 +89,7 @@ pub fn launched_rank() -> Option<u32> {
 
 /// Whether a launcher started this process as one of several ranks: the first of [`SIZE_VARIABLES`]
 /// that is set holds a number above 1.
-pub(crate) fn launched() -> bool {
+fn launched() -> bool {
     launched_in(|name| std::env::var(name).ok())
 }
 
