@@ -118,7 +118,7 @@ impl<F: Lanes> HitPacket<F> {
     #[inline(always)]
     pub(crate) fn update(&mut self, valid: F::Mask, t: F, id: F::Ids, key: F::Ids) {
         let closer = valid & (t.lt(self.t) | (t.le(self.t) & F::ids_lt(key, self.key)));
-        self.t = F::select(closer, t, self.t);
+        self.t = F::select_stored(closer, t, self.t);
         self.prim = F::select_ids(closer, id, self.prim);
         self.key = F::select_ids(closer, key, self.key);
     }

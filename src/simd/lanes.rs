@@ -105,6 +105,14 @@ impl Lanes for f32 {
         }
     }
     #[inline(always)]
+    fn select_stored(m: bool, if_true: f32, if_false: f32) -> f32 {
+        if m {
+            if_true
+        } else {
+            if_false
+        }
+    }
+    #[inline(always)]
     fn ids_eq(a: u32, b: u32) -> bool {
         a == b
     }
@@ -248,6 +256,11 @@ macro_rules! impl_lanes {
             fn select_ids(m: Self::Mask, if_true: $u, if_false: $u) -> $u {
                 // Reinterprets the float mask's bits as u32 lanes (wide's `Select<u32xK> for f32xK`).
                 m.0.select(if_true, if_false)
+            }
+            #[inline(always)]
+            fn select_stored(m: Self::Mask, if_true: Self, if_false: Self) -> Self {
+                let bits: $u = m.0.select(if_true.to_bits(), if_false.to_bits());
+                $f::from_bits(bits)
             }
             #[inline(always)]
             fn ids_eq(a: $u, b: $u) -> Self::Mask {

@@ -94,6 +94,10 @@ pub trait Lanes: Real {
     fn ids_eq(a: Self::Ids, b: Self::Ids) -> Self::Mask;
     /// `a < b` per lane (unsigned), as a float mask.
     fn ids_lt(a: Self::Ids, b: Self::Ids) -> Self::Mask;
+    /// [`Real::select`] for a value stored back where `if_false` was loaded from, blended as integer lanes.
+    /// LLVM turns a float blend stored over its own source into a masked store (`vmaskmovps`), which AMD
+    /// Zen 1–3 run as microcode; the integer blend is stored as a plain vector. The same bits either way.
+    fn select_stored(m: Self::Mask, if_true: Self, if_false: Self) -> Self;
 
     /// The value in lane `i` (panics when `i ≥ K`).
     #[inline(always)]
