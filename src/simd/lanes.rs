@@ -106,11 +106,7 @@ impl Lanes for f32 {
     }
     #[inline(always)]
     fn select_stored(m: bool, if_true: f32, if_false: f32) -> f32 {
-        if m {
-            if_true
-        } else {
-            if_false
-        }
+        <f32 as Real>::select(m, if_true, if_false)
     }
     #[inline(always)]
     fn ids_eq(a: u32, b: u32) -> bool {
