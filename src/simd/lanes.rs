@@ -321,6 +321,13 @@ mod tests {
             let want = if b.lane(i) < a.lane(i) { i as u32 } else { 99 };
             assert_eq!(ids.lane(i), want);
         }
+        // The integer-lane blend gives `select`'s bits, NaN and −0 included, with the mask either way round.
+        for m in [lt, !lt] {
+            let (stored, plain) = (F::select_stored(m, a, b), F::select(m, a, b));
+            for i in 0..F::K {
+                assert_eq!(stored.lane(i).to_bits(), plain.lane(i).to_bits(), "lane {i}");
+            }
+        }
     }
 
     #[test]
