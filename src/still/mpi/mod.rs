@@ -1,19 +1,19 @@
 //! One still rendered across the ranks of an MPI job, `mpirun -n N bareray render ...` (the `mpi` feature;
 //! docs/mpi.md). Every rank reads and compiles the scene; rank 0 alone checks the job and writes the files.
-//! Rank 0 hands out bands of rows ([`Bands`]) a few at a time to each other rank, so a faster rank takes
-//! more of them, and traces bands itself on a thread of its own while its main thread answers; the bands
-//! that come back are put in order and go through the [`RowStage`](crate::render::RowStage) (the
-//! postfilter, if any) into [`write_bands`], so the files are the same bytes one process writes.
+//! Rank 0 hands out bands of rows (`render::Bands`) a few at a time to each other rank, so a faster rank
+//! takes more of them, and traces bands itself on a thread of its own while its main thread answers; the
+//! bands that come back are put in order and go through the band stage (`render::RowStage`, the postfilter if
+//! any) into `still::write_bands`, so the files are the same bytes one process writes.
 //!
-//! Memory stays bounded: bands are handed out at most [`AHEAD`] per rank past the first band not yet
+//! Memory stays bounded: bands are handed out at most `AHEAD` per rank past the first band not yet
 //! written, and a band takes at most the job's band budget divided by twice the number of ranks, so the
 //! bands waiting on rank 0 take at most twice the budget, whatever the image's height. Each other rank holds
 //! the band it traces and the one it sends.
 //!
 //! Errors: before any tracing the ranks [`agree`](Ranks::agree): each reports whether its setup (parse,
-//! compile, and on rank 0 the checks of [`super::check`]) worked; on a failure rank 0 prints one error
+//! compile, and on rank 0 the checks of [`super::check()`]) worked; on a failure rank 0 prints one error
 //! (its own first) and every rank exits with the same non-zero code, no file written. A failure while
-//! rendering (a rank's error, a write error on rank 0) makes rank 0 abandon the files, as [`write_bands`]
+//! rendering (a rank's error, a write error on rank 0) makes rank 0 abandon the files, as `write_bands`
 //! does (temporary files removed, an existing file kept), print one `error: rank R: ...` line and abort
 //! the job with exit code 1. A panic while tracing a band is caught and becomes that band's error; a panic
 //! anywhere else aborts the job at once (a rank that died otherwise would leave the others waiting
@@ -22,9 +22,6 @@
 //! Test hook: with `BAREARAY_MPI_FAIL_BAND=k` in the environment, the rank that traces band `k` (counted
 //! from 0 at the top) fails with an error instead, and with `panic:k` it panics; the tests inject faults
 //! with it.
-//!
-//! [`Bands`]: crate::render::Bands
-//! [`write_bands`]: super::write_bands
 
 use std::sync::atomic::Ordering;
 use std::time::Duration;
@@ -78,7 +75,7 @@ const SIZE_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_SIZE", "PMI_SIZE", "SLURM_ST
 /// The variables that hold this process's rank, in the order of [`SIZE_VARIABLES`].
 const RANK_VARIABLES: [&str; 3] = ["OMPI_COMM_WORLD_RANK", "PMI_RANK", "SLURM_PROCID"];
 
-/// This process's rank when a launcher started it as one of several ([`launched`]), read from the
+/// This process's rank when a launcher started it as one of several ([`launched_in`]), read from the
 /// launcher's variables before MPI is initialised: for errors found while parsing the command line, which
 /// only rank 0 prints.
 pub fn launched_rank() -> Option<u32> {
@@ -87,13 +84,14 @@ pub fn launched_rank() -> Option<u32> {
     launched_in(var).then(|| var(RANK_VARIABLES[i])?.trim().parse().ok()).flatten()
 }
 
-/// Whether a launcher started this process as one of several ranks: the first of [`SIZE_VARIABLES`]
-/// that is set holds a number above 1.
+/// [`launched_in`] in this process's environment.
 fn launched() -> bool {
     launched_in(|name| std::env::var(name).ok())
 }
 
-/// [`launched`] in the environment `var` gives.
+/// Whether a launcher started this process as one of several ranks, in the environment `var` gives: the
+/// first of the launchers' size variables (`OMPI_COMM_WORLD_SIZE`, `PMI_SIZE`, `SLURM_STEP_NUM_TASKS`)
+/// that is set holds a number above 1.
 pub fn launched_in(var: impl Fn(&str) -> Option<String>) -> bool {
     SIZE_VARIABLES
         .iter()
@@ -112,7 +110,7 @@ pub struct Ranks {
 }
 
 impl Ranks {
-    /// MPI initialised, when [`launched`] says a launcher started this process; `None` otherwise. From
+    /// MPI initialised, when [`launched_in`] says a launcher started this process; `None` otherwise. From
     /// then on a panic on this rank aborts the whole job.
     pub fn start() -> Option<Self> {
         if !launched() {
