@@ -12,10 +12,10 @@ pub(super) const ROWS_TOGETHER: u32 = 4;
 
 /// An L2 cache per core this large or larger keeps what a row of tiles shares with the next: rows of tiles
 /// are then traced one by one, left to right. The column order paid where the L2 was 512 KB (Zen 3); with
-/// 2 MB it cost camera rays time, since each tile's writes to the frame then start lines the prefetcher has
-/// not seen coming (PERF.md, "Register", tiles column by column). Sizes between were not measured and keep
-/// the column order.
-const LARGE_L2: u64 = 2 << 20;
+/// 1 MB (Zen 5) and 2 MB (Intel) it cost camera rays time, since each tile's writes to the frame then start
+/// lines the prefetcher has not seen coming (PERF.md, "Register", tiles column by column). Sizes between
+/// 512 KB and 1 MB were not measured and keep the column order.
+const LARGE_L2: u64 = 1 << 20;
 
 /// The rows of tiles traced together on this machine: [`ROWS_TOGETHER`], or 1 where the first core's L2
 /// holds at least [`LARGE_L2`] (Linux's sysfs tells; where it does not, [`ROWS_TOGETHER`]). Where an L2 is
@@ -133,12 +133,15 @@ mod tests {
         assert!([1, ROWS_TOGETHER].contains(&rows_together(1080, 2)));
     }
 
-    /// Rows of tiles go one by one where the L2 is 2 MiB or more, and sysfs sizes read as bytes.
+    /// Rows of tiles go one by one where the L2 is 1 MiB or more, and sysfs sizes read as bytes.
     #[test]
     fn the_group_follows_the_l2() {
         assert_eq!(group_for(Some(512 << 10)), ROWS_TOGETHER);
         assert_eq!(group_for(None), ROWS_TOGETHER);
-        assert_eq!([1 << 20, 2 << 20, 32 << 20].map(|b| group_for(Some(b))), [ROWS_TOGETHER, 1, 1]);
+        assert_eq!(
+            [768 << 10, 1 << 20, 2 << 20, 32 << 20].map(|b| group_for(Some(b))),
+            [ROWS_TOGETHER, 1, 1, 1]
+        );
         assert_eq!(cache_size("2048K\n"), Some(2 << 20));
         assert_eq!(cache_size("1M"), Some(1 << 20));
         assert_eq!(cache_size("524288"), Some(512 << 10));
