@@ -90,8 +90,8 @@ fn launched() -> bool {
 }
 
 /// Whether a launcher started this process as one of several ranks, in the environment `var` gives: the
-/// first of the launchers' size variables (`OMPI_COMM_WORLD_SIZE`, `PMI_SIZE`, `SLURM_STEP_NUM_TASKS`)
-/// that is set holds a number above 1.
+/// first launcher variable for the number of ranks that is set (Open MPI's, Hydra's or Slurm's, most
+/// specific first) holds a number above 1.
 pub fn launched_in(var: impl Fn(&str) -> Option<String>) -> bool {
     SIZE_VARIABLES
         .iter()
