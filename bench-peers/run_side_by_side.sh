@@ -6,10 +6,10 @@
 # field`, so both read the same file. Output: results/side-<UTC stamp>.txt (header: date, machine, load,
 # commands) with one line per measurement; summarize with `python3 summarize_side.py FILE`.
 #
-# bareray runs once per BVH preset in PRESETS (default: sah, its default, and fast, obvhs's PLOC).
+# bareray runs once per BVH preset in PRESETS (default: morton, its default, and sah, the SAH alone).
 #
 # usage: run_side_by_side.sh [path/to/bareray]
-# env:   COUNTS="1e3 1e5 1e6" THREADS="1 2" ROUNDS=3 REPS=7 PRESETS="sah fast" EMBREE_APIS="8 16"
+# env:   COUNTS="1e3 1e5 1e6" THREADS="1 2" ROUNDS=3 REPS=7 PRESETS="morton sah" EMBREE_APIS="8 16"
 #        EMBREE_ARGS=""
 set -euo pipefail
 here="$(cd "$(dirname "$0")" && pwd)"
@@ -25,7 +25,7 @@ reps="${REPS:-7}"
   echo "# cpu: $(grep -m1 'model name' /proc/cpuinfo | cut -d: -f2- | sed 's/^ *//')"
   echo "# embree: $(dpkg-query -W -f='${Version}' libembree3-3 2>/dev/null || echo unknown)  bareray: $("$bareray" --version | tr "\n" " ")"
   echo "# embree: embree_bench --xyzr F --geometry user --api A --threads T --reps $reps ${EMBREE_ARGS:-} (A in ${EMBREE_APIS:-8 16})"
-  echo "# bareray: bareray bench F --primary-only ${cam[*]} --lanes 16 --threads T --reps $reps --json --bvh-preset P (P in ${PRESETS:-sah fast})"
+  echo "# bareray: bareray bench F --primary-only ${cam[*]} --lanes 16 --threads T --reps $reps --json --bvh-preset P (P in ${PRESETS:-morton sah})"
 } > "$out"
 for n in ${COUNTS:-1e3 1e5 1e6}; do
   [ -f "$here/out/field-$n.xyzr" ] || "$bareray" gen field --count "$n" -o "$here/out/field-$n.xyzr" >&2
@@ -39,7 +39,7 @@ for round in $(seq 1 "${ROUNDS:-3}"); do
         "$here/embree/embree_bench" --xyzr "$f" --geometry user --api "$api" --threads "$t" --reps "$reps" \
           ${EMBREE_ARGS:-} 2>/dev/null | sed "s/^/embree round=$round n=$n load=$load /" | tee -a "$out"
       done
-      for preset in ${PRESETS:-sah fast}; do
+      for preset in ${PRESETS:-morton sah}; do
         "$bareray" bench "$f" --primary-only "${cam[@]}" --lanes 16 --threads "$t" --reps "$reps" --json \
           --bvh-preset "$preset" | sed "s/^/bareray round=$round n=$n load=$load /" | tee -a "$out"
       done

@@ -1,4 +1,4 @@
-//! Building a tree: a binary tree over the item boxes, bareray's binned SAH or obvhs's PLOC (with the
+//! Building a tree: a binary tree over the item boxes, bareray's binned SAH or Morton order, or obvhs's PLOC (with the
 //! fallbacks for piles of equal boxes and for trees too deep to walk), collapsed into the 4-wide packet nodes
 //! and, when asked, the 8-wide single-ray nodes; the binary tree itself is kept for the scalar walk when asked.
 
@@ -18,7 +18,7 @@ use super::slab::STACK;
 use super::upward::Upward;
 use super::wide_node::WideNode;
 use super::wide_starts::WideStarts;
-use super::{binary, piles, sah, BuildStats, Bvh};
+use super::{binary, morton, piles, sah, BuildStats, Bvh};
 
 /// Which builder makes the binary tree that is collapsed into the wide nodes.
 #[derive(Clone, Copy, Debug)]
@@ -30,6 +30,13 @@ pub(crate) enum Builder {
         /// The cost of a binary node, in item tests.
         node_cost: f32,
     },
+    /// Items sorted by the Morton code of their centres, ranges of more than [`morton::SAH_BELOW`] items
+    /// split where the code's highest differing bit changes, smaller ones as [`Builder::Sah`] splits them
+    /// (`morton.rs`).
+    Morton {
+        /// The cost of a binary node in the SAH's ranges, in item tests.
+        node_cost: f32,
+    },
     /// obvhs's PLOC with these settings.
     Obvhs(BvhBuildParams),
 }
@@ -39,16 +46,19 @@ impl Builder {
     /// sphere and traces the 1e6 field slower, 4 to 8 trace alike, 12 is slower again
     /// (docs/perf-log/2026-11-own-builder.md, "Node cost and leaves").
     pub(crate) const SAH_SPHERES: Builder = Builder::Sah { node_cost: 6.0 };
+    /// The Morton-order builder for spheres, with [`Builder::SAH_SPHERES`]'s node cost below.
+    pub(crate) const MORTON_SPHERES: Builder = Builder::Morton { node_cost: 6.0 };
     /// The SAH builder for items dearer to test than spheres (triangles, ellipsoids, cones): cones.toml and
     /// SPD's teapot traced faster with 1 than with 6 (docs/perf-log/2026-11-own-builder.md, "Node cost for
     /// the other kinds").
     pub(crate) const SAH_DEARER_ITEMS: Builder = Builder::Sah { node_cost: 1.0 };
 
-    /// The builder for items dearer to test than spheres: [`Builder::SAH_DEARER_ITEMS`] in place of the SAH
-    /// builder, obvhs's presets as they are.
+    /// The builder for items dearer to test than spheres: [`Builder::SAH_DEARER_ITEMS`] in place of
+    /// bareray's builders (the Morton order's shorter build is measured on sphere fields only), obvhs's
+    /// presets as they are.
     pub(crate) fn for_dearer_items(self) -> Builder {
         match self {
-            Builder::Sah { .. } => Builder::SAH_DEARER_ITEMS,
+            Builder::Sah { .. } | Builder::Morton { .. } => Builder::SAH_DEARER_ITEMS,
             obvhs => obvhs,
         }
     }
@@ -99,6 +109,9 @@ pub(crate) fn build<T: Send>(
     let boxes = || boxes.get_or_init(|| (0..n).into_par_iter().map(&item_box).collect::<Vec<Aabb>>());
     let (binary, fallbacks): (_, &[Fallback]) = match builder {
         Builder::Sah { node_cost } => (sah::build_sah(n, &item_box, node_cost), &[Fallback::Balanced]),
+        Builder::Morton { node_cost } => {
+            (morton::build_morton(n, &item_box, node_cost), &[Fallback::Balanced])
+        }
         Builder::Obvhs(params) if piles::has_piles(boxes()) => {
             (piles::build_over_piles(boxes(), params), &[Fallback::Balanced])
         }

@@ -1,4 +1,4 @@
-//! A 4-wide BVH over boxes, built as a binary tree (bareray's binned SAH, or obvhs's PLOC) and collapsed into
+//! A 4-wide BVH over boxes, built as a binary tree (bareray's binned SAH or Morton order, or obvhs's PLOC) and collapsed into
 //! bareray's own node layout: each node holds the boxes of up to `N` children in SoA form (two 64-byte cache
 //! lines), so one node visit tests all its children — K rays against each child in the packet walk
 //! (`packet.rs`), one ray against all children at once in the single-ray walk (`single.rs`).
@@ -15,7 +15,8 @@
 //! whichever walk runs.
 //!
 //! Files: `node` (the 4-wide node layout), `wide_node` (the 8-wide single-ray layout), `build` (the
-//! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `binary.rs`
+//! builders and the fallbacks for piles and deep trees), `sah.rs` (the binned SAH builder), `morton.rs` (the
+//! Morton-order builder on the SAH builder's driver), `binary.rs`
 //! (obvhs), `median.rs` (the median-split fallback tree), `collapse.rs` (binary tree to wide nodes), `slab.rs` (slab tests and the traversal stack),
 //! `packet.rs` and `single.rs` (the walks), `scalar.rs` (the scalar walk over the binary tree, when built),
 //! `upward.rs` (parent links, for walks that start at the leaf of the item a ray leaves), `wide_starts.rs`
@@ -27,6 +28,7 @@ mod collapse;
 pub(crate) mod item_query;
 mod large;
 mod median;
+mod morton;
 pub(crate) mod node;
 mod packet;
 mod piles;

@@ -40,36 +40,36 @@ const MIN_TASK: usize = 4096;
 
 /// Binary levels past which ranges are halved at their median instead of by the SAH: with at most about
 /// log2(items) levels below, every collapsed tree fits the walks' stacks.
-const MAX_SAH_DEPTH: u32 = 40;
+pub(super) const MAX_SAH_DEPTH: u32 = 40;
 
 /// An item's box with its index in the box's spare `w` lane.
 #[derive(Clone, Copy)]
-struct Ref {
-    lo: Vec4,
-    hi: Vec4,
+pub(super) struct Ref {
+    pub(super) lo: Vec4,
+    pub(super) hi: Vec4,
 }
 
 impl Ref {
-    fn new(b: Aabb, item: u32) -> Self {
+    pub(super) fn new(b: Aabb, item: u32) -> Self {
         Ref { lo: b.min.extend(f32::from_bits(item)), hi: b.max.extend(0.0) }
     }
-    fn item(&self) -> u32 {
+    pub(super) fn item(&self) -> u32 {
         self.lo.w.to_bits()
     }
     fn bounds(&self) -> Aabb {
         Aabb { min: Vec3A::from_vec4(self.lo), max: Vec3A::from_vec4(self.hi) }
     }
     /// Twice the box's centre (only compared and binned, so never halved).
-    fn centre2(&self) -> Vec3A {
+    pub(super) fn centre2(&self) -> Vec3A {
         Vec3A::from_vec4(self.lo + self.hi)
     }
 }
 
 /// The box around a range's boxes and the box around their (doubled) centres.
 #[derive(Clone, Copy)]
-struct Extent {
-    boxes: Aabb,
-    centres: Aabb,
+pub(super) struct Extent {
+    pub(super) boxes: Aabb,
+    pub(super) centres: Aabb,
 }
 
 impl Extent {
@@ -92,7 +92,7 @@ impl Extent {
         refs.iter().fold(Extent::EMPTY, |mut e, r| (e.add(r), e).1)
     }
     /// The extent of `refs`, in parallel when they are many.
-    fn of(refs: &[Ref]) -> Extent {
+    pub(super) fn of(refs: &[Ref]) -> Extent {
         summarise(refs, Extent::fold, Extent::EMPTY, Extent::union)
     }
 }
@@ -139,12 +139,17 @@ struct Binner {
     scale: Vec3A,
 }
 
+/// Per axis, `cells` over the spread of `centres` (slightly fewer, so that the largest centre stays below
+/// `cells` in most cases; where it rounds to `cells` the users clamp it), or 0 on an axis without spread.
+pub(super) fn cells_per_unit(centres: &Aabb, cells: f32) -> Vec3A {
+    let spread = centres.max - centres.min;
+    Vec3A::select(spread.cmpgt(Vec3A::ZERO), (cells * 0.9999) / spread, Vec3A::ZERO)
+}
+
 impl Binner {
     fn new(centres: &Aabb) -> Self {
-        let spread = centres.max - centres.min;
         // The largest centre rounds to BINS in `index`, whose clamp puts it in the last bin.
-        let scale = Vec3A::select(spread.cmpgt(Vec3A::ZERO), (BINS as f32 * 0.9999) / spread, Vec3A::ZERO);
-        Binner { min: centres.min, scale }
+        Binner { min: centres.min, scale: cells_per_unit(centres, BINS as f32) }
     }
     /// The bin: the position over the centre box, rounded to the nearest integer by adding 2^23 (whose ulp is
     /// 1), so the float's low bits hold it, without a float-to-integer conversion (which checks each lane).
@@ -239,7 +244,12 @@ fn best_split(bins: &Bins) -> Option<Split> {
 /// extents; `None` when they make a leaf: one item, or at most [`MAX_LEAF`] items that cost less tested
 /// together than split (a binary node costing `node_cost` item tests), that have no binned split (all centres
 /// equal), or that lie past [`MAX_SAH_DEPTH`].
-fn split(refs: &mut [Ref], extent: &Extent, depth: u32, node_cost: f32) -> Option<(usize, Extent, Extent)> {
+pub(super) fn split(
+    refs: &mut [Ref],
+    extent: &Extent,
+    depth: u32,
+    node_cost: f32,
+) -> Option<(usize, Extent, Extent)> {
     let n = refs.len();
     if n <= 1 {
         return None;
@@ -287,7 +297,7 @@ fn partition(refs: &mut [Ref], left: impl Fn(&Ref) -> bool) -> (usize, Extent, E
 }
 
 /// Halves `refs` at the median centre along the axis of widest centre spread.
-fn median(refs: &mut [Ref], extent: &Extent) -> (usize, Extent, Extent) {
+pub(super) fn median(refs: &mut [Ref], extent: &Extent) -> (usize, Extent, Extent) {
     let axis = extent.centres.largest_axis();
     let mid = refs.len() / 2;
     refs.select_nth_unstable_by(mid, |a, b| a.centre2()[axis].total_cmp(&b.centre2()[axis]));
@@ -306,12 +316,12 @@ struct Pending {
     depth: u32,
 }
 
-/// Builds the subtree of `root`, whose items `refs` holds, into `nodes`.
-fn grow(refs: &mut [Ref], root: Pending, nodes: &mut Vec<Bvh2Node>, node_cost: f32) {
+/// Builds the subtree of `root`, whose items `refs` holds, into `nodes`, as `split` splits ranges.
+fn grow(refs: &mut [Ref], root: Pending, nodes: &mut Vec<Bvh2Node>, split: &SplitRange) {
     let mut stack = vec![root];
     while let Some(p) = stack.pop() {
         let range = p.first - root.first..p.first - root.first + p.len;
-        let split = split(&mut refs[range], &p.extent, p.depth, node_cost);
+        let split = split(&mut refs[range], &p.extent, p.depth);
         stack.extend(place(p, split, nodes).into_iter().flatten().rev());
     }
 }
@@ -357,11 +367,38 @@ pub(super) fn build_sah(
     item_box: impl Fn(usize) -> Aabb + Sync,
     node_cost: f32,
 ) -> (Vec<Bvh2Node>, Vec<u32>) {
+    let (refs, extent) = references(n, item_box);
+    build_with(refs, extent, &|refs: &mut [Ref], extent: &Extent, depth: u32| {
+        split(refs, extent, depth, node_cost)
+    })
+}
+
+/// One reference per item `0..n` and their extent. `n` ≥ 1.
+pub(super) fn references(n: usize, item_box: impl Fn(usize) -> Aabb + Sync) -> (Vec<Ref>, Extent) {
     assert!(n > 0, "a tree over no items");
     // Item indices and node links are u32, and a tree has fewer than 2n nodes.
     assert!(n < 1 << 31, "{n} items: more than a tree's u32 links reach");
-    let mut refs: Vec<Ref> = (0..n).into_par_iter().map(|i| Ref::new(item_box(i), i as u32)).collect();
-    let root = Pending { slot: 0, first: 0, len: n, extent: Extent::of(&refs), depth: 0 };
+    let refs: Vec<Ref> = (0..n).into_par_iter().map(|i| Ref::new(item_box(i), i as u32)).collect();
+    let extent = Extent::of(&refs);
+    (refs, extent)
+}
+
+/// How a builder splits a range of references in place: [`split`]'s contract (the left part's length and
+/// both parts' extents, `None` for a leaf of at most [`MAX_LEAF`] items, both parts non-empty), given the
+/// range's extent and depth.
+pub(super) type SplitRange<'a> =
+    dyn Fn(&mut [Ref], &Extent, u32) -> Option<(usize, Extent, Extent)> + Sync + 'a;
+
+/// The binary tree `split` makes of `refs` (whose extent is `extent`), top down: the top levels on this
+/// thread, range by range in parallel, then subtrees of at most 1/[`TASKS`] of the items each on a thread of
+/// its own. The tree does not depend on the thread count.
+pub(super) fn build_with(
+    mut refs: Vec<Ref>,
+    extent: Extent,
+    split: &SplitRange,
+) -> (Vec<Bvh2Node>, Vec<u32>) {
+    let n = refs.len();
+    let root = Pending { slot: 0, first: 0, len: n, extent, depth: 0 };
     let mut nodes = vec![unset()];
     // The top, level by level, each level's ranges split in parallel; ranges of at most `task` items are
     // left for the subtrees.
@@ -371,7 +408,7 @@ pub(super) fn build_sah(
         let (small, large): (Vec<Pending>, Vec<Pending>) = level.into_iter().partition(|p| p.len <= task);
         tasks.extend(small);
         let splits: Vec<_> = (large.par_iter().zip(slices(&mut refs, &large)))
-            .map(|(p, refs)| split(refs, &p.extent, p.depth, node_cost))
+            .map(|(p, refs)| split(refs, &p.extent, p.depth))
             .collect();
         level =
             (large.into_iter().zip(splits)).flat_map(|(p, s)| place(p, s, &mut nodes)).flatten().collect();
@@ -380,7 +417,7 @@ pub(super) fn build_sah(
     let subtrees: Vec<Vec<Bvh2Node>> = (tasks.par_iter().zip(slices(&mut refs, &tasks)))
         .map(|(t, refs)| {
             let mut nodes = vec![unset()];
-            grow(refs, Pending { slot: 0, ..*t }, &mut nodes, node_cost);
+            grow(refs, Pending { slot: 0, ..*t }, &mut nodes, split);
             nodes
         })
         .collect();
@@ -411,7 +448,7 @@ fn moved(mut v: Bvh2Node, shift: u32) -> Bvh2Node {
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
     use crate::math::SplitMix64;
 
@@ -422,7 +459,7 @@ mod tests {
 
     /// Box sets that stress the builder: uniform, clustered with a pile of copies, all one box, sizes and
     /// positions spread over many orders of magnitude (a chain for a pure SAH split), flat boxes.
-    fn box_sets() -> Vec<(&'static str, Vec<Aabb>)> {
+    pub(in crate::bvh) fn box_sets() -> Vec<(&'static str, Vec<Aabb>)> {
         let mut rng = SplitMix64::new(11);
         let mut next = move || rng.unit() as f32;
         let mut point = move || Vec3A::new(next(), next(), next());
@@ -475,26 +512,43 @@ mod tests {
         1 + check(nodes, first, boxes, order, ranges).max(check(nodes, first + 1, boxes, order, ranges))
     }
 
+    /// Checks a whole tree over `boxes`: its order a permutation, every item in one leaf under boxes that
+    /// enclose it, leaves neither overlapping nor leaving gaps, depth at most `bound`, fewer than 2n nodes.
+    pub(in crate::bvh) fn check_tree(
+        name: &str,
+        nodes: &[Bvh2Node],
+        order: &[u32],
+        boxes: &[Aabb],
+        bound: usize,
+    ) {
+        let mut sorted = order.to_vec();
+        sorted.sort_unstable();
+        assert!(sorted.iter().copied().eq(0..boxes.len() as u32), "{name}: the order is no permutation");
+        let mut ranges = Vec::new();
+        let depth = check(nodes, 0, boxes, order, &mut ranges);
+        ranges.sort_unstable();
+        let mut at = 0;
+        for (first, count) in ranges {
+            assert_eq!(first, at, "{name}: leaves overlap or leave a gap");
+            at += count;
+        }
+        assert_eq!(at as usize, boxes.len(), "{name}");
+        assert!(depth <= bound, "{name}: depth {depth} over {bound}");
+        assert!(nodes.len() < 2 * boxes.len(), "{name}: {} nodes", nodes.len());
+    }
+
     #[test]
     fn every_item_is_in_one_leaf_under_boxes_that_enclose_it() {
         for (name, boxes) in box_sets() {
             let (nodes, order) = build_sah(boxes.len(), |i| boxes[i], 6.0);
-            let mut sorted = order.clone();
-            sorted.sort_unstable();
-            assert!(sorted.iter().copied().eq(0..boxes.len() as u32), "{name}: the order is no permutation");
-            let mut ranges = Vec::new();
-            let depth = check(&nodes, 0, &boxes, &order, &mut ranges);
-            ranges.sort_unstable();
-            let mut at = 0;
-            for (first, count) in ranges {
-                assert_eq!(first, at, "{name}: leaves overlap or leave a gap");
-                at += count;
-            }
-            assert_eq!(at as usize, boxes.len(), "{name}");
             // Past MAX_SAH_DEPTH ranges are halved, so at most log2 more levels follow.
-            let bound = MAX_SAH_DEPTH as usize + boxes.len().ilog2() as usize + 2;
-            assert!(depth <= bound, "{name}: depth {depth} over {bound}");
-            assert!(nodes.len() < 2 * boxes.len(), "{name}: {} nodes", nodes.len());
+            check_tree(
+                name,
+                &nodes,
+                &order,
+                &boxes,
+                MAX_SAH_DEPTH as usize + boxes.len().ilog2() as usize + 2,
+            );
         }
     }
 
@@ -615,14 +669,26 @@ mod tests {
         );
     }
 
+    /// `n` boxes, every third infinite both ways (centre NaN), the others points along x.
+    pub(in crate::bvh) fn overflowed_boxes(n: usize) -> Vec<Aabb> {
+        let whole = Aabb { min: Vec3A::NEG_INFINITY, max: Vec3A::INFINITY };
+        (0..n).map(|i| if i % 3 == 0 { whole } else { Aabb::from_point(Vec3A::X * i as f32) }).collect()
+    }
+
+    /// A tree's nodes as comparable fields (corners, count, link), with its order.
+    pub(in crate::bvh) type Fields = (Vec<([f32; 3], [f32; 3], u32, u32)>, Vec<u32>);
+
+    /// [`Fields`] of a tree.
+    pub(in crate::bvh) fn fields((nodes, order): (Vec<Bvh2Node>, Vec<u32>)) -> Fields {
+        let node = |v: &Bvh2Node| (v.aabb.min.to_array(), v.aabb.max.to_array(), v.prim_count, v.first_index);
+        (nodes.iter().map(node).collect(), order)
+    }
+
     /// Boxes infinite both ways (centres NaN) still build, each item in one leaf: a split with an empty side
     /// would repeat forever, and a NaN cost must not make one the best.
     #[test]
     fn boxes_with_overflowed_corners_build() {
-        let whole = Aabb { min: Vec3A::NEG_INFINITY, max: Vec3A::INFINITY };
-        let boxes: Vec<Aabb> = (0..300)
-            .map(|i| if i % 3 == 0 { whole } else { Aabb::from_point(Vec3A::X * i as f32) })
-            .collect();
+        let boxes = overflowed_boxes(300);
         let (nodes, mut order) = build_sah(boxes.len(), |i| boxes[i], 6.0);
         order.sort_unstable();
         assert!(order.iter().copied().eq(0..300), "the order is no permutation");
@@ -643,11 +709,6 @@ mod tests {
                 _ => cubes([(Vec3A::new(next(), next(), next()) * 100.0, 0.05)])[0],
             })
             .collect();
-        let fields = |(nodes, order): (Vec<Bvh2Node>, Vec<u32>)| {
-            let node =
-                |v: &Bvh2Node| (v.aabb.min.to_array(), v.aabb.max.to_array(), v.prim_count, v.first_index);
-            (nodes.iter().map(node).collect::<Vec<_>>(), order)
-        };
         let on = |threads| {
             let pool = rayon::ThreadPoolBuilder::new().num_threads(threads).build().unwrap();
             fields(pool.install(|| build_sah(boxes.len(), |i| boxes[i], 6.0)))

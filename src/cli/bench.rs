@@ -63,8 +63,9 @@ pub(super) struct BenchArgs {
     /// sphere: the setting for comparing kernels).
     #[arg(long, value_enum, default_value_t = AccelArg::Auto)]
     pub(super) accel: AccelArg,
-    /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").
-    #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
+    /// The BVH builder: bareray's Morton order over binned SAH (the default) or binned SAH alone, or an obvhs
+    /// PLOC preset (PERF.md, "Tree builder").
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Morton)]
     pub(super) bvh_preset: BvhPresetArg,
     /// Test each BVH node's children, and each leaf's spheres, against a shared-origin packet's frustum
     /// before its lanes, and walk camera tiles as large packets (default: on, measured faster on large

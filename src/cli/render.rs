@@ -128,8 +128,9 @@ pub(super) struct RenderArgs {
     /// image is identical at every width and on the scalar path.
     #[arg(long, default_value = "16", value_parser = parse_lanes)]
     pub(super) lanes: LanesArg,
-    /// The BVH builder: bareray's binned SAH (the default), or an obvhs PLOC preset (PERF.md, "Tree builder").
-    #[arg(long, value_enum, default_value_t = BvhPresetArg::Sah)]
+    /// The BVH builder: bareray's Morton order over binned SAH (the default) or binned SAH alone, or an obvhs
+    /// PLOC preset (PERF.md, "Tree builder").
+    #[arg(long, value_enum, default_value_t = BvhPresetArg::Morton)]
     pub(super) bvh_preset: BvhPresetArg,
     /// How the spheres are searched: `auto` (a BVH, or the particle tree when the BVH would not fit in
     /// memory), `bvh`, `brute` or `pkd` (the particle tree: 5 bytes per sphere beside the spheres; an .f32r

@@ -169,7 +169,10 @@ impl From<AccelArg> for Accel {
 /// `--bvh-preset`: [`BvhPreset`].
 #[derive(Clone, Copy, Debug, PartialEq, Eq, clap::ValueEnum)]
 pub(super) enum BvhPresetArg {
-    /// bareray's binned SAH builder, the default: the least memory and the quickest build.
+    /// The default: the spheres' tree by Morton order down to ranges of 1024 spheres, by the binned SAH below;
+    /// the other kinds' by the SAH.
+    Morton,
+    /// bareray's binned SAH builder at every level.
     Sah,
     /// obvhs `fastest_build`: leaves of one sphere, no reinsertion.
     Fastest,
@@ -187,6 +190,7 @@ pub(super) enum BvhPresetArg {
 impl From<BvhPresetArg> for BvhPreset {
     fn from(p: BvhPresetArg) -> Self {
         match p {
+            BvhPresetArg::Morton => BvhPreset::Morton,
             BvhPresetArg::Sah => BvhPreset::Sah,
             BvhPresetArg::Fastest => BvhPreset::Fastest,
             BvhPresetArg::VeryFast => BvhPreset::VeryFast,

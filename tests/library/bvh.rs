@@ -107,18 +107,20 @@ fn check_packets<F: Lanes>(bvh: &Scene, brute: &Scene, rays: &[Ray<f32>], live: 
     }
 }
 
+/// By either builder's tree (binned SAH, Morton order).
 #[test]
 fn bvh_equals_brute_force_at_every_width() {
     for (n, seed) in [(1, 1), (2, 2), (17, 3), (300, 4), (2000, 5)] {
         let desc = field(n, seed);
-        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = common::compile_with(&desc, Accel::Brute).unwrap();
-        assert!(bvh.geometry.sphere_bvh.is_some() && brute.geometry.sphere_bvh.is_none());
         let rays = rays(&desc, 2000, seed + 100);
-        check_width::<f32>(&bvh, &brute, &rays);
-        check_width::<f32x4>(&bvh, &brute, &rays);
-        check_width::<f32x8>(&bvh, &brute, &rays);
-        check_width::<f32x16>(&bvh, &brute, &rays);
+        for (_, bvh) in common::compile_by_each_builder(&desc) {
+            assert!(bvh.geometry.sphere_bvh.is_some() && brute.geometry.sphere_bvh.is_none());
+            check_width::<f32>(&bvh, &brute, &rays);
+            check_width::<f32x4>(&bvh, &brute, &rays);
+            check_width::<f32x8>(&bvh, &brute, &rays);
+            check_width::<f32x16>(&bvh, &brute, &rays);
+        }
     }
 }
 
@@ -133,13 +135,14 @@ fn single_ray_tree_equals_brute_force() {
         let light =
             LightDesc { position: DVec3::new(0.0, 3.0, -3.0), color: Rgb::all(1.0), falloff: Falloff::None };
         desc.lights.push(light);
-        let bvh = common::compile_with(&desc, Accel::Bvh).unwrap();
         let brute = common::compile_with(&desc, Accel::Brute).unwrap();
-        let tree = bvh.geometry.sphere_bvh.as_ref().unwrap();
-        assert!(tree.wide.is_some(), "a lit scene builds the single-ray tree");
         let rays = rays(&desc, 3000, seed + 100);
-        check_width::<f32>(&bvh, &brute, &rays);
-        check_width::<f32x16>(&bvh, &brute, &rays);
+        for (_, bvh) in common::compile_by_each_builder(&desc) {
+            let tree = bvh.geometry.sphere_bvh.as_ref().unwrap();
+            assert!(tree.wide.is_some(), "a lit scene builds the single-ray tree");
+            check_width::<f32>(&bvh, &brute, &rays);
+            check_width::<f32x16>(&bvh, &brute, &rays);
+        }
     }
     // Without lights or mirrors nothing walks one ray from the root: no single-ray tree.
     let plain = common::compile_with(&field(300, 4), Accel::Bvh).unwrap();
@@ -253,21 +256,22 @@ fn occlusion_from_the_departure_leaf_equals_brute_force() {
         let light =
             LightDesc { position: DVec3::new(0.0, 3.0, -3.0), color: Rgb::all(1.0), falloff: Falloff::None };
         desc.lights.push(light);
-        let up = common::compile_with(&desc, Accel::Bvh).unwrap();
-        let mut root = up.clone();
-        let bvh = up.geometry.sphere_bvh.as_ref().unwrap();
-        assert!(bvh.up.is_some(), "{n} spheres: no links");
-        let one_leaf = bvh.nodes.len() == 1;
-        assert_eq!(one_leaf, n == 6, "{n} spheres: {} nodes", bvh.nodes.len());
-        root.geometry.sphere_bvh.as_mut().unwrap().up = None;
         let brute = common::compile_with(&desc, Accel::Brute).unwrap();
-        let starts = occlusion_starts(&up, &brute, hits, seed + 100);
-        assert!(starts.len() == hits, "{n} spheres: {} hits", starts.len());
-        let fewer = !one_leaf;
-        check_occlusion_up::<f32>(&up, &root, &brute, &starts, seed, fewer);
-        check_occlusion_up::<f32x4>(&up, &root, &brute, &starts, seed, fewer);
-        check_occlusion_up::<f32x8>(&up, &root, &brute, &starts, seed, fewer);
-        check_occlusion_up::<f32x16>(&up, &root, &brute, &starts, seed, fewer);
+        for (builder, up) in common::compile_by_each_builder(&desc) {
+            let mut root = up.clone();
+            let bvh = up.geometry.sphere_bvh.as_ref().unwrap();
+            assert!(bvh.up.is_some(), "{builder}, {n} spheres: no links");
+            let one_leaf = bvh.nodes.len() == 1;
+            assert_eq!(one_leaf, n == 6, "{builder}, {n} spheres: {} nodes", bvh.nodes.len());
+            root.geometry.sphere_bvh.as_mut().unwrap().up = None;
+            let starts = occlusion_starts(&up, &brute, hits, seed + 100);
+            assert!(starts.len() == hits, "{builder}, {n} spheres: {} hits", starts.len());
+            let fewer = !one_leaf;
+            check_occlusion_up::<f32>(&up, &root, &brute, &starts, seed, fewer);
+            check_occlusion_up::<f32x4>(&up, &root, &brute, &starts, seed, fewer);
+            check_occlusion_up::<f32x8>(&up, &root, &brute, &starts, seed, fewer);
+            check_occlusion_up::<f32x16>(&up, &root, &brute, &starts, seed, fewer);
+        }
     }
 }
 

@@ -16,7 +16,7 @@ pub use files::scene_files;
 use std::path::Path;
 
 use bareray::camera::CameraError;
-use bareray::compile::{Accel, CompileOptions, Scene};
+use bareray::compile::{Accel, BvhPreset, CompileOptions, Scene};
 use bareray::film::Image;
 use bareray::geometry::ShapeKind;
 use bareray::io::toml;
@@ -65,6 +65,15 @@ pub fn compile(desc: &SceneDesc) -> Scene {
 /// The scene compiled with `accel` (every other option at its default).
 pub fn compile_with(desc: &SceneDesc, accel: Accel) -> Result<Scene, CameraError> {
     Scene::compile_with_options(desc, CompileOptions { accel, ..CompileOptions::default() })
+}
+
+/// The scene with BVHs by bareray's two builders in turn: the binned SAH's and the Morton order's.
+pub fn compile_by_each_builder(desc: &SceneDesc) -> [(&'static str, Scene); 2] {
+    let with = |preset| {
+        let options = CompileOptions { accel: Accel::Bvh, preset, ..CompileOptions::default() };
+        Scene::compile_with_options(desc, options).expect("the scene compiles")
+    };
+    [("sah", with(BvhPreset::Sah)), ("morton", with(BvhPreset::Morton))]
 }
 
 pub fn parse_toml(src: &str) -> SceneDesc {
