@@ -1,4 +1,4 @@
-//! A binary tree in obvhs's layout (from the SAH builder or obvhs) collapsed into `WIDTH`-wide nodes: each
+//! A binary tree in obvhs's layout (from bareray's builders or obvhs) collapsed into `WIDTH`-wide nodes: each
 //! node takes its two children, then opens the inner child of largest surface area until it has `WIDTH`; the
 //! top levels are flattened in parallel.
 

@@ -89,8 +89,9 @@ pub(super) fn near_side(inv: f32) -> usize {
     usize::from(inv < 0.0)
 }
 
-/// Deep enough for the trees the builders make (a 4-wide node pushes up to 3 entries per level; the SAH tree is
-/// at most 40 + log2 n binary levels deep); the build checks each tree's need against it, and push checks again.
+/// Deep enough for the trees the builders make (a 4-wide node pushes up to 3 entries per level; bareray's trees
+/// are at most about 40 + 2 log2 n binary levels deep); the build checks each tree's need against it, and push
+/// checks again.
 pub(super) const STACK: usize = 256;
 
 /// A fixed-capacity traversal stack on the call stack (a heap vector per packet costs more than a small

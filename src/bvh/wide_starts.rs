@@ -7,7 +7,7 @@
 //! of them a ray tests depends on the order of visits, its answer does not (the `LeafQuery` contract).
 //!
 //! Subtrees are matched by their item ranges. Where the binary tree's leaves hold the items in depth-first
-//! order (bareray's SAH builder partitions them in place, and so does the balanced fallback), a binary node's
+//! order (bareray's builders split ranges in place, and so does the balanced fallback), a binary node's
 //! items are one range, and no two binary nodes have the same range (an inner node has two non-empty
 //! children). Where they are not (obvhs's PLOC orders them by its clustering), there is no table and such
 //! walks stay in the packet tree.
@@ -167,7 +167,7 @@ mod tests {
     use super::*;
     use crate::bvh::collapse::collapse;
     use crate::bvh::median::balanced;
-    use crate::bvh::{binary, sah, Node, WideNode};
+    use crate::bvh::{binary, morton, sah, Node, WideNode};
 
     /// Items of every leaf under slot `c` of `nodes[n]`.
     fn items<T: RayNode>(nodes: &[T], n: usize, c: usize, out: &mut Vec<u32>) {
@@ -235,6 +235,8 @@ mod tests {
             let boxes = boxes(n, seed);
             let (sah_tree, _) = sah::build_sah(n, |i| boxes[i], 6.0);
             assert!(check(&sah_tree), "{n} boxes: the SAH tree's subtrees hold ranges of items");
+            let (morton_tree, _) = morton::build_morton(n, |i| boxes[i], 6.0);
+            assert!(check(&morton_tree), "{n} boxes: the Morton-order tree's too");
             assert!(check(&balanced(&boxes).0), "{n} boxes: the balanced tree's too");
             // obvhs's trees get a table only where their items happen to lie in ranges.
             for leaf in [1, 8] {
