@@ -6,7 +6,7 @@
 //!
 //! The top levels are where the SAH builder spends most of its time (every level bins and moves every item)
 //! and where a spatial midpoint splits about as well; near the leaves the SAH's choices matter: by Morton order
-//! down to the leaves balls6 traced 1.13x slower, with the SAH below 512 to 4096 items as fast as the SAH's
+//! down to the leaves balls6 traced 1.13x slower, with the SAH below 512 to 4096 items within 4% of the SAH's
 //! tree (PERF.md, "Tree builder"). It shares the SAH builder's references, driver and layout
 //! ([`super::sah::build_with`]), so the tree does not depend on the thread count either.
 
